@@ -1,0 +1,93 @@
+// The methods raydamp offers, by name, with what each needs and the order it has.
+// Python and the service read this catalogue instead of writing it again.
+#pragma once
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "raydamp/methods/butcher_tableau.hpp"
+#include "raydamp/methods/splitting.hpp"
+
+namespace raydamp {
+
+struct MethodEntry {
+  std::string name;
+  std::string description;
+  TableauUse tableau_use;
+  std::string default_tableau;  // "" when the method has no Runge-Kutta stage
+  bool tableau_fixed;           // heun and rk4 are one tableau each
+  int splitting_order;
+};
+
+inline std::vector<MethodEntry> method_entries() {
+  return {
+      {"sv", "Stormer-Verlet: drift h/2, kick h, drift h/2 (ignores damping; the eps = 0 reference)",
+       TableauUse::none, "", false, StormerVerlet::splitting_order},
+      {"3s", "three-term splitting (paper Algorithm 3S): damp h/2, drift h/2, kick h, drift h/2, damp h/2",
+       TableauUse::none, "", false, ThreeTermSplitting::splitting_order},
+      {"2s", "two-term splitting (paper Algorithm 2S): drift h/2, exact kick+damp h, drift h/2",
+       TableauUse::none, "", false, TwoTermSplitting::splitting_order},
+      {"rks", "Runge-Kutta splitting (paper Algorithm RKS): drift h/2, one RK step of kick+damp, drift h/2",
+       TableauUse::any_diagonally_implicit, "heun", false, RungeKuttaSplitting::splitting_order},
+      {"rksb", "the paper's counter-example RKS-B: kick h/2, one RK step of drift+damp, kick h/2 (not momentum-conserving)",
+       TableauUse::explicit_only, "heun", false, RungeKuttaSplittingB::splitting_order},
+      {"heun", "Heun's method on the whole system (the paper's baseline)", TableauUse::explicit_only, "heun", true,
+       RungeKutta::splitting_order},
+      {"rk4", "classical fourth-order Runge-Kutta on the whole system", TableauUse::explicit_only, "rk4", true,
+       RungeKutta::splitting_order},
+  };
+}
+
+inline std::string known_methods() {
+  std::string known;
+  for (auto& m : method_entries()) known += (known.empty() ? "" : ", ") + m.name;
+  return known;
+}
+
+inline MethodEntry method_entry(const std::string& name) {
+  for (auto& m : method_entries())
+    if (m.name == name) return m;
+  throw std::invalid_argument("method: unknown method '" + name + "' (known: " + known_methods() + ")");
+}
+
+// The tableau a run of `method` uses when asked for `tableau` ("" = the default);
+// refuses, naming the argument, a tableau the method cannot use.
+inline ButcherTableau resolve_tableau(const MethodEntry& method, const std::string& tableau) {
+  if (method.tableau_use == TableauUse::none) {
+    if (!tableau.empty())
+      throw std::invalid_argument("tableau: method '" + method.name + "' has no Runge-Kutta stage, so it takes no tableau");
+    return builtin_tableau("euler");  // unused by the step
+  }
+  if (method.tableau_fixed && !tableau.empty() && tableau != method.default_tableau)
+    throw std::invalid_argument("tableau: method '" + method.name + "' is the tableau '" + method.default_tableau +
+                                "'; for another tableau on the whole system there is no separate method yet");
+  ButcherTableau tab = builtin_tableau(tableau.empty() ? method.default_tableau : tableau);
+  if (method.tableau_use == TableauUse::explicit_only && !tab.is_explicit())
+    throw std::invalid_argument("tableau: method '" + method.name + "' needs an explicit tableau; '" + tab.name() +
+                                "' is implicit");
+  if (tab.kind() == TableauKind::implicit)
+    throw std::invalid_argument("tableau: '" + tab.name() +
+                                "' is fully implicit; rks solves diagonally implicit stages only");
+  return tab;
+}
+
+inline int method_order(const MethodEntry& method, const ButcherTableau& tab) {
+  if (method.tableau_use == TableauUse::none) return method.splitting_order;
+  return std::min(method.splitting_order, tab.order());
+}
+
+// Calls f(MethodType{}) for the method named `name`: the one place a name becomes a type.
+template <class F>
+decltype(auto) with_method(const std::string& name, F&& f) {
+  if (name == "sv") return f(StormerVerlet{});
+  if (name == "3s") return f(ThreeTermSplitting{});
+  if (name == "2s") return f(TwoTermSplitting{});
+  if (name == "rks") return f(RungeKuttaSplitting{});
+  if (name == "rksb") return f(RungeKuttaSplittingB{});
+  if (name == "heun" || name == "rk4") return f(RungeKutta{});
+  throw std::invalid_argument("method: unknown method '" + name + "' (known: " + known_methods() + ")");
+}
+
+}  // namespace raydamp

@@ -1,0 +1,35 @@
+// D = c M with a scalar mass: the damping operator A = eps D M^{-1} is a I with
+// a = eps c. Every direction of p decays at the same rate.
+#pragma once
+
+#include <cmath>
+
+#include "raydamp/phi.hpp"
+
+namespace raydamp {
+
+struct IsotropicDamping {
+  double a = 0.0;  // the single eigenvalue of A = eps D M^{-1}
+
+  // p <- exp(-t A) p: the exact flow of eps Y.
+  template <class Q, class P>
+  void decay(const Q&, double t, P& p) const { p *= std::exp(-t * a); }
+
+  // p <- exp(-t A) p - t phi1(-t A) g: the exact flow of p' = -g - A p with q
+  // (and so g = grad V(q)) frozen.
+  template <class Q, class G, class P>
+  void decay_affine(const Q&, double t, const G& g, P& p) const {
+    const double x = -t * a;
+    p = std::exp(x) * p - (t * phi1(x)) * g;
+  }
+
+  // out = A p: the damping force is -out.
+  template <class Q, class P, class O>
+  void rate(const Q&, const P& p, O& out) const { out.noalias() = a * p; }
+
+  // x <- (I + c A)^{-1} x: the one linear solve of an implicit Runge-Kutta stage.
+  template <class Q, class X>
+  void solve_shifted(const Q&, double c, X& x) const { x /= 1.0 + c * a; }
+};
+
+}  // namespace raydamp

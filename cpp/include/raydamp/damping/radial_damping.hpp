@@ -1,0 +1,46 @@
+// D(q) = q q^T / |q|^2 with a scalar mass: damping acts only along q (a spring's
+// axis, paper section 6.2). A = eps D M^{-1} = a u u^T with u = q/|q| and a = eps/m,
+// so A is a rank-one projector scaled by a and every function of A acts on the
+// radial component of p alone.
+#pragma once
+
+#include <cmath>
+
+#include "raydamp/phi.hpp"
+
+namespace raydamp {
+
+struct RadialDamping {
+  double a = 0.0;  // the nonzero eigenvalue of A, along u
+
+  // p <- exp(-t A) p: only the radial component decays.
+  template <class Q, class P>
+  void decay(const Q& q, double t, P& p) const {
+    const double inv_r2 = 1.0 / q.squaredNorm();
+    p += (std::expm1(-t * a) * q.dot(p) * inv_r2) * q;
+  }
+
+  // p <- exp(-t A) p - t phi1(-t A) g. Tangentially phi1(0) = 1 (a plain kick);
+  // radially the exact affine decay.
+  template <class Q, class G, class P>
+  void decay_affine(const Q& q, double t, const G& g, P& p) const {
+    const double x = -t * a;
+    const double inv_r2 = 1.0 / q.squaredNorm();
+    const double radial = (std::expm1(x) * q.dot(p) - t * (phi1(x) - 1.0) * q.dot(g)) * inv_r2;
+    p += radial * q - t * g;
+  }
+
+  template <class Q, class P, class O>
+  void rate(const Q& q, const P& p, O& out) const {
+    out.noalias() = (a * q.dot(p) / q.squaredNorm()) * q;
+  }
+
+  // (I + c a u u^T)^{-1} = I - (c a / (1 + c a)) u u^T.
+  template <class Q, class X>
+  void solve_shifted(const Q& q, double c, X& x) const {
+    const double ca = c * a;
+    x -= (ca / (1.0 + ca) * q.dot(x) / q.squaredNorm()) * q;
+  }
+};
+
+}  // namespace raydamp

@@ -1,0 +1,176 @@
+// The one step loop: fixed steps of any method on any model, with saving,
+// blow-up detection, momentum-drift tracking, progress and cancellation.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "raydamp/step.hpp"
+
+namespace raydamp {
+
+enum class Status { completed, non_finite, cancelled };
+
+inline const char* status_name(Status s) {
+  switch (s) {
+    case Status::completed: return "completed";
+    case Status::non_finite: return "non_finite";
+    default: return "cancelled";
+  }
+}
+
+struct RunSpec {
+  double h = 0.1;
+  long n_steps = 0;
+  double h_last = 0.1;   // size of the final step (lands exactly on t_end)
+  long save_every = 1;
+};
+
+struct Control {
+  const std::atomic<bool>* cancel = nullptr;         // set from another thread to stop
+  std::function<void(long done, long total)> progress;  // called between blocks, a bounded number of times
+  long max_progress_calls = 100;
+};
+
+// Saved points, row-major: t[k], q[k*n + i], p[k*n + i], energy[k], momentum[k*m + j].
+struct Trajectory {
+  int n = 0, n_momenta = 0;
+  std::vector<double> t, q, p, energy, momentum;
+  long rows() const { return static_cast<long>(t.size()); }
+};
+
+struct RunResult {
+  Status status = Status::completed;
+  long steps = 0;          // steps taken whose result is finite
+  long failed_step = -1;   // 1-based index of the step whose result was not finite
+  std::string message;
+  double max_momentum_drift = 0.0;  // max over every step of max_j |J_j - J_j(0)|
+  Trajectory trajectory;
+};
+
+template <class Model, int Dim>
+double energy(const Model& model, const State<Dim>& z) {
+  return model.mass.kinetic(z.p) + model.potential(z.q);
+}
+
+namespace detail {
+
+template <class Model, int Dim>
+void save_point(const Model& model, const State<Dim>& z, double t, Trajectory& out) {
+  out.t.push_back(t);
+  out.q.insert(out.q.end(), z.q.data(), z.q.data() + z.q.size());
+  out.p.insert(out.p.end(), z.p.data(), z.p.data() + z.p.size());
+  out.energy.push_back(energy(model, z));
+  std::array<double, Model::n_momenta> j{};
+  model.momenta(z.q, z.p, j.data());
+  out.momentum.insert(out.momentum.end(), j.begin(), j.end());
+}
+
+template <class Model, int Dim>
+double momentum_drift(const Model& model, const State<Dim>& z, const std::array<double, Model::n_momenta>& j0) {
+  std::array<double, Model::n_momenta> j{};
+  model.momenta(z.q, z.p, j.data());
+  double drift = 0.0;
+  for (int i = 0; i < Model::n_momenta; ++i) drift = std::max(drift, std::abs(j[i] - j0[i]));
+  return drift;
+}
+
+}  // namespace detail
+
+// Steps between finiteness checks. A blown-up block is replayed step by step from
+// its start, so the failing step is found exactly without a check on every step.
+inline constexpr long kBlock = 256;
+
+template <class Method, class Model, int Dim = Model::dim>
+RunResult integrate(const Model& model, const ButcherTableau& tab, State<Dim> z, const RunSpec& spec,
+                    const Control& control = {}) {
+  const long N = spec.n_steps;
+  const int n = model.size();
+  RunResult result;
+  Trajectory& out = result.trajectory;
+  out.n = n;
+  out.n_momenta = Model::n_momenta;
+  const long rows = N / spec.save_every + 2;
+  out.t.reserve(rows);
+  out.q.reserve(rows * n);
+  out.p.reserve(rows * n);
+  out.energy.reserve(rows);
+  out.momentum.reserve(rows * Model::n_momenta);
+
+  Workspace<Dim> ws(n, tab.stages());
+  State<Dim> checkpoint = z;
+  std::array<double, Model::n_momenta> j0{};
+  model.momenta(z.q, z.p, j0.data());
+  auto time_at = [&](long k) { return k == N ? (N - 1) * spec.h + spec.h_last : k * spec.h; };
+  auto step_size = [&](long k) { return k == N - 1 ? spec.h_last : spec.h; };  // size of step k -> k+1
+
+  if (!z.all_finite()) {
+    result.status = Status::non_finite;
+    result.failed_step = 0;
+    result.message = "the initial state is not finite";
+    return result;
+  }
+  detail::save_point(model, z, 0.0, out);
+  const long progress_every = std::max(1L, N / std::max(1L, control.max_progress_calls));
+  long next_save = spec.save_every, next_progress = progress_every, k = 0;
+  double max_drift = 0.0;
+
+  while (k < N) {
+    if (control.cancel && control.cancel->load(std::memory_order_relaxed)) {
+      result.status = Status::cancelled;
+      result.message = "cancelled after " + std::to_string(k) + " of " + std::to_string(N) + " steps";
+      break;
+    }
+    const long end = std::min({N, next_save, next_progress, k + kBlock});
+    checkpoint = z;
+    double block_drift = 0.0;
+    for (long i = k; i < end; ++i) {
+      step<Method>(model, tab, z, step_size(i), ws);
+      if constexpr (Model::n_momenta > 0) block_drift = std::max(block_drift, detail::momentum_drift(model, z, j0));
+    }
+    if (!z.all_finite()) {
+      // Replay the block one checked step at a time from its start.
+      z = checkpoint;
+      long i = k;
+      for (; i < end; ++i) {
+        State<Dim> before = z;
+        step<Method>(model, tab, z, step_size(i), ws);
+        if (!z.all_finite()) {
+          z = before;
+          break;
+        }
+        if constexpr (Model::n_momenta > 0) max_drift = std::max(max_drift, detail::momentum_drift(model, z, j0));
+      }
+      k = i;
+      result.status = Status::non_finite;
+      result.failed_step = i + 1;
+      result.message = "the state stopped being finite at step " + std::to_string(i + 1) + " (t = " +
+                       std::to_string(time_at(i + 1)) + "); the last finite state is saved";
+      break;
+    }
+    max_drift = std::max(max_drift, block_drift);
+    k = end;
+    if (k == next_save) {
+      detail::save_point(model, z, time_at(k), out);
+      next_save += spec.save_every;
+    }
+    if (k == next_progress) {
+      if (control.progress) control.progress(k, N);
+      next_progress += progress_every;
+    }
+  }
+  // The final state is always the last row, saved or not by save_every.
+  if (out.t.back() != time_at(k)) detail::save_point(model, z, time_at(k), out);
+  if (control.progress && result.status == Status::completed && next_progress - progress_every != N) control.progress(N, N);
+  result.steps = k;
+  result.max_momentum_drift = max_drift;
+  if (result.status == Status::completed) result.message = "completed " + std::to_string(N) + " steps";
+  return result;
+}
+
+}  // namespace raydamp

@@ -1,0 +1,115 @@
+// Methods are data: a list of sub-flows, each with the fraction of h it runs for.
+// The paper writes maps right to left; a table lists them in the order applied.
+// Tables are built as palindromes from their first half (the mirror is derived,
+// never typed twice) and validated at compile time.
+#pragma once
+
+#include <array>
+#include <cstddef>
+
+namespace raydamp {
+
+enum class Flow {
+  drift,          // exp(t X_T), exact
+  kick,           // exp(t X_V), exact
+  damp,           // exp(t eps Y), exact
+  kick_damp,      // exp(t (X_V + eps Y)), exact
+  kick_damp_rk,   // Runge-Kutta step of X_V + eps Y (q frozen), tableau chosen at run time
+  drift_damp_rk,  // explicit Runge-Kutta step of X_T + eps Y
+  full_rk,        // explicit Runge-Kutta step of the whole field
+};
+
+inline constexpr int n_flows = 7;
+
+struct Stage {
+  Flow flow;
+  double fraction;  // of the step size h
+};
+
+// A symmetric table from its first half plus the middle stage.
+template <std::size_t N>
+constexpr std::array<Stage, 2 * N - 1> palindrome(const std::array<Stage, N>& half) {
+  std::array<Stage, 2 * N - 1> out{};
+  for (std::size_t i = 0; i < N; ++i) out[i] = out[2 * N - 2 - i] = half[i];
+  return out;
+}
+
+// Each sub-flow used must run for a total of exactly h: otherwise the method is
+// not even consistent.
+template <std::size_t N>
+constexpr bool fractions_sum_to_one(const std::array<Stage, N>& stages) {
+  for (int f = 0; f < n_flows; ++f) {
+    double total = 0.0;
+    bool used = false;
+    for (const auto& s : stages)
+      if (static_cast<int>(s.flow) == f) {
+        total += s.fraction;
+        used = true;
+      }
+    if (used && total != 1.0) return false;
+  }
+  return true;
+}
+
+template <std::size_t N>
+constexpr bool is_symmetric(const std::array<Stage, N>& stages) {
+  for (std::size_t i = 0; i < N; ++i)
+    if (stages[i].flow != stages[N - 1 - i].flow || stages[i].fraction != stages[N - 1 - i].fraction) return false;
+  return true;
+}
+
+enum class TableauUse { none, any_diagonally_implicit, explicit_only };
+
+// Each method: its stages, whether it takes a Butcher tableau, and the highest
+// order the splitting itself can reach (a symmetric splitting: 2).
+struct StormerVerlet {
+  static constexpr const char* name = "sv";
+  static constexpr std::array<Stage, 3> stages = palindrome<2>({{{Flow::drift, 0.5}, {Flow::kick, 1.0}}});
+  static constexpr TableauUse tableau = TableauUse::none;
+  static constexpr int splitting_order = 2;
+};
+
+struct ThreeTermSplitting {  // paper Algorithm 3S
+  static constexpr const char* name = "3s";
+  static constexpr std::array<Stage, 5> stages =
+      palindrome<3>({{{Flow::damp, 0.5}, {Flow::drift, 0.5}, {Flow::kick, 1.0}}});
+  static constexpr TableauUse tableau = TableauUse::none;
+  static constexpr int splitting_order = 2;
+};
+
+struct TwoTermSplitting {  // paper Algorithm 2S
+  static constexpr const char* name = "2s";
+  static constexpr std::array<Stage, 3> stages = palindrome<2>({{{Flow::drift, 0.5}, {Flow::kick_damp, 1.0}}});
+  static constexpr TableauUse tableau = TableauUse::none;
+  static constexpr int splitting_order = 2;
+};
+
+struct RungeKuttaSplitting {  // paper Algorithm RKS
+  static constexpr const char* name = "rks";
+  static constexpr std::array<Stage, 3> stages = palindrome<2>({{{Flow::drift, 0.5}, {Flow::kick_damp_rk, 1.0}}});
+  static constexpr TableauUse tableau = TableauUse::any_diagonally_implicit;
+  static constexpr int splitting_order = 2;
+};
+
+struct RungeKuttaSplittingB {  // the counter-example RKS-B, end of paper section 5
+  static constexpr const char* name = "rksb";
+  static constexpr std::array<Stage, 3> stages = palindrome<2>({{{Flow::kick, 0.5}, {Flow::drift_damp_rk, 1.0}}});
+  static constexpr TableauUse tableau = TableauUse::explicit_only;
+  static constexpr int splitting_order = 2;
+};
+
+struct RungeKutta {  // a classical Runge-Kutta method on the whole system
+  static constexpr const char* name = "rk";
+  static constexpr std::array<Stage, 1> stages = {{{Flow::full_rk, 1.0}}};
+  static constexpr TableauUse tableau = TableauUse::explicit_only;
+  static constexpr int splitting_order = 1000;  // no splitting error: the tableau decides
+};
+
+template <class Method>
+constexpr bool valid_table() {
+  return fractions_sum_to_one(Method::stages) && is_symmetric(Method::stages);
+}
+static_assert(valid_table<StormerVerlet>() && valid_table<ThreeTermSplitting>() && valid_table<TwoTermSplitting>() &&
+              valid_table<RungeKuttaSplitting>() && valid_table<RungeKuttaSplittingB>() && valid_table<RungeKutta>());
+
+}  // namespace raydamp

@@ -1,0 +1,22 @@
+// Scratch vectors for the sub-flows, sized once before the step loop so that a
+// step never allocates (Dynamic-size models included).
+#pragma once
+
+#include <vector>
+
+#include "raydamp/state.hpp"
+
+namespace raydamp {
+
+template <int Dim>
+struct Workspace {
+  Vector<Dim> v, g, f, stage_q, stage_p;
+  std::vector<Vector<Dim>> kq, kp;  // Runge-Kutta stage derivatives
+
+  Workspace(int n, int stages)
+      : v(Vector<Dim>::Zero(n)), g(Vector<Dim>::Zero(n)), f(Vector<Dim>::Zero(n)),
+        stage_q(Vector<Dim>::Zero(n)), stage_p(Vector<Dim>::Zero(n)),
+        kq(stages, Vector<Dim>::Zero(n)), kp(stages, Vector<Dim>::Zero(n)) {}
+};
+
+}  // namespace raydamp

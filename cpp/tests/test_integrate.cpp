@@ -1,0 +1,72 @@
+// The step loop: saving, the final row, blow-up detection at the exact step, cancellation.
+#include <atomic>
+#include <cmath>
+
+#include "check.hpp"
+#include "raydamp/raydamp.hpp"
+
+using namespace raydamp;
+
+int main() {
+  DampedPendulum pendulum(0.01);
+  const State<1> z0{Vector<1>(0.9 * M_PI), Vector<1>(0.0)};
+  const ButcherTableau heun = builtin_tableau("heun");
+
+  // save_every = 3 over 10 steps: rows at 0, 3, 6, 9 and the final 10.
+  {
+    RunResult r = integrate<ThreeTermSplitting>(pendulum, heun, z0, RunSpec{0.1, 10, 0.1, 3});
+    CHECK(r.status == Status::completed);
+    CHECK(r.trajectory.rows() == 5);
+    CHECK_NEAR(r.trajectory.t[3], 0.9, 1e-15);
+    CHECK_NEAR(r.trajectory.t[4], 1.0, 1e-15);
+    CHECK(r.steps == 10);
+  }
+  // A short last step lands exactly on t_end.
+  {
+    RunResult r = integrate<TwoTermSplitting>(pendulum, heun, z0, RunSpec{0.3, 4, 0.1, 1});
+    CHECK_NEAR(r.trajectory.t.back(), 1.0, 1e-15);
+  }
+  // Blow-up: Heun on the pendulum with a huge step. Replaying by hand finds the
+  // first non-finite step; the loop must report that step and keep what came before.
+  {
+    // Heun on p' = -eps p multiplies p by 1 - x + x^2/2 per step, x = h eps = 100.
+    DampedPendulum wild(100.0);
+    const State<1> start{Vector<1>(0.5), Vector<1>(1.0)};
+    const double h = 1.0;
+    State<1> z = start;
+    Workspace<1> ws(1, 2);
+    long first_bad = -1;
+    for (long i = 0; i < 5000 && first_bad < 0; ++i) {
+      step<RungeKutta>(wild, heun, z, h, ws);
+      if (!z.all_finite()) first_bad = i + 1;
+    }
+    CHECK(first_bad > 1);
+    RunResult r = integrate<RungeKutta>(wild, heun, start, RunSpec{h, 5000, h, 1});
+    std::printf("blow-up at step %ld (replay says %ld)\n", r.failed_step, first_bad);
+    CHECK(r.status == Status::non_finite);
+    CHECK(r.failed_step == first_bad);
+    CHECK(r.steps == first_bad - 1);
+    CHECK(r.trajectory.rows() == first_bad);  // rows 0 .. first_bad - 1, all finite
+    for (double x : r.trajectory.q) CHECK(std::isfinite(x));
+    for (double x : r.trajectory.p) CHECK(std::isfinite(x));
+  }
+  // Cancellation before the first block: only the initial row.
+  {
+    std::atomic<bool> cancel{true};
+    Control control;
+    control.cancel = &cancel;
+    RunResult r = integrate<ThreeTermSplitting>(pendulum, heun, z0, RunSpec{0.1, 1000, 0.1, 1}, control);
+    CHECK(r.status == Status::cancelled);
+    CHECK(r.steps == 0 && r.trajectory.rows() == 1);
+  }
+  // Progress is called a bounded number of times, ending at the total.
+  {
+    long calls = 0, last = 0;
+    Control control;
+    control.progress = [&](long done, long) { ++calls; last = done; };
+    integrate<ThreeTermSplitting>(pendulum, heun, z0, RunSpec{0.01, 123457, 0.01, 1000}, control);
+    CHECK(calls <= 102 && calls >= 50);
+    CHECK(last == 123457);
+  }
+  TEST_MAIN_RETURN();
+}
