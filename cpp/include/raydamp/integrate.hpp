@@ -106,7 +106,7 @@ RunResult integrate(const Model& model, const ButcherTableau& tab, State<Dim> z,
   State<Dim> checkpoint = z;
   std::array<double, Model::n_momenta> j0{};
   model.momenta(z.q, z.p, j0.data());
-  auto time_at = [&](long k) { return k == N ? (N - 1) * spec.h + spec.h_last : k * spec.h; };
+  auto time_at = [&](long k) { return k == N && spec.h_last != spec.h ? (N - 1) * spec.h + spec.h_last : k * spec.h; };
   auto step_size = [&](long k) { return k == N - 1 ? spec.h_last : spec.h; };  // size of step k -> k+1
 
   if (!z.all_finite()) {

@@ -1,0 +1,77 @@
+// What can be asked for: methods (one row per usable tableau) and tableaux.
+#include <pybind11/stl.h>
+
+#include "bindings.hpp"
+#include "raydamp/catalogue.hpp"
+
+namespace py = pybind11;
+
+namespace raydamp::bindings {
+
+static const char* kind_name(TableauKind k) {
+  switch (k) {
+    case TableauKind::explicit_: return "explicit";
+    case TableauKind::diagonally_implicit: return "diagonally_implicit";
+    default: return "implicit";
+  }
+}
+
+void bind_catalogue(py::module_& m) {
+  m.def("methods", [] {
+    py::list rows;
+    for (const MethodEntry& e : method_entries()) {
+      auto add = [&](const ButcherTableau* tab) {
+        py::dict row;
+        row["name"] = e.name;
+        row["description"] = e.description;
+        row["tableau"] = tab ? py::cast(tab->name()) : py::none();
+        row["default"] = !tab || tab->name() == e.default_tableau;
+        row["order"] = tab ? method_order(e, *tab) : e.splitting_order;
+        row["explicit"] = !tab || tab->is_explicit();
+        rows.append(row);
+      };
+      if (e.tableau_use == TableauUse::none) {
+        add(nullptr);
+        continue;
+      }
+      for (const ButcherTableau& tab : builtin_tableaux()) {
+        try {
+          resolve_tableau(e, tab.name());
+        } catch (const std::invalid_argument&) {
+          continue;  // this method cannot use this tableau
+        }
+        add(&tab);
+      }
+    }
+    return rows;
+  });
+  m.def("tableaux", [] {
+    py::list rows;
+    for (const ButcherTableau& tab : builtin_tableaux()) {
+      const int s = tab.stages();
+      std::vector<std::vector<double>> a(s, std::vector<double>(s));
+      std::vector<double> b(s), c(s);
+      for (int i = 0; i < s; ++i) {
+        b[i] = tab.b(i);
+        c[i] = tab.c(i);
+        for (int j = 0; j < s; ++j) a[i][j] = tab.a(i, j);
+      }
+      py::dict row;
+      row["name"] = tab.name();
+      row["stages"] = s;
+      row["order"] = tab.order();
+      row["kind"] = kind_name(tab.kind());
+      row["a"] = a;
+      row["b"] = b;
+      row["c"] = c;
+      rows.append(row);
+    }
+    return rows;
+  });
+  // Validates a (method, tableau) pair the way a run would; returns the tableau used.
+  m.def("resolve", [](const std::string& method, const std::string& tableau) {
+    return resolve_tableau(method_entry(method), tableau).name();
+  });
+}
+
+}  // namespace raydamp::bindings

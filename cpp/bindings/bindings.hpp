@@ -1,0 +1,10 @@
+// The pieces of the private _core module, one per concern.
+#pragma once
+
+#include <pybind11/pybind11.h>
+
+namespace raydamp::bindings {
+void bind_catalogue(pybind11::module_& m);
+void bind_models(pybind11::module_& m);
+void bind_integrate(pybind11::module_& m);
+}  // namespace raydamp::bindings

@@ -1,0 +1,14 @@
+// raydamp._core: private; the public names and their documentation live in Python.
+#include "bindings.hpp"
+
+#include <stdexcept>
+
+namespace py = pybind11;
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "raydamp's compiled core (private: use the raydamp package)";
+  m.attr("__version__") = RAYDAMP_VERSION;
+  raydamp::bindings::bind_catalogue(m);
+  raydamp::bindings::bind_models(m);
+  raydamp::bindings::bind_integrate(m);
+}

@@ -1,0 +1,20 @@
+"""raydamp: structure-preserving integrators for Hamiltonian systems with Rayleigh damping.
+
+The splitting methods of Modin & Soderlind, "Geometric integration of Hamiltonian
+systems perturbed by Rayleigh damping": explicit, Stormer-Verlet when undamped,
+with the right dissipation rate, conserved momentum maps and kept relative
+equilibria.
+
+>>> import raydamp
+>>> sol = raydamp.integrate(raydamp.models.DampedPendulum(eps=0.01), [0.9 * 3.14159], [0.0],
+...                         method="3s", h=0.2, t_end=200)
+"""
+
+from . import models
+from ._core import __version__
+from .integrate import CancelToken, integrate
+from .methods import MethodInfo, TableauInfo, methods, tableaux
+from .solution import Solution
+
+__all__ = ["__version__", "models", "integrate", "CancelToken", "Solution", "methods", "tableaux",
+           "MethodInfo", "TableauInfo"]

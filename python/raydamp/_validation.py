@@ -1,0 +1,46 @@
+"""Argument checks that name the offending argument in a ValueError."""
+
+from __future__ import annotations
+
+import math
+import numbers
+
+import numpy as np
+
+
+def real(name: str, value, *, positive: bool = False, nonnegative: bool = False) -> float:
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise ValueError(f"{name} must be a real number, got {value!r}")
+    x = float(value)
+    if not math.isfinite(x):
+        raise ValueError(f"{name} must be finite, got {x!r}")
+    if positive and not x > 0:
+        raise ValueError(f"{name} must be > 0, got {x!r}")
+    if nonnegative and not x >= 0:
+        raise ValueError(f"{name} must be >= 0, got {x!r}")
+    return x
+
+
+def integer(name: str, value, *, minimum: int = 1) -> int:
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        if isinstance(value, float) and value.is_integer():
+            value = int(value)
+        else:
+            raise ValueError(f"{name} must be an integer, got {value!r}")
+    if value < minimum:
+        raise ValueError(f"{name} must be >= {minimum}, got {value}")
+    return int(value)
+
+
+def vector(name: str, value, dim: int) -> np.ndarray:
+    try:
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be an array of {dim} real numbers, got {value!r}") from None
+    if array.ndim == 0 and dim == 1:
+        array = array.reshape(1)
+    if array.shape != (dim,):
+        raise ValueError(f"{name} must have length {dim} for this model, got shape {array.shape}")
+    if not np.all(np.isfinite(array)):
+        raise ValueError(f"{name} must be finite, got {array.tolist()}")
+    return np.ascontiguousarray(array)

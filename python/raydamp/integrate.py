@@ -1,0 +1,103 @@
+"""raydamp.integrate: fixed-step integration of a damped mechanical model."""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+
+from . import _core
+from ._validation import integer, real, vector
+from .models import Model
+from .solution import Solution
+
+__all__ = ["integrate", "CancelToken", "MAX_SAVED_BYTES"]
+
+# Refuse runs whose saved points alone would not fit in memory comfortably.
+MAX_SAVED_BYTES = 4 * 2**30
+
+
+class CancelToken(_core.CancelToken):
+    """Pass as ``cancel=`` to integrate; call ``cancel()`` from any thread to stop the run.
+
+    The run stops within a few hundred steps with status "cancelled", keeping the
+    points saved so far.
+    """
+
+
+def _method_names() -> list[str]:
+    return list(dict.fromkeys(row["name"] for row in _core.methods()))
+
+
+def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: float | None = None,
+              n_steps: int | None = None, save_every: int = 1, tableau: str | None = None,
+              progress: Callable[[int, int], object] | None = None,
+              cancel: CancelToken | None = None) -> Solution:
+    """Integrate ``model`` from (q0, p0) with fixed steps of size ``h``.
+
+    Parameters
+    ----------
+    model : a model from :mod:`raydamp.models`.
+    q0, p0 : initial positions and momenta, length ``model.dim``.
+    method : "3s" (default), "2s", "rks", "rksb", "sv", "heun" or "rk4"; see
+        :func:`raydamp.methods`.
+    h : step size, > 0.
+    t_end, n_steps : give exactly one. With ``t_end`` not a whole multiple of ``h``
+        the last step is shortened to land on ``t_end``.
+    save_every : save every this many steps (the final state is always saved).
+    tableau : Runge-Kutta tableau for "rks" (default "heun"; also "euler", "rk4",
+        "midpoint") or "rksb" (explicit tableaux only).
+    progress : called as ``progress(steps_done, n_steps)`` about 100 times per run
+        (never once per step), from the integrating thread.
+    cancel : a :class:`CancelToken`; cancelling it stops the run.
+
+    The step loop runs in C++ with the GIL released.
+    """
+    if not isinstance(model, Model):
+        raise ValueError(f"model must be a raydamp model (e.g. raydamp.models.DampedPendulum()), got {model!r}")
+    if not isinstance(method, str) or method not in _method_names():
+        raise ValueError(f"method: unknown method {method!r} (known: {', '.join(_method_names())})")
+    if tableau is not None and not isinstance(tableau, str):
+        raise ValueError(f"tableau must be a tableau name or None, got {tableau!r}")
+    resolved_tableau = _core.resolve(method, tableau or "")  # raises ValueError naming the tableau
+    h = real("h", h, positive=True)
+    q0 = vector("q0", q0, model.dim)
+    p0 = vector("p0", p0, model.dim)
+    save_every = integer("save_every", save_every)
+    if (t_end is None) == (n_steps is None):
+        raise ValueError("give exactly one of t_end and n_steps")
+    if n_steps is not None:
+        n_steps = integer("n_steps", n_steps)
+        h_last = h
+    else:
+        t_end = real("t_end", t_end, positive=True)
+        n_steps, h_last = _steps_to(t_end, h)
+    if progress is not None and not callable(progress):
+        raise ValueError(f"progress must be callable or None, got {progress!r}")
+    if cancel is not None and not isinstance(cancel, _core.CancelToken):
+        raise ValueError(f"cancel must be a raydamp.CancelToken or None, got {cancel!r}")
+    rows = n_steps // save_every + 2
+    row_bytes = 8 * (2 + 2 * model.dim + len(model.momentum_names))
+    if rows * row_bytes > MAX_SAVED_BYTES:
+        raise ValueError(f"save_every: {rows} saved points would take {rows * row_bytes / 2**30:.1f} GiB "
+                         f"(limit {MAX_SAVED_BYTES / 2**30:.0f} GiB); raise save_every")
+
+    start = time.perf_counter()
+    out = _core.integrate(model._core_model, method, tableau or "", q0, p0, h, n_steps, h_last, save_every,
+                          progress, cancel)
+    wall = time.perf_counter() - start
+    uses_tableau = any(row["tableau"] is not None for row in _core.methods() if row["name"] == method)
+    return Solution(t=out["t"], q=out["q"], p=out["p"], energy=out["energy"], momentum=out["momentum"],
+                    status=out["status"], steps=out["steps"], failed_step=out["failed_step"],
+                    message=out["message"], method=method, tableau=resolved_tableau if uses_tableau else None,
+                    h=h, max_momentum_drift=out["max_momentum_drift"], wall_time=wall)
+
+
+def _steps_to(t_end: float, h: float) -> tuple[int, float]:
+    """Number of steps to reach t_end and the size of the last one."""
+    ratio = t_end / h
+    nearest = round(ratio)
+    if nearest >= 1 and abs(ratio - nearest) <= 1e-9 * max(1.0, ratio):
+        return nearest, h
+    n = math.ceil(ratio)
+    return n, t_end - (n - 1) * h

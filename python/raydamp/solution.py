@@ -1,0 +1,98 @@
+"""The result of raydamp.integrate."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+__all__ = ["Solution"]
+
+
+@dataclass(frozen=True, repr=False)
+class Solution:
+    """Saved points of a run and why it stopped.
+
+    Arrays have one row per saved point: the initial state, every ``save_every``
+    steps, and always the final (last finite) state.
+
+    Attributes
+    ----------
+    t : (N,) times.
+    q, p : (N, n) positions and momenta.
+    energy : (N,) H(q, p).
+    momentum : (N, m) the model's momentum maps (m = 0 for a model without symmetry).
+    status : "completed", "non_finite" (the state overflowed; ``failed_step`` is the
+        first step whose result was not finite and every saved row is finite) or
+        "cancelled".
+    steps : steps taken (all with finite results).
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    p: np.ndarray
+    energy: np.ndarray
+    momentum: np.ndarray
+    status: str
+    steps: int
+    failed_step: int | None
+    message: str
+    method: str
+    tableau: str | None
+    h: float
+    max_momentum_drift: float
+    wall_time: float = field(default=0.0)
+
+    @property
+    def success(self) -> bool:
+        return self.status == "completed"
+
+    @property
+    def initial_energy(self) -> float:
+        return float(self.energy[0])
+
+    @property
+    def final_energy(self) -> float:
+        return float(self.energy[-1])
+
+    @property
+    def energy_dissipated(self) -> float:
+        """H(0) - H(t_final): positive when energy was lost."""
+        return self.initial_energy - self.final_energy
+
+    @property
+    def mean_dissipation_rate(self) -> float:
+        """Energy dissipated per unit time over the run (nan if no time elapsed)."""
+        elapsed = float(self.t[-1] - self.t[0])
+        return self.energy_dissipated / elapsed if elapsed > 0 else math.nan
+
+    def summary(self) -> dict[str, Any]:
+        """The scalar results as plain JSON-ready values (non-finite numbers as None)."""
+
+        def num(x: float) -> float | None:
+            return float(x) if math.isfinite(x) else None
+
+        return {
+            "status": self.status,
+            "message": self.message,
+            "method": self.method,
+            "tableau": self.tableau,
+            "step_size": self.h,
+            "steps": self.steps,
+            "failed_step": self.failed_step,
+            "t_final": float(self.t[-1]),
+            "saved_points": int(self.t.size),
+            "energy_initial": num(self.initial_energy),
+            "energy_final": num(self.final_energy),
+            "energy_dissipated": num(self.energy_dissipated),
+            "mean_dissipation_rate": num(self.mean_dissipation_rate),
+            "momentum_drift": num(self.max_momentum_drift) if self.momentum.shape[1] else None,
+            "wall_time": self.wall_time,
+        }
+
+    def __repr__(self) -> str:
+        return (f"Solution(status={self.status!r}, method={self.method!r}, steps={self.steps}, "
+                f"saved={self.t.size}, t_final={self.t[-1]:.6g}, energy {self.initial_energy:.6g} -> "
+                f"{self.final_energy:.6g})")
