@@ -28,6 +28,7 @@ void bind_catalogue(py::module_& m) {
         row["default"] = !tab || tab->name() == e.default_tableau;
         row["order"] = tab ? method_order(e, *tab) : e.splitting_order;
         row["explicit"] = !tab || tab->is_explicit();
+        row["damped"] = !e.ignores_damping;
         rows.append(row);
       };
       if (e.tableau_use == TableauUse::none) {

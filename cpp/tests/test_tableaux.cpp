@@ -43,6 +43,9 @@ int main() {
   CHECK(throws([] { resolve_tableau(method_entry("3s"), "heun"); }));
   CHECK(throws([] { resolve_tableau(method_entry("heun"), "rk4"); }));
   CHECK(throws([] { method_entry("leapfrog"); }));
+  CHECK(throws([] { require_applicable(method_entry("sv"), 0.5); }));
+  require_applicable(method_entry("sv"), 0.0);
+  require_applicable(method_entry("3s"), 0.5);
   CHECK(resolve_tableau(method_entry("rks"), "midpoint").name() == "midpoint");
 
   // Palindromes are derived from their half: the tables really are symmetric.

@@ -17,6 +17,7 @@ class MethodInfo(NamedTuple):
     order: int
     explicit: bool
     default: bool
+    damped: bool
     description: str
 
 
@@ -34,7 +35,8 @@ def methods() -> list[MethodInfo]:
     """Every method with its (global) order and whether it is explicit.
 
     Methods taking a Runge-Kutta tableau ('rks', 'rksb') are listed once per
-    tableau they accept; ``default`` marks the one used when ``tableau=None``.
+    tableau they accept; ``default`` marks the one used when ``tableau=None``;
+    ``damped`` is False for 'sv', which refuses models with eps > 0.
     Orders are computed from the tableau's order conditions, not typed in.
     """
     return [MethodInfo(**{k: row[k] for k in MethodInfo._fields}) for row in _core.methods()]

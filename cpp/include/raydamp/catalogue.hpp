@@ -19,12 +19,13 @@ struct MethodEntry {
   std::string default_tableau;  // "" when the method has no Runge-Kutta stage
   bool tableau_fixed;           // heun and rk4 are one tableau each
   int splitting_order;
+  bool ignores_damping = false;  // sv: applying it to a damped model would silently drop eps
 };
 
 inline std::vector<MethodEntry> method_entries() {
   return {
       {"sv", "Stormer-Verlet: drift h/2, kick h, drift h/2 (ignores damping; the eps = 0 reference)",
-       TableauUse::none, "", false, StormerVerlet::splitting_order},
+       TableauUse::none, "", false, StormerVerlet::splitting_order, true},
       {"3s", "three-term splitting (paper Algorithm 3S): damp h/2, drift h/2, kick h, drift h/2, damp h/2",
        TableauUse::none, "", false, ThreeTermSplitting::splitting_order},
       {"2s", "two-term splitting (paper Algorithm 2S): drift h/2, exact kick+damp h, drift h/2",
@@ -71,6 +72,15 @@ inline ButcherTableau resolve_tableau(const MethodEntry& method, const std::stri
     throw std::invalid_argument("tableau: '" + tab.name() +
                                 "' is fully implicit; rks solves diagonally implicit stages only");
   return tab;
+}
+
+// A method that would silently compute something else refuses: sv has no damping
+// sub-flow, so on a damped model it would integrate the undamped system.
+inline void require_applicable(const MethodEntry& method, double eps) {
+  if (method.ignores_damping && eps != 0.0)
+    throw std::invalid_argument("method: '" + method.name + "' ignores damping and this model has eps = " +
+                                std::to_string(eps) + " > 0; use 3s, 2s or rks, which are '" + method.name +
+                                "' when eps = 0");
 }
 
 inline int method_order(const MethodEntry& method, const ButcherTableau& tab) {

@@ -1,0 +1,59 @@
+# The README's two commands: `make serve` and `make test`. Each installs what is
+# missing first (Debian packages, .venv, the package with its extras).
+SHELL := /bin/bash
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+PIP := $(VENV)/bin/pip
+INSTALLED := $(VENV)/.raydamp-installed
+SOURCES := $(shell find cpp python service -type f \( -name '*.hpp' -o -name '*.cpp' -o -name '*.py' -o -name '*.pyi' \) 2>/dev/null)
+APT_PACKAGES := libeigen3-dev g++ make
+SUDO := $(if $(filter 0,$(shell id -u)),,sudo)
+HOST ?= 127.0.0.1
+PORT ?= 8000
+export RAYDAMP_DB ?= $(CURDIR)/var/raydamp.sqlite3
+
+.PHONY: all setup system-deps serve test ctest pytest bench reproduce clean
+
+all: test
+
+setup: system-deps $(INSTALLED)
+
+# apt-get only when a package is missing, so a set-up machine needs no network.
+system-deps:
+	@missing=""; for p in $(APT_PACKAGES); do dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
+	if [ -n "$$missing" ]; then \
+	  echo "installing Debian packages:$$missing"; \
+	  $(SUDO) apt-get update && DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y $$missing; \
+	fi
+
+$(PY):
+	$(PYTHON) -m venv $(VENV)
+	$(PIP) install --upgrade pip
+
+# cmake and ninja come from PyPI into the venv: they build the C++ tests too.
+$(INSTALLED): $(PY) pyproject.toml CMakeLists.txt $(SOURCES)
+	$(PIP) install cmake ninja
+	$(PIP) install '.[service,test]'
+	@touch $@
+
+serve: setup
+	@mkdir -p $(dir $(RAYDAMP_DB))
+	$(PY) -m raydamp_service --host $(HOST) --port $(PORT)
+
+test: setup ctest pytest
+
+ctest: setup
+	$(VENV)/bin/cmake -S . -B build/cpp -G Ninja -DCMAKE_BUILD_TYPE=Release -DRAYDAMP_BUILD_TESTS=ON \
+	  -DCMAKE_MAKE_PROGRAM=$(CURDIR)/$(VENV)/bin/ninja
+	$(VENV)/bin/cmake --build build/cpp -j2
+	$(VENV)/bin/ctest --test-dir build/cpp --output-on-failure
+
+pytest: setup
+	$(PY) -m pytest
+
+bench: setup
+	$(PY) benchmarks/bench_steps.py
+
+clean:
+	rm -rf build $(VENV) var

@@ -1,0 +1,166 @@
+"""raydamp.integrate as a user meets it: arguments, errors, saving, progress, cancellation, threads."""
+
+from __future__ import annotations
+
+import math
+import threading
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import raydamp
+from paper import ELASTIC_P0, ELASTIC_Q0, PENDULUM_P0, PENDULUM_Q0, paper_problem
+from raydamp.models import DampedPendulum, ElasticPendulum
+
+
+def pendulum_run(**kwargs):
+    args = dict(h=0.1, n_steps=10)
+    args.update(kwargs)
+    return raydamp.integrate(DampedPendulum(), PENDULUM_Q0, PENDULUM_P0, **args)
+
+
+@pytest.mark.parametrize(("kwargs", "message"), [
+    ({"h": 0.0}, "h must be > 0"),
+    ({"h": -0.1}, "h must be > 0"),
+    ({"h": math.nan}, "h must be finite"),
+    ({"h": math.inf}, "h must be finite"),
+    ({"h": "0.1"}, "h must be a real number"),
+    ({"method": "leapfrog"}, "method: unknown method 'leapfrog'"),
+    ({"method": "rks", "tableau": "dopri5"}, "tableau: unknown tableau 'dopri5'"),
+    ({"method": "3s", "tableau": "heun"}, "tableau: method '3s' has no Runge-Kutta stage"),
+    ({"method": "rksb", "tableau": "midpoint"}, "tableau: method 'rksb' needs an explicit tableau"),
+    ({"method": "sv"}, "method: 'sv' ignores damping"),
+    ({"save_every": 0}, "save_every must be >= 1"),
+    ({"save_every": 1.5}, "save_every must be an integer"),
+    ({"n_steps": None}, "give exactly one of t_end and n_steps"),
+    ({"t_end": 1.0}, "give exactly one of t_end and n_steps"),
+    ({"n_steps": 0}, "n_steps must be >= 1"),
+    ({"n_steps": None, "t_end": -1.0}, "t_end must be > 0"),
+    ({"progress": 3}, "progress must be callable"),
+    ({"cancel": threading.Event()}, "cancel must be a raydamp.CancelToken"),
+    ({"n_steps": 10**12}, "save_every: .* GiB"),
+])
+def test_bad_arguments_are_named(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        pendulum_run(**kwargs)
+
+
+@pytest.mark.parametrize(("q0", "p0", "message"), [
+    ([0.0, 1.0], PENDULUM_P0, "q0 must have length 1"),
+    (PENDULUM_Q0, [[0.0]], "p0 must have length 1"),
+    ([math.nan], PENDULUM_P0, "q0 must be finite"),
+    (PENDULUM_Q0, [math.inf], "p0 must be finite"),
+    (["a"], PENDULUM_P0, "q0 must be an array"),
+])
+def test_bad_initial_state_is_named(q0, p0, message):
+    with pytest.raises(ValueError, match=message):
+        raydamp.integrate(DampedPendulum(), q0, p0, h=0.1, n_steps=10)
+
+
+def test_model_argument_must_be_a_model():
+    with pytest.raises(ValueError, match="model must be a raydamp model"):
+        raydamp.integrate("damped_pendulum", PENDULUM_Q0, PENDULUM_P0, h=0.1, n_steps=10)
+
+
+def test_saving_shapes_and_final_row():
+    sol = raydamp.integrate(ElasticPendulum(), ELASTIC_Q0, ELASTIC_P0, h=0.1, n_steps=10, save_every=3)
+    np.testing.assert_allclose(sol.t, [0.0, 0.3, 0.6, 0.9, 1.0], atol=1e-15)
+    assert sol.q.shape == sol.p.shape == (5, 3)
+    assert sol.energy.shape == (5,) and sol.momentum.shape == (5, 1)
+    assert sol.steps == 10 and sol.status == "completed" and sol.success
+    pend = pendulum_run()
+    assert pend.momentum.shape == (11, 0)  # no symmetry: empty momentum
+    assert pend.summary()["momentum_drift"] is None
+
+
+def test_t_end_not_a_multiple_of_h_lands_on_t_end():
+    sol = pendulum_run(n_steps=None, t_end=1.0, h=0.3)
+    assert sol.steps == 4 and sol.t[-1] == 1.0
+    exact = pendulum_run(n_steps=None, t_end=200.0, h=0.2)
+    assert exact.steps == 1000 and exact.t[-1] == pytest.approx(200.0, abs=1e-12)
+
+
+def test_energy_and_summary_are_consistent():
+    model, q0, p0 = paper_problem("damped_pendulum", 0.01)
+    sol = raydamp.integrate(model, q0, p0, h=0.2, t_end=200.0, save_every=50)
+    assert sol.energy[0] == pytest.approx(1 - math.cos(0.9 * math.pi), rel=1e-15)
+    for k in (0, 5, -1):
+        assert sol.energy[k] == pytest.approx(model.energy(sol.q[k], sol.p[k]), rel=1e-15)
+    s = sol.summary()
+    assert s["energy_dissipated"] == pytest.approx(s["energy_initial"] - s["energy_final"], rel=1e-14)
+    assert s["mean_dissipation_rate"] == pytest.approx(s["energy_dissipated"] / 200.0, rel=1e-12)
+    assert s["steps"] == 1000 and s["status"] == "completed"
+    # Dissipation is physical: energy falls, and by much more than one step's error.
+    assert 0.5 < s["energy_dissipated"] < s["energy_initial"]
+
+
+def test_progress_is_called_a_bounded_number_of_times():
+    calls = []
+    pendulum_run(n_steps=1_000_000, save_every=10**6, progress=lambda done, total: calls.append((done, total)))
+    assert 50 <= len(calls) <= 102
+    assert calls[-1] == (1_000_000, 1_000_000)
+    assert all(a[0] < b[0] for a, b in zip(calls, calls[1:]))
+
+
+def test_progress_exception_propagates():
+    def boom(done, total):
+        raise RuntimeError("stop here")
+
+    with pytest.raises(RuntimeError, match="stop here"):
+        pendulum_run(n_steps=100_000, progress=boom)
+
+
+def test_cancel_from_another_thread_keeps_the_points_so_far():
+    token = raydamp.CancelToken()
+    seen = threading.Event()
+
+    def progress(done, total):
+        seen.set()
+
+    canceller = threading.Thread(target=lambda: (seen.wait(30), token.cancel()))
+    canceller.start()
+    sol = pendulum_run(n_steps=500_000_000, save_every=100_000, progress=progress, cancel=token)
+    canceller.join()
+    assert sol.status == "cancelled" and token.cancelled
+    assert 0 < sol.steps < 500_000_000
+    assert sol.t[-1] == pytest.approx(sol.steps * 0.1)
+    assert np.all(np.isfinite(sol.q))
+
+
+def test_loop_releases_the_gil():
+    # Another Python thread keeps running while a long integration is under way.
+    counter = [0]
+    stop = threading.Event()
+
+    def spin():
+        while not stop.is_set():
+            counter[0] += 1
+
+    started = []
+    worker = threading.Thread(target=spin)
+    worker.start()
+    pendulum_run(n_steps=20_000_000, save_every=10**7,
+                 progress=lambda done, total: started.append(counter[0]))
+    stop.set()
+    worker.join()
+    # Between the first and last progress call the spinning thread advanced a lot.
+    assert started[-1] - started[0] > 1000
+
+
+def test_methods_catalogue():
+    rows = raydamp.methods()
+    names = {m.name for m in rows}
+    assert names == {"sv", "3s", "2s", "rks", "rksb", "heun", "rk4"}
+    by_key = {(m.name, m.tableau): m for m in rows}
+    assert by_key[("rks", "midpoint")].explicit is False
+    assert by_key[("rks", "heun")].default and by_key[("rks", "heun")].order == 2
+    assert by_key[("rk4", "rk4")].order == 4
+    assert by_key[("sv", None)].damped is False
+    assert {t.name: t.order for t in raydamp.tableaux()} == {"euler": 1, "heun": 2, "midpoint": 2, "rk4": 4}
+
+
+def test_version_comes_from_the_build():
+    pyproject = tomllib.loads((Path(__file__).parents[1] / "pyproject.toml").read_text())
+    assert raydamp.__version__ == pyproject["project"]["version"]
