@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "raydamp/concepts.hpp"
 #include "raydamp/step.hpp"
 
 namespace raydamp {
@@ -89,6 +90,7 @@ inline constexpr long kBlock = 256;
 template <class Method, class Model, int Dim = Model::dim>
 RunResult integrate(const Model& model, const ButcherTableau& tab, State<Dim> z, const RunSpec& spec,
                     const Control& control = {}) {
+  static_assert(is_model_v<Model>, "Model lacks part of the interface listed in raydamp/concepts.hpp");
   const long N = spec.n_steps;
   const int n = model.size();
   RunResult result;
