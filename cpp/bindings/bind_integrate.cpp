@@ -31,11 +31,11 @@ static py::array_t<double> to_numpy(std::vector<double>&& data, std::vector<py::
 template <class Model>
 py::dict run(const Model& model, const std::string& method, const std::string& tableau,
              const typename Model::Vec& q0, const typename Model::Vec& p0, double h, long n_steps, double h_last,
-             long save_every, py::object progress, CancelToken* cancel) {
+             long save_every, bool track_work, py::object progress, CancelToken* cancel) {
   const MethodEntry entry = method_entry(method);
   require_applicable(entry, model.eps);
   const ButcherTableau tab = resolve_tableau(entry, tableau);
-  const RunSpec spec{h, n_steps, h_last, save_every};
+  const RunSpec spec{h, n_steps, h_last, save_every, track_work};
   Control control;
   if (cancel) control.cancel = &cancel->flag;
   if (!progress.is_none())
@@ -64,6 +64,7 @@ py::dict run(const Model& model, const std::string& method, const std::string& t
   out["p"] = to_numpy(std::move(tr.p), {rows, tr.n});
   out["energy"] = to_numpy(std::move(tr.energy), {rows});
   out["momentum"] = to_numpy(std::move(tr.momentum), {rows, tr.n_momenta});
+  out["work"] = track_work ? py::object(to_numpy(std::move(tr.work), {rows})) : py::none();
   return out;
 }
 
@@ -75,10 +76,10 @@ void bind_integrate(py::module_& m) {
       .def_property_readonly("cancelled", [](const CancelToken& c) { return c.flag.load(); });
   m.def("integrate", &run<DampedPendulum>, py::arg("model"), py::arg("method"), py::arg("tableau"), py::arg("q0"),
         py::arg("p0"), py::arg("h"), py::arg("n_steps"), py::arg("h_last"), py::arg("save_every"),
-        py::arg("progress"), py::arg("cancel").none(true));
+        py::arg("track_work"), py::arg("progress"), py::arg("cancel").none(true));
   m.def("integrate", &run<ElasticPendulum>, py::arg("model"), py::arg("method"), py::arg("tableau"), py::arg("q0"),
         py::arg("p0"), py::arg("h"), py::arg("n_steps"), py::arg("h_last"), py::arg("save_every"),
-        py::arg("progress"), py::arg("cancel").none(true));
+        py::arg("track_work"), py::arg("progress"), py::arg("cancel").none(true));
 }
 
 }  // namespace raydamp::bindings

@@ -30,7 +30,7 @@ def _method_names() -> list[str]:
 
 
 def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: float | None = None,
-              n_steps: int | None = None, save_every: int = 1, tableau: str | None = None,
+              n_steps: int | None = None, save_every: int = 1, tableau: str | None = None, work: bool = False,
               progress: Callable[[int, int], object] | None = None,
               cancel: CancelToken | None = None) -> Solution:
     """Integrate ``model`` from (q0, p0) with fixed steps of size ``h``.
@@ -50,6 +50,9 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
     progress : called as ``progress(steps_done, n_steps)`` about 100 times per run
         (never once per step), from the integrating thread.
     cancel : a :class:`CancelToken`; cancelling it stops the run.
+    work : also record the damping work W(t) = eps int qdot^T D(q) qdot dt at the saved
+        points (``Solution.work``), integrated in the step loop with a quadrature of
+        the method's order, so that H(t) - H(0) + W(t) measures the energy error.
 
     The step loop runs in C++ with the GIL released.
     """
@@ -74,23 +77,25 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
         n_steps, h_last = _steps_to(t_end, h)
     if progress is not None and not callable(progress):
         raise ValueError(f"progress must be callable or None, got {progress!r}")
+    if not isinstance(work, bool):
+        raise ValueError(f"work must be True or False, got {work!r}")
     if cancel is not None and not isinstance(cancel, _core.CancelToken):
         raise ValueError(f"cancel must be a raydamp.CancelToken or None, got {cancel!r}")
     rows = n_steps // save_every + 2
-    row_bytes = 8 * (2 + 2 * model.dim + len(model.momentum_names))
+    row_bytes = 8 * (2 + work + 2 * model.dim + len(model.momentum_names))
     if rows * row_bytes > MAX_SAVED_BYTES:
         raise ValueError(f"save_every: {rows} saved points would take {rows * row_bytes / 2**30:.1f} GiB "
                          f"(limit {MAX_SAVED_BYTES / 2**30:.0f} GiB); raise save_every")
 
     start = time.perf_counter()
     out = _core.integrate(model._core_model, method, tableau or "", q0, p0, h, n_steps, h_last, save_every,
-                          progress, cancel)
+                          work, progress, cancel)
     wall = time.perf_counter() - start
     uses_tableau = any(row["tableau"] is not None for row in _core.methods() if row["name"] == method)
     return Solution(t=out["t"], q=out["q"], p=out["p"], energy=out["energy"], momentum=out["momentum"],
                     status=out["status"], steps=out["steps"], failed_step=out["failed_step"],
                     message=out["message"], method=method, tableau=resolved_tableau if uses_tableau else None,
-                    h=h, max_momentum_drift=out["max_momentum_drift"], wall_time=wall)
+                    h=h, max_momentum_drift=out["max_momentum_drift"], work=out["work"], wall_time=wall)
 
 
 def _steps_to(t_end: float, h: float) -> tuple[int, float]:

@@ -28,6 +28,7 @@ class Solution:
         first step whose result was not finite and every saved row is finite) or
         "cancelled".
     steps : steps taken (all with finite results).
+    work : (N,) damping work W(t) if the run was asked for it (``work=True``), else None.
     """
 
     t: np.ndarray
@@ -43,6 +44,7 @@ class Solution:
     tableau: str | None
     h: float
     max_momentum_drift: float
+    work: np.ndarray | None = field(default=None)
     wall_time: float = field(default=0.0)
 
     @property
@@ -67,6 +69,13 @@ class Solution:
         """Energy dissipated per unit time over the run (nan if no time elapsed)."""
         elapsed = float(self.t[-1] - self.t[0])
         return self.energy_dissipated / elapsed if elapsed > 0 else math.nan
+
+    @property
+    def energy_balance(self) -> np.ndarray:
+        """H(t) - H(0) + W(t): zero for the exact flow; needs ``work=True``."""
+        if self.work is None:
+            raise ValueError("work: this run did not record the damping work; pass work=True to integrate")
+        return self.energy - self.energy[0] + self.work
 
     def summary(self) -> dict[str, Any]:
         """The scalar results as plain JSON-ready values (non-finite numbers as None)."""

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "raydamp/concepts.hpp"
+#include "raydamp/diagnostics.hpp"
 #include "raydamp/step.hpp"
 
 namespace raydamp {
@@ -30,6 +31,7 @@ struct RunSpec {
   long n_steps = 0;
   double h_last = 0.1;   // size of the final step (lands exactly on t_end)
   long save_every = 1;
+  bool track_work = false;  // record W(t) = eps int qdot^T D qdot dt at the saved points
 };
 
 struct Control {
@@ -41,7 +43,7 @@ struct Control {
 // Saved points, row-major: t[k], q[k*n + i], p[k*n + i], energy[k], momentum[k*m + j].
 struct Trajectory {
   int n = 0, n_momenta = 0;
-  std::vector<double> t, q, p, energy, momentum;
+  std::vector<double> t, q, p, energy, momentum, work;  // work: empty unless tracked
   long rows() const { return static_cast<long>(t.size()); }
 };
 
@@ -62,8 +64,9 @@ double energy(const Model& model, const State<Dim>& z) {
 namespace detail {
 
 template <class Model, int Dim>
-void save_point(const Model& model, const State<Dim>& z, double t, Trajectory& out) {
+void save_point(const Model& model, const State<Dim>& z, double t, const Workspace<Dim>& ws, Trajectory& out) {
   out.t.push_back(t);
+  if (ws.track_work) out.work.push_back(ws.work);
   out.q.insert(out.q.end(), z.q.data(), z.q.data() + z.q.size());
   out.p.insert(out.p.end(), z.p.data(), z.p.data() + z.p.size());
   out.energy.push_back(energy(model, z));
@@ -105,6 +108,8 @@ RunResult integrate(const Model& model, const ButcherTableau& tab, State<Dim> z,
   out.momentum.reserve(rows * Model::n_momenta);
 
   Workspace<Dim> ws(n, tab.stages());
+  ws.track_work = spec.track_work;
+  if (spec.track_work) out.work.reserve(rows);
   State<Dim> checkpoint = z;
   std::array<double, Model::n_momenta> j0{};
   model.momenta(z.q, z.p, j0.data());
@@ -117,10 +122,24 @@ RunResult integrate(const Model& model, const ButcherTableau& tab, State<Dim> z,
     result.message = "the initial state is not finite";
     return result;
   }
-  detail::save_point(model, z, 0.0, out);
+  detail::save_point(model, z, 0.0, ws, out);
   const long progress_every = std::max(1L, N / std::max(1L, control.max_progress_calls));
   long next_save = spec.save_every, next_progress = progress_every, k = 0;
   double max_drift = 0.0;
+  // Damping work by the trapezoidal rule on the step's end points, unless the
+  // method integrates it itself (see integrates_work).
+  constexpr bool trapezoid = !integrates_work<Method>::value;
+  double power = spec.track_work && trapezoid ? dissipated_power(model, z, ws) : 0.0;
+  auto advance = [&](long i) {
+    step<Method>(model, tab, z, step_size(i), ws);
+    if constexpr (trapezoid) {
+      if (spec.track_work) {
+        const double next = dissipated_power(model, z, ws);
+        ws.work += 0.5 * step_size(i) * (power + next);
+        power = next;
+      }
+    }
+  };
 
   while (k < N) {
     if (control.cancel && control.cancel->load(std::memory_order_relaxed)) {
@@ -130,20 +149,25 @@ RunResult integrate(const Model& model, const ButcherTableau& tab, State<Dim> z,
     }
     const long end = std::min({N, next_save, next_progress, k + kBlock});
     checkpoint = z;
+    const double checkpoint_work = ws.work, checkpoint_power = power;
     double block_drift = 0.0;
     for (long i = k; i < end; ++i) {
-      step<Method>(model, tab, z, step_size(i), ws);
+      advance(i);
       if constexpr (Model::n_momenta > 0) block_drift = std::max(block_drift, detail::momentum_drift(model, z, j0));
     }
     if (!z.all_finite()) {
       // Replay the block one checked step at a time from its start.
       z = checkpoint;
+      ws.work = checkpoint_work;
+      power = checkpoint_power;
       long i = k;
       for (; i < end; ++i) {
-        State<Dim> before = z;
-        step<Method>(model, tab, z, step_size(i), ws);
+        const State<Dim> before = z;
+        const double work_before = ws.work;
+        advance(i);
         if (!z.all_finite()) {
           z = before;
+          ws.work = work_before;
           break;
         }
         if constexpr (Model::n_momenta > 0) max_drift = std::max(max_drift, detail::momentum_drift(model, z, j0));
@@ -158,7 +182,7 @@ RunResult integrate(const Model& model, const ButcherTableau& tab, State<Dim> z,
     max_drift = std::max(max_drift, block_drift);
     k = end;
     if (k == next_save) {
-      detail::save_point(model, z, time_at(k), out);
+      detail::save_point(model, z, time_at(k), ws, out);
       next_save += spec.save_every;
     }
     if (k == next_progress) {
@@ -167,7 +191,7 @@ RunResult integrate(const Model& model, const ButcherTableau& tab, State<Dim> z,
     }
   }
   // The final state is always the last row, saved or not by save_every.
-  if (out.t.back() != time_at(k)) detail::save_point(model, z, time_at(k), out);
+  if (out.t.back() != time_at(k)) detail::save_point(model, z, time_at(k), ws, out);
   if (control.progress && result.status == Status::completed && next_progress - progress_every != N) control.progress(N, N);
   result.steps = k;
   result.max_momentum_drift = max_drift;

@@ -12,6 +12,8 @@ template <int Dim>
 struct Workspace {
   Vector<Dim> v, g, f, stage_q, stage_p;
   std::vector<Vector<Dim>> kq, kp;  // Runge-Kutta stage derivatives
+  bool track_work = false;  // accumulate the damping work W in `work`
+  double work = 0.0;
 
   Workspace(int n, int stages)
       : v(Vector<Dim>::Zero(n)), g(Vector<Dim>::Zero(n)), f(Vector<Dim>::Zero(n)),

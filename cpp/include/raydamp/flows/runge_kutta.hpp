@@ -42,7 +42,8 @@ void kick_damp_rk(const Model& model, const ButcherTableau& tab, State<Dim>& z, 
 
 namespace detail {
 
-// Generic explicit Runge-Kutta step of (q, p)' = field(q, p); field writes (dq, dp).
+// Generic explicit Runge-Kutta step of (q, p)' = field(q, p); field(i, q, p, dq, dp)
+// writes the slopes of stage i.
 template <class Field, int Dim>
 void explicit_rk(const ButcherTableau& tab, State<Dim>& z, double h, Workspace<Dim>& ws, Field field) {
   const int s = tab.stages();
@@ -55,7 +56,7 @@ void explicit_rk(const ButcherTableau& tab, State<Dim>& z, double h, Workspace<D
       ws.stage_q += ha * ws.kq[j];
       ws.stage_p += ha * ws.kp[j];
     }
-    field(ws.stage_q, ws.stage_p, ws.kq[i], ws.kp[i]);
+    field(i, ws.stage_q, ws.stage_p, ws.kq[i], ws.kp[i]);
   }
   // Sum the weighted slopes before scaling by h: with equal slopes (rksb at
   // eps = 0) Heun's 1/2 + 1/2 then adds exactly one h v, as the drift does.
@@ -73,7 +74,7 @@ void explicit_rk(const ButcherTableau& tab, State<Dim>& z, double h, Workspace<D
 
 template <class Model, int Dim>
 void drift_damp_rk(const Model& model, const ButcherTableau& tab, State<Dim>& z, double h, Workspace<Dim>& ws) {
-  detail::explicit_rk(tab, z, h, ws, [&](const Vector<Dim>& q, const Vector<Dim>& p, Vector<Dim>& dq, Vector<Dim>& dp) {
+  detail::explicit_rk(tab, z, h, ws, [&](int, const Vector<Dim>& q, const Vector<Dim>& p, Vector<Dim>& dq, Vector<Dim>& dp) {
     model.mass.velocity(p, dq);
     model.damping.rate(q, p, dp);
     dp = -dp;
@@ -82,10 +83,13 @@ void drift_damp_rk(const Model& model, const ButcherTableau& tab, State<Dim>& z,
 
 template <class Model, int Dim>
 void full_rk(const Model& model, const ButcherTableau& tab, State<Dim>& z, double h, Workspace<Dim>& ws) {
-  detail::explicit_rk(tab, z, h, ws, [&](const Vector<Dim>& q, const Vector<Dim>& p, Vector<Dim>& dq, Vector<Dim>& dp) {
+  detail::explicit_rk(tab, z, h, ws, [&](int i, const Vector<Dim>& q, const Vector<Dim>& p, Vector<Dim>& dq, Vector<Dim>& dp) {
     model.mass.velocity(p, dq);
     model.gradient(q, ws.g);
     model.damping.rate(q, p, dp);
+    // The damping work W' = v . A p is integrated as one more component of the
+    // system, by the same tableau, so its quadrature has the method's order.
+    if (ws.track_work) ws.work += h * tab.b(i) * dq.dot(dp);
     dp = -dp - ws.g;
   });
 }

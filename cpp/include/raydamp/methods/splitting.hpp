@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstddef>
+#include <type_traits>
 
 namespace raydamp {
 
@@ -103,7 +104,16 @@ struct RungeKutta {  // a classical Runge-Kutta method on the whole system
   static constexpr std::array<Stage, 1> stages = {{{Flow::full_rk, 1.0}}};
   static constexpr TableauUse tableau = TableauUse::explicit_only;
   static constexpr int splitting_order = 1000;  // no splitting error: the tableau decides
+  static constexpr bool integrates_work = true;  // full_rk integrates W with its own stages
 };
+
+// Methods whose steps accumulate the damping work themselves; for the others the
+// step loop integrates W by the trapezoidal rule (order 2, their order).
+template <class Method, class = void>
+struct integrates_work : std::false_type {};
+template <class Method>
+struct integrates_work<Method, std::void_t<decltype(Method::integrates_work)>>
+    : std::bool_constant<Method::integrates_work> {};
 
 template <class Method>
 constexpr bool valid_table() {
