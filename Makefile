@@ -34,7 +34,7 @@ $(PY):
 # cmake and ninja come from PyPI into the venv: they build the C++ tests too.
 $(INSTALLED): $(PY) pyproject.toml CMakeLists.txt $(SOURCES)
 	$(PIP) install cmake ninja
-	$(PIP) install '.[service,test]'
+	$(PIP) install '.[service,analysis,test]'
 	@touch $@
 
 serve: setup
@@ -54,6 +54,10 @@ pytest: setup
 
 bench: setup
 	$(PY) benchmarks/bench_steps.py
+
+# The paper's experiments in full: figures and REPORT.md in reproduce-out/.
+reproduce: setup
+	$(VENV)/bin/raydamp reproduce --out reproduce-out
 
 clean:
 	rm -rf build $(VENV) var

@@ -18,8 +18,8 @@ double dissipated_power(const Model& model, const State<Dim>& z, Workspace<Dim>&
 }
 
 // The modified Hamiltonian of the drift-kick-drift Stormer-Verlet step
-// exp(h/2 X_T) exp(h X_V) exp(h/2 X_T), truncated after h^2 (paper Lemma 4.3 gives
-// its form). The symmetric BCH formula
+// exp(h/2 X_T) exp(h X_V) exp(h/2 X_T), truncated after h^2 (paper Lemma 4.4 in the
+// LaTeX source gives its form). The symmetric BCH formula
 //   log(e^{X/2} e^{Y} e^{X/2}) = X + Y - 1/24 [X,[X,Y]] - 1/12 [Y,[X,Y]] + ...
 // with X = h X_T, Y = h X_V, and {T,{T,V}} = v^T V''(q) v, {V,{V,T}} = grad V^T M^{-1} grad V
 // (v = M^{-1} p) gives

@@ -1,0 +1,23 @@
+"""Diagnostics that show the paper's claims: energy balance, modified energy,
+reference solutions, momentum drift, relative equilibria and convergence orders.
+
+Needs SciPy (``pip install raydamp[analysis]``) for the reference solver and root finding.
+"""
+
+from .convergence import ConvergenceResult, convergence
+from .energy import energy_error, modified_energy, reference_solution
+from .momentum import momentum_drift
+from .relative_equilibrium import (
+    RelativeEquilibrium,
+    cartesian_state,
+    distance_from,
+    modified_relative_equilibrium,
+    reduced_coordinates,
+    relative_equilibrium,
+)
+
+__all__ = [
+    "ConvergenceResult", "convergence", "energy_error", "modified_energy", "reference_solution",
+    "momentum_drift", "RelativeEquilibrium", "cartesian_state", "distance_from", "modified_relative_equilibrium",
+    "reduced_coordinates", "relative_equilibrium",
+]

@@ -1,0 +1,217 @@
+"""The paper's numerical experiments, as functions returning data and measured numbers.
+
+Each function returns a plain dict: arrays for the figures and scalars that the
+claims in claims.py compare against the paper. Tests call the same functions.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..analysis import (
+    convergence,
+    distance_from,
+    energy_error,
+    modified_energy,
+    modified_relative_equilibrium,
+    reduced_coordinates,
+    reference_solution,
+    relative_equilibrium,
+)
+from ..analysis.convergence import fitted_order
+from ..analysis.relative_equilibrium import equilibrium_residual
+from ..integrate import integrate
+from ..models import DampedPendulum, ElasticPendulum
+from .settings import (
+    ELASTIC_P0,
+    ELASTIC_Q0,
+    EQUILIBRIUM_P0,
+    EQUILIBRIUM_Q0,
+    PENDULUM_EPS,
+    PENDULUM_P0,
+    PENDULUM_Q0,
+    SPLITTINGS,
+    Settings,
+)
+
+
+def _linear_trend(t, y) -> float:
+    """Slope of the least-squares line through (t, y)."""
+    return float(np.polyfit(t, y, 1)[0])
+
+
+def pendulum_phase(s: Settings) -> dict:
+    """Figures 1 and 2: phase portraits over [0, T] for several h; the final energy is
+    the size of the 'hole' the paper points at."""
+    model = DampedPendulum(PENDULUM_EPS)
+    runs = {(m, h): integrate(model, PENDULUM_Q0, PENDULUM_P0, method=m, h=h, t_end=s.pendulum_t_end)
+            for m in (*SPLITTINGS, "heun") for h in s.pendulum_hs}
+    ref = reference_solution(model, PENDULUM_Q0, PENDULUM_P0, [0.0, s.pendulum_t_end])
+
+    def spread(method):
+        final = np.array([runs[method, h].final_energy for h in s.pendulum_hs])
+        return float(np.ptp(final) / final.mean())
+
+    return {"runs": runs, "reference_final_energy": float(ref.energy[-1]),
+            "final_energy_spread": {m: spread(m) for m in (*SPLITTINGS, "heun")}}
+
+
+def pendulum_energy(s: Settings, h: float = 0.2) -> dict:
+    """Figure 3: energy error against a DOP853 reference, and the pairwise energy
+    differences between the splitting methods."""
+    model = DampedPendulum(PENDULUM_EPS)
+    runs = {m: integrate(model, PENDULUM_Q0, PENDULUM_P0, method=m, h=h, t_end=s.pendulum_t_end)
+            for m in (*SPLITTINGS, "heun")}
+    t = runs["3s"].t
+    ref = reference_solution(model, PENDULUM_Q0, PENDULUM_P0, t)
+    errors = {m: energy_error(model, sol, ref) for m, sol in runs.items()}
+    half = t.size // 2
+    growth = {m: float(np.abs(e[half:]).max() / np.abs(e[:half]).max()) for m, e in errors.items()}
+    trend = {m: _linear_trend(t, np.abs(e)) * t[-1] / np.abs(e).max() for m, e in errors.items()}
+    pairs = [("3s", "2s"), ("2s", "rks"), ("3s", "rks")]
+    differences = {f"{a}-{b}": np.abs(runs[a].energy - runs[b].energy) for a, b in pairs}
+    largest_error = max(np.abs(errors[m]).max() for m in SPLITTINGS)
+    ratio = {k: float(largest_error / d.max()) for k, d in differences.items()}
+    return {"h": h, "t": t, "errors": errors, "differences": differences, "growth": growth, "trend": trend,
+            "difference_ratio": ratio}
+
+
+def elastic_energy(s: Settings) -> dict:
+    """Figure 4: energy against time for several h, eps = 0.01 and 0.1."""
+    out = {}
+    for eps in (0.01, 0.1):
+        model = ElasticPendulum(eps)
+        runs = {(m, h): integrate(model, ELASTIC_Q0, ELASTIC_P0, method=m, h=h, t_end=s.elastic_t_end)
+                for m in (*SPLITTINGS, "heun") for h in s.elastic_hs}
+        ref = reference_solution(model, ELASTIC_Q0, ELASTIC_P0, [0.0, s.elastic_t_end])
+        rates = {m: np.array([runs[m, h].mean_dissipation_rate for h in s.elastic_hs]) for m in (*SPLITTINGS, "heun")}
+        exact_rate = (ref.energy[0] - ref.energy[-1]) / s.elastic_t_end
+        out[eps] = {"runs": runs, "exact_rate": float(exact_rate),
+                    "rate_error": {m: float(np.abs(r - exact_rate).max() / exact_rate) for m, r in rates.items()},
+                    "heun_energy_gain": float(max(runs["heun", h].final_energy - runs["heun", h].initial_energy
+                                                  for h in s.elastic_hs))}
+    return out
+
+
+def _radius_windows(sol, windows=10):
+    rho = np.hypot(sol.q[:, 0], sol.q[:, 1])
+    parts = np.array_split(rho, windows)
+    return np.array([w.mean() for w in parts]), np.array([np.ptp(w) for w in parts])
+
+
+def elastic_orbits(s: Settings) -> dict:
+    """Figure 5: x-y projections; Heun's radius keeps growing, the splittings settle
+    on a limit cycle."""
+    runs = {}
+    for eps, h, methods in ((0.1, 0.1, (*SPLITTINGS, "heun")), (0.01, 0.1, SPLITTINGS), (0.01, 0.4, SPLITTINGS)):
+        model = ElasticPendulum(eps)
+        for m in methods:
+            runs[m, eps, h] = integrate(model, ELASTIC_Q0, ELASTIC_P0, method=m, h=h, t_end=s.orbit_t_end)
+    heun_mean, _ = _radius_windows(runs["heun", 0.1, 0.1])
+    split_mean, split_ptp = _radius_windows(runs["3s", 0.1, 0.1])
+    return {"runs": runs, "heun_radius_growth": float(heun_mean[-1] - heun_mean[1]),
+            "heun_radius_increasing": bool(np.all(np.diff(heun_mean[1:]) > 0)),
+            "splitting_radius_ptp_last": float(split_ptp[-1]), "splitting_radius_ptp_first": float(split_ptp[0]),
+            "splitting_radius_change_late": float(abs(split_mean[-1] - split_mean[-2]))}
+
+
+def momentum(s: Settings, steps: int = 100_000) -> dict:
+    """Section 5 and 6.2: J3 over 10^5 steps at h = 0.1, eps = 0.1."""
+    model = ElasticPendulum(0.1)
+    drift = {m: integrate(model, ELASTIC_Q0, ELASTIC_P0, method=m, h=0.1, n_steps=steps,
+                          save_every=steps).max_momentum_drift for m in (*SPLITTINGS, "rksb", "heun")}
+    j0 = float(model.momenta(ELASTIC_Q0, ELASTIC_P0)[0])
+    return {"steps": steps, "drift": drift, "j0": j0}
+
+
+def equilibrium(s: Settings, eps: float = 0.1) -> dict:
+    """Figure 6: started on the exact relative equilibrium, the splittings drift to
+    their modified relative equilibrium, O(h^2) away."""
+    mu = float(reduced_coordinates(EQUILIBRIUM_Q0, EQUILIBRIUM_P0)[0, 4])
+    rho0, z0 = EQUILIBRIUM_Q0[1], EQUILIBRIUM_Q0[2]
+    residual_k1 = equilibrium_residual(ElasticPendulum(eps, k=1.0), rho0, z0, mu)
+    model = ElasticPendulum(eps, k=10.0)
+    residual_k10 = equilibrium_residual(model, rho0, z0, mu)
+    exact = relative_equilibrium(model, mu)
+    offsets = {m: np.array([np.linalg.norm(modified_relative_equilibrium(model, m, h, mu).reduced - exact.reduced)
+                            for h in s.equilibrium_hs]) for m in SPLITTINGS}
+    h_plot = 0.1
+    modified = modified_relative_equilibrium(model, "3s", h_plot, mu)
+    runs = {m: integrate(model, EQUILIBRIUM_Q0, EQUILIBRIUM_P0, method=m, h=h_plot, t_end=s.equilibrium_t_end)
+            for m in SPLITTINGS}
+    sol = runs["3s"]
+    return {"mu": mu, "residual_k1": residual_k1, "residual_k10": residual_k10, "exact": exact,
+            "modified": modified, "hs": np.array(s.equilibrium_hs), "offsets": offsets,
+            "offset_order": {m: fitted_order(s.equilibrium_hs, o) for m, o in offsets.items()},
+            "runs": runs, "h": h_plot,
+            "distance_to_exact": distance_from(exact, sol), "distance_to_modified": distance_from(modified, sol)}
+
+
+def modified_energy_study(s: Settings) -> dict:
+    """Section 4: SV conserves the modified energy to O(h^4) at eps = 0 while H
+    oscillates at O(h^2); 3s makes it decay monotonically at small h (Theorem 4.6)."""
+    out = {"hs": np.array(s.modified_energy_hs), "H_range": {}, "Hmod_range": {}}
+    for name, model, q0, p0 in (("damped_pendulum", DampedPendulum(0.0), PENDULUM_Q0, PENDULUM_P0),
+                                ("elastic_pendulum", ElasticPendulum(0.0), ELASTIC_Q0, ELASTIC_P0)):
+        h_range, mod_range = [], []
+        for h in s.modified_energy_hs:
+            sol = integrate(model, q0, p0, method="sv", h=h, t_end=100.0)
+            h_range.append(np.ptp(sol.energy))
+            mod_range.append(np.ptp(modified_energy(model, sol.q, sol.p, h)))
+            if name == "damped_pendulum" and h == s.modified_energy_hs[0]:
+                out["sv_run"] = (sol, modified_energy(model, sol.q, sol.p, h))
+        out["H_range"][name], out["Hmod_range"][name] = np.array(h_range), np.array(mod_range)
+    out["H_order"] = {k: fitted_order(s.modified_energy_hs, v) for k, v in out["H_range"].items()}
+    out["Hmod_order"] = {k: fitted_order(s.modified_energy_hs, v) for k, v in out["Hmod_range"].items()}
+    # 3s with damping on the elastic pendulum: count steps where H or H_mod rises.
+    model = ElasticPendulum(0.01)
+    h = 0.05
+    sol = integrate(model, ELASTIC_Q0, ELASTIC_P0, method="3s", h=h, t_end=s.elastic_t_end)
+    hmod = modified_energy(model, sol.q, sol.p, h)
+    out["decay_run"] = (sol, hmod, h)
+    out["H_rises"] = int(np.sum(np.diff(sol.energy) > 0))
+    out["Hmod_rises"] = int(np.sum(np.diff(hmod) > 0))
+    out["steps"] = sol.steps
+    return out
+
+
+CONVERGENCE_CASES = (("3s", None, 2), ("2s", None, 2), ("rks", "heun", 2), ("rks", "rk4", 2), ("rks", "midpoint", 2),
+                     ("rks", "euler", 1), ("rksb", "heun", 2), ("heun", None, 2), ("rk4", None, 4))
+
+
+def orders(s: Settings) -> dict:
+    """Figure 7: global error against h at t_end for every method on both models."""
+    out = {}
+    for name, model, q0, p0 in (("damped_pendulum", DampedPendulum(s.convergence_eps), PENDULUM_Q0, PENDULUM_P0),
+                                ("elastic_pendulum", ElasticPendulum(s.convergence_eps), ELASTIC_Q0, ELASTIC_P0)):
+        ref = reference_solution(model, q0, p0, [0.0, s.convergence_t_end])
+        out[name] = {(m, tab): convergence(model, m, s.convergence_hs, q0=q0, p0=p0, t_end=s.convergence_t_end,
+                                           tableau=tab, reference=(ref.q[-1], ref.p[-1]))
+                     for m, tab, _ in CONVERGENCE_CASES}
+    return out
+
+
+def undamped_equivalence(s: Settings) -> dict:
+    """Section 3: at eps = 0 every splitting method is Stormer-Verlet."""
+    worst = 0.0
+    for model, q0, p0 in ((DampedPendulum(0.0), PENDULUM_Q0, PENDULUM_P0), (ElasticPendulum(0.0), ELASTIC_Q0, ELASTIC_P0)):
+        sv = integrate(model, q0, p0, method="sv", h=0.1, n_steps=2000)
+        for m, tab in (("3s", None), ("2s", None), ("rks", "heun"), ("rks", "rk4"), ("rks", "midpoint")):
+            other = integrate(model, q0, p0, method=m, tableau=tab, h=0.1, n_steps=2000)
+            worst = max(worst, np.abs(other.q - sv.q).max(), np.abs(other.p - sv.p).max())
+    return {"max_difference": float(worst)}
+
+
+def energy_balance(s: Settings) -> dict:
+    """Theorem 4.3: the dissipation rate is asymptotically correct. The balance
+    H(t) - H(0) + W(t) (W the damping work) stays bounded and O(h^2) for the
+    splittings, while Heun's drifts."""
+    model = DampedPendulum(PENDULUM_EPS)
+    out = {}
+    for m in (*SPLITTINGS, "heun"):
+        out[m] = {h: integrate(model, PENDULUM_Q0, PENDULUM_P0, method=m, h=h, t_end=s.pendulum_t_end,
+                               work=True).energy_balance for h in (0.2, 0.1)}
+    order = {m: float(np.log2(np.abs(v[0.2]).max() / np.abs(v[0.1]).max())) for m, v in out.items()}
+    t = np.linspace(0.0, s.pendulum_t_end, out["3s"][0.2].size)
+    trend = {m: _linear_trend(t, v[0.2]) * t[-1] / np.abs(v[0.2]).max() for m, v in out.items()}
+    return {"balance": out, "order": order, "trend": trend, "t": t}
