@@ -19,6 +19,7 @@ STYLES = {"3s": "-", "2s": "--", "rks": ":"}
 
 def _save(fig, out: Path, name: str) -> str:
     path = out / name
+    fig.tight_layout()
     fig.savefig(path, dpi=110, bbox_inches="tight")
     plt.close(fig)
     return name
@@ -133,11 +134,12 @@ def modified_energy(r: dict, out: Path) -> list[str]:
     axes[1].set_title("H oscillates at O(h^2), H_mod at O(h^4)")
     axes[1].legend(fontsize=7)
     sol, hmod, h = r["decay_run"]
-    axes[2].plot(sol.t, sol.energy, lw=0.6, label="H")
-    axes[2].plot(sol.t, hmod, lw=0.8, label="H_mod")
-    axes[2].set_title(f"3s, elastic pendulum, eps = 0.01, h = {h}")
+    axes[2].plot(sol.t[1:], np.diff(sol.energy), lw=0.5, label=f"H (rises at {r['H_rises']} steps)")
+    axes[2].plot(sol.t[1:], np.diff(hmod), lw=0.8, label=f"H_mod (rises at {r['Hmod_rises']} steps)")
+    axes[2].axhline(0.0, color="k", lw=0.5)
+    axes[2].set_title(f"Change per step, 3s, elastic pendulum, eps = 0.01, h = {h}")
     axes[2].set_xlabel("t")
-    axes[2].legend()
+    axes[2].legend(fontsize=8)
     return [_save(fig, out, "fig7_modified_energy.png")]
 
 
