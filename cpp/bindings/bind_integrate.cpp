@@ -32,9 +32,9 @@ template <class Model>
 py::dict run(const Model& model, const std::string& method, const std::string& tableau,
              const typename Model::Vec& q0, const typename Model::Vec& p0, double h, long n_steps, double h_last,
              long save_every, bool track_work, py::object progress, CancelToken* cancel) {
-  const MethodEntry entry = method_entry(method);
+  const MethodEntry& entry = method_entry(method);
   require_applicable(entry, model.eps);
-  const ButcherTableau tab = resolve_tableau(entry, tableau);
+  const ButcherTableau& tab = resolve_tableau(entry, tableau);
   const RunSpec spec{h, n_steps, h_last, save_every, track_work};
   Control control;
   if (cancel) control.cancel = &cancel->flag;

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from collections.abc import Callable
@@ -25,8 +26,12 @@ class CancelToken(_core.CancelToken):
     """
 
 
-def _method_names() -> list[str]:
-    return list(dict.fromkeys(row["name"] for row in _core.methods()))
+@functools.cache
+def _catalogue() -> tuple[tuple[str, ...], frozenset[str]]:
+    """Method names, and the methods that take a tableau (read once from the core)."""
+    rows = _core.methods()
+    names = tuple(dict.fromkeys(row["name"] for row in rows))
+    return names, frozenset(row["name"] for row in rows if row["tableau"] is not None)
 
 
 def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: float | None = None,
@@ -58,8 +63,9 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
     """
     if not isinstance(model, Model):
         raise ValueError(f"model must be a raydamp model (e.g. raydamp.models.DampedPendulum()), got {model!r}")
-    if not isinstance(method, str) or method not in _method_names():
-        raise ValueError(f"method: unknown method {method!r} (known: {', '.join(_method_names())})")
+    names, with_tableau = _catalogue()
+    if not isinstance(method, str) or method not in names:
+        raise ValueError(f"method: unknown method {method!r} (known: {', '.join(names)})")
     if tableau is not None and not isinstance(tableau, str):
         raise ValueError(f"tableau must be a tableau name or None, got {tableau!r}")
     resolved_tableau = _core.resolve(method, tableau or "")  # raises ValueError naming the tableau
@@ -91,10 +97,9 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
     out = _core.integrate(model._core_model, method, tableau or "", q0, p0, h, n_steps, h_last, save_every,
                           work, progress, cancel)
     wall = time.perf_counter() - start
-    uses_tableau = any(row["tableau"] is not None for row in _core.methods() if row["name"] == method)
     return Solution(t=out["t"], q=out["q"], p=out["p"], energy=out["energy"], momentum=out["momentum"],
                     status=out["status"], steps=out["steps"], failed_step=out["failed_step"],
-                    message=out["message"], method=method, tableau=resolved_tableau if uses_tableau else None,
+                    message=out["message"], method=method, tableau=resolved_tableau if method in with_tableau else None,
                     h=h, max_momentum_drift=out["max_momentum_drift"], work=out["work"], wall_time=wall)
 
 

@@ -22,8 +22,8 @@ struct MethodEntry {
   bool ignores_damping = false;  // sv: applying it to a damped model would silently drop eps
 };
 
-inline std::vector<MethodEntry> method_entries() {
-  return {
+inline const std::vector<MethodEntry>& method_entries() {
+  static const std::vector<MethodEntry> entries{
       {"sv", "Stormer-Verlet: drift h/2, kick h, drift h/2 (ignores damping; the eps = 0 reference)",
        TableauUse::none, "", false, StormerVerlet::splitting_order, true},
       {"3s", "three-term splitting (paper Algorithm 3S): damp h/2, drift h/2, kick h, drift h/2, damp h/2",
@@ -39,6 +39,7 @@ inline std::vector<MethodEntry> method_entries() {
       {"rk4", "classical fourth-order Runge-Kutta on the whole system", TableauUse::explicit_only, "rk4", true,
        RungeKutta::splitting_order},
   };
+  return entries;
 }
 
 inline std::string known_methods() {
@@ -47,7 +48,7 @@ inline std::string known_methods() {
   return known;
 }
 
-inline MethodEntry method_entry(const std::string& name) {
+inline const MethodEntry& method_entry(const std::string& name) {
   for (auto& m : method_entries())
     if (m.name == name) return m;
   throw std::invalid_argument("method: unknown method '" + name + "' (known: " + known_methods() + ")");
@@ -55,7 +56,7 @@ inline MethodEntry method_entry(const std::string& name) {
 
 // The tableau a run of `method` uses when asked for `tableau` ("" = the default);
 // refuses, naming the argument, a tableau the method cannot use.
-inline ButcherTableau resolve_tableau(const MethodEntry& method, const std::string& tableau) {
+inline const ButcherTableau& resolve_tableau(const MethodEntry& method, const std::string& tableau) {
   if (method.tableau_use == TableauUse::none) {
     if (!tableau.empty())
       throw std::invalid_argument("tableau: method '" + method.name + "' has no Runge-Kutta stage, so it takes no tableau");
@@ -64,7 +65,7 @@ inline ButcherTableau resolve_tableau(const MethodEntry& method, const std::stri
   if (method.tableau_fixed && !tableau.empty() && tableau != method.default_tableau)
     throw std::invalid_argument("tableau: method '" + method.name + "' is the tableau '" + method.default_tableau +
                                 "'; for another tableau on the whole system there is no separate method yet");
-  ButcherTableau tab = builtin_tableau(tableau.empty() ? method.default_tableau : tableau);
+  const ButcherTableau& tab = builtin_tableau(tableau.empty() ? method.default_tableau : tableau);
   if (method.tableau_use == TableauUse::explicit_only && !tab.is_explicit())
     throw std::invalid_argument("tableau: method '" + method.name + "' needs an explicit tableau; '" + tab.name() +
                                 "' is implicit");

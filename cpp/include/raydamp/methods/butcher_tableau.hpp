@@ -99,9 +99,9 @@ class ButcherTableau {
   int order_;
 };
 
-// The tableaux raydamp ships, by name.
-inline std::vector<ButcherTableau> builtin_tableaux() {
-  return {
+// The tableaux raydamp ships, built and validated once.
+inline const std::vector<ButcherTableau>& builtin_tableaux() {
+  static const std::vector<ButcherTableau> tableaux{
       ButcherTableau("euler", {{0.0}}, {1.0}, {0.0}),
       // Heun's (Runge's) method, the paper's footnote in section 4.3.
       ButcherTableau("heun", {{0.0, 0.0}, {1.0, 0.0}}, {0.5, 0.5}, {0.0, 1.0}),
@@ -110,13 +110,14 @@ inline std::vector<ButcherTableau> builtin_tableaux() {
       ButcherTableau("rk4", {{0, 0, 0, 0}, {0.5, 0, 0, 0}, {0, 0.5, 0, 0}, {0, 0, 1.0, 0}},
                      {1.0 / 6, 1.0 / 3, 1.0 / 3, 1.0 / 6}, {0, 0.5, 0.5, 1.0}),
   };
+  return tableaux;
 }
 
-inline ButcherTableau builtin_tableau(const std::string& name) {
-  for (auto& t : builtin_tableaux())
+inline const ButcherTableau& builtin_tableau(const std::string& name) {
+  for (const auto& t : builtin_tableaux())
     if (t.name() == name) return t;
   std::string known;
-  for (auto& t : builtin_tableaux()) known += (known.empty() ? "" : ", ") + t.name();
+  for (const auto& t : builtin_tableaux()) known += (known.empty() ? "" : ", ") + t.name();
   throw std::invalid_argument("tableau: unknown tableau '" + name + "' (known: " + known + ")");
 }
 
