@@ -110,7 +110,7 @@ RunResult integrate(const Model& model, const ButcherTableau& tab, State<Dim> z,
   Workspace<Dim> ws(n, tab.stages());
   ws.track_work = spec.track_work;
   if (spec.track_work) out.work.reserve(rows);
-  State<Dim> checkpoint = z;
+  State<Dim> checkpoint = z, before = z;  // copies made now, so the loop never allocates
   std::array<double, Model::n_momenta> j0{};
   model.momenta(z.q, z.p, j0.data());
   auto time_at = [&](long k) { return k == N && spec.h_last != spec.h ? (N - 1) * spec.h + spec.h_last : k * spec.h; };
@@ -162,7 +162,7 @@ RunResult integrate(const Model& model, const ButcherTableau& tab, State<Dim> z,
       power = checkpoint_power;
       long i = k;
       for (; i < end; ++i) {
-        const State<Dim> before = z;
+        before = z;
         const double work_before = ws.work;
         advance(i);
         if (!z.all_finite()) {
