@@ -1,0 +1,104 @@
+"""raydamp.analysis: the diagnostics behave as documented on cases with known answers."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import raydamp
+from paper import ELASTIC_P0, ELASTIC_Q0, PENDULUM_P0, PENDULUM_Q0
+from raydamp.analysis import (
+    cartesian_state,
+    convergence,
+    distance_from,
+    energy_error,
+    modified_energy,
+    modified_relative_equilibrium,
+    momentum_drift,
+    reduced_coordinates,
+    reference_solution,
+    relative_equilibrium,
+)
+from raydamp.analysis.relative_equilibrium import equilibrium_residual
+from raydamp.models import DampedPendulum, ElasticPendulum
+
+
+def test_convergence_reports_errors_and_order():
+    model = DampedPendulum(0.5)
+    result = convergence(model, "2s", [0.1, 0.05, 0.025], q0=PENDULUM_Q0, p0=PENDULUM_P0, t_end=5.0)
+    assert result.errors.shape == (3,) and np.all(np.diff(result.errors) < 0)
+    assert result.order == pytest.approx(2, abs=0.1)
+    with pytest.raises(ValueError, match="hs must hold at least two"):
+        convergence(model, "2s", [0.1], q0=PENDULUM_Q0, p0=PENDULUM_P0)
+
+
+def test_energy_error_of_rk4_is_tiny_and_heun_is_not():
+    model = ElasticPendulum(0.1)
+    fine = raydamp.integrate(model, ELASTIC_Q0, ELASTIC_P0, method="rk4", h=0.01, t_end=20.0, save_every=100)
+    ref = reference_solution(model, ELASTIC_Q0, ELASTIC_P0, fine.t)
+    assert np.abs(energy_error(model, fine, ref)).max() < 1e-8
+    coarse = raydamp.integrate(model, ELASTIC_Q0, ELASTIC_P0, method="heun", h=0.2, t_end=20.0)
+    assert np.abs(energy_error(model, coarse)).max() > 1e-4
+    with pytest.raises(ValueError, match="reference: its times differ"):
+        energy_error(model, coarse, ref)
+
+
+def test_energy_balance_closes_for_the_exact_solution_limit():
+    # rk4 integrates the work with its own stages: the balance is O(h^4).
+    model = DampedPendulum(0.3)
+    sols = [raydamp.integrate(model, PENDULUM_Q0, PENDULUM_P0, method="rk4", h=h, t_end=10.0, work=True)
+            for h in (0.1, 0.05)]
+    balances = [np.abs(s.energy_balance).max() for s in sols]
+    assert np.log2(balances[0] / balances[1]) == pytest.approx(4, abs=0.3)
+    assert sols[0].work[-1] == pytest.approx(sols[0].energy[0] - sols[0].energy[-1], rel=1e-4)
+    with pytest.raises(ValueError, match="work: this run did not record"):
+        raydamp.integrate(model, PENDULUM_Q0, PENDULUM_P0, h=0.1, n_steps=5).energy_balance
+
+
+def test_modified_energy_is_h_and_model_aware():
+    model = DampedPendulum(0.0)
+    q, p = np.array([[0.3]]), np.array([[0.4]])
+    h = 0.1
+    expected = 0.5 * 0.16 + (1 - np.cos(0.3)) + h * h * (np.sin(0.3) ** 2 / 12 - np.cos(0.3) * 0.16 / 24)
+    assert modified_energy(model, q, p, h)[0] == pytest.approx(expected, rel=1e-14)
+    assert modified_energy(model, q, p, 0.0)[0] == pytest.approx(model.energy([0.3], [0.4]), rel=1e-15)
+
+
+def test_reduced_coordinates_round_trip_and_momentum_drift():
+    q, p = cartesian_state(1.2, -0.5, 0.3, -0.1, 0.7)
+    np.testing.assert_allclose(reduced_coordinates(q, p)[0], [1.2, -0.5, 0.3, -0.1, 0.7], atol=1e-15)
+    sol = raydamp.integrate(ElasticPendulum(0.1), q, p, method="heun", h=0.1, n_steps=100)
+    drift = momentum_drift(sol)
+    assert drift.shape == (101, 1) and drift[0, 0] == 0 and drift[-1, 0] > 0
+
+
+@pytest.mark.parametrize("mu", [0.3, -1.39, 4.0])
+def test_relative_equilibrium_solves_the_reduced_equations(mu):
+    model = ElasticPendulum(0.1, m=1.3, k=3.0, l=0.8)
+    eq = relative_equilibrium(model, mu)
+    assert np.abs(equilibrium_residual(model, eq.rho, eq.z, mu)).max() < 1e-12
+    # Started there, the exact flow (and rk4 at small h) stays there.
+    q, p = cartesian_state(eq.rho, eq.z, 0.0, 0.0, mu)
+    sol = raydamp.integrate(model, q, p, method="rk4", h=0.01, t_end=5.0, save_every=50)
+    assert distance_from(eq, sol).max() < 1e-8
+
+
+def test_relative_equilibrium_refuses_bad_input():
+    with pytest.raises(ValueError, match="mu must be finite and nonzero"):
+        relative_equilibrium(ElasticPendulum(), 0.0)
+    with pytest.raises(ValueError, match="g must point straight down"):
+        relative_equilibrium(ElasticPendulum(g=(0.1, 0, -1)), 1.0)
+
+
+def test_modified_relative_equilibrium_is_a_fixed_point_of_the_step():
+    model = ElasticPendulum(0.1, k=10.0)
+    mu = -1.3942740046346698
+    mod = modified_relative_equilibrium(model, "3s", 0.2, mu)
+    q, p = cartesian_state(*mod.reduced, mu)
+    sol = raydamp.integrate(model, q, p, method="3s", h=0.2, n_steps=50)
+    assert distance_from(mod, sol).max() < 1e-10
+    # At eps = 0 the three splittings are Stormer-Verlet and share it.
+    undamped = ElasticPendulum(0.0, k=10.0)
+    offsets = [modified_relative_equilibrium(undamped, m, 0.2, mu).reduced for m in ("3s", "2s", "rks")]
+    np.testing.assert_allclose(offsets[1], offsets[0], atol=1e-12)
+    np.testing.assert_allclose(offsets[2], offsets[0], atol=1e-12)
