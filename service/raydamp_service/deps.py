@@ -1,0 +1,30 @@
+"""Request dependencies: the objects the lifespan put on app.state, overridable in tests."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import Depends, Request
+
+from .config import Settings
+from .runner import Runner
+from .store import JobStore
+
+__all__ = ["SettingsDep", "StoreDep", "RunnerDep", "get_settings", "get_store", "get_runner"]
+
+
+def get_settings(request: Request) -> Settings:
+    return request.app.state.settings
+
+
+def get_store(request: Request) -> JobStore:
+    return request.app.state.store
+
+
+def get_runner(request: Request) -> Runner:
+    return request.app.state.runner
+
+
+SettingsDep = Annotated[Settings, Depends(get_settings)]
+StoreDep = Annotated[JobStore, Depends(get_store)]
+RunnerDep = Annotated[Runner, Depends(get_runner)]

@@ -1,0 +1,131 @@
+"""From a JobSpec to a raydamp call: the domain checks and the translation of raydamp's errors.
+
+raydamp owns the rules (which methods take which tableau, that sv refuses eps > 0, each
+model's parameters and dimension); the service asks it rather than restating them, and
+only renames raydamp's argument names to the JSON fields the client sent.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import raydamp
+from raydamp.models import make_model
+
+from .config import Settings
+from .schemas import JobSpec
+
+__all__ = ["SpecError", "RaydampCall", "build_call", "check_spec", "planned_steps"]
+
+# raydamp.integrate's argument -> the JSON field carrying it.
+_FIELD_OF_ARGUMENT: dict[str, tuple[str, ...]] = {
+    "h": ("step_size",),
+    "q0": ("initial_state", "q"),
+    "p0": ("initial_state", "p"),
+    "method": ("method",),
+    "tableau": ("tableau",),
+    "save_every": ("save_every",),
+    "n_steps": ("n_steps",),
+    "t_end": ("t_end",),
+}
+
+
+class SpecError(ValueError):
+    """A spec that cannot run; loc is the JSON path of the offending field (without "body")."""
+
+    def __init__(self, loc: tuple[str, ...], message: str):
+        super().__init__(message)
+        self.loc = loc
+        self.message = message
+
+
+@dataclass(frozen=True)
+class RaydampCall:
+    model: raydamp.models.Model
+    q0: list[float]
+    p0: list[float]
+    options: dict[str, Any]
+
+    def run(self, **extra: Any) -> raydamp.Solution:
+        return raydamp.integrate(self.model, self.q0, self.p0, **{**self.options, **extra})
+
+
+def _translate(error: ValueError, fields: dict[str, tuple[str, ...]]) -> SpecError:
+    """Name the field: raydamp's messages start with the argument they are about ("h must be > 0")."""
+    message = str(error)
+    for name in sorted(fields, key=len, reverse=True):
+        rest = message[len(name):]
+        if message.startswith(name) and not (rest[:1].isalnum() or rest[:1] == "_"):
+            loc = fields[name]
+            # Say it in the client's words: "step_size must be > 0", not "h must be > 0".
+            return SpecError(loc, ".".join(loc) + rest)
+    return SpecError((), message)
+
+
+def build_call(spec: JobSpec) -> RaydampCall:
+    """The model and arguments for raydamp.integrate; raises SpecError for a bad model or parameter."""
+    try:
+        model = make_model(spec.model, spec.parameters)
+    except ValueError as error:
+        fields = {"model": ("model",)}
+        for name in spec.parameters:  # make_model says "eps must be ..." or "parameters.eps: ..."
+            fields[name] = fields[f"parameters.{name}"] = ("parameters", name)
+        raise _translate(error, fields) from None
+    options: dict[str, Any] = {"method": spec.method, "h": spec.step_size, "save_every": spec.save_every}
+    if spec.tableau is not None:
+        options["tableau"] = spec.tableau
+    if spec.n_steps is not None:
+        options["n_steps"] = spec.n_steps
+    if spec.t_end is not None:
+        options["t_end"] = spec.t_end
+    return RaydampCall(model, list(spec.initial_state.q), list(spec.initial_state.p), options)
+
+
+def planned_steps(spec: JobSpec) -> float:
+    """Steps the run will take (t_end / step_size rounded up; may be off by one, enough for bounds)."""
+    if spec.n_steps is not None:
+        return spec.n_steps
+    ratio = spec.t_end / spec.step_size
+    return math.ceil(ratio) if math.isfinite(ratio) else math.inf
+
+
+def check_spec(spec: JobSpec, settings: Settings) -> RaydampCall:
+    """Every check a spec must pass before it is queued; raises SpecError naming the field."""
+    if (spec.t_end is None) == (spec.n_steps is None):
+        both = spec.t_end is not None
+        raise SpecError(("n_steps",) if both else ("t_end",),
+                        "give exactly one of t_end and n_steps" + (", not both" if both else ""))
+    for name, values in (("q", spec.initial_state.q), ("p", spec.initial_state.p)):
+        if len(values) > settings.max_dim:
+            raise SpecError(("initial_state", name), f"initial_state.{name} has {len(values)} components; "
+                            f"this service accepts at most max_dim = {settings.max_dim}")
+    for name, value in spec.parameters.items():
+        if isinstance(value, list) and len(value) > settings.max_dim:
+            raise SpecError(("parameters", name), f"parameters.{name} has {len(value)} components; "
+                            f"this service accepts at most max_dim = {settings.max_dim}")
+
+    steps = planned_steps(spec)
+    if steps > settings.max_steps:
+        field = "n_steps" if spec.n_steps is not None else "t_end"
+        raise SpecError((field,), f"{field}: the run would take {steps:.6g} steps; this service runs at most "
+                        f"max_steps = {settings.max_steps} (raise step_size or shorten the run)")
+    saved_points = steps // spec.save_every + 2
+    if saved_points > settings.max_saved_points:
+        raise SpecError(("save_every",), f"save_every: {saved_points} saved points (n_steps // save_every + 2) "
+                        f"exceed max_saved_points = {settings.max_saved_points}; raise save_every")
+
+    call = build_call(spec)
+    # The largest stored array is q or p: saved_points x dim float64.
+    largest = saved_points * max(call.model.dim, len(call.model.momentum_names)) * 8
+    if largest > settings.max_trajectory_bytes:
+        raise SpecError(("save_every",), f"save_every: the trajectory would take {largest / 2**20:.0f} MiB per "
+                        f"array (limit {settings.max_trajectory_bytes / 2**20:.0f} MiB); raise save_every")
+    # One step validates method, tableau, their fit with the model, step_size and the initial state
+    # the way the real run will, in microseconds.
+    try:
+        call.run(n_steps=1, t_end=None, save_every=1)
+    except ValueError as error:
+        raise _translate(error, _FIELD_OF_ARGUMENT) from None
+    return call

@@ -1,0 +1,1 @@
+"""One router per resource: jobs, the catalogue (models, methods), health."""

@@ -1,0 +1,146 @@
+"""/v1/jobs: submit, list, inspect and cancel integration jobs, and fetch their trajectories.
+
+Handlers are plain functions (FastAPI runs them in its thread pool), so SQLite calls never
+hold up the event loop; no handler waits for a run.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Annotated, Any
+
+import numpy as np
+from fastapi import APIRouter, HTTPException, Query, Request, Response
+from fastapi.exceptions import RequestValidationError
+
+from ..deps import RunnerDep, SettingsDep, StoreDep
+from ..problems import SpecError, check_spec
+from ..runner import Runner
+from ..schemas import JobCreated, JobList, JobListItem, JobSpec, JobStatus, JobView, Trajectory
+from ..store import FINAL_STATUSES, JobRecord, JobStore
+
+router = APIRouter(prefix="/v1/jobs", tags=["jobs"])
+
+_NOT_FOUND = {404: {"description": "no job with this id"}}
+
+
+def _job_url(job_id: str) -> str:
+    return f"/v1/jobs/{job_id}"
+
+
+def _existing(store: JobStore, job_id: str) -> JobRecord:
+    record = store.get(job_id)
+    if record is None:
+        raise HTTPException(404, detail=f"no job with id {job_id!r}")
+    return record
+
+
+def _progress(record: JobRecord, runner: Runner) -> float:
+    if record.status == "running":
+        live = runner.progress(record.id)
+        return live if live is not None else record.progress
+    return record.progress
+
+
+def _view(record: JobRecord, runner: Runner) -> JobView:
+    return JobView(
+        id=record.id, status=record.status, progress=_progress(record, runner), attempts=record.attempts,
+        cancel_requested=record.cancel_requested, error=record.error, failed_step=record.failed_step,
+        summary=record.summary, trajectory=_job_url(record.id) + "/trajectory" if record.has_trajectory else None,
+        spec=JobSpec.model_validate(record.spec), created_at=record.created_at, started_at=record.started_at,
+        finished_at=record.finished_at)
+
+
+def _value_at(data: Any, loc: tuple[str, ...]) -> Any:
+    for key in loc:
+        data = data.get(key) if isinstance(data, dict) else None
+    return data
+
+
+@router.post("", status_code=202, response_model=JobCreated,
+             responses={422: {"description": "the spec is invalid; detail[].loc names the field"}})
+def submit_job(spec: JobSpec, request: Request, response: Response, store: StoreDep, runner: RunnerDep,
+               settings: SettingsDep) -> JobCreated:
+    """Queue an integration; poll the Location for its status."""
+    try:
+        check_spec(spec, settings)
+    except SpecError as error:
+        # The same shape as pydantic's own 422s, so a client reads one format.
+        raise RequestValidationError([{"type": "value_error", "loc": ("body", *error.loc), "msg": error.message,
+                                       "input": _value_at(spec.model_dump(), error.loc)}]) from None
+    record = store.create(spec.model_dump(mode="json"))
+    runner.submit(record.id)
+    response.headers["Location"] = str(request.url_for("get_job", job_id=record.id))
+    return JobCreated(id=record.id, status=record.status)
+
+
+@router.get("", response_model=JobList)
+def list_jobs(store: StoreDep, runner: RunnerDep, settings: SettingsDep,
+              limit: Annotated[int, Query(ge=1, description="at most this many jobs, newest first")] = 50,
+              status: Annotated[JobStatus | None, Query(description="only jobs in this state")] = None) -> JobList:
+    if limit > settings.max_list_limit:
+        raise RequestValidationError([{"type": "less_than_equal", "loc": ("query", "limit"), "input": limit,
+                                       "msg": f"limit must be <= {settings.max_list_limit}"}])
+    return JobList(jobs=[
+        JobListItem(id=r.id, status=r.status, progress=_progress(r, runner), model=r.spec["model"],
+                    method=r.spec["method"], created_at=r.created_at, finished_at=r.finished_at, url=_job_url(r.id))
+        for r in store.recent(limit, status)])
+
+
+@router.get("/{job_id}", response_model=JobView, responses=_NOT_FOUND)
+def get_job(job_id: str, store: StoreDep, runner: RunnerDep) -> JobView:
+    """Status, progress, and once finished the summary; a blow-up is "failed" with the solver's reason."""
+    return _view(_existing(store, job_id), runner)
+
+
+def _rows(array: np.ndarray) -> list:
+    """Nested lists for JSON; non-finite values (an energy that overflowed) become null."""
+    finite = np.isfinite(array)
+    if finite.all():
+        return array.tolist()
+    rows = array.astype(object)
+    rows[~finite] = None
+    return rows.tolist()
+
+
+@router.get("/{job_id}/trajectory", response_model=Trajectory,
+            responses={**_NOT_FOUND, 409: {"description": "the job has no trajectory (yet)"}})
+def get_trajectory(job_id: str, store: StoreDep) -> Response:
+    """The saved points, one row per point."""
+    record = _existing(store, job_id)
+    arrays = store.trajectory(job_id)
+    if arrays is None:
+        if record.status in FINAL_STATUSES:
+            reason = f": {record.error}" if record.error else ""
+            detail = f"job {job_id} is {record.status} and has no trajectory{reason}"
+        else:
+            detail = f"job {job_id} is {record.status}; its trajectory is stored when the run ends"
+        raise HTTPException(409, detail=detail)
+    body = {"t": _rows(arrays.t), "q": _rows(arrays.q), "p": _rows(arrays.p), "energy": _rows(arrays.energy),
+            "momentum": _rows(arrays.momentum)}
+    # Serialised directly: validating up to millions of floats through the response model would cost
+    # more than the run. The body has exactly the Trajectory schema declared above.
+    return Response(json.dumps(body, allow_nan=False, separators=(",", ":")), media_type="application/json")
+
+
+def _cancel(job_id: str, store: JobStore, runner: Runner) -> JobView:
+    record = _existing(store, job_id)
+    if record.status in FINAL_STATUSES:
+        raise HTTPException(409, detail=f"job {job_id} is already {record.status}; there is nothing to cancel")
+    record = store.request_cancel(job_id)
+    runner.cancel(job_id)
+    return _view(record, runner)
+
+
+@router.post("/{job_id}/cancel", status_code=202, response_model=JobView,
+             responses={**_NOT_FOUND, 409: {"description": "the job has already finished"}})
+def cancel_job(job_id: str, store: StoreDep, runner: RunnerDep) -> JobView:
+    """Cancel a queued job at once, or stop a running one (it ends "cancelled" with its partial trajectory)."""
+    return _cancel(job_id, store, runner)
+
+
+@router.delete("/{job_id}", status_code=202, response_model=JobView,
+               responses={**_NOT_FOUND, 409: {"description": "the job has already finished"}})
+def delete_job(job_id: str, store: StoreDep, runner: RunnerDep) -> JobView:
+    """The same as POST /v1/jobs/{id}/cancel; the record and any results are kept."""
+    return _cancel(job_id, store, runner)

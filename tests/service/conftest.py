@@ -1,0 +1,149 @@
+"""A real `python -m raydamp_service` process per test (or per module), on a free loopback port.
+
+The service is tested as it runs in production: its own process, uvicorn, SQLite on disk,
+worker threads, signals. Every wait is bounded and generous, so a loaded machine is slow,
+not red.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import httpx
+import pytest
+
+# Run the service from this checkout, whether or not the package is installed.
+SERVICE_DIR = Path(__file__).resolve().parents[2] / "service"
+if str(SERVICE_DIR) not in sys.path:
+    sys.path.insert(0, str(SERVICE_DIR))
+
+START_TIMEOUT = 60.0   # seconds for a process to answer /healthz
+JOB_TIMEOUT = 120.0    # seconds for a job to reach the awaited state
+POLL = 0.05
+
+
+def _free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+class Server:
+    """One service process on a database; restartable on the same database."""
+
+    def __init__(self, db: Path, log: Path, env: dict[str, str]):
+        self.db = db
+        self.log = log
+        self.env = env
+        self.process: subprocess.Popen | None = None
+        self.client: httpx.Client | None = None
+
+    def start(self) -> Server:
+        for _ in range(3):  # another process may take the free port before we bind it
+            port = _free_port()
+            env = {**os.environ, **self.env, "RAYDAMP_DB": str(self.db),
+                   "PYTHONPATH": os.pathsep.join(filter(None, [str(SERVICE_DIR), os.environ.get("PYTHONPATH")]))}
+            with self.log.open("ab") as log:
+                self.process = subprocess.Popen([sys.executable, "-m", "raydamp_service", "--port", str(port)],
+                                                env=env, stdout=log, stderr=subprocess.STDOUT)
+            self.client = httpx.Client(base_url=f"http://127.0.0.1:{port}", timeout=30.0)
+            if self._wait_healthy():
+                return self
+            self.client.close()
+        raise RuntimeError(f"the service did not start; its log:\n{self.log.read_text()[-4000:]}")
+
+    def _wait_healthy(self) -> bool:
+        deadline = time.monotonic() + START_TIMEOUT
+        while time.monotonic() < deadline:
+            if self.process.poll() is not None:
+                return False
+            try:
+                if self.client.get("/healthz").status_code == 200:
+                    return True
+            except httpx.TransportError:
+                pass
+            time.sleep(0.1)
+        self.kill()
+        return False
+
+    def stop(self) -> None:
+        """SIGTERM: uvicorn's graceful shutdown, which runs the app's lifespan exit."""
+        if self.process is not None and self.process.poll() is None:
+            self.process.terminate()
+            try:
+                self.process.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait(timeout=30)
+        self._close_client()
+
+    def kill(self) -> None:
+        """SIGKILL: a crash, no shutdown code runs."""
+        if self.process is not None and self.process.poll() is None:
+            self.process.send_signal(signal.SIGKILL)
+            self.process.wait(timeout=30)
+        self._close_client()
+
+    def restart(self) -> Server:
+        self.stop()
+        return self.start()
+
+    def _close_client(self) -> None:
+        if self.client is not None:
+            self.client.close()
+
+    # ---- helpers for tests ----
+
+    def submit(self, spec: dict) -> str:
+        response = self.client.post("/v1/jobs", json=spec)
+        assert response.status_code == 202, response.text
+        return response.json()["id"]
+
+    def job(self, job_id: str) -> dict:
+        response = self.client.get(f"/v1/jobs/{job_id}")
+        assert response.status_code == 200, response.text
+        return response.json()
+
+    def wait_for(self, job_id: str, predicate, timeout: float = JOB_TIMEOUT) -> dict:
+        deadline = time.monotonic() + timeout
+        while True:
+            job = self.job(job_id)
+            if predicate(job):
+                return job
+            if time.monotonic() > deadline:
+                raise AssertionError(f"job {job_id} did not get there in {timeout} s; last seen: {job}")
+            time.sleep(POLL)
+
+    def wait_finished(self, job_id: str, timeout: float = JOB_TIMEOUT) -> dict:
+        return self.wait_for(job_id, lambda job: job["status"] in {"completed", "failed", "cancelled"}, timeout)
+
+
+@pytest.fixture
+def start_server(tmp_path: Path) -> Iterator:
+    """Factory: start_server(db=None, **env) -> a running Server; all are stopped at teardown."""
+    servers: list[Server] = []
+
+    def start(db: Path | None = None, **env: str) -> Server:
+        server = Server(db or tmp_path / "var" / "raydamp.sqlite3", tmp_path / f"server{len(servers)}.log", env)
+        servers.append(server)
+        return server.start()
+
+    yield start
+    for server in servers:
+        server.stop()
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
+    """One process shared by a module's small tests; runs of up to 10^10 steps are allowed for cancelling."""
+    tmp = tmp_path_factory.mktemp("service")
+    server = Server(tmp / "raydamp.sqlite3", tmp / "server.log", {"RAYDAMP_MAX_STEPS": str(10**10)}).start()
+    yield server
+    server.stop()

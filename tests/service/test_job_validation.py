@@ -1,0 +1,105 @@
+"""Bad specs get 422 with detail[].loc naming the JSON field, before anything is queued."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+
+VALID = {
+    "model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "step_size": 0.2, "t_end": 200,
+    "initial_state": {"q": [0.9 * math.pi], "p": [0.0]},
+}
+ELASTIC = {**VALID, "model": "elastic_pendulum", "parameters": {},
+           "initial_state": {"q": [0.0, 1.55884573, -0.6], "p": [1.34164079, 0.0, 0.0]}}
+
+
+def without(spec: dict, *keys: str) -> dict:
+    return {k: v for k, v in spec.items() if k not in keys}
+
+
+# (case, spec, the field its 422 must name). The module's server allows 10^10 steps.
+BAD_SPECS = [
+    ("negative step_size", {**VALID, "step_size": -0.2}, ("step_size",)),
+    ("zero step_size", {**VALID, "step_size": 0}, ("step_size",)),
+    ("step_size as a string", {**VALID, "step_size": "0.2"}, ("step_size",)),
+    ("both t_end and n_steps", {**VALID, "n_steps": 1000}, ("n_steps",)),
+    ("neither t_end nor n_steps", without(VALID, "t_end"), ("t_end",)),
+    ("negative t_end", {**VALID, "t_end": -1}, ("t_end",)),
+    ("zero n_steps", {**without(VALID, "t_end"), "n_steps": 0}, ("n_steps",)),
+    ("fractional n_steps", {**without(VALID, "t_end"), "n_steps": 10.5}, ("n_steps",)),
+    ("zero save_every", {**VALID, "save_every": 0}, ("save_every",)),
+    ("unknown model", {**VALID, "model": "double_pendulum"}, ("model",)),
+    ("unknown method", {**VALID, "method": "leapfrog"}, ("method",)),
+    ("unknown tableau", {**VALID, "method": "rks", "tableau": "dopri5"}, ("tableau",)),
+    ("tableau for a pure splitting", {**VALID, "tableau": "rk4"}, ("tableau",)),
+    ("implicit tableau for rksb", {**VALID, "method": "rksb", "tableau": "midpoint"}, ("tableau",)),
+    ("sv with damping", {**VALID, "method": "sv"}, ("method",)),
+    ("wrong q length", {**VALID, "initial_state": {"q": [1.0, 2.0], "p": [0.0]}}, ("initial_state", "q")),
+    ("wrong p length", {**ELASTIC, "initial_state": {"q": [0.0, 1.0, 0.0], "p": [1.0]}}, ("initial_state", "p")),
+    ("empty q", {**VALID, "initial_state": {"q": [], "p": [0.0]}}, ("initial_state", "q")),
+    ("q beyond max_dim", {**VALID, "initial_state": {"q": [0.0] * 1001, "p": [0.0]}}, ("initial_state", "q")),
+    ("missing initial_state", without(VALID, "initial_state"), ("initial_state",)),
+    ("unknown extra field", {**VALID, "stepsize": 0.1}, ("stepsize",)),
+    ("unknown field in initial_state", {**VALID, "initial_state": {"q": [1.0], "p": [0.0], "t": 0}},
+     ("initial_state", "t")),
+    ("negative eps", {**VALID, "parameters": {"eps": -0.01}}, ("parameters", "eps")),
+    ("eps as a vector", {**VALID, "parameters": {"eps": [0.01]}}, ("parameters", "eps")),
+    ("unknown parameter", {**VALID, "parameters": {"eps": 0.01, "mass": 2.0}}, ("parameters", "mass")),
+    ("zero mass", {**ELASTIC, "parameters": {"m": 0.0}}, ("parameters", "m")),
+    ("gravity of the wrong length", {**ELASTIC, "parameters": {"g": [0.0, -1.0]}}, ("parameters", "g")),
+    ("too many steps", {**without(VALID, "t_end"), "n_steps": 10**10 + 1, "save_every": 10**6}, ("n_steps",)),
+    ("too long a t_end", {**VALID, "t_end": 1e300, "save_every": 10**6}, ("t_end",)),
+    ("too many saved points", {**without(VALID, "t_end"), "n_steps": 10**7}, ("save_every",)),
+]
+
+NON_FINITE = [
+    ("NaN step_size", {**VALID, "step_size": math.nan}, ("step_size",)),
+    ("infinite t_end", {**VALID, "t_end": math.inf}, ("t_end",)),
+    ("infinite q", {**VALID, "initial_state": {"q": [-math.inf], "p": [0.0]}}, ("initial_state", "q", 0)),
+    ("NaN parameter", {**VALID, "parameters": {"eps": math.nan}}, ("parameters", "eps")),
+]
+
+
+def assert_names(response, field: tuple) -> None:
+    assert response.status_code == 422, response.text
+    locs = [tuple(error["loc"]) for error in response.json()["detail"]]
+    assert any(loc[:len(field) + 1] == ("body", *field) for loc in locs), locs
+    assert all(error["msg"] for error in response.json()["detail"])
+
+
+@pytest.mark.parametrize(("spec", "field"), [case[1:] for case in BAD_SPECS], ids=[case[0] for case in BAD_SPECS])
+def test_bad_spec_is_422_naming_the_field(server, spec, field):
+    assert_names(server.client.post("/v1/jobs", json=spec), field)
+
+
+@pytest.mark.parametrize(("spec", "field"), [case[1:] for case in NON_FINITE], ids=[case[0] for case in NON_FINITE])
+def test_nan_and_infinity_are_422(server, spec, field):
+    # Python's JSON parser (the server's too) reads NaN and Infinity; they must not reach a run.
+    body = json.dumps(spec, allow_nan=True)
+    assert_names(server.client.post("/v1/jobs", content=body, headers={"content-type": "application/json"}), field)
+
+
+def test_overflowing_number_is_422(server):
+    body = json.dumps(VALID).replace('"step_size": 0.2', '"step_size": 1e999')
+    assert_names(server.client.post("/v1/jobs", content=body, headers={"content-type": "application/json"}),
+                 ("step_size",))
+
+
+@pytest.mark.parametrize("body", [b'{"model": "damped_pendulum",', b"not json", b"[1, 2]", b""])
+def test_malformed_body_is_422(server, body):
+    response = server.client.post("/v1/jobs", content=body, headers={"content-type": "application/json"})
+    assert response.status_code == 422, response.text
+    assert response.json()["detail"][0]["loc"][0] == "body"
+
+
+def test_domain_errors_speak_in_json_field_names(server):
+    detail = server.client.post("/v1/jobs", json={**VALID, "initial_state": {"q": [1.0, 2.0], "p": [0.0]}}).json()
+    assert detail["detail"][0]["msg"].startswith("initial_state.q ")  # raydamp calls it q0
+
+
+def test_nothing_invalid_was_queued(server):
+    for case in BAD_SPECS:
+        server.client.post("/v1/jobs", json=case[1])
+    assert server.client.get("/v1/jobs").json()["jobs"] == []

@@ -1,0 +1,69 @@
+"""The SQLite job store on its own: state changes, recovery after a crash, trajectory blobs."""
+
+from __future__ import annotations
+
+import sqlite3
+
+import numpy as np
+import pytest
+from raydamp_service.store import JobStore, TrajectoryArrays
+
+SPEC = {"model": "damped_pendulum", "method": "3s"}
+
+
+@pytest.fixture
+def store(tmp_path):
+    store = JobStore(tmp_path / "missing" / "dir" / "jobs.sqlite3")  # directories are created
+    store.open()
+    yield store
+    store.close()
+
+
+def test_the_database_is_in_wal_mode(store):
+    with sqlite3.connect(store.path) as db:
+        assert db.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
+
+
+def test_trajectory_round_trips_exactly(store):
+    job = store.create(SPEC)
+    rng = np.random.default_rng(1)
+    arrays = TrajectoryArrays(t=np.arange(5.0), q=rng.normal(size=(5, 3)), p=rng.normal(size=(5, 3)),
+                              energy=np.array([1.0, 2.0, 3.0, 4.0, np.inf]), momentum=np.empty((5, 0)))
+    store.finish(job.id, "failed", error="blew up", failed_step=5, trajectory=arrays)
+    back = store.trajectory(job.id)
+    for name in ("t", "q", "p", "energy", "momentum"):
+        np.testing.assert_array_equal(getattr(back, name), getattr(arrays, name))
+    assert store.get(job.id).has_trajectory and store.get(job.id).failed_step == 5
+
+
+def test_a_cancelled_queued_job_cannot_be_claimed(store):
+    job = store.create(SPEC)
+    assert store.request_cancel(job.id).status == "cancelled"
+    assert store.claim(job.id) is None
+
+
+def test_cancelling_a_running_job_only_flags_it(store):
+    job = store.create(SPEC)
+    assert store.claim(job.id).attempts == 1
+    flagged = store.request_cancel(job.id)
+    assert flagged.status == "running" and flagged.cancel_requested
+
+
+def test_recover_requeues_interrupted_runs_and_honours_cancels(store):
+    queued, running, cancelling, done = (store.create(SPEC) for _ in range(4))
+    for job in (running, cancelling, done):
+        store.claim(job.id)
+    store.request_cancel(cancelling.id)
+    store.finish(done.id, "completed", summary={"status": "completed"})
+
+    assert store.recover() == [queued.id, running.id]  # oldest first
+    assert store.get(running.id).status == "queued" and store.get(running.id).attempts == 1
+    assert store.get(cancelling.id).status == "cancelled"
+    assert store.get(done.id).status == "completed"
+
+
+def test_recent_is_newest_first(store):
+    ids = [store.create(SPEC).id for _ in range(4)]
+    assert [job.id for job in store.recent(3)] == ids[::-1][:3]
+    store.request_cancel(ids[0])
+    assert [job.id for job in store.recent(10, "cancelled")] == [ids[0]]
