@@ -8,7 +8,8 @@
 //   using Vec = Vector<dim>;
 //   double eps;                       // damping strength
 //   mass:    velocity(p, v) -> v = M^{-1} p; kinetic(p) -> 1/2 p^T M^{-1} p
-//   damping: decay(q, t, p), decay_affine(q, t, g, p), rate(q, p, out), solve_shifted(q, c, x)
+//   damping: factors(t), decay(q, factors, p), decay_affine(q, factors, g, p), rate(q, p, out),
+//            solve_shifted(q, c, x)
 //            (the exact flows of A = eps D(q) M^{-1}, see damping/)
 //   int size() const; double potential(q) const; void gradient(q, g) const;
 //   void hessian_product(q, v, out) const; void momenta(q, p, double* out) const;
@@ -34,7 +35,8 @@ struct is_model<M, std::void_t<
     decltype(std::declval<const M&>().momenta(std::declval<const typename M::Vec&>(),
                                               std::declval<const typename M::Vec&>(), std::declval<double*>())),
     decltype(std::declval<const M&>().mass.kinetic(std::declval<const typename M::Vec&>())),
-    decltype(std::declval<const M&>().damping.decay(std::declval<const typename M::Vec&>(), 0.0,
+    decltype(std::declval<const M&>().damping.decay(std::declval<const typename M::Vec&>(),
+                                                    std::declval<const M&>().damping.factors(0.0),
                                                     std::declval<typename M::Vec&>()))>>
     : std::true_type {};
 

@@ -90,9 +90,10 @@ double momentum_drift(const Model& model, const State<Dim>& z, const std::array<
 // its start, so the failing step is found exactly without a check on every step.
 inline constexpr long kBlock = 256;
 
-template <class Method, class Model, int Dim = Model::dim>
-RunResult integrate(const Model& model, const ButcherTableau& tab, State<Dim> z, const RunSpec& spec,
-                    const Control& control = {}) {
+namespace detail {
+
+template <class Method, class Model, class Tab, int Dim>
+RunResult run_steps(const Model& model, const Tab& tab, State<Dim> z, const RunSpec& spec, const Control& control) {
   static_assert(is_model_v<Model>, "Model lacks part of the interface listed in raydamp/concepts.hpp");
   const long N = spec.n_steps;
   const int n = model.size();
@@ -110,7 +111,9 @@ RunResult integrate(const Model& model, const ButcherTableau& tab, State<Dim> z,
   Workspace<Dim> ws(n, tab.stages());
   ws.track_work = spec.track_work;
   if (spec.track_work) out.work.reserve(rows);
-  State<Dim> checkpoint = z, before = z;  // copies made now, so the loop never allocates
+  // Copies made now, so the loop never allocates. The block loop steps y, a local
+  // that only inlined code sees, so the compiler can keep it in registers.
+  State<Dim> checkpoint = z, before = z, y = z;
   std::array<double, Model::n_momenta> j0{};
   model.momenta(z.q, z.p, j0.data());
   auto time_at = [&](long k) { return k == N && spec.h_last != spec.h ? (N - 1) * spec.h + spec.h_last : k * spec.h; };
@@ -122,7 +125,7 @@ RunResult integrate(const Model& model, const ButcherTableau& tab, State<Dim> z,
     result.message = "the initial state is not finite";
     return result;
   }
-  detail::save_point(model, z, 0.0, ws, out);
+  save_point(model, z, 0.0, ws, out);
   const long progress_every = std::max(1L, N / std::max(1L, control.max_progress_calls));
   long next_save = spec.save_every, next_progress = progress_every, k = 0;
   double max_drift = 0.0;
@@ -130,11 +133,11 @@ RunResult integrate(const Model& model, const ButcherTableau& tab, State<Dim> z,
   // method integrates it itself (see integrates_work).
   constexpr bool trapezoid = !integrates_work<Method>::value;
   double power = spec.track_work && trapezoid ? dissipated_power(model, z, ws) : 0.0;
-  auto advance = [&](long i) {
-    step<Method>(model, tab, z, step_size(i), ws);
+  auto advance = [&](State<Dim>& x, long i) {
+    step<Method>(model, tab, x, step_size(i), ws);
     if constexpr (trapezoid) {
       if (spec.track_work) {
-        const double next = dissipated_power(model, z, ws);
+        const double next = dissipated_power(model, x, ws);
         ws.work += 0.5 * step_size(i) * (power + next);
         power = next;
       }
@@ -151,10 +154,12 @@ RunResult integrate(const Model& model, const ButcherTableau& tab, State<Dim> z,
     checkpoint = z;
     const double checkpoint_work = ws.work, checkpoint_power = power;
     double block_drift = 0.0;
+    y = z;
     for (long i = k; i < end; ++i) {
-      advance(i);
-      if constexpr (Model::n_momenta > 0) block_drift = std::max(block_drift, detail::momentum_drift(model, z, j0));
+      advance(y, i);
+      if constexpr (Model::n_momenta > 0) block_drift = std::max(block_drift, momentum_drift(model, y, j0));
     }
+    z = y;
     if (!z.all_finite()) {
       // Replay the block one checked step at a time from its start.
       z = checkpoint;
@@ -164,13 +169,13 @@ RunResult integrate(const Model& model, const ButcherTableau& tab, State<Dim> z,
       for (; i < end; ++i) {
         before = z;
         const double work_before = ws.work;
-        advance(i);
+        advance(z, i);
         if (!z.all_finite()) {
           z = before;
           ws.work = work_before;
           break;
         }
-        if constexpr (Model::n_momenta > 0) max_drift = std::max(max_drift, detail::momentum_drift(model, z, j0));
+        if constexpr (Model::n_momenta > 0) max_drift = std::max(max_drift, momentum_drift(model, z, j0));
       }
       k = i;
       result.status = Status::non_finite;
@@ -182,7 +187,7 @@ RunResult integrate(const Model& model, const ButcherTableau& tab, State<Dim> z,
     max_drift = std::max(max_drift, block_drift);
     k = end;
     if (k == next_save) {
-      detail::save_point(model, z, time_at(k), ws, out);
+      save_point(model, z, time_at(k), ws, out);
       next_save += spec.save_every;
     }
     if (k == next_progress) {
@@ -191,12 +196,31 @@ RunResult integrate(const Model& model, const ButcherTableau& tab, State<Dim> z,
     }
   }
   // The final state is always the last row, saved or not by save_every.
-  if (out.t.back() != time_at(k)) detail::save_point(model, z, time_at(k), ws, out);
+  if (out.t.back() != time_at(k)) save_point(model, z, time_at(k), ws, out);
   if (control.progress && result.status == Status::completed && next_progress - progress_every != N) control.progress(N, N);
   result.steps = k;
   result.max_momentum_drift = max_drift;
   if (result.status == Status::completed) result.message = "completed " + std::to_string(N) + " steps";
   return result;
+}
+
+}  // namespace detail
+
+// Integrates spec.n_steps steps of Method from z. The built-in tableaux have 1, 2 or
+// 4 stages; for those the loop is instantiated with the stage count fixed, so
+// Runge-Kutta stages unroll. Any other tableau runs from the run-time table.
+template <class Method, class Model, int Dim = Model::dim>
+RunResult integrate(const Model& model, const ButcherTableau& tab, State<Dim> z, const RunSpec& spec,
+                    const Control& control = {}) {
+  if constexpr (uses_tableau<Method>()) {
+    switch (tab.stages()) {
+      case 1: return detail::run_steps<Method>(model, FixedTableau<1>(tab), std::move(z), spec, control);
+      case 2: return detail::run_steps<Method>(model, FixedTableau<2>(tab), std::move(z), spec, control);
+      case 4: return detail::run_steps<Method>(model, FixedTableau<4>(tab), std::move(z), spec, control);
+      default: break;
+    }
+  }
+  return detail::run_steps<Method>(model, tab, std::move(z), spec, control);
 }
 
 }  // namespace raydamp

@@ -4,6 +4,7 @@
 
 #include <vector>
 
+#include "raydamp/damping/decay_factors.hpp"
 #include "raydamp/state.hpp"
 
 namespace raydamp {
@@ -14,6 +15,7 @@ struct Workspace {
   std::vector<Vector<Dim>> kq, kp;  // Runge-Kutta stage derivatives
   bool track_work = false;  // accumulate the damping work W in `work`
   double work = 0.0;
+  DecayFactors damp_factors, kick_damp_factors;  // for the last t each exact damping flow ran for
 
   Workspace(int n, int stages)
       : v(Vector<Dim>::Zero(n)), g(Vector<Dim>::Zero(n)), f(Vector<Dim>::Zero(n)),

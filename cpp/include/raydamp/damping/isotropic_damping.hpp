@@ -2,26 +2,23 @@
 // a = eps c. Every direction of p decays at the same rate.
 #pragma once
 
-#include <cmath>
-
-#include "raydamp/phi.hpp"
+#include "raydamp/damping/decay_factors.hpp"
 
 namespace raydamp {
 
 struct IsotropicDamping {
   double a = 0.0;  // the single eigenvalue of A = eps D M^{-1}
 
-  // p <- exp(-t A) p: the exact flow of eps Y.
+  DecayFactors factors(double t) const { return decay_factors(a, t); }
+
+  // p <- exp(-t A) p: the exact flow of eps Y (f = factors(t)).
   template <class Q, class P>
-  void decay(const Q&, double t, P& p) const { p *= std::exp(-t * a); }
+  void decay(const Q&, const DecayFactors& f, P& p) const { p *= f.exp; }
 
   // p <- exp(-t A) p - t phi1(-t A) g: the exact flow of p' = -g - A p with q
   // (and so g = grad V(q)) frozen.
   template <class Q, class G, class P>
-  void decay_affine(const Q&, double t, const G& g, P& p) const {
-    const double x = -t * a;
-    p = std::exp(x) * p - (t * phi1(x)) * g;
-  }
+  void decay_affine(const Q&, const DecayFactors& f, const G& g, P& p) const { p = f.exp * p - f.t_phi1 * g; }
 
   // out = A p: the damping force is -out.
   template <class Q, class P, class O>

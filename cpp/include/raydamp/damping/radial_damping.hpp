@@ -4,30 +4,27 @@
 // radial component of p alone.
 #pragma once
 
-#include <cmath>
-
-#include "raydamp/phi.hpp"
+#include "raydamp/damping/decay_factors.hpp"
 
 namespace raydamp {
 
 struct RadialDamping {
   double a = 0.0;  // the nonzero eigenvalue of A, along u
 
+  DecayFactors factors(double t) const { return decay_factors(a, t); }
+
   // p <- exp(-t A) p: only the radial component decays.
   template <class Q, class P>
-  void decay(const Q& q, double t, P& p) const {
-    const double inv_r2 = 1.0 / q.squaredNorm();
-    p += (std::expm1(-t * a) * q.dot(p) * inv_r2) * q;
+  void decay(const Q& q, const DecayFactors& f, P& p) const {
+    p += (f.expm1 * q.dot(p) / q.squaredNorm()) * q;
   }
 
   // p <- exp(-t A) p - t phi1(-t A) g. Tangentially phi1(0) = 1 (a plain kick);
   // radially the exact affine decay.
   template <class Q, class G, class P>
-  void decay_affine(const Q& q, double t, const G& g, P& p) const {
-    const double x = -t * a;
-    const double inv_r2 = 1.0 / q.squaredNorm();
-    const double radial = (std::expm1(x) * q.dot(p) - t * (phi1(x) - 1.0) * q.dot(g)) * inv_r2;
-    p += radial * q - t * g;
+  void decay_affine(const Q& q, const DecayFactors& f, const G& g, P& p) const {
+    const double radial = (f.expm1 * q.dot(p) - f.t_phi1_m1 * q.dot(g)) / q.squaredNorm();
+    p += radial * q - f.t * g;
   }
 
   template <class Q, class P, class O>

@@ -9,30 +9,32 @@ namespace raydamp::flows {
 
 // exp(t X_T): q <- q + t M^{-1} p.
 template <class Model, int Dim>
-void drift(const Model& model, State<Dim>& z, double t, Workspace<Dim>& ws) {
+inline void drift(const Model& model, State<Dim>& z, double t, Workspace<Dim>& ws) {
   model.mass.velocity(z.p, ws.v);
   z.q += t * ws.v;
 }
 
 // exp(t X_V): p <- p - t grad V(q).
 template <class Model, int Dim>
-void kick(const Model& model, State<Dim>& z, double t, Workspace<Dim>& ws) {
+inline void kick(const Model& model, State<Dim>& z, double t, Workspace<Dim>& ws) {
   model.gradient(z.q, ws.g);
   z.p -= t * ws.g;
 }
 
 // exp(t eps Y): p <- exp(-t eps D(q) M^{-1}) p.
 template <class Model, int Dim>
-void damp(const Model& model, State<Dim>& z, double t, Workspace<Dim>&) {
-  model.damping.decay(z.q, t, z.p);
+inline void damp(const Model& model, State<Dim>& z, double t, Workspace<Dim>& ws) {
+  if (ws.damp_factors.t != t) ws.damp_factors = model.damping.factors(t);
+  model.damping.decay(z.q, ws.damp_factors, z.p);
 }
 
 // exp(t (X_V + eps Y)): the exact solution of the affine ODE p' = -grad V(q) - A p,
 // p(t) = e^{-tA} p - t phi1(-tA) grad V(q).
 template <class Model, int Dim>
-void kick_damp(const Model& model, State<Dim>& z, double t, Workspace<Dim>& ws) {
+inline void kick_damp(const Model& model, State<Dim>& z, double t, Workspace<Dim>& ws) {
   model.gradient(z.q, ws.g);
-  model.damping.decay_affine(z.q, t, ws.g, z.p);
+  if (ws.kick_damp_factors.t != t) ws.kick_damp_factors = model.damping.factors(t);
+  model.damping.decay_affine(z.q, ws.kick_damp_factors, ws.g, z.p);
 }
 
 }  // namespace raydamp::flows

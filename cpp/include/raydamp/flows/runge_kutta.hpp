@@ -18,12 +18,17 @@ namespace raydamp::flows {
 //   P_i = p - h c_i g + h sum_j a_ij D_j,   p_new = p - h g + h sum_i b_i D_i,
 // the same method re-associated. At eps = 0 every D_i is exactly zero, so rks
 // is Stormer-Verlet to the last bit, whatever the tableau.
-template <class Model, int Dim>
-void kick_damp_rk(const Model& model, const ButcherTableau& tab, State<Dim>& z, double h, Workspace<Dim>& ws) {
+// Tab is a ButcherTableau or a FixedTableau<S> (same accessors, stage count known
+// to the compiler, so the stage loops unroll).
+template <class Model, class Tab, int Dim>
+inline void kick_damp_rk(const Model& model, const Tab& tab, State<Dim>& z, double h, Workspace<Dim>& ws) {
   const int s = tab.stages();
   model.gradient(z.q, ws.g);  // constant over the stages: q is frozen
   for (int i = 0; i < s; ++i) {
-    ws.stage_p = z.p - (h * tab.c(i)) * ws.g;
+    // At c_i = 0 (an explicit tableau's first stage) P_i is p itself; writing
+    // p - 0 g would make the stage wait for grad V (a square root and a division).
+    if (tab.c(i) != 0.0) ws.stage_p = z.p - (h * tab.c(i)) * ws.g;
+    else ws.stage_p = z.p;
     for (int j = 0; j < i; ++j)
       if (tab.a(i, j) != 0.0) ws.stage_p += (h * tab.a(i, j)) * ws.kp[j];
     if (tab.a(i, i) != 0.0) {
@@ -44,8 +49,8 @@ namespace detail {
 
 // Generic explicit Runge-Kutta step of (q, p)' = field(q, p); field(i, q, p, dq, dp)
 // writes the slopes of stage i.
-template <class Field, int Dim>
-void explicit_rk(const ButcherTableau& tab, State<Dim>& z, double h, Workspace<Dim>& ws, Field field) {
+template <class Tab, class Field, int Dim>
+inline void explicit_rk(const Tab& tab, State<Dim>& z, double h, Workspace<Dim>& ws, Field field) {
   const int s = tab.stages();
   for (int i = 0; i < s; ++i) {
     ws.stage_q = z.q;
@@ -72,8 +77,8 @@ void explicit_rk(const ButcherTableau& tab, State<Dim>& z, double h, Workspace<D
 
 }  // namespace detail
 
-template <class Model, int Dim>
-void drift_damp_rk(const Model& model, const ButcherTableau& tab, State<Dim>& z, double h, Workspace<Dim>& ws) {
+template <class Model, class Tab, int Dim>
+inline void drift_damp_rk(const Model& model, const Tab& tab, State<Dim>& z, double h, Workspace<Dim>& ws) {
   detail::explicit_rk(tab, z, h, ws, [&](int, const Vector<Dim>& q, const Vector<Dim>& p, Vector<Dim>& dq, Vector<Dim>& dp) {
     model.mass.velocity(p, dq);
     model.damping.rate(q, p, dp);
@@ -81,8 +86,8 @@ void drift_damp_rk(const Model& model, const ButcherTableau& tab, State<Dim>& z,
   });
 }
 
-template <class Model, int Dim>
-void full_rk(const Model& model, const ButcherTableau& tab, State<Dim>& z, double h, Workspace<Dim>& ws) {
+template <class Model, class Tab, int Dim>
+inline void full_rk(const Model& model, const Tab& tab, State<Dim>& z, double h, Workspace<Dim>& ws) {
   detail::explicit_rk(tab, z, h, ws, [&](int i, const Vector<Dim>& q, const Vector<Dim>& p, Vector<Dim>& dq, Vector<Dim>& dp) {
     model.mass.velocity(p, dq);
     model.gradient(q, ws.g);

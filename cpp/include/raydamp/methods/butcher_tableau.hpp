@@ -2,6 +2,7 @@
 // order conditions, never typed in, so a wrong coefficient shows as a lower order.
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <stdexcept>
@@ -97,6 +98,30 @@ class ButcherTableau {
   std::vector<double> b_, c_;
   TableauKind kind_;
   int order_;
+};
+
+// A validated tableau copied into fixed-size storage: the step loop instantiated
+// with it has S known at compile time, so its stage loops unroll (the coefficients
+// stay data, read from the tableau it was made from).
+template <int S>
+class FixedTableau {
+ public:
+  explicit FixedTableau(const ButcherTableau& tab) {
+    if (tab.stages() != S) throw std::invalid_argument("FixedTableau: stage count mismatch");
+    for (int i = 0; i < S; ++i) {
+      b_[i] = tab.b(i);
+      c_[i] = tab.c(i);
+      for (int j = 0; j < S; ++j) a_[i * S + j] = tab.a(i, j);
+    }
+  }
+  static constexpr int stages() { return S; }
+  double a(int i, int j) const { return a_[i * S + j]; }
+  double b(int i) const { return b_[i]; }
+  double c(int i) const { return c_[i]; }
+
+ private:
+  std::array<double, S * S> a_{};
+  std::array<double, S> b_{}, c_{};
 };
 
 // The tableaux raydamp ships, built and validated once.

@@ -116,6 +116,14 @@ struct integrates_work<Method, std::void_t<decltype(Method::integrates_work)>>
     : std::bool_constant<Method::integrates_work> {};
 
 template <class Method>
+constexpr bool uses_tableau() {
+  for (const auto& stage : Method::stages)
+    if (stage.flow == Flow::kick_damp_rk || stage.flow == Flow::drift_damp_rk || stage.flow == Flow::full_rk)
+      return true;
+  return false;
+}
+
+template <class Method>
 constexpr bool valid_table() {
   return fractions_sum_to_one(Method::stages) && is_symmetric(Method::stages);
 }
