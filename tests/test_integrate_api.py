@@ -164,3 +164,16 @@ def test_methods_catalogue():
 def test_version_comes_from_the_build():
     pyproject = tomllib.loads((Path(__file__).parents[1] / "pyproject.toml").read_text())
     assert raydamp.__version__ == pyproject["project"]["version"]
+
+
+@pytest.mark.parametrize("method", ["3s", "2s", "rks"])
+def test_shortened_last_step_uses_its_own_damping_factors(method):
+    # The exact damping flows cache exp/phi1 per sub-step length; the short last step
+    # must not reuse the full step's factors.
+    model = ElasticPendulum(0.3)
+    full = raydamp.integrate(model, ELASTIC_Q0, ELASTIC_P0, method=method, h=0.3, t_end=1.0)
+    assert full.steps == 4 and full.t[-1] == 1.0
+    three = raydamp.integrate(model, ELASTIC_Q0, ELASTIC_P0, method=method, h=0.3, n_steps=3)
+    last = raydamp.integrate(model, three.q[-1], three.p[-1], method=method, h=1.0 - 3 * 0.3, n_steps=1)
+    np.testing.assert_array_equal(full.q[-1], last.q[-1])
+    np.testing.assert_array_equal(full.p[-1], last.p[-1])
