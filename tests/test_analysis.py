@@ -83,6 +83,13 @@ def test_relative_equilibrium_solves_the_reduced_equations(mu):
     assert distance_from(eq, sol).max() < 1e-8
 
 
+def test_analysis_names_bad_arguments():
+    with pytest.raises(ValueError, match="p: give the momenta"):
+        distance_from(relative_equilibrium(ElasticPendulum(), 1.0), np.ones((2, 3)))
+    with pytest.raises(ValueError, match="q0 must have length 1"):
+        reference_solution(DampedPendulum(), [1.0, 2.0], [0.0], [0.0, 1.0])
+
+
 def test_relative_equilibrium_refuses_bad_input():
     with pytest.raises(ValueError, match="mu must be finite and nonzero"):
         relative_equilibrium(ElasticPendulum(), 0.0)

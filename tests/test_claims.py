@@ -73,6 +73,7 @@ def test_momentum_and_orbits():
     # Measured over t in [0, 1000]: Heun's mean radius rises in every window, by 0.054;
     # 3s's radius oscillation falls from 0.56 to 4e-9.
     assert orbits["heun_radius_increasing"] and orbits["heun_radius_growth"] > 0.03
+    assert orbits["heun_radius_trend"] > 0
     assert orbits["splitting_radius_ptp_last"] < 1e-6 < 0.1 < orbits["splitting_radius_ptp_first"]
 
 
@@ -104,4 +105,8 @@ def test_energy_balance():
 def test_all_report_claims_but_the_known_discrepancy_hold(tmp_path):
     claims = raydamp.reproduce.run(tmp_path, quick=False, progress=False)
     failed = [c.where for c in claims if not c.passed]
-    assert failed == ["Sec. 6.2 (data)"]
+    # Two disagreements with the paper, each explained in the report: the pairs with 3s
+    # differ ~45x (not >= 100x) less than the error, and the relative-equilibrium data
+    # needs k = 10.
+    assert failed == ["Fig. 3 (lower)", "Sec. 6.2 (data)"]
+    assert sum(c.where == "Fig. 3 (lower)" and c.passed for c in claims) == 1  # 2s-rks closest: holds

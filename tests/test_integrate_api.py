@@ -41,6 +41,9 @@ def pendulum_run(**kwargs):
     ({"progress": 3}, "progress must be callable"),
     ({"cancel": threading.Event()}, "cancel must be a raydamp.CancelToken"),
     ({"n_steps": 10**12}, "save_every: .* GiB"),
+    ({"save_every": 10**20}, "save_every must be <= "),
+    ({"n_steps": 2**63}, "n_steps must be <= "),
+    ({"n_steps": None, "t_end": 1e300, "h": 1e-300}, "t_end: reaching t_end"),
 ])
 def test_bad_arguments_are_named(kwargs, message):
     with pytest.raises(ValueError, match=message):
@@ -57,6 +60,21 @@ def test_bad_arguments_are_named(kwargs, message):
 def test_bad_initial_state_is_named(q0, p0, message):
     with pytest.raises(ValueError, match=message):
         raydamp.integrate(DampedPendulum(), q0, p0, h=0.1, n_steps=10)
+
+
+def test_elastic_pendulum_refuses_the_origin():
+    with pytest.raises(ValueError, match="q0 must not be the origin"):
+        raydamp.integrate(ElasticPendulum(), [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], h=0.1, n_steps=10)
+
+
+def test_steps_for():
+    assert raydamp.steps_for(200.0, 0.2) == (1000, 0.2)
+    n, last = raydamp.steps_for(1.0, 0.3)
+    assert n == 4 and last == pytest.approx(0.1)
+    # A step far longer than the span is one short step, never zero steps.
+    assert raydamp.steps_for(1e-300, 1e300) == (1, 1e-300)
+    with pytest.raises(ValueError, match="t_end must be > 0"):
+        raydamp.steps_for(0.0, 0.1)
 
 
 def test_model_argument_must_be_a_model():

@@ -15,7 +15,8 @@ T = 10.0
 
 CASES = [
     ("3s", None, 2), ("2s", None, 2), ("rks", "heun", 2), ("rks", "rk4", 2), ("rks", "midpoint", 2),
-    ("rks", "euler", 1), ("rksb", "heun", 2), ("heun", None, 2), ("rk4", None, 4),
+    ("rks", "euler", 1), ("rksb", "heun", 2), ("rksb", "rk4", 2), ("rksb", "euler", 1),
+    ("heun", None, 2), ("rk4", None, 4),
 ]
 
 
@@ -50,6 +51,10 @@ def test_stormer_verlet_order_undamped(model_name):
 
 def test_catalogue_orders_match_measured_ones():
     listed = {(m.name, m.tableau): m.order for m in raydamp.methods()}
+    tested = set()
     for method, tableau, order in CASES:
         key = (method, tableau if tableau else method if method in ("heun", "rk4") else None)
         assert listed[key] == order
+        tested.add(key)
+    # Every damped (method, tableau) pair the catalogue offers has an order test here.
+    assert {k for k, m in zip(listed, raydamp.methods()) if m.damped} == tested

@@ -50,6 +50,20 @@ int main() {
     for (double x : r.trajectory.q) CHECK(std::isfinite(x));
     for (double x : r.trajectory.p) CHECK(std::isfinite(x));
   }
+  // The same blow-up with few saved points: blocks of up to 256 steps, so the failing
+  // block is replayed step by step; the step found and the rows kept must not change.
+  {
+    DampedPendulum wild(100.0);
+    const State<1> start{Vector<1>(0.5), Vector<1>(1.0)};
+    RunResult every = integrate<RungeKutta>(wild, heun, start, RunSpec{1.0, 5000, 1.0, 1});
+    RunResult sparse = integrate<RungeKutta>(wild, heun, start, RunSpec{1.0, 5000, 1.0, 1000});
+    CHECK(sparse.status == Status::non_finite);
+    CHECK(sparse.failed_step == every.failed_step);
+    CHECK(sparse.steps == every.steps);
+    CHECK(sparse.trajectory.rows() == 2);  // the initial state and the last finite one
+    CHECK(sparse.trajectory.p.back() == every.trajectory.p.back());
+    CHECK(sparse.trajectory.t.back() == every.trajectory.t.back());
+  }
   // Cancellation before the first block: only the initial row.
   {
     std::atomic<bool> cancel{true};

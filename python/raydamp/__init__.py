@@ -12,9 +12,9 @@ equilibria.
 
 from . import models
 from ._core import __version__
-from .integrate import CancelToken, integrate
+from .integrate import CancelToken, integrate, steps_for
 from .methods import MethodInfo, TableauInfo, methods, tableaux
 from .solution import Solution
 
-__all__ = ["__version__", "models", "integrate", "CancelToken", "Solution", "methods", "tableaux",
+__all__ = ["__version__", "models", "integrate", "steps_for", "CancelToken", "Solution", "methods", "tableaux",
            "MethodInfo", "TableauInfo"]

@@ -23,7 +23,7 @@ def real(name: str, value, *, positive: bool = False, nonnegative: bool = False)
     return x
 
 
-def integer(name: str, value, *, minimum: int = 1) -> int:
+def integer(name: str, value, *, minimum: int = 1, maximum: int | None = None) -> int:
     if type(value) is not int and (isinstance(value, bool) or not isinstance(value, numbers.Integral)):
         if isinstance(value, float) and value.is_integer():
             value = int(value)
@@ -31,6 +31,8 @@ def integer(name: str, value, *, minimum: int = 1) -> int:
             raise ValueError(f"{name} must be an integer, got {value!r}")
     if value < minimum:
         raise ValueError(f"{name} must be >= {minimum}, got {value}")
+    if maximum is not None and value > maximum:
+        raise ValueError(f"{name} must be <= {maximum}, got {value}")
     return int(value)
 
 

@@ -12,10 +12,12 @@ from ._validation import integer, real, vector
 from .models import Model
 from .solution import Solution
 
-__all__ = ["integrate", "CancelToken", "MAX_SAVED_BYTES"]
+__all__ = ["integrate", "steps_for", "CancelToken", "MAX_SAVED_BYTES", "MAX_STEPS"]
 
 # Refuse runs whose saved points alone would not fit in memory comfortably.
 MAX_SAVED_BYTES = 4 * 2**30
+# Step counts travel as C++ long; far beyond any run that could finish.
+MAX_STEPS = 2**62
 
 
 class CancelToken(_core.CancelToken):
@@ -70,17 +72,16 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
         raise ValueError(f"tableau must be a tableau name or None, got {tableau!r}")
     resolved_tableau = _core.resolve(method, tableau or "")  # raises ValueError naming the tableau
     h = real("h", h, positive=True)
-    q0 = vector("q0", q0, model.dim)
+    q0 = model.check_configuration("q0", vector("q0", q0, model.dim))
     p0 = vector("p0", p0, model.dim)
-    save_every = integer("save_every", save_every)
+    save_every = integer("save_every", save_every, maximum=MAX_STEPS)
     if (t_end is None) == (n_steps is None):
         raise ValueError("give exactly one of t_end and n_steps")
     if n_steps is not None:
-        n_steps = integer("n_steps", n_steps)
+        n_steps = integer("n_steps", n_steps, maximum=MAX_STEPS)
         h_last = h
     else:
-        t_end = real("t_end", t_end, positive=True)
-        n_steps, h_last = _steps_to(t_end, h)
+        n_steps, h_last = steps_for(t_end, h)
     if progress is not None and not callable(progress):
         raise ValueError(f"progress must be callable or None, got {progress!r}")
     if not isinstance(work, bool):
@@ -103,11 +104,21 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
                     h=h, max_momentum_drift=out["max_momentum_drift"], work=out["work"], wall_time=wall)
 
 
-def _steps_to(t_end: float, h: float) -> tuple[int, float]:
-    """Number of steps to reach t_end and the size of the last one."""
+def steps_for(t_end: float, h: float) -> tuple[int, float]:
+    """The number of steps of size ``h`` that reach ``t_end``, and the size of the last.
+
+    A ``t_end`` within 1e-9 relative of a whole multiple of ``h`` takes whole steps;
+    otherwise the last step is shortened to land exactly on ``t_end``."""
+    t_end = real("t_end", t_end, positive=True)
+    h = real("h", h, positive=True)
     ratio = t_end / h
+    if not ratio <= MAX_STEPS:  # also catches ratio = inf
+        raise ValueError(f"t_end: reaching t_end = {t_end:g} with h = {h:g} takes {ratio:.3g} steps, "
+                         f"more than {MAX_STEPS:.3g}")
     nearest = round(ratio)
     if nearest >= 1 and abs(ratio - nearest) <= 1e-9 * max(1.0, ratio):
-        return nearest, h
-    n = math.ceil(ratio)
-    return n, t_end - (n - 1) * h
+        n, h_last = nearest, h
+    else:
+        n = max(1, math.ceil(ratio))
+        h_last = t_end - (n - 1) * h
+    return n, h_last

@@ -36,6 +36,10 @@ class Model:
         """The parameters this model was built with, by name."""
         return {name: getattr(self, name) for name in inspect.signature(type(self)).parameters}
 
+    def check_configuration(self, name: str, q: np.ndarray) -> np.ndarray:
+        """Refuse a configuration outside the model's configuration space; returns q."""
+        return q
+
     def energy(self, q, p) -> float:
         """H(q, p)."""
         return self._core_model.energy(vector("q", q, self.dim), vector("p", p, self.dim))
@@ -112,6 +116,14 @@ class ElasticPendulum(Model):
         self.l = real("l", l, nonnegative=True)
         self.g = tuple(float(x) for x in vector("g", g, 3))
         self._core_model = _core.ElasticPendulum(self.eps, self.m, self.k, self.l, list(self.g))
+
+    def check_configuration(self, name: str, q: np.ndarray) -> np.ndarray:
+        # Configuration space R^3 minus the origin (paper section 6.2): at q = 0 neither
+        # grad V nor D(q) = q q^T / |q|^2 is defined.
+        if not np.any(q):
+            raise ValueError(f"{name} must not be the origin: the elastic pendulum's grad V and damping "
+                             "D(q) = q q^T/|q|^2 are undefined at q = 0")
+        return q
 
 
 MODELS: dict[str, type[Model]] = {cls.name: cls for cls in (DampedPendulum, ElasticPendulum)}

@@ -7,7 +7,6 @@ only renames raydamp's argument names to the JSON fields the client sent.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -83,12 +82,14 @@ def build_call(spec: JobSpec) -> RaydampCall:
     return RaydampCall(model, list(spec.initial_state.q), list(spec.initial_state.p), options)
 
 
-def planned_steps(spec: JobSpec) -> float:
-    """Steps the run will take (t_end / step_size rounded up; may be off by one, enough for bounds)."""
+def planned_steps(spec: JobSpec) -> int:
+    """Steps the run will take, counted by raydamp itself (raises SpecError for a bad t_end)."""
     if spec.n_steps is not None:
         return spec.n_steps
-    ratio = spec.t_end / spec.step_size
-    return math.ceil(ratio) if math.isfinite(ratio) else math.inf
+    try:
+        return raydamp.steps_for(spec.t_end, spec.step_size)[0]
+    except ValueError as error:
+        raise _translate(error, _FIELD_OF_ARGUMENT) from None
 
 
 def check_spec(spec: JobSpec, settings: Settings) -> RaydampCall:
@@ -109,7 +110,7 @@ def check_spec(spec: JobSpec, settings: Settings) -> RaydampCall:
     steps = planned_steps(spec)
     if steps > settings.max_steps:
         field = "n_steps" if spec.n_steps is not None else "t_end"
-        raise SpecError((field,), f"{field}: the run would take {steps:.6g} steps; this service runs at most "
+        raise SpecError((field,), f"{field}: the run would take {steps} steps; this service runs at most "
                         f"max_steps = {settings.max_steps} (raise step_size or shorten the run)")
     saved_points = steps // spec.save_every + 2
     if saved_points > settings.max_saved_points:
@@ -125,7 +126,7 @@ def check_spec(spec: JobSpec, settings: Settings) -> RaydampCall:
     # One step validates method, tableau, their fit with the model, step_size and the initial state
     # the way the real run will, in microseconds.
     try:
-        call.run(n_steps=1, t_end=None, save_every=1)
+        call.run(n_steps=1, t_end=None)
     except ValueError as error:
         raise _translate(error, _FIELD_OF_ARGUMENT) from None
     return call

@@ -52,6 +52,9 @@ BAD_SPECS = [
     ("too many steps", {**without(VALID, "t_end"), "n_steps": 10**10 + 1, "save_every": 10**6}, ("n_steps",)),
     ("too long a t_end", {**VALID, "t_end": 1e300, "save_every": 10**6}, ("t_end",)),
     ("too many saved points", {**without(VALID, "t_end"), "n_steps": 10**7}, ("save_every",)),
+    ("save_every beyond a C++ long", {**VALID, "save_every": 10**20}, ("save_every",)),
+    ("elastic pendulum at the origin", {**ELASTIC, "initial_state": {"q": [0.0, 0.0, 0.0], "p": [1.0, 0.0, 0.0]}},
+     ("initial_state", "q")),
 ]
 
 NON_FINITE = [

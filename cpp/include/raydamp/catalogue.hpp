@@ -3,6 +3,7 @@
 #pragma once
 
 #include <algorithm>
+#include <utility>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -15,29 +16,37 @@ namespace raydamp {
 struct MethodEntry {
   std::string name;
   std::string description;
+  std::string table;  // the stage table it runs: the Method type's name
   TableauUse tableau_use;
+  int splitting_order;
   std::string default_tableau;  // "" when the method has no Runge-Kutta stage
   bool tableau_fixed;           // heun and rk4 are one tableau each
-  int splitting_order;
-  bool ignores_damping = false;  // sv: applying it to a damped model would silently drop eps
+  bool ignores_damping;         // sv: applying it to a damped model would silently drop eps
 };
+
+// An entry whose table, tableau use and order come from the Method type itself.
+template <class Method>
+MethodEntry entry(std::string name, std::string description, std::string default_tableau = "",
+                  bool tableau_fixed = false, bool ignores_damping = false) {
+  return {std::move(name), std::move(description), Method::name, Method::tableau, Method::splitting_order,
+          std::move(default_tableau), tableau_fixed, ignores_damping};
+}
 
 inline const std::vector<MethodEntry>& method_entries() {
   static const std::vector<MethodEntry> entries{
-      {"sv", "Stormer-Verlet: drift h/2, kick h, drift h/2 (ignores damping; the eps = 0 reference)",
-       TableauUse::none, "", false, StormerVerlet::splitting_order, true},
-      {"3s", "three-term splitting (paper Algorithm 3S): damp h/2, drift h/2, kick h, drift h/2, damp h/2",
-       TableauUse::none, "", false, ThreeTermSplitting::splitting_order},
-      {"2s", "two-term splitting (paper Algorithm 2S): drift h/2, exact kick+damp h, drift h/2",
-       TableauUse::none, "", false, TwoTermSplitting::splitting_order},
-      {"rks", "Runge-Kutta splitting (paper Algorithm RKS): drift h/2, one RK step of kick+damp, drift h/2",
-       TableauUse::any_diagonally_implicit, "heun", false, RungeKuttaSplitting::splitting_order},
-      {"rksb", "the paper's counter-example RKS-B: kick h/2, one RK step of drift+damp, kick h/2 (not momentum-conserving)",
-       TableauUse::explicit_only, "heun", false, RungeKuttaSplittingB::splitting_order},
-      {"heun", "Heun's method on the whole system (the paper's baseline)", TableauUse::explicit_only, "heun", true,
-       RungeKutta::splitting_order},
-      {"rk4", "classical fourth-order Runge-Kutta on the whole system", TableauUse::explicit_only, "rk4", true,
-       RungeKutta::splitting_order},
+      entry<StormerVerlet>("sv", "Stormer-Verlet: drift h/2, kick h, drift h/2 (ignores damping; the eps = 0 reference)",
+                           "", false, true),
+      entry<ThreeTermSplitting>(
+          "3s", "three-term splitting (paper Algorithm 3S): damp h/2, drift h/2, kick h, drift h/2, damp h/2"),
+      entry<TwoTermSplitting>("2s", "two-term splitting (paper Algorithm 2S): drift h/2, exact kick+damp h, drift h/2"),
+      entry<RungeKuttaSplitting>(
+          "rks", "Runge-Kutta splitting (paper Algorithm RKS): drift h/2, one RK step of kick+damp, drift h/2", "heun"),
+      entry<RungeKuttaSplittingB>("rksb",
+                                  "the paper's counter-example RKS-B: kick h/2, one RK step of drift+damp, kick h/2 "
+                                  "(not momentum-conserving)",
+                                  "heun"),
+      entry<RungeKutta>("heun", "Heun's method on the whole system (the paper's baseline)", "heun", true),
+      entry<RungeKutta>("rk4", "classical fourth-order Runge-Kutta on the whole system", "rk4", true),
   };
   return entries;
 }
@@ -89,16 +98,22 @@ inline int method_order(const MethodEntry& method, const ButcherTableau& tab) {
   return std::min(method.splitting_order, tab.order());
 }
 
+namespace detail {
+
+template <class F, class Method, class... Rest>
+decltype(auto) with_table(const std::string& table, F& f) {
+  if (table == Method::name) return f(Method{});
+  if constexpr (sizeof...(Rest) > 0) return with_table<F, Rest...>(table, f);
+  else throw std::logic_error("catalogue: no stage table named '" + table + "'");
+}
+
+}  // namespace detail
+
 // Calls f(MethodType{}) for the method named `name`: the one place a name becomes a type.
 template <class F>
 decltype(auto) with_method(const std::string& name, F&& f) {
-  if (name == "sv") return f(StormerVerlet{});
-  if (name == "3s") return f(ThreeTermSplitting{});
-  if (name == "2s") return f(TwoTermSplitting{});
-  if (name == "rks") return f(RungeKuttaSplitting{});
-  if (name == "rksb") return f(RungeKuttaSplittingB{});
-  if (name == "heun" || name == "rk4") return f(RungeKutta{});
-  throw std::invalid_argument("method: unknown method '" + name + "' (known: " + known_methods() + ")");
+  return detail::with_table<F, StormerVerlet, ThreeTermSplitting, TwoTermSplitting, RungeKuttaSplitting,
+                            RungeKuttaSplittingB, RungeKutta>(method_entry(name).table, f);
 }
 
 }  // namespace raydamp

@@ -6,6 +6,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .._validation import vector
 from ..models import Model
 from ..solution import Solution
 
@@ -32,7 +33,7 @@ def reference_solution(model: Model, q0, p0, t_eval, *, rtol: float = 1e-13, ato
         pdot = -np.asarray(core.gradient(q)).reshape(n) - np.asarray(core.damping_rate(q, p)).reshape(n)
         return np.concatenate([qdot, pdot])
 
-    z0 = np.concatenate([np.asarray(q0, float).reshape(n), np.asarray(p0, float).reshape(n)])
+    z0 = np.concatenate([vector("q0", q0, n), vector("p0", p0, n)])
     sol = solve_ivp(rhs, (0.0, float(t_eval[-1])), z0, method="DOP853", t_eval=t_eval, rtol=rtol, atol=atol)
     if not sol.success:
         raise RuntimeError(f"reference solver failed: {sol.message}")

@@ -108,6 +108,8 @@ def distance_from(equilibrium: RelativeEquilibrium, solution_or_q, p=None) -> np
     per saved point of a Solution (or per row of q, p)."""
     if isinstance(solution_or_q, Solution):
         q, p = solution_or_q.q, solution_or_q.p
+    elif p is None:
+        raise ValueError("p: give the momenta with the positions, or pass a Solution")
     else:
         q = solution_or_q
     reduced = reduced_coordinates(q, p)[:, :4]

@@ -23,7 +23,7 @@ class Settings:
     @classmethod
     def quick(cls) -> Settings:
         """A reduced run for CI: shorter time spans, same step sizes."""
-        return cls(pendulum_t_end=40.0, elastic_t_end=40.0, orbit_t_end=200.0, equilibrium_t_end=80.0,
+        return cls(pendulum_t_end=40.0, elastic_t_end=40.0, orbit_t_end=500.0, equilibrium_t_end=80.0,
                    convergence_t_end=2.0)
 
 
