@@ -120,7 +120,7 @@ class ElasticPendulum(Model):
     def check_configuration(self, name: str, q: np.ndarray) -> np.ndarray:
         # Configuration space R^3 minus the origin (paper section 6.2): at q = 0 neither
         # grad V nor D(q) = q q^T / |q|^2 is defined.
-        if not np.any(q):
+        if not q.any():
             raise ValueError(f"{name} must not be the origin: the elastic pendulum's grad V and damping "
                              "D(q) = q q^T/|q|^2 are undefined at q = 0")
         return q
