@@ -7,4 +7,6 @@ namespace raydamp::bindings {
 void bind_catalogue(pybind11::module_& m);
 void bind_models(pybind11::module_& m);
 void bind_integrate(pybind11::module_& m);
+void bind_system_scalar_mass(pybind11::module_& m);
+void bind_system_dense_mass(pybind11::module_& m);
 }  // namespace raydamp::bindings

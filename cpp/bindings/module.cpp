@@ -11,4 +11,6 @@ PYBIND11_MODULE(_core, m) {
   raydamp::bindings::bind_catalogue(m);
   raydamp::bindings::bind_models(m);
   raydamp::bindings::bind_integrate(m);
+  raydamp::bindings::bind_system_scalar_mass(m);
+  raydamp::bindings::bind_system_dense_mass(m);
 }

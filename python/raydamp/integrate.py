@@ -98,9 +98,13 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
     out = _core.integrate(model._core_model, method, tableau or "", q0, p0, h, n_steps, h_last, save_every,
                           work, progress, cancel)
     wall = time.perf_counter() - start
+    message = out["message"]
+    explain = getattr(model, "_explain_failure", None)
+    if explain is not None and (why := explain()) is not None:
+        message = f"{message}: {why}"
     return Solution(t=out["t"], q=out["q"], p=out["p"], energy=out["energy"], momentum=out["momentum"],
                     status=out["status"], steps=out["steps"], failed_step=out["failed_step"],
-                    message=out["message"], method=method, tableau=resolved_tableau if method in with_tableau else None,
+                    message=message, method=method, tableau=resolved_tableau if method in with_tableau else None,
                     h=h, max_momentum_drift=out["max_momentum_drift"], work=out["work"], wall_time=wall)
 
 

@@ -19,12 +19,34 @@ __all__ = ["Model", "DampedPendulum", "ElasticPendulum", "MODELS", "describe_mod
 
 
 class Model:
-    """Base class: a model wraps one compiled model struct."""
+    """Base class: a model wraps one compiled model struct.
+
+    Models are immutable: the compiled struct is built from the parameters once, so
+    changing a parameter afterwards could only change the repr, not the run.
+    ``model.replace(eps=0.5)`` builds a new model instead.
+    """
 
     name: ClassVar[str]
     momentum_names: ClassVar[tuple[str, ...]] = ()
     parameter_docs: ClassVar[dict[str, str]] = {}
     _core_model: Any
+    _frozen: bool = False
+
+    def _freeze(self) -> None:
+        object.__setattr__(self, "_frozen", True)
+
+    def __setattr__(self, name: str, value) -> None:
+        if self._frozen:
+            raise AttributeError(f"{type(self).__name__} is immutable: build a new one, e.g. "
+                                 f"model.replace({name}=...), instead of setting {name!r}")
+        object.__setattr__(self, name, value)
+
+    def __delattr__(self, name: str) -> None:
+        raise AttributeError(f"{type(self).__name__} is immutable: cannot delete {name!r}")
+
+    def replace(self, **changes) -> Model:
+        """A new model of the same kind with some parameters changed."""
+        return type(self)(**{**self.parameters, **changes})
 
     @property
     def dim(self) -> int:
@@ -86,6 +108,7 @@ class DampedPendulum(Model):
     def __init__(self, eps: float = 0.01):
         self.eps = real("eps", eps, nonnegative=True)
         self._core_model = _core.DampedPendulum(self.eps)
+        self._freeze()
 
 
 class ElasticPendulum(Model):
@@ -116,6 +139,7 @@ class ElasticPendulum(Model):
         self.l = real("l", l, nonnegative=True)
         self.g = tuple(float(x) for x in vector("g", g, 3))
         self._core_model = _core.ElasticPendulum(self.eps, self.m, self.k, self.l, list(self.g))
+        self._freeze()
 
     def check_configuration(self, name: str, q: np.ndarray) -> np.ndarray:
         # Configuration space R^3 minus the origin (paper section 6.2): at q = 0 neither

@@ -1,7 +1,9 @@
 """422 responses that survive the input they complain about.
 
 FastAPI echoes the offending input in each error; a request carrying NaN or Infinity (which
-Python's JSON parser accepts) would make that echo unencodable and turn the 422 into a 500.
+Python's JSON parser accepts) or a lone surrogate (valid JSON escape, invalid UTF-8) would make
+that echo unencodable and turn the 422 into a 500, and a megabyte-long expression would come
+back whole. The echo is made encodable and cut short.
 """
 
 from __future__ import annotations
@@ -17,15 +19,36 @@ from fastapi.responses import JSONResponse
 __all__ = ["validation_error_handler"]
 
 
+MAX_ECHO = 200  # characters of an echoed string; items of an echoed list or object
+
+
+MAX_MESSAGE = 2000  # a message lists the names it knows; it is ours, so only bounded
+
+
+def _text(value: str, limit: int = MAX_ECHO) -> str:
+    value = value.encode("utf-8", "backslashreplace").decode("utf-8")  # lone surrogates -> \ud800
+    return value if len(value) <= limit else value[:limit] + f"... ({len(value)} characters)"
+
+
 def _json_safe(value: Any) -> Any:
     if isinstance(value, float) and not math.isfinite(value):
         return str(value)  # "nan", "inf", "-inf"
+    if isinstance(value, str):
+        return _text(value)
     if isinstance(value, dict):
-        return {key: _json_safe(item) for key, item in value.items()}
-    if isinstance(value, list):
-        return [_json_safe(item) for item in value]
+        return {_text(str(key)): _json_safe(item) for key, item in list(value.items())[:MAX_ECHO]}
+    if isinstance(value, (list, tuple)):
+        return [_json_safe(item) for item in list(value)[:MAX_ECHO]]
     return value
 
 
+def _error(item: dict[str, Any]) -> dict[str, Any]:
+    out = _json_safe(item)
+    if isinstance(item.get("msg"), str):
+        out["msg"] = _text(item["msg"], MAX_MESSAGE)
+    return out
+
+
 async def validation_error_handler(request: Request, error: RequestValidationError) -> JSONResponse:
-    return JSONResponse(status_code=422, content={"detail": _json_safe(jsonable_encoder(error.errors()))})
+    errors = jsonable_encoder(error.errors()[:MAX_ECHO])
+    return JSONResponse(status_code=422, content={"detail": [_error(item) for item in errors]})

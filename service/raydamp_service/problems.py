@@ -7,6 +7,8 @@ only renames raydamp's argument names to the JSON fields the client sent.
 
 from __future__ import annotations
 
+import functools
+import json
 from dataclasses import dataclass
 from typing import Any
 
@@ -34,7 +36,7 @@ _FIELD_OF_ARGUMENT: dict[str, tuple[str, ...]] = {
 class SpecError(ValueError):
     """A spec that cannot run; loc is the JSON path of the offending field (without "body")."""
 
-    def __init__(self, loc: tuple[str, ...], message: str):
+    def __init__(self, loc: tuple[str | int, ...], message: str):
         super().__init__(message)
         self.loc = loc
         self.message = message
@@ -63,15 +65,46 @@ def _translate(error: ValueError, fields: dict[str, tuple[str, ...]]) -> SpecErr
     return SpecError((), message)
 
 
-def build_call(spec: JobSpec) -> RaydampCall:
-    """The model and arguments for raydamp.integrate; raises SpecError for a bad model or parameter."""
+@functools.lru_cache(maxsize=32)
+def _compiled_system(text: str) -> raydamp.System:
+    # Keyed by the canonical JSON: a system checked at submission is not compiled again by the
+    # worker, and a sweep over initial states compiles its system once.
+    return raydamp.System.from_dict(json.loads(text))
+
+
+def _system(spec: JobSpec) -> raydamp.System:
+    """The user's system; raydamp's own validation names the path inside "system"."""
     try:
-        model = make_model(spec.model, spec.parameters)
+        return _compiled_system(json.dumps(spec.system.model_dump(exclude_unset=True), sort_keys=True))
+    except raydamp.SpecError as error:
+        raise _system_error(error) from None
+
+
+def _system_error(error: raydamp.SpecError) -> SpecError:
+    return SpecError(("system", *error.path), f"system.{error}")
+
+
+def _model(spec: JobSpec) -> raydamp.models.Model:
+    if (spec.model is None) == (spec.system is None):
+        raise SpecError(("model",) if spec.model is None else ("system",),
+                        "give exactly one of model (a name from GET /v1/models, with parameters) and system "
+                        "(a user-defined system)")
+    if spec.system is not None:
+        if spec.parameters:
+            raise SpecError(("parameters",), "parameters: a system carries its parameters inside system.parameters")
+        return _system(spec)
+    try:
+        return make_model(spec.model, spec.parameters)
     except ValueError as error:
         fields = {"model": ("model",)}
         for name in spec.parameters:  # make_model says "eps must be ..." or "parameters.eps: ..."
             fields[name] = fields[f"parameters.{name}"] = ("parameters", name)
         raise _translate(error, fields) from None
+
+
+def build_call(spec: JobSpec) -> RaydampCall:
+    """The model and arguments for raydamp.integrate; raises SpecError for a bad model, system or parameter."""
+    model = _model(spec)
     options: dict[str, Any] = {"method": spec.method, "h": spec.step_size, "save_every": spec.save_every}
     if spec.tableau is not None:
         options["tableau"] = spec.tableau
@@ -127,6 +160,8 @@ def check_spec(spec: JobSpec, settings: Settings) -> RaydampCall:
     # the way the real run will, in microseconds.
     try:
         call.run(n_steps=1, t_end=None)
+    except raydamp.SpecError as error:  # a system's function is not finite at q0
+        raise _system_error(error) from None
     except ValueError as error:
         raise _translate(error, _FIELD_OF_ARGUMENT) from None
     return call

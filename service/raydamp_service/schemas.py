@@ -8,7 +8,7 @@ from typing import Annotated, Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 __all__ = [
-    "FiniteFloat", "InitialState", "JobSpec",
+    "FiniteFloat", "InitialState", "JobSpec", "SystemInput",
     "JobStatus", "JobCreated", "JobSummary", "JobView", "JobListItem", "JobList", "Trajectory",
     "ParameterInfo", "ModelInfo", "MethodInfo", "Health",
 ]
@@ -32,10 +32,67 @@ class InitialState(_Input):
     p: list[FiniteFloat] = Field(min_length=1, description="initial momenta, length = the model's dim")
 
 
-class JobSpec(_Input):
-    """One integration problem: a model, a method, a step size and a span. Exactly one of t_end, n_steps."""
+# Bounds of a system: raydamp's own limits (raydamp.system.spec and raydamp.expressions), stated in
+# the schema so that an oversized list fails at parsing, before any work.
+_MAX_COORDINATES = 256
+_MAX_EXPRESSION = 10_000
+_MAX_DENSE = 32
+Expression = Annotated[str, Field(min_length=1, max_length=_MAX_EXPRESSION)]
+Name = Annotated[str, Field(min_length=1, max_length=100, pattern=r"^[A-Za-z_][A-Za-z0-9_]*$")]
 
-    model: str = Field(min_length=1, max_length=100, description="a name from GET /v1/models")
+
+class ScalarDamping(_Input):
+    scalar: FiniteFloat = Field(ge=0, description="D = c M: every momentum decays at rate eps c")
+
+
+class DiagonalDamping(_Input):
+    diagonal: list[FiniteFloat] = Field(min_length=1, max_length=_MAX_DENSE, description="a constant diagonal D")
+
+
+class MatrixDamping(_Input):
+    matrix: list[Annotated[list[FiniteFloat], Field(max_length=_MAX_DENSE)]] = Field(
+        min_length=1, max_length=_MAX_DENSE, description="a constant symmetric positive semi-definite D (rows)")
+
+
+class Damper(_Input):
+    on: Expression = Field(description="g(q): the dashpot resists its rate of change")
+    c: FiniteFloat = Field(1.0, ge=0, description="the dashpot's coefficient")
+
+
+class DamperDamping(_Input):
+    dampers: list[Damper] = Field(min_length=1, max_length=32,
+                                  description="D(q) = sum_i c_i grad g_i grad g_i^T")
+
+
+class SystemInput(_Input):
+    """A user-defined system: raydamp.System.to_dict()'s form. H = 1/2 p^T M^{-1} p + V(q) with
+    damping -eps D(q) M^{-1} p; M constant SPD, D(q) symmetric PSD."""
+
+    coordinates: Annotated[list[Name], Field(min_length=1, max_length=_MAX_COORDINATES)] | Annotated[
+            int, Field(ge=1, le=_MAX_COORDINATES)] = Field(
+        description="coordinate names, or their number n (names q0..q{n-1})")
+    potential: Expression = Field(description="V(q): numbers, names, + - * / ^, parentheses, pi, and "
+                                              "sin cos tan asin acos atan atan2 sinh cosh tanh asinh acosh "
+                                              "atanh exp log sqrt cbrt")
+    parameters: dict[Name, FiniteFloat] = Field(default_factory=dict, max_length=256)
+    mass: FiniteFloat | Annotated[list[FiniteFloat], Field(max_length=_MAX_COORDINATES)] | Annotated[
+            list[Annotated[list[FiniteFloat], Field(max_length=_MAX_COORDINATES)]],
+            Field(max_length=_MAX_COORDINATES)] = Field(
+        1.0, description="a number m (M = m I), a diagonal (n numbers) or an n x n SPD matrix")
+    damping: ScalarDamping | DiagonalDamping | MatrixDamping | DamperDamping | None = Field(
+        None, description="null (undamped) or exactly one form")
+    eps: FiniteFloat = Field(0.0, ge=0, description="damping strength")
+    momenta: dict[Name, Expression] = Field(default_factory=dict, max_length=16,
+                                            description="quantities tracked at every step; momenta are p_<coordinate>")
+    name: str | None = Field(None, max_length=200)
+
+
+class JobSpec(_Input):
+    """One integration problem: a model (or a system), a method, a step size and a span.
+    Exactly one of model and system; exactly one of t_end, n_steps."""
+
+    model: str | None = Field(None, min_length=1, max_length=100, description="a name from GET /v1/models")
+    system: SystemInput | None = Field(None, description="a user-defined system, in place of model/parameters")
     parameters: dict[str, ParameterValue] = Field(
         default_factory=dict, max_length=64, description="model parameters by name; the rest take their defaults")
     method: str = Field(min_length=1, max_length=100, description="a name from GET /v1/methods")

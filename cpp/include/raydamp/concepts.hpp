@@ -4,7 +4,8 @@
 //
 // A Model is one small struct with
 //   static constexpr int dim;         // n, or Eigen::Dynamic
-//   static constexpr int n_momenta;   // momentum maps of its symmetries (may be 0)
+//   static constexpr int n_momenta;   // momentum maps of its symmetries (may be 0, or
+//                                     // kDynamicMomenta with int momentum_count() const)
 //   using Vec = Vector<dim>;
 //   double eps;                       // damping strength
 //   mass:    velocity(p, v) -> v = M^{-1} p; kinetic(p) -> 1/2 p^T M^{-1} p
@@ -42,5 +43,16 @@ struct is_model<M, std::void_t<
 
 template <class M>
 inline constexpr bool is_model_v = is_model<M>::value;
+
+// The momentum maps' values: their count is fixed per model type (n_momenta >= 0)
+// or, for compiled systems, per model (n_momenta = kDynamicMomenta).
+inline constexpr int kDynamicMomenta = -1;
+
+template <class Model>
+int momentum_count(const Model& model) {
+  if constexpr (Model::n_momenta == kDynamicMomenta) return model.momentum_count();
+  else return Model::n_momenta;
+}
+
 
 }  // namespace raydamp

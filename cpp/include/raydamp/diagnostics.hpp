@@ -10,8 +10,8 @@ namespace raydamp {
 // eps d_q(qdot, qdot) = eps qdot^T D(q) qdot, the rate of energy loss of the exact
 // flow (paper equation exact_energy_dissipation_rate). With v = M^{-1} p and
 // A p = eps D M^{-1} p it is v . (A p), so it needs no model function of its own.
-template <class Model, int Dim>
-double dissipated_power(const Model& model, const State<Dim>& z, Workspace<Dim>& ws) {
+template <class Model, int Dim, class DF>
+double dissipated_power(const Model& model, const State<Dim>& z, Workspace<Dim, DF>& ws) {
   model.mass.velocity(z.p, ws.v);
   model.damping.rate(z.q, z.p, ws.f);
   return ws.v.dot(ws.f);
@@ -26,8 +26,8 @@ double dissipated_power(const Model& model, const State<Dim>& z, Workspace<Dim>&
 //   H_h = T + V + h^2 ( grad V^T M^{-1} grad V / 12 - v^T V''(q) v / 24 ) + O(h^4).
 // (For the harmonic oscillator this is the invariant (1 - h^2/4) p^2/2 + q^2/2 up to
 // a factor 1 + O(h^2); the tests check the O(h^4) conservation numerically.)
-template <class Model, int Dim>
-double modified_energy_sv(const Model& model, const State<Dim>& z, double h, Workspace<Dim>& ws) {
+template <class Model, int Dim, class DF>
+double modified_energy_sv(const Model& model, const State<Dim>& z, double h, Workspace<Dim, DF>& ws) {
   model.gradient(z.q, ws.g);
   model.mass.velocity(ws.g, ws.f);
   const double force_term = ws.g.dot(ws.f);

@@ -63,24 +63,31 @@ double energy(const Model& model, const State<Dim>& z) {
 
 namespace detail {
 
-template <class Model, int Dim>
-void save_point(const Model& model, const State<Dim>& z, double t, const Workspace<Dim>& ws, Trajectory& out) {
+// Buffers for J(q, p), sized before the loop so that tracking allocates nothing.
+struct MomentumBuffers {
+  std::vector<double> j0, j;
+  explicit MomentumBuffers(int m) : j0(m), j(m) {}
+  int count() const { return static_cast<int>(j0.size()); }
+};
+
+template <class Model, int Dim, class DF>
+void save_point(const Model& model, const State<Dim>& z, double t, const Workspace<Dim, DF>& ws,
+                MomentumBuffers& mb, Trajectory& out) {
   out.t.push_back(t);
   if (ws.track_work) out.work.push_back(ws.work);
   out.q.insert(out.q.end(), z.q.data(), z.q.data() + z.q.size());
   out.p.insert(out.p.end(), z.p.data(), z.p.data() + z.p.size());
   out.energy.push_back(energy(model, z));
-  std::array<double, Model::n_momenta> j{};
-  model.momenta(z.q, z.p, j.data());
-  out.momentum.insert(out.momentum.end(), j.begin(), j.end());
+  if (mb.count() == 0) return;
+  model.momenta(z.q, z.p, mb.j.data());
+  out.momentum.insert(out.momentum.end(), mb.j.begin(), mb.j.end());
 }
 
 template <class Model, int Dim>
-double momentum_drift(const Model& model, const State<Dim>& z, const std::array<double, Model::n_momenta>& j0) {
-  std::array<double, Model::n_momenta> j{};
-  model.momenta(z.q, z.p, j.data());
+double momentum_drift(const Model& model, const State<Dim>& z, MomentumBuffers& mb) {
+  model.momenta(z.q, z.p, mb.j.data());
   double drift = 0.0;
-  for (int i = 0; i < Model::n_momenta; ++i) drift = std::max(drift, std::abs(j[i] - j0[i]));
+  for (int i = 0; i < mb.count(); ++i) drift = std::max(drift, std::abs(mb.j[i] - mb.j0[i]));
   return drift;
 }
 
@@ -100,22 +107,23 @@ RunResult run_steps(const Model& model, const Tab& tab, State<Dim> z, const RunS
   RunResult result;
   Trajectory& out = result.trajectory;
   out.n = n;
-  out.n_momenta = Model::n_momenta;
+  MomentumBuffers mb(momentum_count(model));
+  out.n_momenta = mb.count();
   const long rows = N / spec.save_every + 2;
   out.t.reserve(rows);
   out.q.reserve(rows * n);
   out.p.reserve(rows * n);
   out.energy.reserve(rows);
-  out.momentum.reserve(rows * Model::n_momenta);
+  out.momentum.reserve(rows * mb.count());
 
-  Workspace<Dim> ws(n, tab.stages());
+  WorkspaceFor<Model> ws(n, tab.stages());
   ws.track_work = spec.track_work;
   if (spec.track_work) out.work.reserve(rows);
   // Copies made now, so the loop never allocates. The block loop steps y, a local
   // that only inlined code sees, so the compiler can keep it in registers.
   State<Dim> checkpoint = z, before = z, y = z;
-  std::array<double, Model::n_momenta> j0{};
-  model.momenta(z.q, z.p, j0.data());
+  if (mb.count() > 0) model.momenta(z.q, z.p, mb.j0.data());
+  const bool track_momenta = mb.count() > 0;
   auto time_at = [&](long k) { return k == N && spec.h_last != spec.h ? (N - 1) * spec.h + spec.h_last : k * spec.h; };
   auto step_size = [&](long k) { return k == N - 1 ? spec.h_last : spec.h; };  // size of step k -> k+1
 
@@ -125,7 +133,7 @@ RunResult run_steps(const Model& model, const Tab& tab, State<Dim> z, const RunS
     result.message = "the initial state is not finite";
     return result;
   }
-  save_point(model, z, 0.0, ws, out);
+  save_point(model, z, 0.0, ws, mb, out);
   const long progress_every = std::max(1L, N / std::max(1L, control.max_progress_calls));
   long next_save = spec.save_every, next_progress = progress_every, k = 0;
   double max_drift = 0.0;
@@ -157,7 +165,7 @@ RunResult run_steps(const Model& model, const Tab& tab, State<Dim> z, const RunS
     y = z;
     for (long i = k; i < end; ++i) {
       advance(y, i);
-      if constexpr (Model::n_momenta > 0) block_drift = std::max(block_drift, momentum_drift(model, y, j0));
+      if (track_momenta) block_drift = std::max(block_drift, momentum_drift(model, y, mb));
     }
     z = y;
     if (!z.all_finite()) {
@@ -175,7 +183,7 @@ RunResult run_steps(const Model& model, const Tab& tab, State<Dim> z, const RunS
           ws.work = work_before;
           break;
         }
-        if constexpr (Model::n_momenta > 0) max_drift = std::max(max_drift, momentum_drift(model, z, j0));
+        if (track_momenta) max_drift = std::max(max_drift, momentum_drift(model, z, mb));
       }
       k = i;
       result.status = Status::non_finite;
@@ -187,7 +195,7 @@ RunResult run_steps(const Model& model, const Tab& tab, State<Dim> z, const RunS
     max_drift = std::max(max_drift, block_drift);
     k = end;
     if (k == next_save) {
-      save_point(model, z, time_at(k), ws, out);
+      save_point(model, z, time_at(k), ws, mb, out);
       next_save += spec.save_every;
     }
     if (k == next_progress) {
@@ -196,7 +204,7 @@ RunResult run_steps(const Model& model, const Tab& tab, State<Dim> z, const RunS
     }
   }
   // The final state is always the last row, saved or not by save_every.
-  if (out.t.back() != time_at(k)) save_point(model, z, time_at(k), ws, out);
+  if (out.t.back() != time_at(k)) save_point(model, z, time_at(k), ws, mb, out);
   if (control.progress && result.status == Status::completed && next_progress - progress_every != N) control.progress(N, N);
   result.steps = k;
   result.max_momentum_drift = max_drift;

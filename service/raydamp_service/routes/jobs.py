@@ -51,10 +51,22 @@ def _view(record: JobRecord, runner: Runner) -> JobView:
         finished_at=record.finished_at)
 
 
-def _value_at(data: Any, loc: tuple[str, ...]) -> Any:
+def _value_at(data: Any, loc: tuple[str | int, ...]) -> Any:
     for key in loc:
-        data = data.get(key) if isinstance(data, dict) else None
+        if isinstance(data, dict):
+            data = data.get(key)
+        elif isinstance(data, list) and isinstance(key, int) and 0 <= key < len(data):
+            data = data[key]
+        else:
+            return None
     return data
+
+
+def _model_label(spec: dict[str, Any]) -> str:
+    """A built-in model's name, or a system's label ("system" when it has none)."""
+    if spec.get("model"):
+        return spec["model"]
+    return (spec.get("system") or {}).get("name") or "system"
 
 
 @router.post("", status_code=202, response_model=JobCreated,
@@ -82,7 +94,7 @@ def list_jobs(store: StoreDep, runner: RunnerDep, settings: SettingsDep,
         raise RequestValidationError([{"type": "less_than_equal", "loc": ("query", "limit"), "input": limit,
                                        "msg": f"limit must be <= {settings.max_list_limit}"}])
     return JobList(jobs=[
-        JobListItem(id=r.id, status=r.status, progress=_progress(r, runner), model=r.spec["model"],
+        JobListItem(id=r.id, status=r.status, progress=_progress(r, runner), model=_model_label(r.spec),
                     method=r.spec["method"], created_at=r.created_at, finished_at=r.finished_at, url=_job_url(r.id))
         for r in store.recent(limit, status)])
 

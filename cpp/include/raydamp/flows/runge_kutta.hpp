@@ -20,8 +20,8 @@ namespace raydamp::flows {
 // is Stormer-Verlet to the last bit, whatever the tableau.
 // Tab is a ButcherTableau or a FixedTableau<S> (same accessors, stage count known
 // to the compiler, so the stage loops unroll).
-template <class Model, class Tab, int Dim>
-inline void kick_damp_rk(const Model& model, const Tab& tab, State<Dim>& z, double h, Workspace<Dim>& ws) {
+template <class Model, class Tab, int Dim, class DF>
+inline void kick_damp_rk(const Model& model, const Tab& tab, State<Dim>& z, double h, Workspace<Dim, DF>& ws) {
   const int s = tab.stages();
   model.gradient(z.q, ws.g);  // constant over the stages: q is frozen
   for (int i = 0; i < s; ++i) {
@@ -49,8 +49,8 @@ namespace detail {
 
 // Generic explicit Runge-Kutta step of (q, p)' = field(q, p); field(i, q, p, dq, dp)
 // writes the slopes of stage i.
-template <class Tab, class Field, int Dim>
-inline void explicit_rk(const Tab& tab, State<Dim>& z, double h, Workspace<Dim>& ws, Field field) {
+template <class Tab, class Field, int Dim, class DF>
+inline void explicit_rk(const Tab& tab, State<Dim>& z, double h, Workspace<Dim, DF>& ws, Field field) {
   const int s = tab.stages();
   for (int i = 0; i < s; ++i) {
     ws.stage_q = z.q;
@@ -77,8 +77,8 @@ inline void explicit_rk(const Tab& tab, State<Dim>& z, double h, Workspace<Dim>&
 
 }  // namespace detail
 
-template <class Model, class Tab, int Dim>
-inline void drift_damp_rk(const Model& model, const Tab& tab, State<Dim>& z, double h, Workspace<Dim>& ws) {
+template <class Model, class Tab, int Dim, class DF>
+inline void drift_damp_rk(const Model& model, const Tab& tab, State<Dim>& z, double h, Workspace<Dim, DF>& ws) {
   detail::explicit_rk(tab, z, h, ws, [&](int, const Vector<Dim>& q, const Vector<Dim>& p, Vector<Dim>& dq, Vector<Dim>& dp) {
     model.mass.velocity(p, dq);
     model.damping.rate(q, p, dp);
@@ -86,8 +86,8 @@ inline void drift_damp_rk(const Model& model, const Tab& tab, State<Dim>& z, dou
   });
 }
 
-template <class Model, class Tab, int Dim>
-inline void full_rk(const Model& model, const Tab& tab, State<Dim>& z, double h, Workspace<Dim>& ws) {
+template <class Model, class Tab, int Dim, class DF>
+inline void full_rk(const Model& model, const Tab& tab, State<Dim>& z, double h, Workspace<Dim, DF>& ws) {
   detail::explicit_rk(tab, z, h, ws, [&](int i, const Vector<Dim>& q, const Vector<Dim>& p, Vector<Dim>& dq, Vector<Dim>& dp) {
     model.mass.velocity(p, dq);
     model.gradient(q, ws.g);

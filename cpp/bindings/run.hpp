@@ -1,0 +1,81 @@
+// The run() every model kind binds as _core.integrate: validates nothing Python
+// has not (Python owns argument names), runs the C++ step loop with the GIL
+// released and hands the saved points to NumPy without a copy.
+#pragma once
+
+#include <pybind11/eigen.h>
+#include <pybind11/functional.h>
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include <atomic>
+#include <memory>
+
+#include "bindings.hpp"
+#include "raydamp/raydamp.hpp"
+
+namespace raydamp::bindings {
+
+namespace py = pybind11;
+
+struct CancelToken {
+  std::atomic<bool> flag{false};
+};
+
+// A NumPy array that owns the vector's buffer.
+inline py::array_t<double> to_numpy(std::vector<double>&& data, std::vector<py::ssize_t> shape) {
+  auto* owned = new std::vector<double>(std::move(data));
+  py::capsule owner(owned, [](void* p) { delete static_cast<std::vector<double>*>(p); });
+  if (owned->empty()) return py::array_t<double>(shape);
+  return py::array_t<double>(shape, owned->data(), owner);
+}
+
+template <class Model>
+py::dict run(const Model& model, const std::string& method, const std::string& tableau,
+             const typename Model::Vec& q0, const typename Model::Vec& p0, double h, long n_steps, double h_last,
+             long save_every, bool track_work, py::object progress, CancelToken* cancel) {
+  const MethodEntry& entry = method_entry(method);
+  require_applicable(entry, model.eps);
+  const ButcherTableau& tab = resolve_tableau(entry, tableau);
+  const RunSpec spec{h, n_steps, h_last, save_every, track_work};
+  Control control;
+  if (cancel) control.cancel = &cancel->flag;
+  if (!progress.is_none())
+    control.progress = [progress](long done, long total) {
+      py::gil_scoped_acquire gil;
+      progress(done, total);
+    };
+  RunResult r;
+  {
+    py::gil_scoped_release release;
+    r = with_method(method, [&](auto m) {
+      return integrate<decltype(m)>(model, tab, State<Model::dim>{q0, p0}, spec, control);
+    });
+  }
+  Trajectory& tr = r.trajectory;
+  const py::ssize_t rows = tr.rows();
+  py::dict out;
+  out["status"] = status_name(r.status);
+  out["steps"] = r.steps;
+  out["failed_step"] = r.failed_step < 0 ? py::none() : py::cast(r.failed_step);
+  out["message"] = r.message;
+  out["max_momentum_drift"] = r.max_momentum_drift;
+  out["tableau"] = tab.name();
+  out["t"] = to_numpy(std::move(tr.t), {rows});
+  out["q"] = to_numpy(std::move(tr.q), {rows, tr.n});
+  out["p"] = to_numpy(std::move(tr.p), {rows, tr.n});
+  out["energy"] = to_numpy(std::move(tr.energy), {rows});
+  out["momentum"] = to_numpy(std::move(tr.momentum), {rows, tr.n_momenta});
+  out["work"] = track_work ? py::object(to_numpy(std::move(tr.work), {rows})) : py::none();
+  return out;
+}
+
+// Registers run<Model> as one overload of _core.integrate.
+template <class Model>
+void def_integrate(py::module_& m) {
+  m.def("integrate", &run<Model>, py::arg("model"), py::arg("method"), py::arg("tableau"), py::arg("q0"),
+        py::arg("p0"), py::arg("h"), py::arg("n_steps"), py::arg("h_last"), py::arg("save_every"),
+        py::arg("track_work"), py::arg("progress"), py::arg("cancel").none(true));
+}
+
+}  // namespace raydamp::bindings

@@ -1,0 +1,84 @@
+// A user's system (python/raydamp/system): H = 1/2 p^T M^{-1} p + V(q) with V, its
+// gradient, its Hessian-vector product and the momentum maps compiled at run time
+// from expressions, a constant mass kind and a damping kind. One struct for every
+// system of a kind: the bindings instantiate each (Mass, Damping) pair once, and a
+// new system is new data, never new C++.
+#pragma once
+
+#include <array>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "raydamp/concepts.hpp"
+#include "raydamp/state.hpp"
+#include "raydamp/system/compiled_function.hpp"
+
+namespace raydamp {
+
+struct SystemFunctions {
+  CompiledFunction potential;        // q -> V(q)                      (1 output)
+  CompiledFunction gradient;         // q -> grad V(q)                 (n outputs)
+  CompiledFunction hessian_product;  // (q, v) -> Hess V(q) v          (n outputs)
+  CompiledFunction momenta;          // (q, p) -> J(q, p)              (m outputs; unset when m = 0)
+};
+
+template <class Mass, class Damping>
+struct CompiledSystem {
+  static constexpr int dim = Eigen::Dynamic;
+  static constexpr int n_momenta = kDynamicMomenta;
+  using Vec = Vector<dim>;
+
+  double eps;
+  Mass mass;
+  Damping damping;
+  SystemFunctions functions;
+  int n;
+  int m;  // number of momentum maps
+
+  CompiledSystem(int n_, double eps_, Mass mass_, Damping damping_, SystemFunctions functions_, int m_)
+      : eps(eps_), mass(std::move(mass_)), damping(std::move(damping_)), functions(functions_), n(n_), m(m_) {
+    if (n < 1) throw std::invalid_argument("coordinates: a system needs at least one coordinate");
+    if (!functions.potential || !functions.gradient || !functions.hessian_product)
+      throw std::invalid_argument("potential: not compiled");
+    if (m > 0 && !functions.momenta) throw std::invalid_argument("momenta: not compiled");
+  }
+
+  int size() const { return n; }
+  int momentum_count() const { return m; }
+
+  double potential(const Vec& q) const {
+    double v;
+    functions.potential(&v, q.data());
+    return v;
+  }
+
+  void gradient(const Vec& q, Vec& g) const { functions.gradient(g.data(), q.data()); }
+
+  // Diagnostics only (the modified Hamiltonian), so a heap buffer is fine here.
+  void hessian_product(const Vec& q, const Vec& v, Vec& out) const {
+    std::vector<double> in(2 * n);
+    std::copy(q.data(), q.data() + n, in.begin());
+    std::copy(v.data(), v.data() + n, in.begin() + n);
+    functions.hessian_product(out.data(), in.data());
+  }
+
+  // Called every step when momenta are tracked: (q, p) go into a stack buffer.
+  void momenta(const Vec& q, const Vec& p, double* out) const {
+    if (m == 0) return;
+    constexpr int kStack = 256;
+    if (2 * n <= kStack) {
+      std::array<double, kStack> in;
+      std::copy(q.data(), q.data() + n, in.begin());
+      std::copy(p.data(), p.data() + n, in.begin() + n);
+      functions.momenta(out, in.data());
+    } else {
+      std::vector<double> in(2 * n);
+      std::copy(q.data(), q.data() + n, in.begin());
+      std::copy(p.data(), p.data() + n, in.begin() + n);
+      functions.momenta(out, in.data());
+    }
+  }
+};
+
+}  // namespace raydamp

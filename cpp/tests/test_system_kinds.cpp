@@ -1,0 +1,160 @@
+// The compiled-system kinds with hand-written C functions in place of JIT code:
+// - one dashpot on |q| with M = I is the elastic pendulum: every method's step equals
+//   the built-in struct's to rounding;
+// - dashpots on linear functions give a constant D, so their exact flows must equal
+//   the constant-matrix kind's, and both must equal exp(-tA) where it is known in
+//   closed form (diagonal A);
+// - phi2 is continuous across its series/direct switch.
+#include <cmath>
+#include <cstdio>
+
+#include "check.hpp"
+#include "raydamp/raydamp.hpp"
+
+using namespace raydamp;
+using Vec = Eigen::VectorXd;
+
+namespace {
+
+// The elastic pendulum's functions (k = l = m = 1, g = (0, 0, -1)), written as the JIT would.
+void potential(double* out, const double* q, void*) {
+  const double r = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
+  out[0] = 0.5 * (r - 1.0) * (r - 1.0) + q[2];
+}
+void gradient(double* out, const double* q, void*) {
+  const double r = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
+  for (int i = 0; i < 3; ++i) out[i] = (1.0 - 1.0 / r) * q[i];
+  out[2] += 1.0;
+}
+void hessian_product(double* out, const double* in, void*) {
+  const double* q = in;
+  const double* v = in + 3;
+  const double r = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
+  const double qv = q[0] * v[0] + q[1] * v[1] + q[2] * v[2];
+  for (int i = 0; i < 3; ++i) out[i] = (1.0 - 1.0 / r) * v[i] + qv / (r * r * r) * q[i];
+}
+void radial_gradient(double* out, const double* q, void*) {
+  const double r = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
+  for (int i = 0; i < 3; ++i) out[i] = q[i] / r;
+}
+void j3(double* out, const double* in, void*) { out[0] = in[0] * in[4] - in[1] * in[3]; }
+// Two dashpots on x2 - x1 and x3 - x2: constant gradient rows.
+void chain_gradients(double* out, const double*, void*) {
+  const double rows[6] = {-1.0, 1.0, 0.0, 0.0, -1.0, 1.0};
+  for (int i = 0; i < 6; ++i) out[i] = rows[i];
+}
+
+CompiledFunction fn(CompiledFunction::Fn f) { return {f, nullptr}; }
+
+double distance(const State<Eigen::Dynamic>& a, const State<3>& b) {
+  double d = 0.0;
+  for (int i = 0; i < 3; ++i) d = std::max({d, std::abs(a.q[i] - b.q[i]), std::abs(a.p[i] - b.p[i])});
+  return d;
+}
+
+void elastic_pendulum_as_system() {
+  const Eigen::MatrixXd mass = Eigen::MatrixXd::Identity(3, 3);
+  const double eps = 0.1;
+  using Sys = CompiledSystem<ScalarMass, DamperDamping>;
+  const Sys sys(3, eps, ScalarMass(1.0), DamperDamping(mass, eps, {1.0}, fn(radial_gradient)),
+                SystemFunctions{fn(potential), fn(gradient), fn(hessian_product), fn(j3)}, 1);
+  const ElasticPendulum builtin(eps);
+  const State<3> z0{Vector<3>(0.0, 1.55884573, -0.6), Vector<3>(1.34164079, 0.0, 0.0)};
+  const State<Eigen::Dynamic> y0{Vec(z0.q), Vec(z0.p)};
+  for (const char* name : {"3s", "2s", "rks", "rksb", "heun", "rk4"}) {
+    const MethodEntry& entry = method_entry(name);
+    const ButcherTableau& tab = resolve_tableau(entry, "");
+    const RunSpec spec{0.1, 1000, 0.1, 1000, true};
+    const RunResult a = with_method(name, [&](auto m) { return integrate<decltype(m)>(sys, tab, y0, spec); });
+    const RunResult b = with_method(name, [&](auto m) { return integrate<decltype(m)>(builtin, tab, z0, spec); });
+    const auto& ta = a.trajectory;
+    const auto& tb = b.trajectory;
+    double worst = 0.0;
+    for (std::size_t i = 0; i < ta.q.size(); ++i)
+      worst = std::max({worst, std::abs(ta.q[i] - tb.q[i]), std::abs(ta.p[i] - tb.p[i])});
+    if (!(worst <= 1e-12)) std::printf("method %s: system and built-in differ by %.3g\n", name, worst);
+    CHECK(worst <= 1e-12);
+    CHECK_NEAR(ta.work.back(), tb.work.back(), 1e-12);
+    CHECK(ta.n_momenta == 1);
+    CHECK_NEAR(ta.momentum.back(), tb.momentum.back(), 1e-12);
+  }
+  // The single sub-flows agree too, including at a = 0 (eps = 0).
+  for (double e : {0.0, 0.1, 50.0}) {
+    const Sys s(3, e, ScalarMass(1.0), DamperDamping(mass, e, {1.0}, fn(radial_gradient)),
+                SystemFunctions{fn(potential), fn(gradient), fn(hessian_product), fn(j3)}, 1);
+    const ElasticPendulum p(e);
+    State<Eigen::Dynamic> y = y0;
+    State<3> z = z0;
+    WorkspaceFor<Sys> wy(3, 1);
+    WorkspaceFor<ElasticPendulum> wz(3, 1);
+    flows::kick_damp(s, y, 0.3, wy);
+    flows::kick_damp(p, z, 0.3, wz);
+    flows::damp(s, y, 0.7, wy);
+    flows::damp(p, z, 0.7, wz);
+    CHECK(distance(y, z) <= 1e-14);
+  }
+}
+
+void linear_dampers_equal_constant_damping() {
+  Eigen::MatrixXd mass = Eigen::Vector3d(1.0, 1.5, 2.0).asDiagonal();
+  mass(0, 1) = mass(1, 0) = 0.2;  // a full SPD mass
+  const double eps = 0.4, t = 0.9;
+  Eigen::Vector3d e1(-1.0, 1.0, 0.0), e2(0.0, -1.0, 1.0);
+  const Eigen::MatrixXd d = 1.0 * e1 * e1.transpose() + 1.0 * e2 * e2.transpose();
+  const DamperDamping dampers(mass, eps, {1.0, 1.0}, fn(chain_gradients));
+  const ConstantDamping constant(mass, d, eps);
+  const Vec q = Vec::Zero(3);
+  Vec g(3), pa(3), pb(3);
+  g << 0.3, -0.1, 0.8;
+  pa << 1.0, -2.0, 0.5;
+  pb = pa;
+  dampers.decay(q, dampers.factors(t), pa);
+  constant.decay(q, constant.factors(t), pb);
+  CHECK((pa - pb).cwiseAbs().maxCoeff() <= 1e-14);
+  dampers.decay_affine(q, dampers.factors(t), g, pa);
+  constant.decay_affine(q, constant.factors(t), g, pb);
+  CHECK((pa - pb).cwiseAbs().maxCoeff() <= 1e-14);
+  Vec ra(3), rb(3);
+  dampers.rate(q, pa, ra);
+  constant.rate(q, pa, rb);
+  CHECK((ra - rb).cwiseAbs().maxCoeff() <= 1e-14);
+  dampers.solve_shifted(q, 0.7, ra);
+  constant.solve_shifted(q, 0.7, rb);
+  CHECK((ra - rb).cwiseAbs().maxCoeff() <= 1e-14);
+  // (I + cA) x recovers the input: the shifted solve is a real inverse.
+  Vec x = pa, y(3);
+  constant.solve_shifted(q, 0.7, x);
+  constant.rate(q, x, y);
+  CHECK(((x + 0.7 * y) - pa).cwiseAbs().maxCoeff() <= 1e-14);
+}
+
+void diagonal_constant_damping_is_exponential() {
+  const Eigen::MatrixXd mass = Eigen::Vector2d(2.0, 0.5).asDiagonal();
+  const Eigen::MatrixXd d = Eigen::Vector2d(1.0, 3.0).asDiagonal();
+  const double eps = 0.2, t = 1.7;
+  const ConstantDamping damping(mass, d, eps);
+  Vec p(2);
+  p << 1.0, -1.0;
+  damping.decay(Vec::Zero(2), damping.factors(t), p);
+  CHECK_NEAR(p[0], std::exp(-t * eps * 1.0 / 2.0), 1e-15);
+  CHECK_NEAR(p[1], -std::exp(-t * eps * 3.0 / 0.5), 1e-15);
+}
+
+void phi2_is_continuous() {
+  for (double x : {0.5, -0.5}) {
+    const double below = phi2(std::nextafter(x, 0.0)), at = phi2(x);
+    CHECK(std::abs(below - at) <= 1e-15 * at);
+  }
+  CHECK_NEAR(phi2(0.0), 0.5, 0.0);
+  CHECK_NEAR(phi2(-1.0), (std::exp(-1.0) - 1.0 + 1.0), 1e-15);  // (e^-1 - 1 + 1)/1
+}
+
+}  // namespace
+
+int main() {
+  elastic_pendulum_as_system();
+  linear_dampers_equal_constant_damping();
+  diagonal_constant_damping_is_exponential();
+  phi2_is_continuous();
+  TEST_MAIN_RETURN();
+}

@@ -1,0 +1,263 @@
+"""raydamp.System: a mechanical system of the paper's class, defined by expressions,
+run by every method at compiled speed."""
+
+from __future__ import annotations
+
+import copy
+import json
+from typing import Any, Mapping
+
+import numpy as np
+
+from .. import _core
+from ..models import Model
+from .compile import compile_system, evaluate
+from .errors import SpecError
+from .spec import KEYS, SystemSpec, normalise
+
+__all__ = ["System"]
+
+
+class System(Model):
+    """A mechanical system H = 1/2 p^T M^{-1} p + V(q) with damping -eps D(q) M^{-1} p.
+
+    The class of the paper's section 2 with a constant mass matrix: any potential
+    V(q), a constant symmetric positive definite M, and a symmetric positive
+    semi-definite dissipation tensor D(q). (A mass matrix that depends on q, such as
+    a double pendulum's in joint angles, is outside the class: write such a system in
+    Cartesian coordinates with stiff springs for the rigid links.)
+
+    Parameters
+    ----------
+    coordinates : list of names, or an int n (names q0 .. q{n-1}).
+    potential : V(q) as an expression in the coordinates and parameters: numbers,
+        names, ``+ - * / ^`` (or ``**``), parentheses, ``pi`` and the functions sin
+        cos tan asin acos atan atan2 sinh cosh tanh asinh acosh atanh exp log sqrt
+        cbrt. Parsed by raydamp's own parser (never evaluated as Python),
+        differentiated symbolically and compiled to machine code.
+    parameters : {name: number} used in the expressions.
+    mass : a number m (M = m I), a list of n numbers (diagonal M) or an n x n
+        symmetric positive definite matrix.
+    damping : None (undamped; then "sv" may be used), or exactly one of
+        ``{"scalar": c}`` (D = c M: every momentum decays at rate eps c),
+        ``{"diagonal": [...]}`` or ``{"matrix": [[...]]}`` (a constant symmetric
+        PSD D, e.g. Rayleigh damping alpha M + beta K), or
+        ``{"dampers": [{"on": "<g(q)>", "c": c}, ...]}`` (dashpots resisting the
+        rate of change of each g_i: D(q) = sum_i c_i grad g_i grad g_i^T). Each form
+        has its exact damping flows: one dashpot a closed-form rank-one flow,
+        several the exact flow of their sum (they need not commute). The constant
+        and dashpot forms are dense n x n computations meant for n <= 32.
+    eps : damping strength, >= 0.
+    momenta : {name: expression} quantities to track at every step (momentum maps
+        of symmetries); momenta are named ``p_<coordinate>``.
+    name : an optional label.
+
+    A System is immutable: to change it, build another (``system.replace(eps=...)``).
+    ``to_dict()``/``from_dict()`` give the plain form, which is also the JSON the
+    job service takes as ``"system"``.
+    """
+
+    name = "system"
+
+    def __init__(self, coordinates, potential: str, *, parameters: Mapping[str, float] | None = None,
+                 mass=1.0, damping: Mapping[str, Any] | None = None, eps: float = 0.0,
+                 momenta: Mapping[str, str] | None = None, name: str | None = None):
+        spec = normalise(coordinates=coordinates, potential=potential, parameters=parameters, mass=mass,
+                         damping=damping, eps=eps, momenta=momenta, name=name)
+        object.__setattr__(self, "_spec", spec)
+        object.__setattr__(self, "momentum_names", tuple(spec.momenta))
+        object.__setattr__(self, "label", spec.name)
+        compiled = compile_system(spec)
+        object.__setattr__(self, "_compiled", compiled)
+        object.__setattr__(self, "_python", None)
+        object.__setattr__(self, "_core_model", _build_core(spec, compiled.addresses, [d.c for d in spec.dampers],
+                                                            len(spec.momenta), compiled))
+        self._freeze()
+
+    @classmethod
+    def from_functions(cls, n: int, *, potential, gradient, mass=1.0, damping=None, eps: float = 0.0,
+                       momenta=None, hessian_product=None, coordinates=None, name: str | None = None) -> System:
+        """A System from NumPy callables instead of expressions: the slower path.
+
+        ``potential(q) -> float`` and ``gradient(q) -> (n,)`` take the whole vector q;
+        ``momenta`` is {name: f(q, p) -> float}; ``damping`` takes the same forms as
+        System, with dashpots given by their gradient: ``{"dampers": [{"gradient":
+        g(q) -> (n,), "c": c}]}``. ``hessian_product(q, v)`` is optional (only the
+        modified-energy diagnostic uses it; by default a central difference of the
+        gradient).
+
+        Each call from the step loop runs Python under the GIL (microseconds per call
+        instead of nanoseconds), so prefer expressions where you can. A callable that
+        raises stops the run at that step with status "non_finite", keeping every
+        finite point, and the message names the function and the exception. Such a
+        System has no plain form (``to_dict`` raises).
+        """
+        from .functions import build_from_functions
+
+        spec, addresses, python, coefficients, momentum_names, direct = build_from_functions(
+            n, potential=potential, gradient=gradient, mass=mass, damping=damping, eps=eps, momenta=momenta,
+            hessian_product=hessian_product, coordinates=coordinates, name=name)
+        self = object.__new__(cls)
+        object.__setattr__(self, "_spec", spec)
+        object.__setattr__(self, "momentum_names", momentum_names)
+        object.__setattr__(self, "label", name)
+        object.__setattr__(self, "_compiled", None)
+        object.__setattr__(self, "_python", (python, direct))
+        object.__setattr__(self, "_core_model", _build_core(spec, addresses, coefficients, len(momentum_names),
+                                                            python))
+        self._freeze()
+        return self
+
+    # -- the plain form ------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        """The system as plain JSON-ready data; ``System.from_dict`` inverts it."""
+        if self._python is not None:
+            raise ValueError("to_dict: a System built from Python functions has no plain form; "
+                             "write its potential as an expression to send it to the service or save it")
+        s = self._spec
+        out: dict[str, Any] = {
+            "coordinates": len(s.coordinates) if s.coordinates_given_as_count else list(s.coordinates),
+            "potential": s.potential.text,
+            "parameters": dict(s.parameters),
+            "mass": _mass_plain(s),
+            "damping": _damping_plain(s),
+            "eps": s.eps,
+            "momenta": {k: e.text for k, e in s.momenta.items()},
+        }
+        if s.name is not None:
+            out["name"] = s.name
+        return out
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> System:
+        """Build a System from ``to_dict()``'s form (or the service's JSON)."""
+        if not isinstance(data, Mapping):
+            raise SpecError((), f"a system must be an object with the keys {', '.join(KEYS)}")
+        unknown = [k for k in data if k not in KEYS]
+        if unknown:
+            raise SpecError((str(unknown[0]),), f"unknown key (known: {', '.join(KEYS)})")
+        for required in ("coordinates", "potential"):
+            if required not in data:
+                raise SpecError((required,), "missing")
+        kwargs = {k: v for k, v in data.items() if k not in ("coordinates", "potential")}
+        return cls(data["coordinates"], data["potential"], **kwargs)
+
+    def replace(self, **changes) -> System:
+        """A new System with some fields changed (System is immutable)."""
+        return System.from_dict({**self.to_dict(), **changes})
+
+    # -- Model ---------------------------------------------------------------
+    @property
+    def coordinates(self) -> tuple[str, ...]:
+        return self._spec.coordinates
+
+    @property
+    def parameters(self) -> dict[str, float]:
+        """The parameters' values, by name."""
+        return dict(self._spec.parameters)
+
+    @property
+    def eps(self) -> float:
+        return self._spec.eps
+
+    @property
+    def mass_matrix(self) -> np.ndarray:
+        return self._spec.mass.copy()
+
+    def check_configuration(self, name: str, q: np.ndarray) -> np.ndarray:
+        # The compiled functions at q0: a non-finite value (a division by zero, a
+        # log of a negative) would otherwise turn the run's first step into NaN.
+        if self._python is not None:
+            return self._check_functions(name, q)
+        c = self._compiled
+        for label, fn, path in (("V", c.potential, "potential"), ("grad V", c.gradient, "potential")):
+            if not np.isfinite(evaluate(fn, q)).all():
+                raise SpecError((path,), f"{label} is not finite at {name} = {q.tolist()} (a division by zero or a "
+                                         "function outside its domain there)")
+        if c.damper_gradients is not None:
+            rows = evaluate(c.damper_gradients, q).reshape(len(self._spec.dampers), -1)
+            for i, row in enumerate(rows):
+                if not np.isfinite(row).all():
+                    raise SpecError(("damping", "dampers", i, "on"),
+                                    f"the gradient of {self._spec.dampers[i].on.text!r} is not finite at {name} = "
+                                    f"{q.tolist()} (a division by zero or a function outside its domain there)")
+        return q
+
+    def _check_functions(self, name: str, q: np.ndarray) -> np.ndarray:
+        _, direct = self._python
+        pieces = [(("potential",), lambda x: [direct["potential"](x)], 1), (("gradient",), direct["gradient"], q.size)]
+        pieces += [(("damping", "dampers", i, "gradient"), g, q.size) for i, (g, _) in enumerate(direct["dampers"])]
+        for path, fn, size in pieces:
+            try:
+                value = np.asarray(fn(q.copy()), dtype=float).reshape(-1)
+            except Exception as error:  # noqa: BLE001 - the user's code; say what it raised
+                raise SpecError(path, f"raised {type(error).__name__} at {name} = {q.tolist()}: {error}") from error
+            if value.size != size:
+                raise SpecError(path, f"returned {value.size} values at {name}, expected {size}")
+            if not np.isfinite(value).all():
+                raise SpecError(path, f"is not finite at {name} = {q.tolist()}")
+        return q
+
+    def _explain_failure(self) -> str | None:
+        """Why a run stopped early, when a Python callable of from_functions raised."""
+        return self._python[0].take_error() if self._python is not None else None
+
+    def __repr__(self) -> str:
+        if self._python is not None:
+            return f"System.from_functions(n={len(self.coordinates)}, name={self.label!r})"
+        return f"System({json.dumps(self.to_dict())})"
+
+    def __eq__(self, other) -> bool:
+        if self._python is not None or not isinstance(other, System) or other._python is not None:
+            return self is other
+        return self.to_dict() == other.to_dict()
+
+    def __hash__(self) -> int:
+        if self._python is not None:
+            return id(self)
+        return hash(json.dumps(self.to_dict(), sort_keys=True))
+
+    def __copy__(self) -> System:
+        return self  # immutable
+
+    def __deepcopy__(self, memo) -> System:
+        return self
+
+    def __reduce__(self):
+        return (System.from_dict, (copy.deepcopy(self.to_dict()),))  # to_dict refuses function systems
+
+
+def _mass_plain(s: SystemSpec):
+    if s.mass_form == "scalar":
+        return float(s.mass[0, 0])
+    if s.mass_form == "diagonal":
+        return np.diag(s.mass).tolist()
+    return s.mass.tolist()
+
+
+def _damping_plain(s: SystemSpec):
+    if s.damping_form is None:
+        return None
+    if s.damping_form == "scalar":
+        return {"scalar": s.damping_scalar}
+    if s.damping_form == "diagonal":
+        return {"diagonal": np.diag(s.damping_matrix).tolist()}
+    if s.damping_form == "matrix":
+        return {"matrix": s.damping_matrix.tolist()}
+    return {"dampers": [{"on": d.on.text, "c": d.c} for d in s.dampers]}
+
+
+def _build_core(spec: SystemSpec, addresses, damper_coefficients, n_momenta: int, owner):
+    mass_kind = "scalar" if spec.mass_form == "scalar" else "dense"
+    damping_kind = {None: "isotropic", "scalar": "isotropic", "diagonal": "constant", "matrix": "constant",
+                    "dampers": "dampers"}[spec.damping_form]
+    cls = getattr(_core, f"System_{mass_kind}_{damping_kind}")
+    # Undamped: eps has nothing to act on, and the core's eps decides whether sv may run.
+    eps = 0.0 if spec.damping_form is None else spec.eps
+    try:
+        return cls(spec.n, eps, spec.mass, spec.damping_scalar if spec.damping_form == "scalar" else 0.0,
+                   spec.damping_matrix if spec.damping_matrix.size else np.zeros((spec.n, spec.n)),
+                   list(damper_coefficients), list(addresses), n_momenta, owner)
+    except ValueError as err:  # the core's own checks name the field first
+        field, _, message = str(err).partition(": ")
+        raise SpecError(tuple(field.split(".")), message or str(err)) from None
