@@ -60,8 +60,9 @@ int main() {
     State<3> w{Vector<3>(0.3, 1.2, -0.6), Vector<3>(1.1, -0.4, 0.25)};
     check_flows(elastic, w, 0.8);
   }
-  // phi1 across its series/expm1 switch, against long-double evaluation.
-  for (double x : {-1e-3, -2e-5, -1e-5, -9.99e-6, -1e-8, 0.0, 1e-7, 0.3, -40.0}) {
+  // phi1 across its series/expm1 switches (1e-3, 0.05), against long-double evaluation.
+  for (double x : {-1e-3, -0.999e-3, 1e-3, -2e-5, -1e-5, -9.99e-6, -1e-8, 0.0, 1e-7, -0.0499, -0.05, 0.05, 0.3,
+                   -0.4999, 0.5, -40.0}) {
     const long double xl = x;
     const double expected = x == 0.0 ? 1.0 : static_cast<double>(std::expm1(xl) / xl);
     CHECK_NEAR(phi1(x), expected, 4e-16 * std::abs(expected));

@@ -141,9 +141,16 @@ void diagonal_constant_damping_is_exponential() {
 }
 
 void phi2_is_continuous() {
-  for (double x : {0.5, -0.5}) {
+  for (double x : {1e-3, -1e-3, 0.05, -0.05, 0.5, -0.5}) {
     const double below = phi2(std::nextafter(x, 0.0)), at = phi2(x);
     CHECK(std::abs(below - at) <= 1e-15 * at);
+  }
+  // Against long double where its direct form is accurate (|x| >= 1e-3: cancellation
+  // costs it about 1e-19 / |x|), on both sides of each switch.
+  for (double x : {-0.9e-3, 1e-3, -0.0499, 0.05, 0.3, -0.4999, 0.5, -2.0, 3.0}) {
+    const long double xl = x;
+    const double expected = static_cast<double>((std::expm1(xl) - xl) / (xl * xl));
+    CHECK_NEAR(phi2(x), expected, 1e-15 * expected);  // a few ulp
   }
   CHECK_NEAR(phi2(0.0), 0.5, 0.0);
   CHECK_NEAR(phi2(-1.0), (std::exp(-1.0) - 1.0 + 1.0), 1e-15);  // (e^-1 - 1 + 1)/1

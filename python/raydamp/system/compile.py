@@ -42,7 +42,45 @@ class CompiledSystemFunctions:
     momenta: Any | None
 
 
+_HALF = se.Rational(1, 2)
+
+
+def _without_half_powers(expr: se.Basic) -> se.Basic:
+    """expr with every b^(n/2), n odd and not 1, written as |sqrt(b)|^n.
+
+    SymEngine writes 1/sqrt(b) as b^(-1/2), and its LLVM backend compiles any
+    non-integer power to a call of pow(), some 20 ns, while sqrt is one
+    instruction and an integer power a few multiplications. Such powers are in
+    every gradient of a potential or dashpot built on a distance (a spring,
+    gravity). The abs (one instruction) keeps SymEngine from folding sqrt(b)^n
+    back into b^(n/2); for b < 0 both forms are NaN. Iterative, like the tree code.
+    """
+    done: dict[se.Basic, se.Basic] = {}
+    stack = [expr]
+    while stack:
+        node = stack[-1]
+        if node in done:
+            stack.pop()
+            continue
+        pending = [a for a in node.args if a not in done]
+        if pending:
+            stack.extend(pending)
+            continue
+        stack.pop()
+        args = [done[a] for a in node.args]
+        if isinstance(node, se.Pow) and isinstance(node.args[1], se.Rational) and not isinstance(
+                node.args[1], se.Integer):
+            exponent = node.args[1]
+            twice = exponent * 2
+            if isinstance(twice, se.Integer) and exponent != _HALF:
+                done[node] = se.Abs(se.sqrt(args[0])) ** twice
+                continue
+        done[node] = node.func(*args) if node.args else node
+    return done[expr]
+
+
 def _jit(inputs: list[se.Symbol], outputs: list[se.Basic]) -> tuple[Any, int, int]:
+    outputs = [_without_half_powers(e) for e in outputs]
     fn = se.Lambdify(inputs, outputs, backend="llvm", cse=True, real=True)
     cfunc, data = fn.as_ctypes()
     return fn, ctypes.cast(cfunc, ctypes.c_void_p).value, data.value or 0

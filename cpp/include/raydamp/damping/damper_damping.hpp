@@ -11,11 +11,11 @@
 
 #include <Eigen/Eigenvalues>
 #include <array>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
-#include "raydamp/damping/decay_factors.hpp"
 #include "raydamp/damping/mass_cholesky.hpp"
 #include "raydamp/phi.hpp"
 #include "raydamp/system/compiled_function.hpp"
@@ -25,8 +25,31 @@ namespace raydamp {
 
 class DamperDamping {
  public:
-  // Nothing depends on t alone (A depends on q): the factors carry only t.
-  using Factors = DecayFactors;
+  // The dashpots at one q, with the functions of t A the flows of length t need.
+  struct AtConfiguration {
+    std::array<double, kMaxDenseDim> q;  // where they were evaluated (the cache key)
+    bool valid = false;
+    // One dashpot: A = u w^T with u = eps c grad g, w = M^{-1} grad g; x = -t w.u and
+    // the scalars t phi1(x), t^2 phi2(x) (the second only for kick+damp, so computed
+    // when first needed). Plain arrays and Maps: no temporaries in the step loop.
+    std::array<double, kMaxDenseDim> grad, w;
+    double x = 0.0, t_phi1 = 0.0, t2_phi2 = 0.0;
+    bool has_phi2 = false;
+    // Several: exp(-tA) = L V diag(decay) V^T L^{-1}; t phi1(-tA) likewise with t_phi1s.
+    SmallMatrix vectors;
+    SmallVector decay, t_phi1s;
+  };
+
+  // What a workspace keeps per sub-flow length t: t, and the dashpots at the last q a
+  // flow of that length saw. The sub-flow that ends a step and the one that starts the
+  // next act at the same q (3s: damp h/2 | damp h/2; 2s: kick_damp h/2 | kick_damp h/2),
+  // so the second reuses the gradients, phi1 and any eigendecomposition of the first.
+  // Mutable: the flows take the factors by const reference, and this is a cache of
+  // pure functions of (q, t), private to one workspace (one run, one thread).
+  struct Factors {
+    double t = std::numeric_limits<double>::quiet_NaN();
+    mutable AtConfiguration at;
+  };
 
   DamperDamping(const Eigen::MatrixXd& mass, double eps, std::vector<double> coefficients, CompiledFunction gradients)
       : eps_(eps), c_(std::move(coefficients)), gradients_(gradients), n_(static_cast<int>(mass.rows())) {
@@ -43,43 +66,50 @@ class DamperDamping {
     lower_ = chol.lower;
     lower_inverse_ = chol.lower_inverse;
     inverse_ = chol.inverse;
+    // M = m I (the common case: particles in Cartesian coordinates) makes M^{-1} g a scaling.
+    const double m = mass(0, 0);
+    scalar_inverse_ = mass.isApprox(m * Eigen::MatrixXd::Identity(n_, n_), 0.0) ? 1.0 / m : 0.0;
+    eps_c_ = eps_ * c_[0];
   }
 
-  Factors factors(double t) const { Factors f; f.t = t; return f; }
+  Factors factors(double t) const {
+    Factors f;
+    f.t = t;
+    return f;
+  }
 
   template <class Q, class P>
   void decay(const Q& q, const Factors& f, P& p) const {
-    Buffer g;
-    evaluate(q, g);
+    const AtConfiguration& at = evaluate(q, f);
     if (c_.size() == 1) {
-      const Rank1 r = rank1(g);
-      p -= (f.t * phi1(-f.t * r.a) * r.w.dot(p)) * r.u;
+      p -= (at.t_phi1 * eps_c_ * map(at.w).dot(p)) * map(at.grad);
       return;
     }
-    SmallVector zero = SmallVector::Zero(n_);
-    modal(g, f.t, p, zero, p);
+    modal_apply(at, p, static_cast<const P*>(nullptr), p);
   }
 
   template <class Q, class G, class P>
   void decay_affine(const Q& q, const Factors& f, const G& grad_v, P& p) const {
-    Buffer g;
-    evaluate(q, g);
-    const double t = f.t;
+    AtConfiguration& at = evaluate(q, f);
     if (c_.size() == 1) {
-      const Rank1 r = rank1(g);
-      const double x = -t * r.a;
-      p += (t * t * phi2(x) * r.w.dot(grad_v) - t * phi1(x) * r.w.dot(p)) * r.u - t * grad_v;
+      if (!at.has_phi2) {
+        at.t2_phi2 = f.t * f.t * phi2(at.x);
+        at.has_phi2 = true;
+      }
+      const auto w = map(at.w);
+      p += (eps_c_ * (at.t2_phi2 * w.dot(grad_v) - at.t_phi1 * w.dot(p))) * map(at.grad) - f.t * grad_v;
       return;
     }
-    modal(g, t, p, grad_v, p);
+    modal_apply(at, p, &grad_v, p);
   }
 
   // out = A p = eps sum_i c_i grad g_i (grad g_i . M^{-1} p).
   template <class Q, class P, class O>
   void rate(const Q& q, const P& p, O& out) const {
     Buffer g;
-    evaluate(q, g);
-    SmallVector v = inverse_ * p;
+    gradients_(g.data(), q.data());
+    SmallVector v(n_);
+    mass_inverse(p, v);
     out.setZero(n_);
     for (std::size_t i = 0; i < c_.size(); ++i) {
       const auto gi = row(g, i);
@@ -91,45 +121,54 @@ class DamperDamping {
   template <class Q, class X>
   void solve_shifted(const Q& q, double c, X& x) const {
     Buffer g;
-    evaluate(q, g);
+    gradients_(g.data(), q.data());
     if (c_.size() == 1) {
-      const Rank1 r = rank1(g);
-      x -= (c * r.w.dot(x) / (1.0 + c * r.a)) * r.u;
+      SmallVector u(n_), w(n_);
+      const double a = rank_one(g, u, w);
+      x -= (c * w.dot(x) / (1.0 + c * a)) * u;
       return;
     }
-    SmallVector lambda;
-    SmallMatrix vectors;
+    SmallVector lambda(n_);
+    SmallMatrix vectors(n_, n_);
     eigen(g, lambda, vectors);
-    const SmallVector lx = lower_inverse_ * x;
-    SmallVector y = vectors.transpose() * lx;
+    SmallVector y = vectors.transpose() * (lower_inverse_ * x);
     y.array() /= 1.0 + c * lambda.array();
-    const SmallVector vy = vectors * y;
-    x.noalias() = lower_ * vy;
+    x.noalias() = lower_ * (vectors * y);
   }
 
   int dampers() const { return static_cast<int>(c_.size()); }
 
  private:
   using Buffer = std::array<double, kMaxDenseDim * kMaxDampers>;  // k rows of n gradient entries
-  struct Rank1 {
-    SmallVector u, w;
-    double a;
-  };
-
-  template <class Q>
-  void evaluate(const Q& q, Buffer& g) const { gradients_(g.data(), q.data()); }
 
   Eigen::Map<const Eigen::VectorXd> row(const Buffer& g, std::size_t i) const {
     return Eigen::Map<const Eigen::VectorXd>(g.data() + i * n_, n_);
   }
 
-  Rank1 rank1(const Buffer& g) const {
+  // q == key, entry by entry (n is small here; a NaN q never matches, so re-evaluates).
+  template <class Q>
+  bool same(const std::array<double, kMaxDenseDim>& key, const Q& q) const {
+    for (int i = 0; i < n_; ++i)
+      if (key[i] != q[i]) return false;
+    return true;
+  }
+
+  Eigen::Map<const Eigen::VectorXd> map(const std::array<double, kMaxDenseDim>& a) const {
+    return Eigen::Map<const Eigen::VectorXd>(a.data(), n_);
+  }
+
+  template <class P, class V>
+  void mass_inverse(const P& p, V& v) const {
+    if (scalar_inverse_ != 0.0) v = scalar_inverse_ * p;
+    else v.noalias() = inverse_ * p;
+  }
+
+  // u = eps c grad g, w = M^{-1} grad g; returns a = w.u.
+  double rank_one(const Buffer& g, SmallVector& u, SmallVector& w) const {
     const auto grad = row(g, 0);
-    Rank1 r;
-    r.u = (eps_ * c_[0]) * grad;
-    r.w = inverse_ * grad;
-    r.a = r.w.dot(r.u);
-    return r;
+    u = (eps_ * c_[0]) * grad;
+    mass_inverse(grad, w);
+    return w.dot(u);
   }
 
   // S = eps sum_i c_i (L^{-1} grad g_i)(L^{-1} grad g_i)^T = V diag(lambda) V^T.
@@ -144,27 +183,62 @@ class DamperDamping {
     vectors = eig.eigenvectors();
   }
 
-  // out = exp(-tA) p - t phi1(-tA) grad_v, through the modes of S.
-  template <class P, class G, class O>
-  void modal(const Buffer& g, double t, const P& p, const G& grad_v, O& out) const {
-    SmallVector lambda;
-    SmallMatrix vectors;
-    eigen(g, lambda, vectors);
-    const SmallVector lp = lower_inverse_ * p, lg = lower_inverse_ * grad_v;
-    SmallVector y = vectors.transpose() * lp;
-    const SmallVector z = vectors.transpose() * lg;
+  // The dashpots at q for flows of length f.t: from the cache when q is where the
+  // last flow of this length left it.
+  template <class Q>
+  AtConfiguration& evaluate(const Q& q, const Factors& f) const {
+    AtConfiguration& at = f.at;
+    if (at.valid && same(at.q, q)) return at;
+    for (int i = 0; i < n_; ++i) at.q[i] = q[i];
+    at.valid = true;
+    const double t = f.t;
+    if (c_.size() == 1) {
+      gradients_(at.grad.data(), q.data());
+      const auto grad = map(at.grad);
+      if (scalar_inverse_ != 0.0) {
+        for (int i = 0; i < n_; ++i) at.w[i] = scalar_inverse_ * at.grad[i];
+      } else {
+        Eigen::Map<Eigen::VectorXd>(at.w.data(), n_).noalias() = inverse_ * grad;
+      }
+      at.x = -t * eps_c_ * map(at.w).dot(grad);
+      at.t_phi1 = t * phi1(at.x);
+      at.has_phi2 = false;
+      return at;
+    }
+    Buffer g;
+    gradients_(g.data(), q.data());
+    SmallVector lambda(n_);
+    at.vectors.resize(n_, n_);
+    eigen(g, lambda, at.vectors);
+    at.decay.resize(n_);
+    at.t_phi1s.resize(n_);
     for (int i = 0; i < n_; ++i) {
       const double x = -t * lambda[i];
-      y[i] = std::exp(x) * y[i] - t * phi1(x) * z[i];
+      at.decay[i] = std::exp(x);
+      at.t_phi1s[i] = t * phi1(x);
     }
-    const SmallVector vy = vectors * y;
-    out.noalias() = lower_ * vy;
+    return at;
+  }
+
+  // out = exp(-tA) p - t phi1(-tA) grad_v (grad_v null: the first term alone),
+  // through the modes of S.
+  template <class P, class G, class O>
+  void modal_apply(const AtConfiguration& at, const P& p, const G* grad_v, O& out) const {
+    SmallVector y = at.vectors.transpose() * (lower_inverse_ * p);
+    y.array() *= at.decay.array();
+    if (grad_v) {
+      const SmallVector z = at.vectors.transpose() * (lower_inverse_ * (*grad_v));
+      y.array() -= at.t_phi1s.array() * z.array();
+    }
+    out.noalias() = lower_ * (at.vectors * y);
   }
 
   double eps_;
   std::vector<double> c_;
   CompiledFunction gradients_;
   int n_;
+  double scalar_inverse_ = 0.0;  // 1/m when M = m I, else 0
+  double eps_c_ = 0.0;           // eps c of the first dashpot (the rank-one case)
   SmallMatrix lower_, lower_inverse_, inverse_;  // L, L^{-1}, M^{-1} (M = L L^T)
 };
 
