@@ -27,7 +27,7 @@ STAGES: tuple[tuple[str, Callable, str | None], ...] = (
     ("modified", experiments.modified_energy_study, "modified_energy"),
     ("orders", experiments.orders, "orders"),
     ("undamped", experiments.undamped_equivalence, None),
-    ("balance", experiments.energy_balance, None),
+    ("rate", experiments.dissipation_rate, None),
 )
 
 

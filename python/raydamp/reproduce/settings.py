@@ -19,6 +19,10 @@ class Settings:
     convergence_hs: tuple[float, ...] = (0.1, 0.05, 0.025, 0.0125)
     convergence_t_end: float = 10.0
     convergence_eps: float = 0.5
+    # Theorem 4.3: the grid of the issue-11 check (cheap enough to run in full always)
+    rate_t_end: float = 20.0
+    rate_eps: tuple[float, ...] = (1e-3, 1e-2, 1e-1)
+    rate_hs: tuple[float, ...] = (0.1, 0.05, 0.025)
 
     @classmethod
     def quick(cls) -> Settings:
