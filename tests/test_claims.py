@@ -84,7 +84,7 @@ def test_momentum_and_orbits():
     for m in ("3s", "2s", "rks"):
         assert mom["drift"][m] < bound
     assert mom["drift"]["rksb"] > 1e-6 and mom["drift"]["heun"] > 1e-6
-    orbits = experiments.elastic_orbits(FULL)
+    orbits = experiments.elastic_orbits(FULL)  # eps = 0.1
     # Measured over t in [0, 1000]: Heun's mean radius rises in every window, by 0.054;
     # 3s's radius oscillation falls from 0.56 to 4e-9.
     assert orbits["heun_radius_increasing"] and orbits["heun_radius_growth"] > 0.03

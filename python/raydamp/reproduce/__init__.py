@@ -27,6 +27,7 @@ STAGES: tuple[tuple[str, Callable, str | None], ...] = (
     ("modified", experiments.modified_energy_study, "modified_energy"),
     ("orders", experiments.orders, "orders"),
     ("undamped", experiments.undamped_equivalence, None),
+    ("conjugacy", experiments.conjugacy, None),
     ("rate", experiments.dissipation_rate, None),
 )
 
