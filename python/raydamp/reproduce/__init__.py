@@ -28,6 +28,7 @@ STAGES: tuple[tuple[str, Callable, str | None], ...] = (
     ("orders", experiments.orders, "orders"),
     ("undamped", experiments.undamped_equivalence, None),
     ("conjugacy", experiments.conjugacy, None),
+    ("invariance", experiments.coordinate_invariance, None),
     ("rate", experiments.dissipation_rate, None),
 )
 

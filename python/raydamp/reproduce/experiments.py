@@ -382,3 +382,60 @@ def dissipation_rate(s: Settings) -> dict:
             "spread": {k: float(g.max() / g.min()) for k, g in groups.items()},
             "undamped": undamped,
             "undamped_order": {k: fitted_order(s.rate_hs, v) for k, v in undamped.items()}}
+
+
+# Proposition 3.1's test system in coordinates q = (x, y): a pendulum coupled by a
+# spring to a quartic oscillator, a dense mass matrix, and damping either a constant
+# matrix D or one dashpot on a nonlinear g(q) (then D(q) = grad g grad g^T varies with q).
+INVARIANCE_POTENTIAL = "1 - cos({x}) + ({x} - {y})^2/2 + {y}^4/4"
+INVARIANCE_DAMPER = "sin({x}) + {y}^2/2"
+INVARIANCE_MASS = np.array([[2.0, 0.3], [0.3, 1.0]])
+INVARIANCE_DAMPING = np.array([[0.5, 0.1], [0.1, 0.2]])
+INVARIANCE_A = np.array([[1.0, 0.5], [-0.3, 2.0]])  # s = A q
+INVARIANCE_METHODS = (("3s", None), ("2s", None), ("rks", "heun"), ("rks", "midpoint"), ("rks", "rk4"),
+                      ("rksb", "heun"), ("heun", None), ("rk4", None))
+
+
+def _invariance_pair(damping: str, eps: float = 0.1):
+    """The test system as a raydamp.System in q, and pulled back to s = A q: V(A^-1 s),
+    M_s = A^-T M A^-1, D_s = A^-T D A^-1 (for the dashpot, g(A^-1 s), whose gradient
+    carries the same A^-T)."""
+    from ..system import System
+
+    a_inv = np.linalg.inv(INVARIANCE_A)
+    in_q = {"x": "x", "y": "y"}
+    in_s = {"x": "(b00*s0 + b01*s1)", "y": "(b10*s0 + b11*s1)"}  # q = A^-1 s
+    inverse = {f"b{i}{j}": float(a_inv[i, j]) for i in range(2) for j in range(2)}
+    if damping == "matrix":
+        d_q = {"matrix": INVARIANCE_DAMPING.tolist()}
+        d_s = {"matrix": (a_inv.T @ INVARIANCE_DAMPING @ a_inv).tolist()}
+    else:
+        d_q = {"dampers": [{"on": INVARIANCE_DAMPER.format(**in_q), "c": 1.0}]}
+        d_s = {"dampers": [{"on": INVARIANCE_DAMPER.format(**in_s), "c": 1.0}]}
+    system_q = System(["x", "y"], INVARIANCE_POTENTIAL.format(**in_q), mass=INVARIANCE_MASS.tolist(), damping=d_q,
+                      eps=eps)
+    system_s = System(["s0", "s1"], INVARIANCE_POTENTIAL.format(**in_s), parameters=inverse,
+                      mass=(a_inv.T @ INVARIANCE_MASS @ a_inv).tolist(), damping=d_s, eps=eps)
+    return system_q, system_s
+
+
+def coordinate_invariance(s: Settings, h: float = 0.05, t_end: float = 20.0) -> dict:
+    """Proposition 3.1 for linear changes of coordinates s = A q: integrate in q and in s
+    (M, D, V pulled back; momenta r = A^-T p, the cotangent lift) and map one trajectory
+    onto the other. Every method maps, Runge-Kutta ones too: a linear change of q with
+    its cotangent lift is linear in (q, p), and Runge-Kutta methods are affine covariant.
+    What sets the splittings apart is nonlinear changes (q-dependent mass), which
+    raydamp.System (constant M) cannot express."""
+    a = INVARIANCE_A
+    a_inv = np.linalg.inv(a)
+    q0, p0 = np.array([1.0, -0.5]), np.array([0.2, 0.7])
+    deviation, scale = {}, 0.0
+    for damping in ("matrix", "dampers"):
+        system_q, system_s = _invariance_pair(damping)
+        for m, tab in INVARIANCE_METHODS:
+            in_q = integrate(system_q, q0, p0, method=m, tableau=tab, h=h, t_end=t_end)
+            in_s = integrate(system_s, a @ q0, a_inv.T @ p0, method=m, tableau=tab, h=h, t_end=t_end)
+            deviation[damping, m if tab is None else f"{m}/{tab}"] = float(max(
+                np.abs(in_s.q - in_q.q @ a.T).max(), np.abs(in_s.p - in_q.p @ a_inv).max()))
+            scale = max(scale, float(np.abs(in_q.q).max()), float(np.abs(in_q.p).max()))
+    return {"deviation": deviation, "steps": int(round(t_end / h)), "h": h, "scale": scale}
