@@ -69,6 +69,7 @@ def run(out: str | Path, *, quick: bool = False, progress: bool = True) -> list[
     if bar:
         bar.close()
     claims = evaluate(results)
+    legible = {name: figures.PROBLEMS.get(name, []) for names in figure_files.values() for name in names}
     report.write(out / "REPORT.md", claims, figure_files, settings, quick=quick, timings=timings,
-                 total=time.perf_counter() - start)
+                 total=time.perf_counter() - start, legibility=legible)
     return claims
