@@ -357,7 +357,7 @@ def dissipation_rate(s: Settings) -> dict:
     left, and it is O(h^4). (H itself would not do: its own O(h^2) oscillation hides
     the eps dependence; see the issue-11 notes in the report.)"""
     t_end = s.rate_t_end
-    scaled, undamped = {}, {}
+    scaled, undamped, undamped_trend = {}, {}, {}
     for name, make, q0, p0 in (("damped_pendulum", DampedPendulum, PENDULUM_Q0, PENDULUM_P0),
                                ("elastic_pendulum", ElasticPendulum, ELASTIC_Q0, ELASTIC_P0)):
         for m in SPLITTINGS:
@@ -368,12 +368,14 @@ def dissipation_rate(s: Settings) -> dict:
                     hmod = modified_energy(model, sol.q, sol.p, h)
                     balance = hmod - hmod[0] + sol.work
                     scaled[name, m, eps, h] = _linear_trend(sol.t, balance) * t_end / (eps * h * h)
-        model, ranges = make(0.0), []
+        model, ranges, trends = make(0.0), [], []
         for h in s.rate_hs:
             sol = integrate(model, q0, p0, method="sv", h=h, t_end=t_end)
             hmod = modified_energy(model, sol.q, sol.p, h)
             ranges.append(np.abs(hmod - hmod[0]).max())
+            trends.append(abs(_linear_trend(sol.t, hmod)) * t_end)
         undamped[name] = np.array(ranges)
+        undamped_trend[name] = np.array(trends)
     groups = {(name, m): np.array([[scaled[name, m, eps, h] for h in s.rate_hs] for eps in s.rate_eps])
               for name, m, _, _ in scaled}
     return {"t_end": t_end, "eps": np.array(s.rate_eps), "hs": np.array(s.rate_hs), "scaled": groups,
@@ -381,7 +383,9 @@ def dissipation_rate(s: Settings) -> dict:
             "h_spread": {k: float((g.max(axis=1) / g.min(axis=1)).max()) for k, g in groups.items()},
             "spread": {k: float(g.max() / g.min()) for k, g in groups.items()},
             "undamped": undamped,
-            "undamped_order": {k: fitted_order(s.rate_hs, v) for k, v in undamped.items()}}
+            "undamped_order": {k: fitted_order(s.rate_hs, v) for k, v in undamped.items()},
+            "undamped_trend": undamped_trend,
+            "undamped_trend_order": {k: fitted_order(s.rate_hs, v) for k, v in undamped_trend.items()}}
 
 
 # Proposition 3.1's test system in coordinates q = (x, y): a pendulum coupled by a
