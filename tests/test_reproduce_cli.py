@@ -14,7 +14,7 @@ def test_reproduce_quick_writes_figures_and_report(tmp_path):
                          capture_output=True, text=True, timeout=600)
     assert run.returncode == 0, run.stderr
     assert "claims hold" in run.stdout
-    assert "10/10" in run.stderr  # the progress bar reached the end
+    assert "12/12" in run.stderr  # the progress bar reached the end
     pngs = sorted(out.glob("*.png"))
     assert len(pngs) == 8
     for png in pngs:
@@ -23,10 +23,10 @@ def test_reproduce_quick_writes_figures_and_report(tmp_path):
     report = (out / "REPORT.md").read_text()
     for png in pngs:
         assert f"]({png.name})" in report
-    assert report.count("| PASS |") + report.count("| FAIL |") == 16
-    # The reduced run still shows every claim but the two explained disagreements.
-    assert "14 of 16 claims hold" in run.stdout
-    assert report.count("| FAIL |") == 2
+    assert report.count("| PASS |") + report.count("| FAIL |") == 21
+    # The reduced run still shows every claim but the one explained disagreement.
+    assert "20 of 21 claims hold" in run.stdout
+    assert report.count("| FAIL |") == 1
 
 
 def test_cli_needs_a_command():

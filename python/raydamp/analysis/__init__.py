@@ -13,11 +13,12 @@ from .relative_equilibrium import (
     distance_from,
     modified_relative_equilibrium,
     reduced_coordinates,
+    reduced_hessian,
     relative_equilibrium,
 )
 
 __all__ = [
     "ConvergenceResult", "convergence", "energy_error", "modified_energy", "reference_solution",
     "momentum_drift", "RelativeEquilibrium", "cartesian_state", "distance_from", "modified_relative_equilibrium",
-    "reduced_coordinates", "relative_equilibrium",
+    "reduced_coordinates", "reduced_hessian", "relative_equilibrium",
 ]

@@ -103,6 +103,26 @@ def relative_equilibrium(model: ElasticPendulum, mu: float) -> RelativeEquilibri
     return RelativeEquilibrium(rho, -depth(rho), 0.0, 0.0, mu)
 
 
+def reduced_hessian(model: ElasticPendulum, equilibrium: RelativeEquilibrium) -> np.ndarray:
+    """The Hessian of the reduced Hamiltonian
+
+        H_mu(rho, z, p_rho, p_z) = (p_rho^2 + p_z^2) / 2m + mu^2 / (2 m rho^2) + k/2 (r - l)^2 - m g_z z
+
+    at the reduced state of ``equilibrium`` (r = |(rho, z)|), in the order (rho, z, p_rho, p_z).
+    Theorem 6.2 needs it positive definite (H_mu strictly convex) at the equilibrium.
+    Second derivatives written out by hand, so no finite-difference step enters."""
+    _require_vertical_gravity(model)
+    m, k, l, mu = model.m, model.k, model.l, equilibrium.mu
+    rho, z = equilibrium.rho, equilibrium.z
+    r = math.hypot(rho, z)
+    stretch = r - l
+    # Hessian of k/2 (r - l)^2 is k (x x^T / r^2 + (r - l)(I / r - x x^T / r^3)), x = (rho, z).
+    h_rr = 3.0 * mu**2 / (m * rho**4) + k * (rho**2 / r**2 + stretch * z**2 / r**3)
+    h_zz = k * (z**2 / r**2 + stretch * rho**2 / r**3)
+    h_rz = k * rho * z * (1.0 / r**2 - stretch / r**3)
+    return np.array([[h_rr, h_rz, 0.0, 0.0], [h_rz, h_zz, 0.0, 0.0], [0.0, 0.0, 1.0 / m, 0.0], [0.0, 0.0, 0.0, 1.0 / m]])
+
+
 def distance_from(equilibrium: RelativeEquilibrium, solution_or_q, p=None) -> np.ndarray:
     """Euclidean distance in reduced coordinates (rho, z, p_rho, p_z) from the equilibrium,
     per saved point of a Solution (or per row of q, p)."""

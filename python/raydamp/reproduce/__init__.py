@@ -27,7 +27,9 @@ STAGES: tuple[tuple[str, Callable, str | None], ...] = (
     ("modified", experiments.modified_energy_study, "modified_energy"),
     ("orders", experiments.orders, "orders"),
     ("undamped", experiments.undamped_equivalence, None),
-    ("balance", experiments.energy_balance, None),
+    ("conjugacy", experiments.conjugacy, None),
+    ("invariance", experiments.coordinate_invariance, None),
+    ("rate", experiments.dissipation_rate, None),
 )
 
 
@@ -67,6 +69,7 @@ def run(out: str | Path, *, quick: bool = False, progress: bool = True) -> list[
     if bar:
         bar.close()
     claims = evaluate(results)
+    legible = {name: figures.PROBLEMS.get(name, []) for names in figure_files.values() for name in names}
     report.write(out / "REPORT.md", claims, figure_files, settings, quick=quick, timings=timings,
-                 total=time.perf_counter() - start)
+                 total=time.perf_counter() - start, legibility=legible)
     return claims
