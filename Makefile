@@ -34,7 +34,7 @@ $(PY):
 # cmake and ninja come from PyPI into the venv: they build the C++ tests too.
 $(INSTALLED): $(PY) pyproject.toml CMakeLists.txt $(SOURCES)
 	$(PIP) install cmake ninja
-	$(PIP) install '.[service,analysis,test]'
+	$(PIP) install '.[service,analysis,io,test]'
 	@touch $@
 
 serve: setup

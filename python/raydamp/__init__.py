@@ -14,8 +14,10 @@ from . import models
 from ._core import __version__
 from .integrate import CancelToken, integrate, steps_for
 from .methods import MethodInfo, TableauInfo, methods, tableaux
+from .results import load
 from .solution import Solution
 from .system import SpecError, System
 
-__all__ = ["__version__", "models", "System", "SpecError", "integrate", "steps_for", "CancelToken", "Solution", "methods", "tableaux",
+__all__ = ["__version__", "models", "System", "SpecError", "integrate", "steps_for", "CancelToken", "Solution",
+           "load", "methods", "tableaux",
            "MethodInfo", "TableauInfo"]

@@ -13,7 +13,45 @@ def main(argv: list[str] | None = None) -> int:
     rep.add_argument("--out", required=True, help="directory for the figures and REPORT.md")
     rep.add_argument("--quick", action="store_true", help="reduced time spans (for CI)")
     rep.add_argument("--no-progress", action="store_true", help="no progress bar")
+    run = commands.add_parser("run", help="run a job file (the service's job JSON); print a summary")
+    run.add_argument("spec", help="a JSON file: model or system, method, step_size, t_end or n_steps, "
+                                  "initial_state, save_every")
+    run.add_argument("--out", help="write the solution: .nc (NetCDF), .npz or .csv")
+    run.add_argument("--plot", help="draw the energy (and H - H0 + W when recorded) to this PNG")
+    run.add_argument("--no-progress", action="store_true", help="no progress bar")
+    commands.add_parser("methods", help="list the methods and their tableaux")
+    commands.add_parser("models", help="list the built-in models and their parameters")
+    serve = commands.add_parser("serve", help="run the job service (same as python -m raydamp_service)")
+    serve.add_argument("--host", help="address to bind (default: RAYDAMP_HOST or 127.0.0.1)")
+    serve.add_argument("--port", type=int, help="port to bind (default: RAYDAMP_PORT or 8000)")
     args = parser.parse_args(argv)
+    if args.command == "run":
+        from .run_command import run_file
+
+        return run_file(args.spec, out=args.out, plot=args.plot, progress=not args.no_progress)
+    if args.command == "methods":
+        from .methods import methods
+
+        for m in methods():
+            print(f"{m.name:<6} {m.tableau or '':<9} order {m.order}  {'damped' if m.damped else 'eps = 0 only'}"
+                  f"  {m.description}")
+        return 0
+    if args.command == "models":
+        from .models import describe_models
+
+        for model in describe_models():
+            params = ", ".join(f"{p['name']}={p['default']}" for p in model["parameters"])
+            print(f"{model['name']:<18} dim {model['dim']}  ({params})  {model['description']}")
+        return 0
+    if args.command == "serve":
+        try:
+            from raydamp_service.__main__ import main as serve_main
+        except ImportError as exc:
+            print(f"raydamp serve needs the service extra (pip install 'raydamp[service]'): {exc}", file=sys.stderr)
+            return 2
+        forwarded = [arg for name in ("host", "port") if getattr(args, name) is not None
+                     for arg in (f"--{name}", str(getattr(args, name)))]
+        return serve_main(forwarded) or 0
     if args.command == "reproduce":
         try:
             from .reproduce import run

@@ -105,7 +105,10 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
     return Solution(t=out["t"], q=out["q"], p=out["p"], energy=out["energy"], momentum=out["momentum"],
                     status=out["status"], steps=out["steps"], failed_step=out["failed_step"],
                     message=message, method=method, tableau=resolved_tableau if method in with_tableau else None,
-                    h=h, max_momentum_drift=out["max_momentum_drift"], work=out["work"], wall_time=wall)
+                    h=h, max_momentum_drift=out["max_momentum_drift"], work=out["work"], wall_time=wall,
+                    origin=(model, q0.copy(), p0.copy(), {"method": method, "tableau": tableau, "h": h, "t_end": t_end,
+                                                          "n_steps": None if t_end is not None else n_steps,
+                                                          "save_every": save_every, "work": work}))
 
 
 def steps_for(t_end: float, h: float) -> tuple[int, float]:

@@ -49,6 +49,11 @@ class Model:
         return type(self)(**{**self.parameters, **changes})
 
     @property
+    def coordinates(self) -> tuple[str, ...]:
+        """The names of the coordinates (q0, q1, ... unless the model names them)."""
+        return tuple(f"q{i}" for i in range(self.dim))
+
+    @property
     def dim(self) -> int:
         """Configuration dimension n (the state is (q, p) in R^n x R^n)."""
         return self._core_model.dim
@@ -103,6 +108,7 @@ class DampedPendulum(Model):
     """
 
     name = "damped_pendulum"
+    coordinates = ("q",)
     parameter_docs = {"eps": "damping coefficient, >= 0"}
 
     def __init__(self, eps: float = 0.01):
@@ -122,6 +128,7 @@ class ElasticPendulum(Model):
     """
 
     name = "elastic_pendulum"
+    coordinates = ("x", "y", "z")
     momentum_names = ("J3",)
     parameter_docs = {
         "eps": "damping coefficient along the spring, >= 0",

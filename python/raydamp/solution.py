@@ -29,6 +29,15 @@ class Solution:
         "cancelled".
     steps : steps taken (all with finite results).
     work : (N,) damping work W(t) if the run was asked for it (``work=True``), else None.
+    provenance : what produced it, as the job JSON the service and ``raydamp run`` take
+        (model or system, initial state, method, tableau, step size, span, save_every)
+        plus ``raydamp_version``; ``raydamp.integrate(*raydamp.job.job_arguments(...))``
+        runs it again.
+    plot : ``sol.plot.energy()``, ``.phase()``, ``.projection()`` (matplotlib axes).
+
+    ``to_xarray()`` gives an xarray Dataset (dims time, dof); ``save(path)`` writes
+    NetCDF (.nc), NumPy (.npz) or CSV (.csv), and ``raydamp.load`` reads the first
+    two back with their provenance.
     """
 
     t: np.ndarray
@@ -46,6 +55,52 @@ class Solution:
     max_momentum_drift: float
     work: np.ndarray | None = field(default=None)
     wall_time: float = field(default=0.0)
+    # (model, q0, p0, options) of the run, turned into `provenance` when asked for (cheap
+    # runs stay cheap); or the provenance dict itself, for a loaded solution.
+    origin: Any = field(default=None, compare=False)
+
+    @property
+    def provenance(self) -> dict[str, Any] | None:
+        if self.origin is None or isinstance(self.origin, dict):
+            return None if self.origin is None else dict(self.origin)
+        from .job import job_spec
+
+        model, q0, p0, options = self.origin
+        return job_spec(model, q0, p0, **options)
+
+    @property
+    def coordinates(self) -> tuple[str, ...]:
+        """The names of the coordinates (q0, q1, ... when the model does not name them)."""
+        if isinstance(self.origin, tuple):
+            return tuple(self.origin[0].coordinates)
+        names = (self.provenance or {}).get("coordinates")
+        return tuple(names) if names else tuple(f"q{i}" for i in range(self.q.shape[1]))
+
+    @property
+    def momentum_names(self) -> tuple[str, ...]:
+        if isinstance(self.origin, tuple):
+            return tuple(self.origin[0].momentum_names)
+        names = (self.provenance or {}).get("momentum_names")
+        return tuple(names) if names else tuple(f"J{i}" for i in range(self.momentum.shape[1]))
+
+    @property
+    def plot(self):
+        """Plots of this solution: ``energy()``, ``phase()``, ``projection()``."""
+        from .plotting import SolutionPlots
+
+        return SolutionPlots(self)
+
+    def to_xarray(self):
+        """An xarray.Dataset with dims (time, dof[, momentum]) and the provenance in attrs."""
+        from .results import to_xarray
+
+        return to_xarray(self)
+
+    def save(self, path) -> None:
+        """Write to ``path``: .nc (NetCDF, via xarray), .npz or .csv, by its suffix."""
+        from .results import save
+
+        save(self, path)
 
     @property
     def success(self) -> bool:

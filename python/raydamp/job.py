@@ -1,0 +1,111 @@
+"""A run as plain data: the job JSON the service takes, the file ``raydamp run`` reads, and
+the provenance every Solution carries (so a saved result can be run again).
+
+    {"model": "elastic_pendulum", "parameters": {"eps": 0.1}}   or   {"system": System.to_dict()}
+    + {"method": "3s", "tableau": null, "step_size": 0.1, "t_end": 100 | "n_steps": 1000,
+       "save_every": 1, "initial_state": {"q": [...], "p": [...]}, "work": false}
+
+Errors are ValueErrors whose message starts with the JSON path of the bad field.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from .models import MODELS, Model
+from .system import SpecError, System
+
+__all__ = ["JOB_KEYS", "describe_model", "model_from_spec", "job_arguments", "job_spec"]
+
+JOB_KEYS = ("model", "system", "parameters", "method", "tableau", "step_size", "t_end", "n_steps", "save_every",
+            "initial_state", "work")
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, tuple):
+        return [_plain(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def describe_model(model: Model) -> dict[str, Any]:
+    """{"model": name, "parameters": {...}} for a built-in model, {"system": {...}} for a System
+    ({"system": None, "label": ...} for one built from Python functions, which has no plain form)."""
+    if isinstance(model, System):
+        try:
+            return {"system": model.to_dict()}
+        except ValueError:
+            return {"system": None, "label": repr(model)}
+    return {"model": model.name, "parameters": {k: _plain(v) for k, v in model.parameters.items()}}
+
+
+def model_from_spec(spec: Mapping[str, Any]) -> Model:
+    """The model of a job spec: ``model`` + ``parameters`` or ``system`` (exactly one)."""
+    has_model, has_system = spec.get("model") is not None, spec.get("system") is not None
+    if has_model == has_system:
+        raise ValueError("model: give exactly one of model (a built-in model's name, with parameters) and "
+                         "system (a user-defined system)")
+    if has_system:
+        if spec.get("parameters"):
+            raise ValueError("parameters: a system carries its parameters inside system.parameters")
+        try:
+            return System.from_dict(spec["system"])
+        except SpecError as error:
+            raise ValueError(f"system.{error}") from None
+    name = spec["model"]
+    if name not in MODELS:
+        raise ValueError(f"model: unknown model {name!r} (known: {', '.join(MODELS)})")
+    parameters = spec.get("parameters") or {}
+    if not isinstance(parameters, Mapping):
+        raise ValueError("parameters: must be an object of name: value")
+    try:
+        return MODELS[name](**parameters)
+    except TypeError as error:  # an unknown keyword
+        raise ValueError(f"parameters: {error}") from None
+    except ValueError as error:
+        raise ValueError(f"parameters.{error}") from None
+
+
+def job_arguments(spec: Mapping[str, Any]) -> tuple[Model, Any, Any, dict[str, Any]]:
+    """(model, q0, p0, keyword arguments of raydamp.integrate) for a job spec."""
+    if not isinstance(spec, Mapping):
+        raise ValueError("a job must be an object with the keys " + ", ".join(JOB_KEYS))
+    unknown = [k for k in spec if k not in JOB_KEYS and k != "raydamp_version"]
+    if unknown:
+        raise ValueError(f"{unknown[0]}: unknown key (known: {', '.join(JOB_KEYS)})")
+    model = model_from_spec(spec)
+    state = spec.get("initial_state")
+    if not isinstance(state, Mapping) or "q" not in state or "p" not in state:
+        raise ValueError('initial_state: must be {"q": [...], "p": [...]}')
+    for key in ("method", "step_size"):
+        if key not in spec:
+            raise ValueError(f"{key}: missing")
+    options: dict[str, Any] = {"method": spec["method"], "h": spec["step_size"],
+                               "save_every": spec.get("save_every", 1), "work": spec.get("work", False)}
+    for key in ("tableau", "t_end", "n_steps"):
+        if spec.get(key) is not None:
+            options[key] = spec[key]
+    return model, state["q"], state["p"], options
+
+
+def job_spec(model: Model, q0: np.ndarray, p0: np.ndarray, *, method: str, tableau: str | None, h: float,
+             t_end: float | None, n_steps: int | None, save_every: int, work: bool) -> dict[str, Any]:
+    """The job spec of a run: what Solution.provenance holds."""
+    from . import __version__
+
+    spec = describe_model(model)
+    spec.update({"method": method, "tableau": tableau, "step_size": h, "save_every": save_every, "work": work,
+                 "initial_state": {"q": np.asarray(q0, float).tolist(), "p": np.asarray(p0, float).tolist()}})
+    if t_end is not None:
+        spec["t_end"] = t_end
+    else:
+        spec["n_steps"] = n_steps
+    spec["raydamp_version"] = __version__
+    return spec

@@ -1,0 +1,86 @@
+"""``raydamp run spec.json``: a job file (the service's job JSON) run in this process, with a
+progress bar on a terminal, a summary table, and the solution and an energy plot written
+where asked. Exit codes: 0 completed, 1 the run stopped early (blow-up or cancel: the summary
+names the failing step and what was computed is still written), 2 a bad file or spec."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import sys
+from pathlib import Path
+
+from .integrate import integrate
+from .job import job_arguments
+from .results import FORMATS
+
+__all__ = ["run_file"]
+
+
+def _fail(message: str) -> int:
+    print(f"raydamp run: {message}", file=sys.stderr)
+    return 2
+
+
+def _progress_bar(enabled: bool):
+    """(callback for integrate, closer): a tqdm bar on a terminal, nothing elsewhere."""
+    if not enabled:
+        return None, lambda: None
+    from tqdm import tqdm
+
+    # A terminal that reports no size (a bare pseudo-terminal: 0 x 0) gets 80 x 24; tqdm would
+    # otherwise hide the bar as below the screen's last row.
+    size = shutil.get_terminal_size((80, 24))
+    bar = tqdm(total=0, unit="step", unit_scale=True, disable=None, ncols=size.columns, nrows=size.lines,
+               desc="integrating")
+
+    def update(done: int, total: int) -> None:
+        if bar.total != total:
+            bar.total = total
+        bar.update(done - bar.n)
+
+    return update, bar.close
+
+
+def _summary_table(summary: dict) -> str:
+    rows = [(key, "-" if value is None else (f"{value:.6g}" if isinstance(value, float) else str(value)))
+            for key, value in summary.items()]
+    width = max(len(key) for key, _ in rows)
+    return "\n".join(f"{key:<{width}}  {value}" for key, value in rows)
+
+
+def run_file(spec_path: str, *, out: str | None = None, plot: str | None = None, progress: bool = True) -> int:
+    if out is not None and Path(out).suffix.lower() not in FORMATS:
+        return _fail(f"--out: unknown format {Path(out).suffix!r} (known: {', '.join(FORMATS)})")
+    if plot is not None and Path(plot).suffix.lower() != ".png":
+        return _fail("--plot: give a .png path")
+    try:
+        spec = json.loads(Path(spec_path).read_text())
+    except OSError as error:
+        return _fail(f"{spec_path}: {error.strerror}")
+    except (json.JSONDecodeError, UnicodeDecodeError) as error:
+        return _fail(f"{spec_path}: not JSON ({error})")
+    callback, close = _progress_bar(progress)
+    try:
+        model, q0, p0, options = job_arguments(spec)
+        sol = integrate(model, q0, p0, progress=callback, **options)
+    except ValueError as error:
+        return _fail(f"{spec_path}: {error}")
+    finally:
+        close()
+    print(_summary_table(sol.summary()))
+    if out is not None:
+        sol.save(out)
+        print(f"wrote {out}")
+    if plot is not None:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        ax = sol.plot.energy()
+        ax.figure.savefig(plot, dpi=120)
+        print(f"wrote {plot}")
+    if not sol.success:
+        print(f"raydamp run: stopped early ({sol.status}) at step {sol.failed_step or sol.steps}: {sol.message}",
+              file=sys.stderr)
+        return 1
+    return 0
