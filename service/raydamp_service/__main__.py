@@ -42,6 +42,9 @@ def main(argv: list[str] | None = None) -> None:
     except StoreUnavailable as error:
         _refuse(str(error))
     store.close()
+    # Threads serialising trajectories hand the GIL back every millisecond rather than every five, so
+    # the event loop (which answers /healthz and accepts submissions) is not kept waiting behind them.
+    sys.setswitchinterval(0.001)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     # One process only: the job queue and the cancel tokens live in it.
     uvicorn.run(create_app(settings), host=settings.host, port=settings.port)

@@ -138,6 +138,8 @@ class JobStore:
         self._local = threading.local()
         self._connections: list[sqlite3.Connection] = []
         self._lock = threading.Lock()
+        self._write_lock = threading.Lock()
+        self._space_pending = False  # freed pages not yet returned (a checkpoint met readers)
 
     # ---- connections ----
 
@@ -184,7 +186,10 @@ class JobStore:
     @contextmanager
     def _transaction(self) -> Iterator[sqlite3.Connection]:
         connection = self._connection()
-        with connection:  # commits, or rolls back on an exception
+        # One writer at a time inside this process: threads queue on a lock that wakes the next at
+        # once, rather than meeting SQLITE_BUSY, whose handler sleeps 1, 2, 5 ... 100 ms between
+        # tries (the tail of the submission latency under concurrent POSTs).
+        with self._write_lock, connection:  # commits, or rolls back on an exception
             yield connection
 
     # ---- reading ----
@@ -257,6 +262,8 @@ class JobStore:
 
     def prune(self, *, max_jobs: int = 0, max_age_seconds: float = 0, max_bytes: int = 0) -> int:
         """Remove finished jobs, oldest first, until every given bound (0 = none) holds; returns how many."""
+        if self._space_pending:
+            self._give_back_space()
         if not (max_jobs or max_age_seconds or max_bytes):
             return 0
         rows = self._connection().execute(
@@ -284,8 +291,17 @@ class JobStore:
     def _give_back_space(self) -> None:
         """Return freed pages to the file system, and fold the WAL back so the file really shrinks."""
         connection = self._connection()
-        connection.executescript("PRAGMA incremental_vacuum;")  # execute() would free one page per call
-        connection.execute("PRAGMA wal_checkpoint(TRUNCATE)").fetchall()
+        with self._write_lock:
+            connection.executescript("PRAGMA incremental_vacuum;")  # execute() would free one page per call
+        # TRUNCATE waits for the readers of older snapshots; a client streaming a trajectory may hold
+        # one for seconds, and other writers would wait as long. So wait briefly, and if readers
+        # remain, leave it to the next retention pass.
+        connection.execute("PRAGMA busy_timeout = 200")
+        try:
+            busy = connection.execute("PRAGMA wal_checkpoint(TRUNCATE)").fetchone()[0]
+        finally:
+            connection.execute("PRAGMA busy_timeout = 30000")
+        self._space_pending = bool(busy)
 
     def claim(self, job_id: str) -> JobRecord | None:
         """queued -> running; None if the job is no longer queued (cancelled meanwhile)."""

@@ -20,7 +20,7 @@ from .store import StoredTrajectory
 
 __all__ = ["FetchLease", "Selection", "trajectory_chunks"]
 
-CHUNK_BYTES = 1 << 20  # floats read per piece; the JSON text of a piece is a few times this
+CHUNK_BYTES = 1 << 16  # floats read per piece. Small: json.dumps holds the GIL (and so the event loop) for a whole piece
 _ROW_READ_LIMIT = 1 << 16  # a decimation step wider than this reads its rows one by one
 
 
