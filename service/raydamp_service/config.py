@@ -48,7 +48,8 @@ class Settings(BaseSettings):
     retry_after_seconds: int = Field(5, ge=1, description="the Retry-After of a 429")
     max_steps: int = Field(10**8, ge=1)
     max_saved_points: int = Field(10**6, ge=2, description="n_steps // save_every + 2 at most")
-    max_dim: int = Field(1000, ge=1, description="longest initial_state.q / p or vector parameter accepted")
+    max_dim: int = Field(1000, ge=1, le=10_000,  # schemas.MAX_VECTOR
+                         description="longest initial_state.q / p or vector parameter accepted")
     # SQLite refuses blobs above 1e9 bytes; stay well under it per array.
     max_trajectory_bytes: int = Field(512 * 2**20, ge=1, le=900_000_000)
     max_list_limit: int = Field(1000, ge=1)

@@ -24,7 +24,11 @@ TableauName = Literal[tuple(dict.fromkeys(  # type: ignore[valid-type]
 
 # JSON parsing accepts NaN and Infinity (and 1e999 overflows to inf); no run may start from them.
 FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
-ParameterValue = FiniteFloat | list[FiniteFloat]
+# The longest vector any job may carry (Settings.max_dim is at most this, and usually lower). In the
+# schema, so that a list of 200,000 bad items is one error found at once, not 200,000 found one by one.
+MAX_VECTOR = 10_000
+Vector = Annotated[list[FiniteFloat], Field(max_length=MAX_VECTOR)]
+ParameterValue = FiniteFloat | Vector
 JobStatus = Literal["queued", "running", "completed", "failed", "cancelled"]
 
 
@@ -37,8 +41,10 @@ class _Input(BaseModel):
 
 
 class InitialState(_Input):
-    q: list[FiniteFloat] = Field(min_length=1, description="initial positions, length = the model's dim")
-    p: list[FiniteFloat] = Field(min_length=1, description="initial momenta, length = the model's dim")
+    q: list[FiniteFloat] = Field(min_length=1, max_length=MAX_VECTOR,
+                                 description="initial positions, length = the model's dim")
+    p: list[FiniteFloat] = Field(min_length=1, max_length=MAX_VECTOR,
+                                 description="initial momenta, length = the model's dim")
 
 
 # Bounds of a system: raydamp's own limits (raydamp.system.spec and raydamp.expressions), stated in

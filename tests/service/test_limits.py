@@ -54,6 +54,17 @@ def test_a_body_just_under_the_limit_is_parsed(server):
     assert len(response.content) < 10_000  # the 2 MB string is not echoed whole
 
 
+def test_a_list_of_200_000_bad_items_is_one_short_422(server):
+    # The audit's 1 MB body of 200,000 strings: it stalled every client and came back as 22.9 MB of errors.
+    body = json.dumps({**PENDULUM, "initial_state": {"q": ["x"] * 200_000, "p": [0.0]}}).encode()
+    assert len(body) < 2 * 2**20  # under the body limit: the schema's own bound must catch it
+    response = server.client.post("/v1/jobs", content=body, headers=JSON)
+    assert response.status_code == 422
+    detail = response.json()["detail"]
+    assert [error["loc"] for error in detail] == [["body", "initial_state", "q"]] and detail[0]["type"] == "too_long"
+    assert len(response.content) < 5_000
+
+
 def test_a_lone_surrogate_model_name_is_422_not_500(server):
     body = json.dumps({**PENDULUM, "model": "\ud800"}).encode()  # ensure_ascii writes the escape \\ud800
     response = server.client.post("/v1/jobs", content=body, headers=JSON)
