@@ -73,7 +73,7 @@ class Runner:
             self._queue.put(None)
         self._retention_wake.set()
         deadline = time.monotonic() + self._settings.shutdown_seconds
-        for thread in [*self._threads, self._retention]:
+        for thread in [*self._threads, *([self._retention] if self._retention else [])]:
             thread.join(timeout=max(0.0, deadline - time.monotonic()))
         self._threads.clear()
 
