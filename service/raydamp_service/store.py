@@ -237,15 +237,20 @@ class JobStore:
 
     def create(self, spec: dict[str, Any], max_queued: int | None = None) -> JobRecord | None:
         """A new queued job; None (nothing written) when max_queued jobs are already queued."""
-        job_id = uuid.uuid4().hex
+        job_id, text, created_at = uuid.uuid4().hex, json.dumps(spec), _now()
         with self._transaction() as db:
-            # Count and insert in one statement: SQLite runs writes one at a time, so concurrent
-            # submissions cannot all see room for one more.
+            # Count and insert in one statement, under the write lock: concurrent submissions
+            # cannot all see room for one more.
             inserted = db.execute(
                 "INSERT INTO jobs (id, status, spec, created_at) SELECT ?, 'queued', ?, ? "
                 "WHERE ? IS NULL OR (SELECT COUNT(*) FROM jobs WHERE status = 'queued') < ?",
-                (job_id, json.dumps(spec), _now(), max_queued, max_queued)).rowcount
-        return self.get(job_id) if inserted else None
+                (job_id, text, created_at, max_queued, max_queued)).rowcount
+        if not inserted:
+            return None
+        # The row as written, without reading it back (one query fewer on the submission path).
+        return JobRecord(id=job_id, status="queued", spec=json.loads(text), progress=0.0, attempts=0,
+                         cancel_requested=False, summary=None, error=None, failed_step=None, created_at=created_at,
+                         started_at=None, finished_at=None, has_trajectory=False)
 
     def delete_finished(self, job_id: str) -> bool:
         """Remove a finished job and its trajectory; False if it is not (or no longer) finished."""

@@ -112,3 +112,8 @@ def test_delete_finished_refuses_a_running_job(store):
     job = store.create(SPEC)
     store.claim(job.id)
     assert not store.delete_finished(job.id) and store.get(job.id).status == "running"
+
+
+def test_create_returns_the_row_as_stored(store):
+    created = store.create({**SPEC, "n_steps": 10})
+    assert created == store.get(created.id)
