@@ -25,8 +25,8 @@ _ROW_READ_LIMIT = 1 << 16  # a decimation step wider than this reads its rows on
 
 
 class FetchLease:
-    """A slot among the large fetches served at once; released exactly once, by whoever ends first
-    (the body's generator, or the response's background task when the client went away)."""
+    """A slot among the large fetches served at once; released exactly once, by whoever ends first:
+    the body's generator, the response's background task, or the lease's own collection."""
 
     def __init__(self, semaphore: threading.Semaphore | None):
         self._semaphore = semaphore
@@ -37,6 +37,11 @@ class FetchLease:
             semaphore, self._semaphore = self._semaphore, None
         if semaphore is not None:
             semaphore.release()
+
+    def __del__(self) -> None:
+        # A client gone before the first byte: neither the body (never started) nor the background
+        # task (skipped on a disconnect) runs, and the slot would be lost for good.
+        self.release()
 
 
 @dataclass(frozen=True)

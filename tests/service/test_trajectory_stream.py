@@ -3,13 +3,14 @@ capped in number, and a 10^6-point fetch growing the server's memory by far less
 
 from __future__ import annotations
 
+import gc
 import math
 import threading
 import time
 from pathlib import Path
 
-import numpy as np
 import pytest
+from raydamp_service.trajectory_stream import FetchLease
 
 PENDULUM = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "step_size": 0.01,
             "initial_state": {"q": [0.9 * math.pi], "p": [0.0]}}
@@ -122,3 +123,15 @@ def test_a_million_point_fetch_streams_in_bounded_memory(fetch_server, jobs):
     # And the streamed body is the same data: the last points agree with a decimated fetch.
     end = fetch_server.client.get(url, params={"start": MILLION - 2}).json()
     assert len(end["t"]) == 3 and end["t"][-1] == pytest.approx(MILLION * 0.01, rel=1e-12)
+
+
+def test_a_lease_is_released_once_by_whoever_ends_first():
+    semaphore = threading.Semaphore(1)
+    assert semaphore.acquire(blocking=False)
+    lease = FetchLease(semaphore)
+    lease.release()
+    lease.release()  # a second release must not hand out a second slot
+    assert semaphore.acquire(blocking=False) and not semaphore.acquire(blocking=False)
+    FetchLease(semaphore)  # dropped unreleased, as when a client leaves before the first byte
+    gc.collect()
+    assert semaphore.acquire(blocking=False)
