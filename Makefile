@@ -55,6 +55,7 @@ pytest: setup
 bench: setup
 	$(PY) benchmarks/bench_steps.py
 	$(PY) benchmarks/bench_system.py
+	$(PY) benchmarks/bench_service_load.py
 
 # The paper's experiments in full: figures and REPORT.md in reproduce-out/.
 reproduce: setup

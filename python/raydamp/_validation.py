@@ -8,11 +8,24 @@ import numbers
 import numpy as np
 
 
+_MAX_REPR = 200  # characters of a bad value quoted in a message
+
+
+def _short(value) -> str:
+    """repr(value), cut short: a message must not carry a megabyte-long list back."""
+    if isinstance(value, np.ndarray) and value.size > _MAX_REPR:
+        return f"an array of shape {value.shape}"
+    if isinstance(value, (list, tuple)) and len(value) > _MAX_REPR:
+        return f"a {type(value).__name__} of {len(value)} items starting {value[:5]!r}"
+    text = repr(value)
+    return text if len(text) <= _MAX_REPR else f"{text[:_MAX_REPR]}... ({len(text)} characters)"
+
+
 def real(name: str, value, *, positive: bool = False, nonnegative: bool = False) -> float:
     # Exact-type fast path first: the ABC check costs microseconds on every short call.
     if type(value) is not float and type(value) is not int and (
             isinstance(value, bool) or not isinstance(value, numbers.Real)):
-        raise ValueError(f"{name} must be a real number, got {value!r}")
+        raise ValueError(f"{name} must be a real number, got {_short(value)}")
     x = float(value)
     if not math.isfinite(x):
         raise ValueError(f"{name} must be finite, got {x!r}")
@@ -24,11 +37,10 @@ def real(name: str, value, *, positive: bool = False, nonnegative: bool = False)
 
 
 def integer(name: str, value, *, minimum: int = 1, maximum: int | None = None) -> int:
+    # 10.0 is refused like 10.5: a count given as a float is usually a computed value that was
+    # meant to be rounded, and h=True is refused the same way.
     if type(value) is not int and (isinstance(value, bool) or not isinstance(value, numbers.Integral)):
-        if isinstance(value, float) and value.is_integer():
-            value = int(value)
-        else:
-            raise ValueError(f"{name} must be an integer, got {value!r}")
+        raise ValueError(f"{name} must be an integer, got {_short(value)}")
     if value < minimum:
         raise ValueError(f"{name} must be >= {minimum}, got {value}")
     if maximum is not None and value > maximum:
@@ -37,14 +49,23 @@ def integer(name: str, value, *, minimum: int = 1, maximum: int | None = None) -
 
 
 def vector(name: str, value, dim: int) -> np.ndarray:
-    try:
-        array = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be an array of {dim} real numbers, got {value!r}") from None
+    # Only numbers: np.asarray would read None as nan, True as 1.0 and "1.0" as 1.0.
+    if isinstance(value, np.ndarray) and value.dtype == np.float64:
+        array = value
+    else:
+        try:
+            array = np.asarray(value)
+        except (TypeError, ValueError):
+            array = None
+        if array is None or array.dtype.kind not in "iuf":
+            raise ValueError(f"{name} must be an array of {dim} real numbers, got {_short(value)}") from None
+        array = array.astype(float)
     if array.ndim == 0 and dim == 1:
         array = array.reshape(1)
     if array.shape != (dim,):
         raise ValueError(f"{name} must have length {dim} for this model, got shape {array.shape}")
-    if not np.isfinite(array).all():
-        raise ValueError(f"{name} must be finite, got {array.tolist()}")
+    finite = np.isfinite(array)
+    if not finite.all():
+        first = int(np.argmin(finite))
+        raise ValueError(f"{name} must be finite, got {name}[{first}] = {float(array[first])!r}")
     return np.ascontiguousarray(array)

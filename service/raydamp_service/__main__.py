@@ -4,11 +4,20 @@ from __future__ import annotations
 
 import argparse
 import logging
+import sys
 
 import uvicorn
+from pydantic import ValidationError
 
 from .app import create_app
-from .config import Settings
+from .config import Settings, is_loopback
+from .store import JobStore, StoreUnavailable
+
+
+def _refuse(message: str) -> None:
+    """One line on stderr and exit status 2: what is wrong and what to do, no traceback."""
+    print(f"raydamp-service: {message}", file=sys.stderr)
+    sys.exit(2)
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -19,7 +28,23 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     # Command-line values win over the environment; absent ones fall back to it.
     overrides = {name: value for name, value in vars(args).items() if value is not None}
-    settings = Settings(**overrides)
+    try:
+        settings = Settings(**overrides)
+    except ValidationError as error:
+        first = error.errors()[0]
+        _refuse(f"bad setting RAYDAMP_{str(first['loc'][0]).upper()}: {first['msg']}")
+    if not is_loopback(settings.host) and settings.token is None:
+        _refuse(f"binding to {settings.host} lets other machines submit, read and cancel jobs: set RAYDAMP_TOKEN "
+                "to a secret that clients send as 'Authorization: Bearer <token>', or bind 127.0.0.1")
+    store = JobStore(settings.db)
+    try:
+        store.open()  # the lifespan opens it again; this is to fail here with one line, not a traceback
+    except StoreUnavailable as error:
+        _refuse(str(error))
+    store.close()
+    # Threads serialising trajectories hand the GIL back every millisecond rather than every five, so
+    # the event loop (which answers /healthz and accepts submissions) is not kept waiting behind them.
+    sys.setswitchinterval(0.001)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     # One process only: the job queue and the cancel tokens live in it.
     uvicorn.run(create_app(settings), host=settings.host, port=settings.port)

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import threading
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
+from typing import Any
 
 import raydamp
 from fastapi import FastAPI
@@ -11,6 +13,7 @@ from fastapi.exceptions import RequestValidationError
 
 from .config import Settings
 from .errors import validation_error_handler
+from .guard import UNGUARDED_PATHS, RequestGuard
 from .routes import catalogue, health, jobs
 from .runner import Runner
 from .store import JobStore
@@ -37,7 +40,40 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app = FastAPI(title="raydamp", version=raydamp.__version__, lifespan=lifespan,
                   summary="Damped Hamiltonian integrations as jobs: submit, poll, fetch the trajectory.")
     app.state.settings = settings
+    app.state.large_fetches = threading.Semaphore(settings.max_large_fetches)
+    app.add_middleware(RequestGuard, settings=settings)
     app.add_exception_handler(RequestValidationError, validation_error_handler)
     for router in (jobs.router, catalogue.router, health.router):
         app.include_router(router)
+    _document_limits(app, settings)
     return app
+
+
+def _document_limits(app: FastAPI, settings: Settings) -> None:
+    """What the guard and the settings enforce, said in /openapi.json (for clients and fuzzers): the
+    list limit's maximum, the answers every operation may give before its route runs, the token."""
+    generate = app.openapi
+
+    def openapi() -> dict[str, Any]:
+        if app.openapi_schema is not None:
+            return app.openapi_schema
+        schema = generate()
+        for parameter in schema["paths"]["/v1/jobs"]["get"]["parameters"]:
+            if parameter["name"] == "limit":
+                parameter["schema"]["maximum"] = settings.max_list_limit
+        schema["paths"]["/v1/jobs"]["post"]["responses"]["400"] = {
+            "description": "the body is not UTF-8 text, or the Host is not one of trusted_hosts"}
+        if settings.token is not None:
+            schema.setdefault("components", {})["securitySchemes"] = {"bearer": {"type": "http", "scheme": "bearer"}}
+        for path, operations in schema["paths"].items():
+            for operation in operations.values():
+                responses = operation["responses"]
+                responses.setdefault("400", {"description": "the Host is not one of trusted_hosts"})
+                if operation.get("requestBody"):
+                    responses["413"] = {"description": f"the body is over max_body_bytes = {settings.max_body_bytes}"}
+                if settings.token is not None and path not in UNGUARDED_PATHS:
+                    operation["security"] = [{"bearer": []}]
+                    responses["401"] = {"description": "no or wrong Authorization: Bearer <token>"}
+        return schema
+
+    app.openapi = openapi  # type: ignore[method-assign]

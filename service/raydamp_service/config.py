@@ -2,12 +2,27 @@
 
 from __future__ import annotations
 
+import ipaddress
 from pathlib import Path
+from typing import Annotated
 
-from pydantic import Field
-from pydantic_settings import BaseSettings, SettingsConfigDict
+from pydantic import Field, SecretStr, field_validator
+from pydantic_settings import BaseSettings, NoDecode, SettingsConfigDict
 
-__all__ = ["Settings"]
+__all__ = ["Settings", "is_loopback"]
+
+LOOPBACK_NAMES = ("127.0.0.1", "::1", "localhost")
+
+
+def is_loopback(host: str) -> bool:
+    """True for an address or name that only this machine can reach."""
+    host = host.strip("[]")
+    if host.lower() == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
 
 
 class Settings(BaseSettings):
@@ -20,15 +35,43 @@ class Settings(BaseSettings):
     port: int = Field(8000, ge=0, le=65535)
     workers: int = Field(2, ge=1, le=64, description="runs executed at once")
 
+    # Who may talk to the service. A browser page can make a request to 127.0.0.1 with a foreign
+    # Host (DNS rebinding); checking Host stops that, and a token stops other local users.
+    token: SecretStr | None = Field(None, description="when set, every /v1 request needs Authorization: Bearer "
+                                                      "<token>; required to bind a non-loopback address")
+    trusted_hosts: Annotated[list[str], NoDecode] = Field(
+        list(LOOPBACK_NAMES), description="Host header names accepted (comma-separated; '*' accepts any)")
+
     # Bounds on what one job may ask for, so that no request can exhaust memory or disk.
+    max_body_bytes: int = Field(2 * 2**20, ge=1024, description="a larger request body gets 413 before parsing")
+    max_queued: int = Field(1000, ge=1, description="queued jobs beyond this get 429 with Retry-After")
+    retry_after_seconds: int = Field(5, ge=1, description="the Retry-After of a 429")
     max_steps: int = Field(10**8, ge=1)
     max_saved_points: int = Field(10**6, ge=2, description="n_steps // save_every + 2 at most")
-    max_dim: int = Field(1000, ge=1, description="longest initial_state.q / p or vector parameter accepted")
+    max_dim: int = Field(1000, ge=1, le=10_000,  # schemas.MAX_VECTOR
+                         description="longest initial_state.q / p or vector parameter accepted")
     # SQLite refuses blobs above 1e9 bytes; stay well under it per array.
     max_trajectory_bytes: int = Field(512 * 2**20, ge=1, le=900_000_000)
     max_list_limit: int = Field(1000, ge=1)
+
+    # Trajectory fetches stream; those above large_fetch_points points are held to a few at once.
+    large_fetch_points: int = Field(100_000, ge=1)
+    max_large_fetches: int = Field(2, ge=1, description="large trajectory fetches served at once; more get 429")
+
+    # Retention: finished jobs (oldest first) are removed past any of these; 0 means no bound.
+    retain_jobs: int = Field(10_000, ge=0, description="finished jobs kept at most")
+    retain_seconds: float = Field(0, ge=0, description="finished jobs older than this are removed")
+    retain_bytes: int = Field(4 * 2**30, ge=0, description="trajectory bytes kept at most")
+    retention_interval_seconds: float = Field(60.0, gt=0, description="how often the retention pass runs")
 
     # How often a run's progress is also written to the database (GET reads memory first).
     progress_save_seconds: float = Field(1.0, gt=0)
     # How long shutdown waits for interrupted runs to hand their jobs back to the queue.
     shutdown_seconds: float = Field(10.0, gt=0)
+
+    @field_validator("trusted_hosts", mode="before")
+    @classmethod
+    def _split_hosts(cls, value: object) -> object:
+        if isinstance(value, str):
+            return [name.strip() for name in value.split(",") if name.strip()]
+        return value

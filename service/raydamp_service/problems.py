@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import functools
 import json
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -145,6 +146,9 @@ def check_spec(spec: JobSpec, settings: Settings) -> RaydampCall:
         field = "n_steps" if spec.n_steps is not None else "t_end"
         raise SpecError((field,), f"{field}: the run would take {steps} steps; this service runs at most "
                         f"max_steps = {settings.max_steps} (raise step_size or shorten the run)")
+    if not math.isfinite(spec.step_size * steps):
+        raise SpecError(("step_size",), f"step_size: {steps} steps of {spec.step_size} end beyond the largest "
+                        "float, so the times would not be finite; lower step_size or the number of steps")
     saved_points = steps // spec.save_every + 2
     if saved_points > settings.max_saved_points:
         raise SpecError(("save_every",), f"save_every: {saved_points} saved points (n_steps // save_every + 2) "

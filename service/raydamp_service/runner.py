@@ -8,6 +8,7 @@ and the other workers keep going) and records the outcome with its trajectory.
 from __future__ import annotations
 
 import logging
+import math
 import queue
 import sqlite3
 import threading
@@ -43,6 +44,8 @@ class Runner:
         self._active: dict[str, _ActiveRun] = {}
         self._lock = threading.Lock()
         self._stopping = threading.Event()
+        self._retention_wake = threading.Event()
+        self._retention: threading.Thread | None = None
 
     # ---- called by the application ----
 
@@ -52,6 +55,8 @@ class Runner:
             thread = threading.Thread(target=self._work, name=f"raydamp-worker-{i}", daemon=True)
             thread.start()
             self._threads.append(thread)
+        self._retention = threading.Thread(target=self._retain, name="raydamp-retention", daemon=True)
+        self._retention.start()
         recovered = self._store.recover()
         if recovered:
             log.info("re-queued %d job(s) left queued or running by a previous process", len(recovered))
@@ -66,8 +71,9 @@ class Runner:
                 run.token.cancel()
         for _ in self._threads:
             self._queue.put(None)
+        self._retention_wake.set()
         deadline = time.monotonic() + self._settings.shutdown_seconds
-        for thread in self._threads:
+        for thread in [*self._threads, *([self._retention] if self._retention else [])]:
             thread.join(timeout=max(0.0, deadline - time.monotonic()))
         self._threads.clear()
 
@@ -102,6 +108,22 @@ class Runner:
                 except sqlite3.Error:
                     log.exception("job %s: could not record the failure; it is re-run at the next start", job_id)
 
+    def _retain(self) -> None:
+        """The retention pass: at start, after jobs finish (at most once a second), and periodically."""
+        settings = self._settings
+        while not self._stopping.is_set():
+            self._retention_wake.clear()
+            try:
+                removed = self._store.prune(max_jobs=settings.retain_jobs, max_age_seconds=settings.retain_seconds,
+                                            max_bytes=settings.retain_bytes)
+                if removed:
+                    log.info("retention: removed %d finished job(s)", removed)
+            except sqlite3.Error:
+                log.warning("retention pass failed; it is tried again later", exc_info=True)
+            if self._stopping.wait(1.0):
+                return
+            self._retention_wake.wait(settings.retention_interval_seconds)
+
     def _run(self, job_id: str) -> None:
         run = _ActiveRun()
         # Registered before the claim, so a cancel arriving once the job is "running" always finds the token.
@@ -121,6 +143,7 @@ class Runner:
         finally:
             with self._lock:
                 self._active.pop(job_id, None)
+            self._retention_wake.set()
 
     def _execute(self, job_id: str, spec: JobSpec, run: _ActiveRun) -> None:
         def on_progress(done: int, total: int) -> None:
@@ -145,7 +168,11 @@ class Runner:
         trajectory = TrajectoryArrays(t=solution.t, q=solution.q, p=solution.p, energy=solution.energy,
                                       momentum=solution.momentum)
         outcome = {"summary": solution.summary(), "trajectory": trajectory, "progress": run.progress}
-        if solution.status == "completed":
+        if solution.status == "completed" and not math.isfinite(float(solution.t[-1])):
+            # Refused at submission (step_size x steps must be finite); kept as a last guard, since a
+            # run whose times overflowed has not computed what was asked.
+            self._store.finish(job_id, "failed", error="the time overflowed to a non-finite value", **outcome)
+        elif solution.status == "completed":
             self._store.finish(job_id, "completed", **outcome)
         elif solution.status == "non_finite":
             # A blow-up is a failed job that keeps everything computed up to it.

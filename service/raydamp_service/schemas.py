@@ -5,7 +5,9 @@ from __future__ import annotations
 from datetime import datetime
 from typing import Annotated, Literal
 
+import raydamp
 from pydantic import BaseModel, ConfigDict, Field
+from raydamp.models import describe_models
 
 __all__ = [
     "FiniteFloat", "InitialState", "JobSpec", "SystemInput",
@@ -13,9 +15,20 @@ __all__ = [
     "ParameterInfo", "ModelInfo", "MethodInfo", "Health",
 ]
 
+# The names a job may use, from raydamp's own catalogue: enums in /openapi.json, so that a client
+# (or a fuzzer) sees every valid value.
+ModelName = Literal[tuple(model["name"] for model in describe_models())]  # type: ignore[valid-type]
+MethodName = Literal[tuple(dict.fromkeys(method.name for method in raydamp.methods()))]  # type: ignore[valid-type]
+TableauName = Literal[tuple(dict.fromkeys(  # type: ignore[valid-type]
+    method.tableau for method in raydamp.methods() if method.tableau is not None))]
+
 # JSON parsing accepts NaN and Infinity (and 1e999 overflows to inf); no run may start from them.
 FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
-ParameterValue = FiniteFloat | list[FiniteFloat]
+# The longest vector any job may carry (Settings.max_dim is at most this, and usually lower). In the
+# schema, so that a list of 200,000 bad items is one error found at once, not 200,000 found one by one.
+MAX_VECTOR = 10_000
+Vector = Annotated[list[FiniteFloat], Field(max_length=MAX_VECTOR)]
+ParameterValue = FiniteFloat | Vector
 JobStatus = Literal["queued", "running", "completed", "failed", "cancelled"]
 
 
@@ -28,8 +41,10 @@ class _Input(BaseModel):
 
 
 class InitialState(_Input):
-    q: list[FiniteFloat] = Field(min_length=1, description="initial positions, length = the model's dim")
-    p: list[FiniteFloat] = Field(min_length=1, description="initial momenta, length = the model's dim")
+    q: list[FiniteFloat] = Field(min_length=1, max_length=MAX_VECTOR,
+                                 description="initial positions, length = the model's dim")
+    p: list[FiniteFloat] = Field(min_length=1, max_length=MAX_VECTOR,
+                                 description="initial momenta, length = the model's dim")
 
 
 # Bounds of a system: raydamp's own limits (raydamp.system.spec and raydamp.expressions), stated in
@@ -87,19 +102,28 @@ class SystemInput(_Input):
     name: str | None = Field(None, max_length=200)
 
 
+def _exactly_one(first: str, second: str, first_type: str, second_type: str) -> dict:
+    """JSON Schema for "exactly one of first and second is given (not null)"."""
+    return {"oneOf": [{"required": [first], "properties": {first: {"type": first_type}, second: {"type": "null"}}},
+                      {"required": [second], "properties": {second: {"type": second_type}, first: {"type": "null"}}}]}
+
+
 class JobSpec(_Input):
     """One integration problem: a model (or a system), a method, a step size and a span.
     Exactly one of model and system; exactly one of t_end, n_steps."""
 
-    model: str | None = Field(None, min_length=1, max_length=100, description="a name from GET /v1/models")
+    model_config = ConfigDict(json_schema_extra={"allOf": [_exactly_one("model", "system", "string", "object"),
+                                                           _exactly_one("t_end", "n_steps", "number", "integer")]})
+
+    model: ModelName | None = Field(None, description="a name from GET /v1/models")
     system: SystemInput | None = Field(None, description="a user-defined system, in place of model/parameters")
     parameters: dict[str, ParameterValue] = Field(
         default_factory=dict, max_length=64, description="model parameters by name; the rest take their defaults")
-    method: str = Field(min_length=1, max_length=100, description="a name from GET /v1/methods")
-    tableau: str | None = Field(None, max_length=100, description="Runge-Kutta tableau for rks/rksb")
-    step_size: FiniteFloat = Field(gt=0)
-    t_end: FiniteFloat | None = Field(None, gt=0)
-    n_steps: int | None = Field(None, ge=1)
+    method: MethodName = Field(description="a name from GET /v1/methods")
+    tableau: TableauName | None = Field(None, description="Runge-Kutta tableau for rks/rksb")
+    step_size: FiniteFloat = Field(gt=0, description="step_size x the number of steps must be finite")
+    t_end: FiniteFloat | None = Field(None, gt=0, description="the end time; give this or n_steps, not both")
+    n_steps: int | None = Field(None, ge=1, description="the number of steps; give this or t_end, not both")
     initial_state: InitialState
     save_every: int = Field(1, ge=1, description="save every this many steps; the final state is always saved")
 

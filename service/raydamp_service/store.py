@@ -20,9 +20,10 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["JobStore", "JobRecord", "TrajectoryArrays", "FINAL_STATUSES"]
+__all__ = ["JobStore", "JobRecord", "TrajectoryArrays", "StoredTrajectory", "FINAL_STATUSES", "StoreUnavailable"]
 
 FINAL_STATUSES = frozenset({"completed", "failed", "cancelled"})
+_FINAL_SQL = "('completed', 'failed', 'cancelled')"
 _FLOAT = np.dtype("<f8")  # the blob format: little-endian float64, row-major
 
 _SCHEMA = """
@@ -48,10 +49,29 @@ CREATE TABLE IF NOT EXISTS trajectories (
     momenta INTEGER NOT NULL,
     t BLOB NOT NULL, q BLOB NOT NULL, p BLOB NOT NULL, energy BLOB NOT NULL, momentum BLOB NOT NULL
 );
+CREATE INDEX IF NOT EXISTS jobs_by_status ON jobs (status, finished_at);
+CREATE TABLE IF NOT EXISTS service (key TEXT PRIMARY KEY, value TEXT);
 """
+_INCREMENTAL = 2  # PRAGMA auto_vacuum value
+# Stored bytes of a trajectory row: t, energy (N), q, p (N x dim), momentum (N x m), float64.
+_TRAJECTORY_BYTES = "(t.points * (2 + 2 * t.dim + t.momenta) * 8)"
 _JOB_COLUMNS = ("id, status, spec, progress, attempts, cancel_requested, summary, error, failed_step, "
                 "created_at, started_at, finished_at, "
                 "EXISTS (SELECT 1 FROM trajectories WHERE job_id = jobs.id) AS has_trajectory")
+
+
+class StoreUnavailable(RuntimeError):
+    """The database cannot be opened for writing; the message says what is wrong and what to do."""
+
+    def __init__(self, path: Path, error: BaseException):
+        reason = str(error) or type(error).__name__
+        if isinstance(error, sqlite3.DatabaseError) and "not a database" in reason:
+            advice = "the file is corrupt or not SQLite: move it aside, or set RAYDAMP_DB to another file"
+        elif "readonly" in reason.replace("-", "").replace(" ", "") or isinstance(error, PermissionError):
+            advice = "the service must be able to write it and its directory: fix the permissions or set RAYDAMP_DB"
+        else:
+            advice = "check the path and the disk, or set RAYDAMP_DB to another file"
+        super().__init__(f"cannot use the job database {path}: {reason}; {advice}")
 
 
 def _now() -> str:
@@ -94,6 +114,16 @@ class TrajectoryArrays:
     momentum: np.ndarray
 
 
+@dataclass(frozen=True)
+class StoredTrajectory:
+    """Where a trajectory's blobs are (the row) and their shapes, for reading them in slices."""
+
+    rowid: int
+    points: int
+    dim: int
+    momenta: int
+
+
 def _blob(array: np.ndarray) -> bytes:
     return np.ascontiguousarray(array, dtype=_FLOAT).tobytes()
 
@@ -108,13 +138,28 @@ class JobStore:
         self._local = threading.local()
         self._connections: list[sqlite3.Connection] = []
         self._lock = threading.Lock()
+        self._write_lock = threading.Lock()
+        self._space_pending = False  # freed pages not yet returned (a checkpoint met readers)
 
     # ---- connections ----
 
     def open(self) -> None:
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        with self._transaction() as db:
-            db.executescript(_SCHEMA)
+        """Create or open the database and prove it writable; raises StoreUnavailable saying what to do."""
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            connection = self._connection()
+            if connection.execute("PRAGMA auto_vacuum").fetchone()[0] != _INCREMENTAL:
+                # Set before the first table exists (or by one VACUUM for an older file), so that
+                # removed jobs give their pages back to the file system (incremental_vacuum).
+                connection.execute(f"PRAGMA auto_vacuum = {_INCREMENTAL}")
+                connection.execute("VACUUM")
+            with self._transaction() as db:
+                db.executescript(_SCHEMA)
+                # A real write: a read-only file or directory fails here, not at the first job.
+                db.execute("INSERT OR REPLACE INTO service (key, value) VALUES ('opened_at', ?)", (_now(),))
+        except (sqlite3.DatabaseError, OSError) as error:
+            self.close()
+            raise StoreUnavailable(self.path, error) from None
 
     def close(self) -> None:
         with self._lock:
@@ -141,7 +186,10 @@ class JobStore:
     @contextmanager
     def _transaction(self) -> Iterator[sqlite3.Connection]:
         connection = self._connection()
-        with connection:  # commits, or rolls back on an exception
+        # One writer at a time inside this process: threads queue on a lock that wakes the next at
+        # once, rather than meeting SQLITE_BUSY, whose handler sleeps 1, 2, 5 ... 100 ms between
+        # tries (the tail of the submission latency under concurrent POSTs).
+        with self._write_lock, connection:  # commits, or rolls back on an exception
             yield connection
 
     # ---- reading ----
@@ -168,14 +216,97 @@ class JobStore:
         return TrajectoryArrays(t=_array(row["t"], n), q=_array(row["q"], n, dim), p=_array(row["p"], n, dim),
                                 energy=_array(row["energy"], n), momentum=_array(row["momentum"], n, m))
 
+    def open_trajectory(self, job_id: str) -> tuple[sqlite3.Connection, StoredTrajectory] | None:
+        """A read-only connection holding a snapshot in which the job's trajectory exists, and where it is.
+        The caller reads the blobs through it (incremental I/O) and closes it."""
+        connection = sqlite3.connect(f"{self.path.resolve().as_uri()}?mode=ro", uri=True, timeout=30.0,
+                                     check_same_thread=False)  # used by one response, one piece at a time
+        try:
+            connection.execute("BEGIN")  # the snapshot: later deletions do not cut the body short
+            row = connection.execute("SELECT rowid, points, dim, momenta FROM trajectories WHERE job_id = ?",
+                                     (job_id,)).fetchone()
+        except BaseException:
+            connection.close()
+            raise
+        if row is None:
+            connection.close()
+            return None
+        return connection, StoredTrajectory(*row)
+
     # ---- state changes ----
 
-    def create(self, spec: dict[str, Any]) -> JobRecord:
-        job_id = uuid.uuid4().hex
+    def create(self, spec: dict[str, Any], max_queued: int | None = None) -> JobRecord | None:
+        """A new queued job; None (nothing written) when max_queued jobs are already queued."""
+        job_id, text, created_at = uuid.uuid4().hex, json.dumps(spec), _now()
         with self._transaction() as db:
-            db.execute("INSERT INTO jobs (id, status, spec, created_at) VALUES (?, 'queued', ?, ?)",
-                       (job_id, json.dumps(spec), _now()))
-        return self.get(job_id)
+            # Count and insert in one statement, under the write lock: concurrent submissions
+            # cannot all see room for one more.
+            inserted = db.execute(
+                "INSERT INTO jobs (id, status, spec, created_at) SELECT ?, 'queued', ?, ? "
+                "WHERE ? IS NULL OR (SELECT COUNT(*) FROM jobs WHERE status = 'queued') < ?",
+                (job_id, text, created_at, max_queued, max_queued)).rowcount
+        if not inserted:
+            return None
+        # The row as written, without reading it back (one query fewer on the submission path).
+        return JobRecord(id=job_id, status="queued", spec=json.loads(text), progress=0.0, attempts=0,
+                         cancel_requested=False, summary=None, error=None, failed_step=None, created_at=created_at,
+                         started_at=None, finished_at=None, has_trajectory=False)
+
+    def delete_finished(self, job_id: str) -> bool:
+        """Remove a finished job and its trajectory; False if it is not (or no longer) finished."""
+        with self._transaction() as db:
+            deleted = db.execute(f"DELETE FROM jobs WHERE id = ? AND status IN {_FINAL_SQL}", (job_id,)).rowcount
+        if deleted:
+            self._give_back_space()
+        return bool(deleted)
+
+    def stored_bytes(self) -> int:
+        """Bytes of trajectory data held (the arrays; SQLite's own overhead is small beside them)."""
+        return self._connection().execute(f"SELECT COALESCE(SUM({_TRAJECTORY_BYTES}), 0) FROM trajectories t"
+                                          ).fetchone()[0]
+
+    def prune(self, *, max_jobs: int = 0, max_age_seconds: float = 0, max_bytes: int = 0) -> int:
+        """Remove finished jobs, oldest first, until every given bound (0 = none) holds; returns how many."""
+        if self._space_pending:
+            self._give_back_space()
+        if not (max_jobs or max_age_seconds or max_bytes):
+            return 0
+        rows = self._connection().execute(
+            f"SELECT j.id, j.finished_at, COALESCE({_TRAJECTORY_BYTES}, 0) AS bytes FROM jobs j "
+            f"LEFT JOIN trajectories t ON t.job_id = j.id WHERE j.status IN {_FINAL_SQL} "
+            "ORDER BY j.finished_at DESC, j.seq DESC").fetchall()  # newest first: the ones kept
+        cutoff = (datetime.now(timezone.utc).timestamp() - max_age_seconds) if max_age_seconds else None
+        doomed, kept, kept_bytes, full = [], 0, 0, False
+        for row in rows:
+            too_old = cutoff is not None and datetime.fromisoformat(row["finished_at"]).timestamp() < cutoff
+            # Once a bound is reached every older job goes, so what is kept is always the newest.
+            full = full or bool(max_jobs and kept >= max_jobs) or bool(
+                max_bytes and kept_bytes + row["bytes"] > max_bytes)
+            if full or too_old:
+                doomed.append(row["id"])
+            else:
+                kept, kept_bytes = kept + 1, kept_bytes + row["bytes"]
+        if doomed:
+            with self._transaction() as db:
+                db.executemany(f"DELETE FROM jobs WHERE id = ? AND status IN {_FINAL_SQL}",
+                               [(job_id,) for job_id in doomed])
+            self._give_back_space()
+        return len(doomed)
+
+    def _give_back_space(self) -> None:
+        """Return freed pages to the file system, and fold the WAL back so the file really shrinks."""
+        connection = self._connection()
+        with self._write_lock:
+            connection.executescript("PRAGMA incremental_vacuum;")  # execute() would free one page per call
+        # TRUNCATE waits for the readers of older snapshots; a client streaming a trajectory may hold
+        # one for seconds, and other writers would wait as long. So wait briefly, and if readers
+        # remain, leave it to the next retention pass.
+        connection.execute("PRAGMA busy_timeout = 200")
+        try:
+            busy = connection.execute("PRAGMA wal_checkpoint(TRUNCATE)").fetchone()[0]
+        finally:
+            connection.execute("PRAGMA busy_timeout = 30000")
+        self._space_pending = bool(busy)
 
     def claim(self, job_id: str) -> JobRecord | None:
         """queued -> running; None if the job is no longer queued (cancelled meanwhile)."""

@@ -35,6 +35,22 @@ def _free_port() -> int:
         return sock.getsockname()[1]
 
 
+def service_env(**env: str) -> dict[str, str]:
+    return {**os.environ, **env,
+            "PYTHONPATH": os.pathsep.join(filter(None, [str(SERVICE_DIR), os.environ.get("PYTHONPATH")]))}
+
+
+def _run_service(*args: str, timeout: float = 60.0, **env: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "raydamp_service", *args], env=service_env(**env),
+                          capture_output=True, text=True, timeout=timeout)
+
+
+@pytest.fixture
+def run_service():
+    """run_service(*args, **env): run `python -m raydamp_service ARGS` expecting it to refuse to start."""
+    return _run_service
+
+
 class Server:
     """One service process on a database; restartable on the same database."""
 
@@ -43,17 +59,19 @@ class Server:
         self.log = log
         self.env = env
         self.process: subprocess.Popen | None = None
+        # The client sends the token when the server has one.
+        self.headers = {"Authorization": f"Bearer {env['RAYDAMP_TOKEN']}"} if "RAYDAMP_TOKEN" in env else {}
         self.client: httpx.Client | None = None
 
     def start(self) -> Server:
         for _ in range(3):  # another process may take the free port before we bind it
             port = _free_port()
-            env = {**os.environ, **self.env, "RAYDAMP_DB": str(self.db),
-                   "PYTHONPATH": os.pathsep.join(filter(None, [str(SERVICE_DIR), os.environ.get("PYTHONPATH")]))}
+            env = service_env(**self.env, RAYDAMP_DB=str(self.db))
             with self.log.open("ab") as log:
                 self.process = subprocess.Popen([sys.executable, "-m", "raydamp_service", "--port", str(port)],
                                                 env=env, stdout=log, stderr=subprocess.STDOUT)
-            self.client = httpx.Client(base_url=f"http://127.0.0.1:{port}", timeout=30.0)
+            self.port = port
+            self.client = httpx.Client(base_url=f"http://127.0.0.1:{port}", timeout=30.0, headers=self.headers)
             if self._wait_healthy():
                 return self
             self.client.close()
@@ -146,4 +164,13 @@ def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
     tmp = tmp_path_factory.mktemp("service")
     server = Server(tmp / "raydamp.sqlite3", tmp / "server.log", {"RAYDAMP_MAX_STEPS": str(10**10)}).start()
     yield server
+    server.stop()
+
+
+@pytest.fixture(scope="module")
+def module_server(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
+    """One process shared by a module, with the module's SERVER_ENV settings."""
+    tmp = tmp_path_factory.mktemp("service")
+    server = Server(tmp / "raydamp.sqlite3", tmp / "server.log", dict(getattr(request.module, "SERVER_ENV", {})))
+    yield server.start()
     server.stop()

@@ -31,3 +31,23 @@ def test_openapi_describes_every_endpoint(server):
     assert {"/v1/jobs", "/v1/jobs/{job_id}", "/v1/jobs/{job_id}/trajectory", "/v1/jobs/{job_id}/cancel",
             "/v1/models", "/v1/methods", "/healthz"} <= set(paths)
     assert "Trajectory" in str(paths["/v1/jobs/{job_id}/trajectory"])
+
+
+def test_openapi_declares_names_limits_and_exclusive_fields(server):
+    schema = server.client.get("/openapi.json").json()
+    spec = schema["components"]["schemas"]["JobSpec"]
+    names = {"model": {model["name"] for model in describe_models()},
+             "method": {method.name for method in raydamp.methods()},
+             "tableau": {method.tableau for method in raydamp.methods()} - {None}}
+    for field, expected in names.items():
+        options = spec["properties"][field].get("anyOf", [spec["properties"][field]])
+        enum = next(option["enum"] for option in options if "enum" in option)
+        assert set(enum) == expected, field
+    exclusive = [branch["oneOf"] for branch in spec["allOf"]]
+    assert [[b["required"] for b in one_of] for one_of in exclusive] == [[["model"], ["system"]],
+                                                                         [["t_end"], ["n_steps"]]]
+    limit = next(p for p in schema["paths"]["/v1/jobs"]["get"]["parameters"] if p["name"] == "limit")
+    assert limit["schema"]["maximum"] == 1000 and limit["schema"]["minimum"] == 1
+    post = schema["paths"]["/v1/jobs"]["post"]["responses"]
+    assert {"400", "413", "422", "429"} <= set(post)
+    assert "UTF-8" in post["400"]["description"] and "2097152" in post["413"]["description"]

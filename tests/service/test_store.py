@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import sqlite3
+import time
+from datetime import datetime, timezone
 
 import numpy as np
 import pytest
@@ -67,3 +69,51 @@ def test_recent_is_newest_first(store):
     assert [job.id for job in store.recent(3)] == ids[::-1][:3]
     store.request_cancel(ids[0])
     assert [job.id for job in store.recent(10, "cancelled")] == [ids[0]]
+
+
+def _finished(store, seconds_ago: float = 0.0, points: int = 10):
+    job = store.create(SPEC)
+    arrays = TrajectoryArrays(t=np.zeros(points), q=np.zeros((points, 1)), p=np.zeros((points, 1)),
+                              energy=np.zeros(points), momentum=np.empty((points, 0)))
+    store.finish(job.id, "completed", summary={"status": "completed"}, trajectory=arrays)
+    if seconds_ago:
+        stamp = datetime.fromtimestamp(time.time() - seconds_ago, timezone.utc).isoformat()
+        with sqlite3.connect(store.path) as db:
+            db.execute("UPDATE jobs SET finished_at = ? WHERE id = ?", (stamp, job.id))
+    return job.id
+
+
+def test_prune_keeps_the_newest_finished_jobs_and_never_a_queued_one(store):
+    old = [_finished(store) for _ in range(3)]
+    queued = store.create(SPEC).id
+    new = [_finished(store) for _ in range(2)]
+    assert store.prune() == 0  # no bound given, nothing removed
+    assert store.prune(max_jobs=2) == 3
+    assert all(store.get(job_id) is None for job_id in old)
+    assert all(store.get(job_id) is not None for job_id in [queued, *new])
+
+
+def test_prune_by_bytes_and_by_age(store):
+    first, second, third = (_finished(store, points=100) for _ in range(3))  # 100 x 4 x 8 = 3200 bytes each
+    assert store.stored_bytes() == 3 * 3200
+    assert store.prune(max_bytes=6400) == 1 and store.get(first) is None
+    assert store.prune(max_bytes=6399) == 1 and store.get(second) is None and store.stored_bytes() == 3200
+    stale = _finished(store, seconds_ago=3600)
+    assert store.prune(max_age_seconds=1800) == 1 and store.get(stale) is None and store.get(third) is not None
+
+
+def test_queue_bound_in_create(store):
+    assert store.create(SPEC, max_queued=2) and store.create(SPEC, max_queued=2)
+    assert store.create(SPEC, max_queued=2) is None
+    assert len(store.recent(10)) == 2
+
+
+def test_delete_finished_refuses_a_running_job(store):
+    job = store.create(SPEC)
+    store.claim(job.id)
+    assert not store.delete_finished(job.id) and store.get(job.id).status == "running"
+
+
+def test_create_returns_the_row_as_stored(store):
+    created = store.create({**SPEC, "n_steps": 10})
+    assert created == store.get(created.id)

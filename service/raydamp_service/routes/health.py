@@ -12,6 +12,8 @@ router = APIRouter(tags=["health"])
 
 
 @router.get("/healthz", response_model=Health)
-def healthz(store: StoreDep, settings: SettingsDep) -> Health:
+async def healthz(store: StoreDep, settings: SettingsDep) -> Health:
+    # On the event loop, not the thread pool: a probe answers while every pool thread is busy
+    # streaming, and SELECT 1 on a WAL database never waits for a writer.
     store.ping()
     return Health(status="ok", version=raydamp.__version__, workers=settings.workers)

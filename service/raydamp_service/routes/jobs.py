@@ -6,18 +6,19 @@ hold up the event loop; no handler waits for a run.
 
 from __future__ import annotations
 
-import json
 from typing import Annotated, Any
 
-import numpy as np
 from fastapi import APIRouter, HTTPException, Query, Request, Response
 from fastapi.exceptions import RequestValidationError
+from fastapi.responses import StreamingResponse
+from starlette.background import BackgroundTask
 
 from ..deps import RunnerDep, SettingsDep, StoreDep
 from ..problems import SpecError, check_spec
 from ..runner import Runner
 from ..schemas import JobCreated, JobList, JobListItem, JobSpec, JobStatus, JobView, Trajectory
 from ..store import FINAL_STATUSES, JobRecord, JobStore
+from ..trajectory_stream import FetchLease, Selection, trajectory_chunks
 
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"])
 
@@ -70,7 +71,8 @@ def _model_label(spec: dict[str, Any]) -> str:
 
 
 @router.post("", status_code=202, response_model=JobCreated,
-             responses={422: {"description": "the spec is invalid; detail[].loc names the field"}})
+             responses={422: {"description": "the spec is invalid; detail[].loc names the field"},
+                        429: {"description": "max_queued jobs are waiting; retry after Retry-After seconds"}})
 def submit_job(spec: JobSpec, request: Request, response: Response, store: StoreDep, runner: RunnerDep,
                settings: SettingsDep) -> JobCreated:
     """Queue an integration; poll the Location for its status."""
@@ -80,9 +82,13 @@ def submit_job(spec: JobSpec, request: Request, response: Response, store: Store
         # The same shape as pydantic's own 422s, so a client reads one format.
         raise RequestValidationError([{"type": "value_error", "loc": ("body", *error.loc), "msg": error.message,
                                        "input": _value_at(spec.model_dump(), error.loc)}]) from None
-    record = store.create(spec.model_dump(mode="json"))
+    record = store.create(spec.model_dump(mode="json"), max_queued=settings.max_queued)
+    if record is None:
+        raise HTTPException(429, detail=f"{settings.max_queued} jobs are already queued (max_queued); retry later",
+                            headers={"Retry-After": str(settings.retry_after_seconds)})
     runner.submit(record.id)
-    response.headers["Location"] = str(request.url_for("get_job", job_id=record.id))
+    # A path, never built from the Host header: a forged Host must not come back as a redirect target.
+    response.headers["Location"] = request.scope.get("root_path", "") + _job_url(record.id)
     return JobCreated(id=record.id, status=record.status)
 
 
@@ -105,34 +111,38 @@ def get_job(job_id: str, store: StoreDep, runner: RunnerDep) -> JobView:
     return _view(_existing(store, job_id), runner)
 
 
-def _rows(array: np.ndarray) -> list:
-    """Nested lists for JSON; non-finite values (an energy that overflowed) become null."""
-    finite = np.isfinite(array)
-    if finite.all():
-        return array.tolist()
-    rows = array.astype(object)
-    rows[~finite] = None
-    return rows.tolist()
-
-
 @router.get("/{job_id}/trajectory", response_model=Trajectory,
-            responses={**_NOT_FOUND, 409: {"description": "the job has no trajectory (yet)"}})
-def get_trajectory(job_id: str, store: StoreDep) -> Response:
-    """The saved points, one row per point."""
+            responses={**_NOT_FOUND, 409: {"description": "the job has no trajectory (yet)"},
+                       429: {"description": "max_large_fetches large fetches are being served; retry after "
+                                            "Retry-After seconds, or ask for fewer points"}})
+def get_trajectory(job_id: str, request: Request, store: StoreDep, settings: SettingsDep,
+                   start: Annotated[int, Query(ge=0, description="first saved point (0-based)")] = 0,
+                   stop: Annotated[int | None, Query(ge=0, description="end before this point (default: all)")] = None,
+                   every: Annotated[int, Query(ge=1, description="every this many points")] = 1) -> Response:
+    """The saved points start, start + every, ... before stop, one row per point, streamed."""
     record = _existing(store, job_id)
-    arrays = store.trajectory(job_id)
-    if arrays is None:
+    opened = store.open_trajectory(job_id)
+    if opened is None:
         if record.status in FINAL_STATUSES:
             reason = f": {record.error}" if record.error else ""
             detail = f"job {job_id} is {record.status} and has no trajectory{reason}"
         else:
             detail = f"job {job_id} is {record.status}; its trajectory is stored when the run ends"
         raise HTTPException(409, detail=detail)
-    body = {"t": _rows(arrays.t), "q": _rows(arrays.q), "p": _rows(arrays.p), "energy": _rows(arrays.energy),
-            "momentum": _rows(arrays.momentum)}
-    # Serialised directly: validating up to millions of floats through the response model would cost
-    # more than the run. The body has exactly the Trajectory schema declared above.
-    return Response(json.dumps(body, allow_nan=False, separators=(",", ":")), media_type="application/json")
+    connection, stored = opened
+    selection = Selection(*slice(start, stop, every).indices(stored.points))
+    lease = FetchLease(None)
+    if len(selection) > settings.large_fetch_points:
+        semaphore = request.app.state.large_fetches
+        if not semaphore.acquire(blocking=False):
+            connection.close()
+            raise HTTPException(429, detail=f"{settings.max_large_fetches} large trajectory fetches are being "
+                                f"served (max_large_fetches); retry, or ask for fewer points with every/stop",
+                                headers={"Retry-After": "1"})
+        lease = FetchLease(semaphore)
+    # Not validated against the response model: the pieces are written to have exactly its schema.
+    return StreamingResponse(trajectory_chunks(connection, stored, selection, lease), media_type="application/json",
+                             background=BackgroundTask(lease.release))
 
 
 def _cancel(job_id: str, store: JobStore, runner: Runner) -> JobView:
@@ -152,7 +162,15 @@ def cancel_job(job_id: str, store: StoreDep, runner: RunnerDep) -> JobView:
 
 
 @router.delete("/{job_id}", status_code=202, response_model=JobView,
-               responses={**_NOT_FOUND, 409: {"description": "the job has already finished"}})
-def delete_job(job_id: str, store: StoreDep, runner: RunnerDep) -> JobView:
-    """The same as POST /v1/jobs/{id}/cancel; the record and any results are kept."""
-    return _cancel(job_id, store, runner)
+               responses={**_NOT_FOUND, 204: {"description": "the finished job and its trajectory were removed"}})
+def delete_job(job_id: str, store: StoreDep, runner: RunnerDep) -> JobView | Response:
+    """A finished job is removed with its trajectory (204); a queued or running one is cancelled as by
+    POST /v1/jobs/{id}/cancel (202), and a second DELETE once it has stopped removes it."""
+    record = _existing(store, job_id)
+    if record.status in FINAL_STATUSES and store.delete_finished(job_id):
+        return Response(status_code=204)
+    if record.status in FINAL_STATUSES:  # removed by another request meanwhile
+        raise HTTPException(404, detail=f"no job with id {job_id!r}")
+    record = store.request_cancel(job_id)
+    runner.cancel(job_id)
+    return _view(record, runner)

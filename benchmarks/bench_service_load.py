@@ -1,0 +1,188 @@
+#!/usr/bin/env python3
+"""The job service under a bounded loopback load, against a real `python -m raydamp_service`.
+
+1. Submission: 2000 small jobs (the damped pendulum, 100 steps) posted by 16 concurrent clients;
+   prints the submit throughput and the POST latency p50 / p99 / max beside the issue's targets
+   (p99 <= 50 ms at >= 200 jobs/s), then how long the queue takes to drain.
+2. Large fetches: 8 clients fetch a 10^6-point trajectory over and over (a 429 from the large-fetch
+   cap is retried after its Retry-After) while /healthz is polled every 50 ms; prints the /healthz
+   latency p50 / p99 / max (target: within 100 ms), the fetches served and refused, and the server's
+   RSS before and at its peak (target: growth < 100 MB per large fetch served at once).
+
+It prints figures and exits 0 whatever they are (a benchmark, not a test).
+
+    .venv/bin/python benchmarks/bench_service_load.py           # about a minute
+    .venv/bin/python benchmarks/bench_service_load.py --jobs 500 --fetch-seconds 10
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import socket
+import statistics
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import httpx
+
+SERVICE_DIR = Path(__file__).resolve().parents[1] / "service"
+SMALL = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "step_size": 0.01,
+         "n_steps": 100, "initial_state": {"q": [0.9 * math.pi], "p": [0.0]}}
+MILLION = {**SMALL, "n_steps": 999_998}  # 999,999 saved points
+
+
+def percentile(values: list[float], fraction: float) -> float:
+    ordered = sorted(values)
+    return ordered[min(len(ordered) - 1, int(fraction * len(ordered)))]
+
+
+def rss_mb(pid: int) -> float:
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1]) / 1024
+    return float("nan")
+
+
+def start_server(db: Path, log: Path) -> tuple[subprocess.Popen, str]:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        port = sock.getsockname()[1]
+    env = {**os.environ, "RAYDAMP_DB": str(db), "RAYDAMP_MAX_QUEUED": "100000",
+           "PYTHONPATH": os.pathsep.join(filter(None, [str(SERVICE_DIR), os.environ.get("PYTHONPATH")]))}
+    with log.open("wb") as out:
+        process = subprocess.Popen([sys.executable, "-m", "raydamp_service", "--port", str(port)], env=env,
+                                   stdout=out, stderr=subprocess.STDOUT)
+    base = f"http://127.0.0.1:{port}"
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:
+        try:
+            if httpx.get(base + "/healthz").status_code == 200:
+                return process, base
+        except httpx.TransportError:
+            time.sleep(0.1)
+    process.kill()
+    raise SystemExit(f"the service did not start:\n{log.read_text()[-2000:]}")
+
+
+def submission(base: str, jobs: int, concurrency: int) -> list[str]:
+    latencies: list[float] = []
+    ids: list[str] = []
+    refused = errors = 0
+    lock = threading.Lock()
+    local = threading.local()
+
+    def post(_: int) -> None:
+        nonlocal refused, errors
+        client = getattr(local, "client", None) or httpx.Client(base_url=base, timeout=60)
+        local.client = client
+        start = time.perf_counter()
+        response = client.post("/v1/jobs", json=SMALL)
+        elapsed = time.perf_counter() - start
+        with lock:
+            latencies.append(elapsed)
+            if response.status_code == 202:
+                ids.append(response.json()["id"])
+            elif response.status_code == 429:
+                refused += 1
+            else:
+                errors += 1
+
+    began = time.perf_counter()
+    with ThreadPoolExecutor(concurrency) as pool:
+        list(pool.map(post, range(jobs)))
+    wall = time.perf_counter() - began
+    ms = [1000 * x for x in latencies]
+    print(f"submit: {jobs} jobs at concurrency {concurrency} in {wall:.2f} s = {jobs / wall:.0f} jobs/s "
+          f"(target >= 200); accepted {len(ids)}, 429 {refused}, other errors {errors}")
+    print(f"POST latency: p50 {percentile(ms, 0.5):.1f} ms, p99 {percentile(ms, 0.99):.1f} ms (target <= 50), "
+          f"max {max(ms):.1f} ms")
+    return ids
+
+
+def drain(base: str, ids: list[str]) -> None:
+    began = time.perf_counter()
+    with httpx.Client(base_url=base, timeout=60) as client:
+        while client.get("/v1/jobs", params={"status": "queued", "limit": 1}).json()["jobs"] or \
+                client.get("/v1/jobs", params={"status": "running", "limit": 1}).json()["jobs"]:
+            time.sleep(0.1)
+        completed = len(client.get("/v1/jobs", params={"status": "completed", "limit": 1000}).json()["jobs"])
+    print(f"drain: the queue emptied {time.perf_counter() - began:.1f} s after the last submission "
+          f"({completed}+ completed listed)")
+
+
+def large_fetches(base: str, pid: int, clients: int, seconds: float) -> None:
+    with httpx.Client(base_url=base, timeout=120) as client:
+        job_id = client.post("/v1/jobs", json=MILLION).json()["id"]
+        while client.get(f"/v1/jobs/{job_id}").json()["status"] not in {"completed", "failed", "cancelled"}:
+            time.sleep(0.1)
+    url = f"/v1/jobs/{job_id}/trajectory"
+    stop = threading.Event()
+    served, refused, body_mb = [0], [0], [0.0]
+    lock = threading.Lock()
+
+    def fetch_loop() -> None:
+        with httpx.Client(base_url=base, timeout=300) as client:
+            while not stop.is_set():
+                with client.stream("GET", url) as response:
+                    if response.status_code == 429:
+                        with lock:
+                            refused[0] += 1
+                        stop.wait(float(response.headers.get("retry-after", "1")))
+                        continue
+                    size = sum(len(piece) for piece in response.iter_bytes())
+                with lock:
+                    served[0] += 1
+                    body_mb[0] = size / 1e6
+
+    baseline = rss_mb(pid)
+    peak = baseline
+    health: list[float] = []
+    threads = [threading.Thread(target=fetch_loop) for _ in range(clients)]
+    for thread in threads:
+        thread.start()
+    with httpx.Client(base_url=base, timeout=120) as client:
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            start = time.perf_counter()
+            client.get("/healthz").raise_for_status()
+            health.append(1000 * (time.perf_counter() - start))
+            peak = max(peak, rss_mb(pid))
+            time.sleep(0.05)
+    stop.set()
+    for thread in threads:
+        thread.join()
+    print(f"large fetches: {clients} clients for {seconds:.0f} s: {served[0]} bodies of {body_mb[0]:.0f} MB served, "
+          f"{refused[0]} refused with 429 (max_large_fetches)")
+    print(f"/healthz meanwhile: {len(health)} probes, p50 {statistics.median(health):.1f} ms, "
+          f"p99 {percentile(health, 0.99):.1f} ms, max {max(health):.1f} ms (target <= 100)")
+    print(f"server RSS: {baseline:.0f} MB before, {peak:.0f} MB at peak (+{peak - baseline:.0f} MB; "
+          f"target < 100 MB per large fetch at once)")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--jobs", type=int, default=2000)
+    parser.add_argument("--concurrency", type=int, default=16)
+    parser.add_argument("--fetch-clients", type=int, default=8)
+    parser.add_argument("--fetch-seconds", type=float, default=30.0)
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        process, base = start_server(Path(tmp) / "raydamp.sqlite3", Path(tmp) / "server.log")
+        try:
+            ids = submission(base, args.jobs, args.concurrency)
+            drain(base, ids)
+            large_fetches(base, process.pid, args.fetch_clients, args.fetch_seconds)
+        finally:
+            process.terminate()
+            process.wait(timeout=30)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,96 @@
+"""The checks every request passes before any route sees it: Host, bearer token, body size.
+
+An ASGI middleware rather than route dependencies, so that a request from an untrusted page,
+without the token, or with a body over the limit is answered before its body is read or parsed.
+"""
+
+from __future__ import annotations
+
+import hmac
+from starlette.datastructures import Headers
+from starlette.responses import JSONResponse
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
+
+from .config import Settings
+
+__all__ = ["RequestGuard", "UNGUARDED_PATHS"]
+
+# Liveness probes need no token (the answer says only "ok", the version and the worker count).
+UNGUARDED_PATHS = frozenset({"/healthz"})
+
+
+class _BodyTooLarge(Exception):
+    pass
+
+
+def host_name(header: str) -> str:
+    """"example.org:8000" -> "example.org", "[::1]:8000" -> "::1"."""
+    header = header.strip().lower()
+    if header.startswith("["):
+        return header[1:header.find("]")] if "]" in header else header
+    return header.rsplit(":", 1)[0] if header.count(":") == 1 else header
+
+
+class RequestGuard:
+    def __init__(self, app: ASGIApp, settings: Settings):
+        self.app = app
+        self.trusted = {name.strip("[]").lower() for name in settings.trusted_hosts}
+        self.token = settings.token.get_secret_value().encode() if settings.token else None
+        self.max_body = settings.max_body_bytes
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        headers = Headers(scope=scope)
+        refusal = self._refusal(scope, headers)
+        if refusal is not None:
+            await refusal(scope, receive, send)
+            return
+        await self._with_body_limit(scope, receive, send)
+
+    def _refusal(self, scope: Scope, headers: Headers) -> JSONResponse | None:
+        host = host_name(headers.get("host", ""))
+        if "*" not in self.trusted and host not in self.trusted:
+            return JSONResponse({"detail": f"Host {host[:100]!r} is not one of this service's trusted_hosts "
+                                           "(RAYDAMP_TRUSTED_HOSTS)"}, status_code=400)
+        if self.token is not None and scope["path"] not in UNGUARDED_PATHS:
+            scheme, _, credentials = headers.get("authorization", "").partition(" ")
+            if scheme.lower() != "bearer" or not hmac.compare_digest(credentials.strip().encode(), self.token):
+                return JSONResponse({"detail": "this service needs Authorization: Bearer <RAYDAMP_TOKEN>"},
+                                    status_code=401, headers={"WWW-Authenticate": "Bearer"})
+        length = headers.get("content-length")
+        if length is not None and (not length.isdigit() or int(length) > self.max_body):
+            return self._too_large()
+        return None
+
+    def _too_large(self) -> JSONResponse:
+        return JSONResponse({"detail": f"the request body is larger than max_body_bytes = {self.max_body} bytes "
+                                       "(RAYDAMP_MAX_BODY_BYTES)"}, status_code=413)
+
+    async def _with_body_limit(self, scope: Scope, receive: Receive, send: Send) -> None:
+        """A body without Content-Length (chunked) is counted as it arrives."""
+        received = 0
+        too_large = False
+
+        async def counting_receive() -> Message:
+            nonlocal received, too_large
+            message = await receive()
+            if message["type"] == "http.request":
+                received += len(message.get("body", b""))
+                if received > self.max_body:
+                    too_large = True
+                    raise _BodyTooLarge
+            return message
+
+        async def guarded_send(message: Message) -> None:
+            if not too_large:  # whatever the app made of the interrupted read is replaced by the 413
+                await send(message)
+
+        try:
+            await self.app(scope, counting_receive, guarded_send)
+        except _BodyTooLarge:
+            pass
+        if too_large:
+            await self._too_large()(scope, receive, send)
+

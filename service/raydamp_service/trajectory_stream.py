@@ -1,0 +1,115 @@
+"""A stored trajectory as a JSON body written piece by piece, with start/stop/every decimation.
+
+A 10^6-point trajectory is some 170 MB of JSON; built whole, it cost ~1 GB per request and eight
+fetches froze the machine. Here each array is read from its SQLite blob a bounded slice at a time
+(incremental blob I/O), so a fetch holds about CHUNK_BYTES of floats and their text at once,
+whatever the trajectory's length. The body has exactly the Trajectory schema.
+"""
+
+from __future__ import annotations
+
+import json
+import sqlite3
+import threading
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import numpy as np
+
+from .store import StoredTrajectory
+
+__all__ = ["FetchLease", "Selection", "trajectory_chunks"]
+
+CHUNK_BYTES = 1 << 16  # floats read per piece. Small: json.dumps holds the GIL (and so the event loop) for a whole piece
+_ROW_READ_LIMIT = 1 << 16  # a decimation step wider than this reads its rows one by one
+
+
+class FetchLease:
+    """A slot among the large fetches served at once; released exactly once, by whoever ends first:
+    the body's generator, the response's background task, or the lease's own collection."""
+
+    def __init__(self, semaphore: threading.Semaphore | None):
+        self._semaphore = semaphore
+        self._lock = threading.Lock()
+
+    def release(self) -> None:
+        with self._lock:
+            semaphore, self._semaphore = self._semaphore, None
+        if semaphore is not None:
+            semaphore.release()
+
+    def __del__(self) -> None:
+        # A client gone before the first byte: neither the body (never started) nor the background
+        # task (skipped on a disconnect) runs, and the slot would be lost for good.
+        self.release()
+
+
+@dataclass(frozen=True)
+class Selection:
+    start: int
+    stop: int
+    every: int
+
+    def __len__(self) -> int:
+        return len(range(self.start, self.stop, self.every))
+
+
+def _json_rows(array: np.ndarray) -> str:
+    """The rows as JSON without the enclosing brackets; non-finite values (an overflowed energy) are null."""
+    finite = np.isfinite(array)
+    if finite.all():
+        rows = array.tolist()
+    else:
+        boxed = array.astype(object)
+        boxed[~finite] = None
+        rows = boxed.tolist()
+    return json.dumps(rows, allow_nan=False, separators=(",", ":"))[1:-1]
+
+
+def _read_rows(blob: sqlite3.Blob, first: int, count: int, every: int, width: int) -> np.ndarray:
+    """Rows first, first + every, ... (count of them) of a row-major float64 array `width` wide."""
+    row_bytes = 8 * width
+    if every * row_bytes <= _ROW_READ_LIMIT:
+        blob.seek(first * row_bytes)
+        span = np.frombuffer(blob.read(((count - 1) * every + 1) * row_bytes), dtype="<f8")
+        return span.reshape(-1, width)[::every]
+    out = np.empty((count, width))
+    for i in range(count):
+        blob.seek((first + i * every) * row_bytes)
+        out[i] = np.frombuffer(blob.read(row_bytes), dtype="<f8")
+    return out
+
+
+def _array_json(connection: sqlite3.Connection, stored: StoredTrajectory, column: str, width: int | None,
+                selection: Selection) -> Iterator[str]:
+    """One array's JSON value, '[' ... ']', in pieces. width None: a 1-D array (t, energy)."""
+    n = len(selection)
+    yield "["
+    if width == 0:  # momentum of a model without symmetries: one empty row per point, nothing stored
+        for first in range(0, n, 100_000):
+            yield ("," if first else "") + ",".join(["[]"] * min(100_000, n - first))
+    elif n:
+        row_width = width or 1
+        per_piece = max(1, CHUNK_BYTES // (8 * row_width * selection.every))
+        with connection.blobopen("trajectories", column, stored.rowid, readonly=True) as blob:
+            for done in range(0, n, per_piece):
+                count = min(per_piece, n - done)
+                rows = _read_rows(blob, selection.start + done * selection.every, count, selection.every, row_width)
+                yield ("," if done else "") + _json_rows(rows if width else rows[:, 0])
+    yield "]"
+
+
+def trajectory_chunks(connection: sqlite3.Connection, stored: StoredTrajectory, selection: Selection,
+                      lease: FetchLease) -> Iterator[bytes]:
+    """The body of GET .../trajectory. Owns the read connection (a snapshot: a concurrent DELETE or
+    retention pass does not change what is being sent) and the lease; both end when the body does."""
+    try:
+        arrays = (("t", None), ("q", stored.dim), ("p", stored.dim), ("energy", None), ("momentum", stored.momenta))
+        for i, (column, width) in enumerate(arrays):
+            yield f'{"{" if i == 0 else ","}"{column}":'.encode()
+            for piece in _array_json(connection, stored, column, width, selection):
+                yield piece.encode()
+        yield b"}"
+    finally:
+        connection.close()
+        lease.release()

@@ -1,0 +1,96 @@
+"""Who may use the service, against real processes: trusted Host names, Location without the Host
+header, the bearer token, and the refusals to start (open bind without a token, unusable database)."""
+
+from __future__ import annotations
+
+import math
+import os
+import sqlite3
+
+import httpx
+import pytest
+
+PENDULUM = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "step_size": 0.2,
+            "t_end": 20, "initial_state": {"q": [0.9 * math.pi], "p": [0.0]}}
+
+
+def test_a_foreign_host_header_is_refused(server):
+    response = server.client.post("/v1/jobs", json=PENDULUM, headers={"Host": "evil.example:666"})
+    assert response.status_code == 400 and "trusted_hosts" in response.json()["detail"]
+    for host in ("localhost", f"127.0.0.1:{server.port}", "[::1]:80"):
+        assert server.client.get("/v1/models", headers={"Host": host}).status_code == 200, host
+
+
+def test_location_never_carries_the_host_header(start_server):
+    server = start_server(RAYDAMP_TRUSTED_HOSTS="*")  # even when every Host is let in
+    response = server.client.post("/v1/jobs", json=PENDULUM, headers={"Host": "evil.example:666"})
+    assert response.status_code == 202
+    assert response.headers["location"] == f"/v1/jobs/{response.json()['id']}"
+
+
+def test_trusted_hosts_is_a_comma_separated_setting(start_server):
+    server = start_server(RAYDAMP_TRUSTED_HOSTS="127.0.0.1, lab.example")
+    assert server.client.get("/v1/models", headers={"Host": "lab.example:8000"}).status_code == 200
+    assert server.client.get("/v1/models", headers={"Host": "localhost"}).status_code == 400
+
+
+def test_a_token_is_required_when_set(start_server):
+    server = start_server(RAYDAMP_TOKEN="s3cret-token")
+    base = str(server.client.base_url)
+    with httpx.Client(base_url=base, timeout=30.0) as anonymous:
+        for method, path in (("GET", "/v1/jobs"), ("POST", "/v1/jobs"), ("GET", "/v1/models"),
+                             ("GET", "/openapi.json"), ("DELETE", "/v1/jobs/x")):
+            response = anonymous.request(method, path, json=PENDULUM if method == "POST" else None)
+            assert response.status_code == 401, (method, path)
+            assert response.headers["www-authenticate"] == "Bearer"
+        wrong = anonymous.get("/v1/jobs", headers={"Authorization": "Bearer s3cret-tokeN"})
+        assert wrong.status_code == 401
+        # A big body from someone without the token is refused before it is read.
+        assert anonymous.post("/v1/jobs", content=b"x" * 3_000_000).status_code == 401
+        assert anonymous.get("/healthz").status_code == 200  # liveness probes need no secret
+    job_id = server.submit(PENDULUM)  # the fixture's client sends the token
+    assert server.wait_finished(job_id)["status"] == "completed"
+    schema = server.client.get("/openapi.json").json()
+    assert schema["components"]["securitySchemes"]["bearer"] == {"type": "http", "scheme": "bearer"}
+    assert schema["paths"]["/v1/jobs"]["post"]["security"] == [{"bearer": []}]
+
+
+def _one_line(result) -> str:
+    lines = result.stderr.strip().splitlines()
+    assert result.returncode == 2 and len(lines) == 1, result.stderr[-2000:]
+    assert "Traceback" not in result.stderr
+    return lines[0]
+
+
+def test_a_non_loopback_bind_without_a_token_refuses_to_start(tmp_path, run_service):
+    result = run_service("--host", "0.0.0.0", "--port", "0", RAYDAMP_DB=str(tmp_path / "db.sqlite3"))
+    line = _one_line(result)
+    assert "0.0.0.0" in line and "RAYDAMP_TOKEN" in line
+    assert not (tmp_path / "db.sqlite3").exists()  # refused before touching anything
+
+
+def test_a_corrupt_database_refuses_to_start_with_one_line(tmp_path, run_service):
+    db = tmp_path / "raydamp.sqlite3"
+    db.write_bytes(b"this is not a database, it is a shopping list\n" * 200)
+    line = _one_line(run_service("--port", "0", RAYDAMP_DB=str(db)))
+    assert str(db) in line and "corrupt" in line and "RAYDAMP_DB" in line
+
+
+def test_an_unusable_database_path_refuses_to_start_with_one_line(tmp_path, run_service):
+    (tmp_path / "afile").write_text("")
+    db = tmp_path / "afile" / "raydamp.sqlite3"  # its directory is a file
+    line = _one_line(run_service("--port", "0", RAYDAMP_DB=str(db)))
+    assert str(db) in line and "RAYDAMP_DB" in line
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes read-only files")
+def test_a_read_only_database_refuses_to_start_with_one_line(tmp_path, run_service):
+    db = tmp_path / "raydamp.sqlite3"
+    sqlite3.connect(db).close()
+    db.chmod(0o444)
+    tmp_path.chmod(0o555)
+    try:
+        line = _one_line(run_service("--port", "0", RAYDAMP_DB=str(db)))
+    finally:
+        tmp_path.chmod(0o755)
+    assert "readonly" in line.replace(" ", "") or "permission" in line.lower()

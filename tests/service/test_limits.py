@@ -1,0 +1,115 @@
+"""Admission limits against a real service: body size before parsing, the queue bound, time overflow,
+and 422s that survive hostile input. Each case is a reproducer from the service audit (issue 9)."""
+
+from __future__ import annotations
+
+import json
+import math
+from concurrent.futures import ThreadPoolExecutor
+
+import httpx
+
+PENDULUM = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "step_size": 0.2,
+            "t_end": 200, "initial_state": {"q": [0.9 * math.pi], "p": [0.0]}}
+LONG_RUN = {**{k: v for k, v in PENDULUM.items() if k != "t_end"}, "step_size": 0.001, "n_steps": 4 * 10**9,
+            "save_every": 10**6}
+JSON = {"content-type": "application/json"}
+
+
+def six_megabytes() -> bytes:
+    """A syntactically valid spec padded to 6 MB with a list of 600,000 short strings."""
+    return json.dumps({**PENDULUM, "padding": ["0123456"] * 600_000}).encode()
+
+
+def test_a_6_mb_body_is_413_naming_the_limit_before_parsing(server):
+    body = six_megabytes()
+    assert len(body) > 6_000_000
+    # The 2 s budget is the audit's: before, a 1 MB body stalled every client for 5.7 s.
+    with httpx.Client(base_url=str(server.client.base_url), timeout=2.0) as client:
+        response = client.post("/v1/jobs", content=body, headers=JSON)
+    assert response.status_code == 413, response.text[:300]
+    assert "max_body_bytes = 2097152" in response.json()["detail"]
+    assert server.client.get("/healthz").status_code == 200
+
+
+def test_a_chunked_body_is_counted_as_it_arrives(server):
+    body = six_megabytes()
+
+    def chunks():  # no Content-Length: the guard must count the bytes itself
+        for start in range(0, len(body), 65536):
+            yield body[start:start + 65536]
+
+    before = len(server.client.get("/v1/jobs", params={"limit": 1000}).json()["jobs"])
+    with httpx.Client(base_url=str(server.client.base_url), timeout=10.0) as client:
+        response = client.post("/v1/jobs", content=chunks(), headers=JSON)
+    assert response.status_code == 413, response.text[:300]
+    assert len(server.client.get("/v1/jobs", params={"limit": 1000}).json()["jobs"]) == before
+
+
+def test_a_body_just_under_the_limit_is_parsed(server):
+    spec = {**PENDULUM, "padding": "x" * (2 * 2**20 - 1000)}
+    response = server.client.post("/v1/jobs", json=spec)
+    assert response.status_code == 422  # reached validation: the padding field is unknown
+    assert response.json()["detail"][0]["loc"] == ["body", "padding"]
+    assert len(response.content) < 10_000  # the 2 MB string is not echoed whole
+
+
+def test_a_list_of_200_000_bad_items_is_one_short_422(server):
+    # The audit's 1 MB body of 200,000 strings: it stalled every client and came back as 22.9 MB of errors.
+    body = json.dumps({**PENDULUM, "initial_state": {"q": ["x"] * 200_000, "p": [0.0]}}).encode()
+    assert len(body) < 2 * 2**20  # under the body limit: the schema's own bound must catch it
+    response = server.client.post("/v1/jobs", content=body, headers=JSON)
+    assert response.status_code == 422
+    detail = response.json()["detail"]
+    assert [error["loc"] for error in detail] == [["body", "initial_state", "q"]] and detail[0]["type"] == "too_long"
+    assert len(response.content) < 5_000
+
+
+def test_a_lone_surrogate_model_name_is_422_not_500(server):
+    body = json.dumps({**PENDULUM, "model": "\ud800"}).encode()  # ensure_ascii writes the escape \\ud800
+    response = server.client.post("/v1/jobs", content=body, headers=JSON)
+    assert response.status_code == 422, response.text[:300]
+    assert response.json()["detail"][0]["loc"][:2] == ["body", "model"]
+
+
+def test_a_run_whose_time_overflows_is_refused_naming_step_size(server):
+    spec = {**{k: v for k, v in PENDULUM.items() if k != "t_end"}, "step_size": 1e308, "n_steps": 1000}
+    response = server.client.post("/v1/jobs", json=spec)
+    assert response.status_code == 422, response.text
+    detail = response.json()["detail"]
+    assert detail[0]["loc"] == ["body", "step_size"] and "finite" in detail[0]["msg"]
+    # A finite product runs and ends at a finite time (from rest at the bottom, so the state stays finite).
+    job_id = server.submit({**spec, "step_size": 1e305, "initial_state": {"q": [0.0], "p": [0.0]}})
+    job = server.wait_finished(job_id)
+    assert job["status"] == "completed" and job["summary"]["t_final"] == 1e305 * 1000
+
+
+def test_the_queue_bound_answers_429_with_retry_after(start_server):
+    server = start_server(RAYDAMP_WORKERS="1", RAYDAMP_MAX_QUEUED="2", RAYDAMP_MAX_STEPS=str(10**10))
+    running = server.submit(LONG_RUN)
+    server.wait_for(running, lambda job: job["status"] == "running")
+    queued = [server.submit(PENDULUM) for _ in range(2)]
+    response = server.client.post("/v1/jobs", json=PENDULUM)
+    assert response.status_code == 429, response.text
+    assert response.headers["retry-after"] == "5"
+    assert "max_queued" in response.json()["detail"]
+    assert len(server.client.get("/v1/jobs").json()["jobs"]) == 3  # the refused job was not stored
+
+    server.client.post(f"/v1/jobs/{queued[0]}/cancel")  # room for one more
+    assert server.client.post("/v1/jobs", json=PENDULUM).status_code == 202
+    server.client.post(f"/v1/jobs/{running}/cancel")
+    assert server.wait_finished(running)["status"] == "cancelled"
+
+
+def test_concurrent_submissions_never_pass_the_bound(start_server):
+    server = start_server(RAYDAMP_WORKERS="1", RAYDAMP_MAX_QUEUED="5", RAYDAMP_MAX_STEPS=str(10**10))
+    running = server.submit(LONG_RUN)
+    server.wait_for(running, lambda job: job["status"] == "running")
+    def post(_):
+        with httpx.Client(base_url=str(server.client.base_url), timeout=30.0) as client:
+            return client.post("/v1/jobs", json=PENDULUM).status_code
+
+    with ThreadPoolExecutor(8) as pool:
+        codes = list(pool.map(post, range(24)))
+    assert codes.count(202) == 5 and codes.count(429) == 19, codes
+    server.client.post(f"/v1/jobs/{running}/cancel")
