@@ -6,7 +6,6 @@ from __future__ import annotations
 import builtins
 import math
 import pickle
-import time
 
 import pytest
 import symengine as se
@@ -259,11 +258,10 @@ def test_default_field_name():
 
 # --- hostile input and limits -------------------------------------------------------
 
-def _quick(text, limit=0.5) -> str:
-    start = time.perf_counter()
-    message = potential_error(text)
-    assert time.perf_counter() - start < limit
-    return message
+def _quick(text) -> str:
+    # Bounded work is shown by where each message says the parser stopped (the column of
+    # the first character over a limit), not by timing: tests never assert on wall time.
+    return potential_error(text)
 
 
 def test_code_injection_is_just_a_syntax_error():
@@ -287,10 +285,10 @@ def test_huge_powers_are_refused_before_anything_computes_them():
 
 def test_length_limit_is_checked_first():
     assert MAX_LENGTH == 10_000
-    message = _quick("x" * 10**6, limit=0.01)
+    message = _quick("x" * 10**6)
     assert message == "potential: expression too long at column 10001: 1000000 characters, over the limit of 10000"
-    assert _quick("(" * 10_000 + "x" + ")" * 10_000, limit=0.01).startswith("potential: expression too long")
-    assert _quick("+".join(["x"] * 6000), limit=0.01).startswith("potential: expression too long")
+    assert _quick("(" * 10_000 + "x" + ")" * 10_000).startswith("potential: expression too long")
+    assert _quick("+".join(["x"] * 6000)).startswith("potential: expression too long")
     assert parse("x" + " " * (MAX_LENGTH - 1), names={"x": "coordinate"}).names == {"x"}
 
 
