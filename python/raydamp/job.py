@@ -19,10 +19,12 @@ import numpy as np
 from .models import MODELS, Model
 from .system import SpecError, System
 
-__all__ = ["JOB_KEYS", "describe_model", "model_from_spec", "job_arguments", "job_spec"]
+__all__ = ["JOB_KEYS", "PROVENANCE_KEYS", "describe_model", "model_from_spec", "job_arguments", "job_spec"]
 
 JOB_KEYS = ("model", "system", "parameters", "method", "tableau", "step_size", "t_end", "n_steps", "save_every",
             "initial_state", "work")
+# What a Solution's provenance adds to the job (a saved result's provenance runs as a job).
+PROVENANCE_KEYS = ("raydamp_version", "job_id", "coordinates", "momentum_names")
 
 
 def _plain(value: Any) -> Any:
@@ -77,7 +79,7 @@ def job_arguments(spec: Mapping[str, Any]) -> tuple[Model, Any, Any, dict[str, A
     """(model, q0, p0, keyword arguments of raydamp.integrate) for a job spec."""
     if not isinstance(spec, Mapping):
         raise ValueError("a job must be an object with the keys " + ", ".join(JOB_KEYS))
-    unknown = [k for k in spec if k not in JOB_KEYS and k != "raydamp_version"]
+    unknown = [k for k in spec if k not in JOB_KEYS and k not in PROVENANCE_KEYS]
     if unknown:
         raise ValueError(f"{unknown[0]}: unknown key (known: {', '.join(JOB_KEYS)})")
     model = model_from_spec(spec)

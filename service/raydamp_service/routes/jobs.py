@@ -6,7 +6,7 @@ hold up the event loop; no handler waits for a run.
 
 from __future__ import annotations
 
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, HTTPException, Query, Request, Response
 from fastapi.exceptions import RequestValidationError
@@ -17,7 +17,8 @@ from ..deps import RunnerDep, SettingsDep, StoreDep
 from ..problems import SpecError, check_spec
 from ..runner import Runner
 from ..schemas import JobCreated, JobList, JobListItem, JobSpec, JobStatus, JobView, Trajectory
-from ..store import FINAL_STATUSES, JobRecord, JobStore
+from ..downloads import file_bytes, plot_png, stored_solution
+from ..store import FINAL_STATUSES, JobRecord, JobStore, TrajectoryArrays
 from ..trajectory_stream import FetchLease, Selection, trajectory_chunks
 
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"])
@@ -118,9 +119,15 @@ def get_job(job_id: str, store: StoreDep, runner: RunnerDep) -> JobView:
 def get_trajectory(job_id: str, request: Request, store: StoreDep, settings: SettingsDep,
                    start: Annotated[int, Query(ge=0, description="first saved point (0-based)")] = 0,
                    stop: Annotated[int | None, Query(ge=0, description="end before this point (default: all)")] = None,
-                   every: Annotated[int, Query(ge=1, description="every this many points")] = 1) -> Response:
-    """The saved points start, start + every, ... before stop, one row per point, streamed."""
+                   every: Annotated[int, Query(ge=1, description="every this many points")] = 1,
+                   format: Annotated[Literal["json", "csv", "npz", "netcdf"], Query(  # noqa: A002 - the API's name
+                       description="json (streamed), or a file: csv (the numbers), npz or netcdf (with the job "
+                                   "spec as provenance; raydamp.load reads them)")] = "json") -> Response:
+    """The saved points start, start + every, ... before stop, one row per point, streamed as JSON or
+    written as a file."""
     record = _existing(store, job_id)
+    if format != "json":
+        return _trajectory_file(record, store, request, settings, slice(start, stop, every), format)
     opened = store.open_trajectory(job_id)
     if opened is None:
         if record.status in FINAL_STATUSES:
@@ -143,6 +150,76 @@ def get_trajectory(job_id: str, request: Request, store: StoreDep, settings: Set
     # Not validated against the response model: the pieces are written to have exactly its schema.
     return StreamingResponse(trajectory_chunks(connection, stored, selection, lease), media_type="application/json",
                              background=BackgroundTask(lease.release))
+
+
+def _stored_solution(record: JobRecord, store: JobStore, points: slice):
+    arrays = store.trajectory(record.id)
+    if arrays is None:
+        raise HTTPException(409, detail=f"job {record.id} is {record.status} and has no trajectory"
+                            + (f": {record.error}" if record.error else ""))
+    picked = TrajectoryArrays(*(getattr(arrays, name)[points] for name in ("t", "q", "p", "energy", "momentum")))
+    if picked.t.size == 0:
+        raise HTTPException(422, detail="start, stop, every select no saved point")
+    return stored_solution(record, picked)
+
+
+def _with_large_slot(request: Request, settings, points: int):
+    """The large-fetch slot a file or plot of this many points needs (None for a small one)."""
+    if points <= settings.large_fetch_points:
+        return None
+    semaphore = request.app.state.large_fetches
+    if not semaphore.acquire(blocking=False):
+        raise HTTPException(429, detail=f"{settings.max_large_fetches} large trajectory fetches are being served "
+                            "(max_large_fetches); retry, or ask for fewer points with every/stop",
+                            headers={"Retry-After": "1"})
+    return semaphore
+
+
+def _trajectory_file(record: JobRecord, store: JobStore, request: Request, settings, points: slice,
+                     fmt: str) -> Response:
+    saved = int((record.summary or {}).get("saved_points", settings.large_fetch_points + 1))
+    slot = _with_large_slot(request, settings, len(range(*points.indices(saved))))
+    try:
+        body, media_type, name = file_bytes(_stored_solution(record, store, points), fmt)
+    finally:
+        if slot is not None:
+            slot.release()
+    return Response(body, media_type=media_type,
+                    headers={"Content-Disposition": f'attachment; filename="{record.id}-{name}"'})
+
+
+_PLOT_POINTS = 20_000  # points drawn at most: a plot of more is decimated evenly
+
+
+@router.get("/{job_id}/plots/{kind}.png", response_class=Response,
+            responses={**_NOT_FOUND, 200: {"content": {"image/png": {}}, "description": "a PNG image"},
+                       409: {"description": "the job has no trajectory (yet)"},
+                       422: {"description": "a plot this system cannot have (a projection of one coordinate), "
+                                            "or an unknown coordinate"}})
+def get_plot(job_id: str, kind: Literal["energy", "phase", "projection"], store: StoreDep,
+             width: Annotated[int, Query(ge=200, le=3000, description="pixels")] = 800,
+             height: Annotated[int, Query(ge=150, le=3000, description="pixels")] = 500,
+             coordinate: Annotated[str | None, Query(max_length=100, description="phase: the coordinate "
+                                                     "(name or index; default the first)")] = None,
+             x: Annotated[str | None, Query(max_length=100, description="projection: horizontal coordinate")] = None,
+             y: Annotated[str | None, Query(max_length=100, description="projection: vertical coordinate")] = None,
+             ) -> Response:
+    """energy: H(t) (and H - H0 + W when recorded); phase: (q_i, p_i); projection: (q_x, q_y)."""
+    record = _existing(store, job_id)
+    sol = _stored_solution(record, store, slice(None))
+    if sol.t.size > _PLOT_POINTS:
+        sol = _stored_solution(record, store, slice(None, None, -(-sol.t.size // _PLOT_POINTS)))
+
+    def pick(value: str | None):  # a coordinate's name, or its index
+        return int(value) if value is not None and value.isdigit() else value
+
+    try:
+        png = plot_png(sol, kind, width=width, height=height, coordinate=pick(coordinate), x=pick(x), y=pick(y))
+    except ValueError as error:
+        field = str(error).partition(": ")[0]
+        loc = ("query", "coordinate" if kind == "phase" else "x") if field == "coordinate" else ("path", "kind")
+        raise RequestValidationError([{"type": "value_error", "loc": loc, "msg": str(error), "input": None}]) from None
+    return Response(png, media_type="image/png")
 
 
 def _cancel(job_id: str, store: JobStore, runner: Runner) -> JobView:

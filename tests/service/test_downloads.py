@@ -1,0 +1,103 @@
+"""Trajectories as files and plots as PNGs, from a real service process: every format carries
+the same numbers as the JSON, an unknown format is a 422 naming `format`, plots have the asked size."""
+
+from __future__ import annotations
+
+import io
+import json
+
+import numpy as np
+import pytest
+from PIL import Image
+
+import raydamp
+from raydamp.job import job_arguments
+
+PENDULUM = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "step_size": 0.2,
+            "t_end": 40, "initial_state": {"q": [2.827433388], "p": [0.0]}, "save_every": 2}
+KEPLER = {"system": {"coordinates": ["x", "y"], "potential": "-1/sqrt(x^2+y^2)", "eps": 0.01,
+                     "damping": {"dampers": [{"on": "sqrt(x^2+y^2)", "c": 1}]}, "momenta": {"L": "x*p_y - y*p_x"}},
+          "method": "2s", "step_size": 0.01, "n_steps": 2000, "save_every": 10,
+          "initial_state": {"q": [1.0, 0.0], "p": [0.0, 1.2]}}
+
+
+@pytest.fixture(scope="module")
+def jobs(server):
+    ids = {name: server.submit(spec) for name, spec in (("pendulum", PENDULUM), ("kepler", KEPLER))}
+    for job_id in ids.values():
+        assert server.wait_finished(job_id)["status"] == "completed"
+    return ids
+
+
+def _json(server, job_id, **params) -> dict:
+    response = server.client.get(f"/v1/jobs/{job_id}/trajectory", params=params)
+    assert response.status_code == 200, response.text
+    return {key: np.array(value, dtype=float) for key, value in response.json().items()}
+
+
+@pytest.mark.parametrize("name", ["pendulum", "kepler"])
+def test_every_format_carries_the_json_numbers(server, jobs, tmp_path, name):
+    job_id = jobs[name]
+    reference = _json(server, job_id)
+    rows = reference["t"].size
+    for fmt, suffix in (("npz", ".npz"), ("netcdf", ".nc")):
+        response = server.client.get(f"/v1/jobs/{job_id}/trajectory", params={"format": fmt})
+        assert response.status_code == 200, response.text
+        assert f'filename="{job_id}-trajectory{suffix}"' in response.headers["content-disposition"]
+        path = tmp_path / f"{name}{suffix}"
+        path.write_bytes(response.content)
+        sol = raydamp.load(path)
+        for key in ("t", "q", "p", "energy"):
+            np.testing.assert_array_equal(getattr(sol, key).reshape(rows, -1), reference[key].reshape(rows, -1))
+        np.testing.assert_array_equal(sol.momentum.reshape(rows, -1), reference["momentum"].reshape(rows, -1))
+        spec = PENDULUM if name == "pendulum" else KEPLER
+        assert sol.provenance["job_id"] == job_id and sol.provenance["method"] == spec["method"]
+        model, q0, p0, options = job_arguments(sol.provenance)
+        again = raydamp.integrate(model, q0, p0, **options)
+        np.testing.assert_allclose(again.q, sol.q, rtol=0, atol=1e-13)  # the provenance reruns the job
+    csv = server.client.get(f"/v1/jobs/{job_id}/trajectory", params={"format": "csv"})
+    assert csv.status_code == 200 and csv.headers["content-type"].startswith("text/csv")
+    header, *lines = csv.text.strip().splitlines()
+    table = np.array([[float(v) for v in line.split(",")] for line in lines])
+    n = reference["q"].reshape(rows, -1).shape[1]
+    np.testing.assert_array_equal(table[:, 0], reference["t"])
+    np.testing.assert_array_equal(table[:, 1:1 + n], reference["q"].reshape(rows, -1))
+    assert header.split(",")[0] == "t"
+
+
+def test_decimation_applies_to_files(server, jobs, tmp_path):
+    reference = _json(server, jobs["kepler"], start=3, stop=150, every=7)
+    response = server.client.get(f"/v1/jobs/{jobs['kepler']}/trajectory",
+                                 params={"format": "npz", "start": 3, "stop": 150, "every": 7})
+    (tmp_path / "d.npz").write_bytes(response.content)
+    np.testing.assert_array_equal(raydamp.load(tmp_path / "d.npz").q, reference["q"])
+
+
+def test_unknown_format_is_422_naming_format(server, jobs):
+    response = server.client.get(f"/v1/jobs/{jobs['pendulum']}/trajectory", params={"format": "xlsx"})
+    assert response.status_code == 422
+    assert [tuple(e["loc"]) for e in response.json()["detail"]] == [("query", "format")]
+
+
+@pytest.mark.parametrize(("name", "kind", "params"), [
+    ("pendulum", "energy", {}), ("pendulum", "phase", {}), ("kepler", "energy", {"width": 640, "height": 480}),
+    ("kepler", "phase", {"coordinate": "y"}), ("kepler", "projection", {"x": "x", "y": "y"})])
+def test_plots_are_pngs_of_the_asked_size(server, jobs, name, kind, params):
+    response = server.client.get(f"/v1/jobs/{jobs[name]}/plots/{kind}.png", params=params)
+    assert response.status_code == 200, response.text
+    assert response.headers["content-type"] == "image/png"
+    image = Image.open(io.BytesIO(response.content))
+    assert image.size == (params.get("width", 800), params.get("height", 500))
+    pixels = np.asarray(image.convert("L"), dtype=float)
+    assert pixels.std() > 5  # something was drawn, not a blank canvas
+
+
+def test_impossible_plots_are_422(server, jobs):
+    one_dimensional = server.client.get(f"/v1/jobs/{jobs['pendulum']}/plots/projection.png")
+    assert one_dimensional.status_code == 422
+    assert "at least two coordinates" in json.dumps(one_dimensional.json())
+    unknown = server.client.get(f"/v1/jobs/{jobs['kepler']}/plots/phase.png", params={"coordinate": "w"})
+    assert unknown.status_code == 422
+    assert unknown.json()["detail"][0]["loc"] == ["query", "coordinate"]
+    assert server.client.get(f"/v1/jobs/{jobs['kepler']}/plots/histogram.png").status_code == 422
+    assert server.client.get("/v1/jobs/nope/plots/energy.png").status_code == 404
