@@ -14,10 +14,11 @@ from . import models
 from ._core import __version__
 from .integrate import CancelToken, integrate, steps_for
 from .methods import MethodInfo, TableauInfo, methods, tableaux
+from .rayleigh import modal_damping_ratio, rayleigh_coefficients
 from .results import load
 from .solution import Solution
 from .system import SpecError, System
 
 __all__ = ["__version__", "models", "System", "SpecError", "integrate", "steps_for", "CancelToken", "Solution",
-           "load", "methods", "tableaux",
+           "load", "rayleigh_coefficients", "modal_damping_ratio", "methods", "tableaux",
            "MethodInfo", "TableauInfo"]
