@@ -13,9 +13,9 @@ equilibria.
 from . import models
 from ._core import __version__
 from .integrate import CancelToken, integrate, steps_for
-from .methods import MethodInfo, TableauInfo, methods, tableaux
+from .methods import CompositionInfo, MethodInfo, TableauInfo, compositions, methods, tableaux
 from .solution import Solution
 from .system import SpecError, System
 
 __all__ = ["__version__", "models", "System", "SpecError", "integrate", "steps_for", "CancelToken", "Solution", "methods", "tableaux",
-           "MethodInfo", "TableauInfo"]
+           "MethodInfo", "TableauInfo", "compositions", "CompositionInfo"]

@@ -29,6 +29,7 @@ class Solution:
         "cancelled".
     steps : steps taken (all with finite results).
     work : (N,) damping work W(t) if the run was asked for it (``work=True``), else None.
+    composition : the composition the method was raised to higher order with, or None.
     """
 
     t: np.ndarray
@@ -46,6 +47,7 @@ class Solution:
     max_momentum_drift: float
     work: np.ndarray | None = field(default=None)
     wall_time: float = field(default=0.0)
+    composition: str | None = field(default=None)
 
     @property
     def success(self) -> bool:
@@ -88,6 +90,7 @@ class Solution:
             "message": self.message,
             "method": self.method,
             "tableau": self.tableau,
+            "composition": self.composition,
             "step_size": self.h,
             "steps": self.steps,
             "failed_step": self.failed_step,

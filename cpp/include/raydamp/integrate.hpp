@@ -7,11 +7,13 @@
 #include <atomic>
 #include <cmath>
 #include <functional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "raydamp/concepts.hpp"
 #include "raydamp/diagnostics.hpp"
+#include "raydamp/composed_step.hpp"
 #include "raydamp/step.hpp"
 
 namespace raydamp {
@@ -32,6 +34,9 @@ struct RunSpec {
   double h_last = 0.1;   // size of the final step (lands exactly on t_end)
   long save_every = 1;
   bool track_work = false;  // record W(t) = eps int qdot^T D qdot dt at the saved points
+  // Merge the last sub-flow of a step with the first of the next between steps
+  // that save nothing (see composed_step.hpp); false runs every step whole (tests).
+  bool merge_steps = true;
 };
 
 struct Control {
@@ -52,7 +57,7 @@ struct RunResult {
   long steps = 0;          // steps taken whose result is finite
   long failed_step = -1;   // 1-based index of the step whose result was not finite
   std::string message;
-  double max_momentum_drift = 0.0;  // max over every step of max_j |J_j - J_j(0)|
+  double max_momentum_drift = 0.0;  // max over every step of max_j |J_j - J_j(0)| (merged steps: see run_steps)
   Trajectory trajectory;
 };
 
@@ -99,8 +104,33 @@ inline constexpr long kBlock = 256;
 
 namespace detail {
 
+// The steps of a method with a table that cannot be composed or merged (rk):
+// whole steps only.
+template <class Method>
+struct WholeStepper {
+  double h, h_last;
+  long last_step;
+  template <class Model, class Tab, int Dim, class DF>
+  void step(const Model& model, const Tab& tab, State<Dim>& z, long i, Workspace<Dim, DF>& ws) const {
+    raydamp::step<Method>(model, tab, z, i == last_step ? h_last : h, ws);
+  }
+};
+
+template <class Method>
+auto make_stepper(const Composition& composition, const RunSpec& spec) {
+  if constexpr (is_mergeable<Method>()) {
+    return ComposedStepper<Method>(composition, spec.h, spec.h_last, spec.n_steps);
+  } else {
+    if (composition.stages() != 1)
+      throw std::invalid_argument(std::string("composition: method table '") + Method::name +
+                                  "' is not symmetric, so it cannot be composed");
+    return WholeStepper<Method>{spec.h, spec.h_last, spec.n_steps - 1};
+  }
+}
+
 template <class Method, class Model, class Tab, int Dim>
-RunResult run_steps(const Model& model, const Tab& tab, State<Dim> z, const RunSpec& spec, const Control& control) {
+RunResult run_steps(const Model& model, const Tab& tab, const Composition& composition, State<Dim> z,
+                    const RunSpec& spec, const Control& control) {
   static_assert(is_model_v<Model>, "Model lacks part of the interface listed in raydamp/concepts.hpp");
   const long N = spec.n_steps;
   const int n = model.size();
@@ -141,8 +171,16 @@ RunResult run_steps(const Model& model, const Tab& tab, State<Dim> z, const RunS
   // method integrates it itself (see integrates_work).
   constexpr bool trapezoid = !integrates_work<Method>::value;
   double power = spec.track_work && trapezoid ? dissipated_power(model, z, ws) : 0.0;
+  const auto stepper = make_stepper<Method>(composition, spec);
+  // First-same-as-last merging needs no intermediate state except the momentum
+  // maps', which are read before the merged sub-flow: an exact flow of a part of
+  // H or of the damping, each of which conserves J (paper section 5), so up to
+  // rounding that is J at the step's end. The damping work needs the step's end
+  // points: with work tracked, steps run whole.
+  constexpr bool mergeable = is_mergeable<Method>();
+  const bool merge = mergeable && spec.merge_steps && !spec.track_work;
   auto advance = [&](State<Dim>& x, long i) {
-    step<Method>(model, tab, x, step_size(i), ws);
+    stepper.step(model, tab, x, i, ws);
     if constexpr (trapezoid) {
       if (spec.track_work) {
         const double next = dissipated_power(model, x, ws);
@@ -163,9 +201,24 @@ RunResult run_steps(const Model& model, const Tab& tab, State<Dim> z, const RunS
     const double checkpoint_work = ws.work, checkpoint_power = power;
     double block_drift = 0.0;
     y = z;
-    for (long i = k; i < end; ++i) {
-      advance(y, i);
-      if (track_momenta) block_drift = std::max(block_drift, momentum_drift(model, y, mb));
+    if constexpr (mergeable) {
+      if (merge) {
+        stepper.lead(model, tab, y, k, ws);
+        for (long i = k; i + 1 < end; ++i) {
+          stepper.body(model, tab, y, i, ws);
+          if (track_momenta) block_drift = std::max(block_drift, momentum_drift(model, y, mb));
+          stepper.join(model, tab, y, i, ws);
+        }
+        stepper.body(model, tab, y, end - 1, ws);
+        stepper.trail(model, tab, y, end - 1, ws);
+        if (track_momenta) block_drift = std::max(block_drift, momentum_drift(model, y, mb));
+      }
+    }
+    if (!merge) {
+      for (long i = k; i < end; ++i) {
+        advance(y, i);
+        if (track_momenta) block_drift = std::max(block_drift, momentum_drift(model, y, mb));
+      }
     }
     z = y;
     if (!z.all_finite()) {
@@ -217,18 +270,25 @@ RunResult run_steps(const Model& model, const Tab& tab, State<Dim> z, const RunS
 // Integrates spec.n_steps steps of Method from z. The built-in tableaux have 1, 2 or
 // 4 stages; for those the loop is instantiated with the stage count fixed, so
 // Runge-Kutta stages unroll. Any other tableau runs from the run-time table.
+// `composition` composes a symmetric Method (builtin_composition("none") is Method itself).
 template <class Method, class Model, int Dim = Model::dim>
-RunResult integrate(const Model& model, const ButcherTableau& tab, State<Dim> z, const RunSpec& spec,
-                    const Control& control = {}) {
+RunResult integrate(const Model& model, const ButcherTableau& tab, const Composition& composition, State<Dim> z,
+                    const RunSpec& spec, const Control& control = {}) {
   if constexpr (uses_tableau<Method>()) {
     switch (tab.stages()) {
-      case 1: return detail::run_steps<Method>(model, FixedTableau<1>(tab), std::move(z), spec, control);
-      case 2: return detail::run_steps<Method>(model, FixedTableau<2>(tab), std::move(z), spec, control);
-      case 4: return detail::run_steps<Method>(model, FixedTableau<4>(tab), std::move(z), spec, control);
+      case 1: return detail::run_steps<Method>(model, FixedTableau<1>(tab), composition, std::move(z), spec, control);
+      case 2: return detail::run_steps<Method>(model, FixedTableau<2>(tab), composition, std::move(z), spec, control);
+      case 4: return detail::run_steps<Method>(model, FixedTableau<4>(tab), composition, std::move(z), spec, control);
       default: break;
     }
   }
-  return detail::run_steps<Method>(model, tab, std::move(z), spec, control);
+  return detail::run_steps<Method>(model, tab, composition, std::move(z), spec, control);
+}
+
+template <class Method, class Model, int Dim = Model::dim>
+RunResult integrate(const Model& model, const ButcherTableau& tab, State<Dim> z, const RunSpec& spec,
+                    const Control& control = {}) {
+  return integrate<Method>(model, tab, builtin_composition("none"), std::move(z), spec, control);
 }
 
 }  // namespace raydamp
