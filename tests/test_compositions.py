@@ -1,5 +1,5 @@
 """Compositions of the symmetric splittings (issue 8): orders 4, 4, 6, 8, 8 with eps > 0 on
-both paper models and a user System, momentum maps kept."""
+both paper models and a user System, momentum maps kept, the amplification guard."""
 
 from __future__ import annotations
 
@@ -129,3 +129,54 @@ def test_momentum_map_conserved_by_compositions(method, tableau, composition):
     assert sol.success
     assert sol.max_momentum_drift < 1e-13
     assert np.abs(sol.momentum - 1.2).max() < 1e-13
+
+
+# ---- The amplification guard.
+
+def stiff_structure(beta: float = 0.1) -> raydamp.System:
+    """Two springs of stiffness 1000 and 1 with stiffness-proportional (beta) damping D = beta K:
+    the stiff mode's damping rate is eps beta 1000 = 100."""
+    return raydamp.System(["a", "b"], "(1000*a^2 + b^2)/2", damping={"matrix": [[1000 * beta, 0.0], [0.0, beta]]},
+                          eps=1.0)
+
+
+def test_guard_refuses_a_stiff_structure_at_order_4_and_accepts_order_2():
+    model = stiff_structure()
+    q0, p0 = [0.01, 1.0], [0.0, 0.0]
+    with pytest.raises(ValueError) as refused:
+        raydamp.integrate(model, q0, p0, method="2s", composition="yoshida4", h=0.05, n_steps=10)
+    message = str(refused.value)
+    # 2s runs kick+damp for gamma_2 h = -1.70 * 0.05: e^{0.0851 * 100} = 4.97e3.
+    assert message.startswith("composition: 'yoshida4'") and "h = 0.05" in message
+    assert "4.97e+03" in message and "rho = 100" in message and "composition=None" in message
+    suggested = float(message.rsplit("h <= ", 1)[1])
+    assert suggested == pytest.approx(math.log(10) / (100 * 1.7024143839193153), rel=2e-3)
+    # Accepted at order 2, and at the suggested h.
+    assert raydamp.integrate(model, q0, p0, method="2s", h=0.05, n_steps=10).success
+    assert raydamp.integrate(model, q0, p0, method="2s", composition="yoshida4", h=0.99 * suggested,
+                             n_steps=10).success
+
+
+def test_guard_limit_is_the_documented_one():
+    from raydamp.integrate import MAX_AMPLIFICATION
+
+    assert MAX_AMPLIFICATION == 10.0
+
+
+def test_guard_passes_mild_damping():
+    # The paper's models at their usual eps and h are far from the limit.
+    for name in ("damped_pendulum", "elastic_pendulum"):
+        model, q0, p0 = paper_problem(name, 0.5)
+        for composition, _ in COMPOSITIONS:
+            assert raydamp.integrate(model, q0, p0, method="2s", composition=composition, h=0.5, n_steps=4).success
+
+
+def test_guard_sees_the_implicit_midpoint_pole():
+    # rks(midpoint) backward: R(z) = (1 + z/2)/(1 - z/2) has a pole at z = 2, where e^z is only 7.4.
+    model = raydamp.System(["a"], "a^2/2", damping={"scalar": 1.0}, eps=2.0)  # rho = 2
+    h = 2.0 / (2 * 1.7024143839193153 * 1.0) * 0.999  # the backward RK sub-step at z just under 2
+    with pytest.raises(ValueError, match="^composition: 'yoshida4'"):
+        raydamp.integrate(model, [1.0], [0.0], method="rks", tableau="midpoint", composition="yoshida4", h=h,
+                          n_steps=4)
+    # The exact backward flow of 2s at the same h amplifies by e^{1.998} = 7.4 only: accepted.
+    assert raydamp.integrate(model, [1.0], [0.0], method="2s", composition="yoshida4", h=h, n_steps=4).success

@@ -2,6 +2,7 @@
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
+#include "raydamp/amplification.hpp"
 #include "raydamp/catalogue.hpp"
 
 namespace py = pybind11;
@@ -70,6 +71,7 @@ void bind_catalogue(py::module_& m) {
     }
     return rows;
   });
+  m.attr("MAX_AMPLIFICATION") = kMaxAmplification;
   m.def("compositions", [] {
     py::list rows;
     for (const Composition& c : builtin_compositions()) {

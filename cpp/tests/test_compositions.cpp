@@ -146,5 +146,40 @@ int main() {
       }
     }
   }
+  // The amplification guard. Damped pendulum with eps = 50 (rho = 50), h = 0.1:
+  // yoshida4 over 2s runs kick+damp for -1.70 h, e^{8.5} ~ 4900: refused; over 3s
+  // the backward damp is only the merged (gamma_1 + gamma_2)/2 h = -0.176 h,
+  // e^{0.88} ~ 2.4: accepted; order 2 has no backward sub-step: accepted.
+  {
+    DampedPendulum stiff(50.0);
+    CHECK_NEAR(damping_spectral_radius(stiff, pend0.q), 50.0, 1e-12);
+    ElasticPendulum elastic(0.7);  // rho = eps / m along the spring
+    CHECK_NEAR(damping_spectral_radius(elastic, elas0.q), 0.7, 1e-12);
+    const RunSpec spec{0.1, 10, 0.1, 1};
+    std::string message;
+    try {
+      run(stiff, "2s", "", "yoshida4", pend0, spec);
+    } catch (const std::invalid_argument& e) {
+      message = e.what();
+    }
+    std::printf("refused: %s\n", message.c_str());
+    CHECK(message.rfind("composition: 'yoshida4'", 0) == 0);
+    CHECK(message.find("h = 0.1") != std::string::npos && message.find("4.97e+03") != std::string::npos);
+    CHECK(!throws([&] { run(stiff, "3s", "", "yoshida4", pend0, spec); }));
+    CHECK(!throws([&] { run(stiff, "2s", "", "", pend0, spec); }));
+    // The h the message suggests passes, and a little more does not.
+    const Composition& y4 = builtin_composition("yoshida4");
+    const double h_max = std::log(kMaxAmplification) / (50.0 * -y4.gamma(1));
+    CHECK_NEAR(amplification_bound<TwoTermSplitting>(y4, builtin_tableau("euler"), h_max, 50.0), 10.0, 1e-9);
+    CHECK(message.find("h <= 0.0271") != std::string::npos);
+    CHECK_NEAR(h_max, 0.0271, 5e-5);
+    CHECK(!throws([&] { run(stiff, "2s", "", "yoshida4", pend0, RunSpec{0.999 * h_max, 10, 0.999 * h_max, 1}); }));
+    CHECK(throws([&] { run(stiff, "2s", "", "yoshida4", pend0, RunSpec{1.001 * h_max, 10, 1.001 * h_max, 1}); }));
+    // Implicit midpoint backward: R(z) = (1 + z/2) / (1 - z/2) > e^z, a pole at z = 2.
+    const ButcherTableau& mid = builtin_tableau("midpoint");
+    CHECK_NEAR(stability_magnitude(mid, 1.0), 3.0, 1e-15);
+    CHECK(std::isinf(stability_magnitude(mid, 2.0)));
+    CHECK_NEAR(stability_magnitude(builtin_tableau("rk4"), 1.0), 1 + 1 + 0.5 + 1.0 / 6 + 1.0 / 24, 1e-15);
+  }
   TEST_MAIN_RETURN();
 }

@@ -4,6 +4,7 @@ from typing import Any, Callable
 import numpy as np
 
 __version__: str
+MAX_AMPLIFICATION: float
 
 def methods() -> list[dict[str, Any]]: ...
 def tableaux() -> list[dict[str, Any]]: ...

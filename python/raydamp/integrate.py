@@ -12,12 +12,14 @@ from ._validation import integer, real, vector
 from .models import Model
 from .solution import Solution
 
-__all__ = ["integrate", "steps_for", "CancelToken", "MAX_SAVED_BYTES", "MAX_STEPS"]
+__all__ = ["integrate", "steps_for", "CancelToken", "MAX_SAVED_BYTES", "MAX_STEPS", "MAX_AMPLIFICATION"]
 
 # Refuse runs whose saved points alone would not fit in memory comfortably.
 MAX_SAVED_BYTES = 4 * 2**30
 # Step counts travel as C++ long; far beyond any run that could finish.
 MAX_STEPS = 2**62
+# The amplification guard's limit for compositions (see integrate's ``composition``), from the core.
+MAX_AMPLIFICATION: float = _core.MAX_AMPLIFICATION
 
 
 class CancelToken(_core.CancelToken):
@@ -59,6 +61,17 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
         ``tableau="midpoint"``) to higher order by composing its steps:
         "yoshida4", "suzuki4", "kahan_li6", "mclachlan8" or "kahan_li8" (see
         :func:`raydamp.compositions`); None (default) runs the method itself.
+        Every composition of order above 2 has negative coefficients, so some
+        damping sub-step runs backward and multiplies the mode of eps D M^{-1}
+        with eigenvalue lambda by e^{|tau| lambda} (tau < 0 its duration). Before
+        the run the bound e^{|tau| rho} (rho: the spectral radius of eps D M^{-1}
+        at q0; for an rks Runge-Kutta sub-step its stability function where
+        larger) is computed, and a run whose bound passes
+        ``MAX_AMPLIFICATION`` (10: one decimal digit of a damped mode per
+        backward sub-step) is refused with a ValueError that gives the bound and
+        the largest h that passes. Order 2 (no composition) has no backward
+        sub-step. 3s composes most gently: its backward damping is only the
+        merged (gamma_i + gamma_{i+1}) h / 2 between stages.
     progress : called as ``progress(steps_done, n_steps)`` about 100 times per run
         (never once per step), from the integrating thread.
     cancel : a :class:`CancelToken`; cancelling it stops the run.

@@ -13,6 +13,7 @@
 
 #include "raydamp/concepts.hpp"
 #include "raydamp/diagnostics.hpp"
+#include "raydamp/amplification.hpp"
 #include "raydamp/composed_step.hpp"
 #include "raydamp/step.hpp"
 
@@ -270,10 +271,13 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
 // Integrates spec.n_steps steps of Method from z. The built-in tableaux have 1, 2 or
 // 4 stages; for those the loop is instantiated with the stage count fixed, so
 // Runge-Kutta stages unroll. Any other tableau runs from the run-time table.
-// `composition` composes a symmetric Method (builtin_composition("none") is Method itself).
+// `composition` composes a symmetric Method (builtin_composition("none") is Method
+// itself); a composed run past the amplification guard (amplification.hpp) is
+// refused with std::invalid_argument.
 template <class Method, class Model, int Dim = Model::dim>
 RunResult integrate(const Model& model, const ButcherTableau& tab, const Composition& composition, State<Dim> z,
                     const RunSpec& spec, const Control& control = {}) {
+  check_amplification<Method>(model, z.q, tab, composition, spec.h);
   if constexpr (uses_tableau<Method>()) {
     switch (tab.stages()) {
       case 1: return detail::run_steps<Method>(model, FixedTableau<1>(tab), composition, std::move(z), spec, control);
