@@ -12,10 +12,10 @@
 // Results equal the unmerged steps to rounding.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <stdexcept>
 #include <utility>
-#include <vector>
 
 #include "raydamp/methods/composition.hpp"
 #include "raydamp/step.hpp"
@@ -24,17 +24,17 @@ namespace raydamp {
 
 // Sub-flow durations of one step of size h: the first sub-flow (lead), then for
 // each composition stage c its inner sub-flows 1 .. S-2 followed (except after the
-// last stage) by the joint, then the last sub-flow (trail). Sized once, before
-// the loop.
+// last stage) by the joint, then the last sub-flow (trail). Fixed storage, so the
+// step loop can copy it into a local the compiler keeps in registers.
 template <class Method>
 struct StepDurations {
   static constexpr int S = static_cast<int>(Method::stages.size());
   static constexpr int stride = S - 1;  // inner sub-flows and the joint after them
   double lead = 0.0, trail = 0.0;
   int m = 1;
-  std::vector<double> body;  // m * stride entries; the last stage's joint slot is unused
+  std::array<double, kMaxCompositionStages * stride> body{};  // m * stride used; the last joint slot unused
 
-  StepDurations(const Composition& c, double h) : m(c.stages()), body(static_cast<std::size_t>(m * stride), 0.0) {
+  StepDurations(const Composition& c, double h) : m(c.stages()) {
     const double first = Method::stages[0].fraction, last = Method::stages[S - 1].fraction;
     lead = first * c.gamma(0) * h;
     trail = last * c.gamma(m - 1) * h;
@@ -75,7 +75,10 @@ class ComposedStepper {
   static_assert(is_mergeable<Method>(), "ComposedStepper needs a symmetric table with an exact end sub-flow");
 
   ComposedStepper(const Composition& c, double h, double h_last, long n_steps)
-      : regular_(c, h), last_(c, h_last), last_step_(n_steps - 1), join_regular_(regular_.trail + regular_.lead) {}
+      : regular_(c, h), last_(c, h_last), last_step_(n_steps - 1), join_regular_(regular_.trail + regular_.lead),
+        single_(c.stages() == 1) {
+    for (int j = 0; j < S - 2; ++j) inner_regular_[j] = regular_.body[j];
+  }
 
   const StepDurations<Method>& durations(long i) const { return i == last_step_ ? last_ : regular_; }
 
@@ -96,7 +99,13 @@ class ComposedStepper {
   }
   template <class Model, class Tab, int Dim, class DF>
   void body(const Model& model, const Tab& tab, State<Dim>& z, long i, Workspace<Dim, DF>& ws) const {
-    body(model, tab, z, durations(i), ws);
+    // The uncomposed method's regular step reads its durations from this object,
+    // a local of the step loop that nothing else can write, so the compiler keeps
+    // them in registers across the model's calls (heap data it must reload).
+    if (single_ && i != last_step_)
+      detail::inner_stages<Method>(model, tab, z, inner_regular_.data(), ws, std::make_index_sequence<S - 2>{});
+    else
+      body(model, tab, z, durations(i), ws);
   }
   // The last sub-flow of step i and the first of step i + 1, as one flow.
   template <class Model, class Tab, int Dim, class DF>
@@ -123,6 +132,8 @@ class ComposedStepper {
   StepDurations<Method> regular_, last_;
   long last_step_;
   double join_regular_;
+  bool single_;  // one composition stage: the method itself
+  std::array<double, S - 2> inner_regular_{};
 };
 
 }  // namespace raydamp

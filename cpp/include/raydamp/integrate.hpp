@@ -9,6 +9,7 @@
 #include <functional>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "raydamp/concepts.hpp"
@@ -16,6 +17,14 @@
 #include "raydamp/amplification.hpp"
 #include "raydamp/composed_step.hpp"
 #include "raydamp/step.hpp"
+
+#ifndef RAYDAMP_FLATTEN
+#if defined(__GNUC__) || defined(__clang__)
+#define RAYDAMP_FLATTEN __attribute__((flatten))
+#else
+#define RAYDAMP_FLATTEN
+#endif
+#endif
 
 namespace raydamp {
 
@@ -97,6 +106,25 @@ double momentum_drift(const Model& model, const State<Dim>& z, MomentumBuffers& 
   return drift;
 }
 
+// The same for a model with a fixed number of momentum maps, on J(0) copied into
+// this object: a local of the step loop, so J(0) and J stay in registers instead of
+// being reloaded from the heap after every call into the model.
+template <class Model, int M = Model::n_momenta>
+struct FixedMomentumDrift {
+  std::array<double, (M > 0 ? M : 1)> j0{};
+  explicit FixedMomentumDrift(const MomentumBuffers& mb) {
+    for (int i = 0; i < M; ++i) j0[i] = mb.j0[i];
+  }
+  template <int Dim>
+  double operator()(const Model& model, const State<Dim>& z) const {
+    std::array<double, (M > 0 ? M : 1)> j{};
+    model.momenta(z.q, z.p, j.data());
+    double drift = 0.0;
+    for (int i = 0; i < M; ++i) drift = std::max(drift, std::abs(j[i] - j0[i]));
+    return drift;
+  }
+};
+
 }  // namespace detail
 
 // Steps between finiteness checks. A blown-up block is replayed step by step from
@@ -129,6 +157,46 @@ auto make_stepper(const Composition& composition, const RunSpec& spec) {
   }
 }
 
+// Steps k .. end-1 of y, with nothing saved in between; returns the largest
+// momentum-map drift seen. Flattened: every call in it (sub-flows, the model,
+// Eigen) is inlined, whatever the compiler's budget in a translation unit that
+// instantiates every method for every model (the bindings' does; without it the
+// elastic pendulum's 3s took 43 ns/step instead of 30).
+template <bool Mergeable, class Model, class Tab, class Stepper, int Dim, class DF, class Advance, class Drift>
+RAYDAMP_FLATTEN double run_block(const Model& model, const Tab& shared_tab, const Stepper& stepper, Workspace<Dim, DF>& ws,
+                                 State<Dim>& state, long k, long end, bool merge, bool track_momenta,
+                                 const Advance& advance, const Drift& step_drift) {
+  // Stepped on local copies (state and durations) that no opaque call (sin, exp)
+  // can be assumed to touch, so the compiler keeps them in registers.
+  State<Dim> y = state;
+  const Stepper local = stepper;  // a few hundred bytes, once per block
+  // A fixed-size tableau is copied too; a run-time one (vectors) is read in place.
+  using LocalTab = std::conditional_t<std::is_trivially_copyable_v<Tab>, const Tab, const Tab&>;
+  LocalTab tab = shared_tab;
+  double block_drift = 0.0;
+  if constexpr (Mergeable) {
+    if (merge) {
+      local.lead(model, tab, y, k, ws);
+      for (long i = k; i + 1 < end; ++i) {
+        local.body(model, tab, y, i, ws);
+        if (track_momenta) block_drift = std::max(block_drift, step_drift(y));
+        local.join(model, tab, y, i, ws);
+      }
+      local.body(model, tab, y, end - 1, ws);
+      local.trail(model, tab, y, end - 1, ws);
+      if (track_momenta) block_drift = std::max(block_drift, step_drift(y));
+      state = y;
+      return block_drift;
+    }
+  }
+  for (long i = k; i < end; ++i) {
+    advance(y, i);
+    if (track_momenta) block_drift = std::max(block_drift, step_drift(y));
+  }
+  state = y;
+  return block_drift;
+}
+
 template <class Method, class Model, class Tab, int Dim>
 RunResult run_steps(const Model& model, const Tab& tab, const Composition& composition, State<Dim> z,
                     const RunSpec& spec, const Control& control) {
@@ -154,6 +222,10 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
   // that only inlined code sees, so the compiler can keep it in registers.
   State<Dim> checkpoint = z, before = z, y = z;
   if (mb.count() > 0) model.momenta(z.q, z.p, mb.j0.data());
+  auto step_drift = [&, fixed = FixedMomentumDrift<Model>(mb)](const State<Dim>& x) {
+    if constexpr (Model::n_momenta > 0) return fixed(model, x);
+    else return momentum_drift(model, x, mb);
+  };
   const bool track_momenta = mb.count() > 0;
   auto time_at = [&](long k) { return k == N && spec.h_last != spec.h ? (N - 1) * spec.h + spec.h_last : k * spec.h; };
   auto step_size = [&](long k) { return k == N - 1 ? spec.h_last : spec.h; };  // size of step k -> k+1
@@ -202,25 +274,7 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
     const double checkpoint_work = ws.work, checkpoint_power = power;
     double block_drift = 0.0;
     y = z;
-    if constexpr (mergeable) {
-      if (merge) {
-        stepper.lead(model, tab, y, k, ws);
-        for (long i = k; i + 1 < end; ++i) {
-          stepper.body(model, tab, y, i, ws);
-          if (track_momenta) block_drift = std::max(block_drift, momentum_drift(model, y, mb));
-          stepper.join(model, tab, y, i, ws);
-        }
-        stepper.body(model, tab, y, end - 1, ws);
-        stepper.trail(model, tab, y, end - 1, ws);
-        if (track_momenta) block_drift = std::max(block_drift, momentum_drift(model, y, mb));
-      }
-    }
-    if (!merge) {
-      for (long i = k; i < end; ++i) {
-        advance(y, i);
-        if (track_momenta) block_drift = std::max(block_drift, momentum_drift(model, y, mb));
-      }
-    }
+    block_drift = run_block<mergeable>(model, tab, stepper, ws, y, k, end, merge, track_momenta, advance, step_drift);
     z = y;
     if (!z.all_finite()) {
       // Replay the block one checked step at a time from its start.

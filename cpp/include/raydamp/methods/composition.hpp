@@ -22,6 +22,10 @@
 
 namespace raydamp {
 
+// Stages a composition may have (kahan_li8 has 17): the step loop keeps a composed
+// step's durations in fixed storage of this size.
+inline constexpr int kMaxCompositionStages = 32;
+
 class Composition {
  public:
   // outer: gamma_1 ... gamma_k of a palindrome with 2k + 1 stages; gamma_{k+1}
@@ -33,6 +37,9 @@ class Composition {
     std::vector<long double> full(outer);
     full.push_back(1.0L - 2.0L * outer_sum);
     full.insert(full.end(), outer.rbegin(), outer.rend());
+    if (static_cast<int>(full.size()) > kMaxCompositionStages)
+      throw std::invalid_argument("composition " + name_ + ": more than " + std::to_string(kMaxCompositionStages) +
+                                  " stages");
     validate(full);
     for (long double g : full) gammas_.push_back(static_cast<double>(g));
   }
