@@ -97,6 +97,7 @@ class JobSpec(_Input):
         default_factory=dict, max_length=64, description="model parameters by name; the rest take their defaults")
     method: str = Field(min_length=1, max_length=100, description="a name from GET /v1/methods")
     tableau: str | None = Field(None, max_length=100, description="Runge-Kutta tableau for rks/rksb")
+    composition: str | None = Field(None, max_length=100, description="raises a symmetric method's order (GET /v1/methods)")
     step_size: FiniteFloat = Field(gt=0)
     t_end: FiniteFloat | None = Field(None, gt=0)
     n_steps: int | None = Field(None, ge=1)
@@ -118,6 +119,7 @@ class JobSummary(BaseModel):
     message: str
     method: str
     tableau: str | None
+    composition: str | None = None
     step_size: float
     steps: int
     failed_step: int | None
@@ -194,6 +196,7 @@ class MethodInfo(BaseModel):
     default: bool = Field(description="the tableau used when none is given")
     damped: bool = Field(description="False for methods that refuse eps > 0")
     description: str
+    symmetric: bool = Field(False, description="a symmetric order-2 step, which a composition raises to higher order")
 
 
 class Health(BaseModel):
