@@ -2,6 +2,7 @@
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
+#include "raydamp/amplification.hpp"
 #include "raydamp/catalogue.hpp"
 
 namespace py = pybind11;
@@ -29,6 +30,7 @@ void bind_catalogue(py::module_& m) {
         row["order"] = tab ? method_order(e, *tab) : e.splitting_order;
         row["explicit"] = !tab || tab->is_explicit();
         row["damped"] = !e.ignores_damping;
+        row["symmetric"] = is_composable(e, tab ? *tab : builtin_tableau("euler"));
         rows.append(row);
       };
       if (e.tableau_use == TableauUse::none) {
@@ -68,6 +70,29 @@ void bind_catalogue(py::module_& m) {
       rows.append(row);
     }
     return rows;
+  });
+  m.attr("MAX_AMPLIFICATION") = kMaxAmplification;
+  m.def("compositions", [] {
+    py::list rows;
+    for (const Composition& c : builtin_compositions()) {
+      py::dict row;
+      row["name"] = c.name();
+      row["order"] = c.order();
+      row["stages"] = c.stages();
+      row["gammas"] = c.gammas();
+      row["reference"] = c.reference();
+      rows.append(row);
+    }
+    return rows;
+  });
+  // Validates a (method, tableau, composition) triple the way a run would; returns
+  // the composition used and the run's order.
+  m.def("resolve_composition", [](const std::string& method, const std::string& tableau,
+                                   const std::string& composition) {
+    const MethodEntry& e = method_entry(method);
+    const ButcherTableau& tab = resolve_tableau(e, tableau);
+    const Composition& c = resolve_composition(e, tab, composition);
+    return py::make_tuple(c.name(), method_order(e, tab, c));
   });
   // Validates a (method, tableau) pair the way a run would; returns the tableau used.
   m.def("resolve", [](const std::string& method, const std::string& tableau) {

@@ -32,11 +32,12 @@ inline py::array_t<double> to_numpy(std::vector<double>&& data, std::vector<py::
 
 template <class Model>
 py::dict run(const Model& model, const std::string& method, const std::string& tableau,
-             const typename Model::Vec& q0, const typename Model::Vec& p0, double h, long n_steps, double h_last,
+             const std::string& composition, const typename Model::Vec& q0, const typename Model::Vec& p0, double h, long n_steps, double h_last,
              long save_every, bool track_work, py::object progress, CancelToken* cancel) {
   const MethodEntry& entry = method_entry(method);
   require_applicable(entry, model.eps);
   const ButcherTableau& tab = resolve_tableau(entry, tableau);
+  const Composition& comp = resolve_composition(entry, tab, composition);
   const RunSpec spec{h, n_steps, h_last, save_every, track_work};
   Control control;
   if (cancel) control.cancel = &cancel->flag;
@@ -49,7 +50,7 @@ py::dict run(const Model& model, const std::string& method, const std::string& t
   {
     py::gil_scoped_release release;
     r = with_method(method, [&](auto m) {
-      return integrate<decltype(m)>(model, tab, State<Model::dim>{q0, p0}, spec, control);
+      return integrate<decltype(m)>(model, tab, comp, State<Model::dim>{q0, p0}, spec, control);
     });
   }
   Trajectory& tr = r.trajectory;
@@ -73,7 +74,8 @@ py::dict run(const Model& model, const std::string& method, const std::string& t
 // Registers run<Model> as one overload of _core.integrate.
 template <class Model>
 void def_integrate(py::module_& m) {
-  m.def("integrate", &run<Model>, py::arg("model"), py::arg("method"), py::arg("tableau"), py::arg("q0"),
+  m.def("integrate", &run<Model>, py::arg("model"), py::arg("method"), py::arg("tableau"), py::arg("composition"),
+        py::arg("q0"),
         py::arg("p0"), py::arg("h"), py::arg("n_steps"), py::arg("h_last"), py::arg("save_every"),
         py::arg("track_work"), py::arg("progress"), py::arg("cancel").none(true));
 }

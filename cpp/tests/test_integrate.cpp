@@ -90,7 +90,8 @@ int main() {
       const ButcherTableau& tab = builtin_tableau(name);
       const RunSpec spec{0.1, 1000, 0.1, 1000};
       RunResult fixed = integrate<RungeKuttaSplitting>(elastic, tab, w0, spec);
-      RunResult table = detail::run_steps<RungeKuttaSplitting>(elastic, tab, w0, spec, Control{});
+      RunResult table =
+          detail::run_steps<RungeKuttaSplitting>(elastic, tab, builtin_composition("none"), w0, spec, Control{});
       for (int i = 0; i < 3; ++i) {
         CHECK_NEAR(fixed.trajectory.q[3 + i], table.trajectory.q[3 + i], 1e-13);
         CHECK_NEAR(fixed.trajectory.p[3 + i], table.trajectory.p[3 + i], 1e-13);

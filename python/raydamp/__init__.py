@@ -13,12 +13,12 @@ equilibria.
 from . import models
 from ._core import __version__
 from .integrate import CancelToken, integrate, steps_for
-from .methods import MethodInfo, TableauInfo, methods, tableaux
+from .methods import CompositionInfo, MethodInfo, TableauInfo, compositions, methods, tableaux
 from .rayleigh import modal_damping_ratio, rayleigh_coefficients
 from .results import load
 from .solution import Solution
 from .system import SpecError, System
 
 __all__ = ["__version__", "models", "System", "SpecError", "integrate", "steps_for", "CancelToken", "Solution",
-           "load", "rayleigh_coefficients", "modal_damping_ratio", "methods", "tableaux",
-           "MethodInfo", "TableauInfo"]
+           "load", "rayleigh_coefficients", "modal_damping_ratio", "methods", "tableaux", "compositions",
+           "MethodInfo", "TableauInfo", "CompositionInfo"]

@@ -12,12 +12,14 @@ from ._validation import integer, real, vector
 from .models import Model
 from .solution import Solution
 
-__all__ = ["integrate", "steps_for", "CancelToken", "MAX_SAVED_BYTES", "MAX_STEPS"]
+__all__ = ["integrate", "steps_for", "CancelToken", "MAX_SAVED_BYTES", "MAX_STEPS", "MAX_AMPLIFICATION"]
 
 # Refuse runs whose saved points alone would not fit in memory comfortably.
 MAX_SAVED_BYTES = 4 * 2**30
 # Step counts travel as C++ long; far beyond any run that could finish.
 MAX_STEPS = 2**62
+# The amplification guard's limit for compositions (see integrate's ``composition``), from the core.
+MAX_AMPLIFICATION: float = _core.MAX_AMPLIFICATION
 
 
 class CancelToken(_core.CancelToken):
@@ -37,7 +39,8 @@ def _catalogue() -> tuple[tuple[str, ...], frozenset[str]]:
 
 
 def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: float | None = None,
-              n_steps: int | None = None, save_every: int = 1, tableau: str | None = None, work: bool = False,
+              n_steps: int | None = None, save_every: int = 1, tableau: str | None = None,
+              composition: str | None = None, work: bool = False,
               progress: Callable[[int, int], object] | None = None,
               cancel: CancelToken | None = None) -> Solution:
     """Integrate ``model`` from (q0, p0) with fixed steps of size ``h``.
@@ -54,6 +57,21 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
     save_every : save every this many steps (the final state is always saved).
     tableau : Runge-Kutta tableau for "rks" (default "heun"; also "euler", "rk4",
         "midpoint") or "rksb" (explicit tableaux only).
+    composition : raise a symmetric order-2 method ("sv", "3s", "2s", or "rks" with
+        ``tableau="midpoint"``) to higher order by composing its steps:
+        "yoshida4", "suzuki4", "kahan_li6", "mclachlan8" or "kahan_li8" (see
+        :func:`raydamp.compositions`); None (default) runs the method itself.
+        Every composition of order above 2 has negative coefficients, so some
+        damping sub-step runs backward and multiplies the mode of eps D M^{-1}
+        with eigenvalue lambda by e^{|tau| lambda} (tau < 0 its duration). Before
+        the run the bound e^{|tau| rho} (rho: the spectral radius of eps D M^{-1}
+        at q0; for an rks Runge-Kutta sub-step its stability function where
+        larger) is computed, and a run whose bound passes
+        ``MAX_AMPLIFICATION`` (10: one decimal digit of a damped mode per
+        backward sub-step) is refused with a ValueError that gives the bound and
+        the largest h that passes. Order 2 (no composition) has no backward
+        sub-step. 3s composes most gently: its backward damping is only the
+        merged (gamma_i + gamma_{i+1}) h / 2 between stages.
     progress : called as ``progress(steps_done, n_steps)`` about 100 times per run
         (never once per step), from the integrating thread.
     cancel : a :class:`CancelToken`; cancelling it stops the run.
@@ -71,6 +89,10 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
     if tableau is not None and not isinstance(tableau, str):
         raise ValueError(f"tableau must be a tableau name or None, got {tableau!r}")
     resolved_tableau = _core.resolve(method, tableau or "")  # raises ValueError naming the tableau
+    if composition is not None and not isinstance(composition, str):
+        raise ValueError(f"composition must be a composition name or None, got {composition!r}")
+    # raises ValueError naming the composition (unknown, or a base that is not symmetric)
+    resolved_composition, _order = _core.resolve_composition(method, tableau or "", composition or "")
     h = real("h", h, positive=True)
     q0 = model.check_configuration("q0", vector("q0", q0, model.dim))
     p0 = vector("p0", p0, model.dim)
@@ -95,8 +117,8 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
                          f"(limit {MAX_SAVED_BYTES / 2**30:.0f} GiB); raise save_every")
 
     start = time.perf_counter()
-    out = _core.integrate(model._core_model, method, tableau or "", q0, p0, h, n_steps, h_last, save_every,
-                          work, progress, cancel)
+    out = _core.integrate(model._core_model, method, tableau or "", composition or "", q0, p0, h, n_steps, h_last,
+                          save_every, work, progress, cancel)
     wall = time.perf_counter() - start
     message = out["message"]
     explain = getattr(model, "_explain_failure", None)
@@ -105,10 +127,13 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
     return Solution(t=out["t"], q=out["q"], p=out["p"], energy=out["energy"], momentum=out["momentum"],
                     status=out["status"], steps=out["steps"], failed_step=out["failed_step"],
                     message=message, method=method, tableau=resolved_tableau if method in with_tableau else None,
-                    h=h, max_momentum_drift=out["max_momentum_drift"], work=out["work"], wall_time=wall,
-                    origin=(model, q0.copy(), p0.copy(), {"method": method, "tableau": tableau, "h": h, "t_end": t_end,
-                                                          "n_steps": None if t_end is not None else n_steps,
-                                                          "save_every": save_every, "work": work}))
+                    composition=None if resolved_composition == "none" else resolved_composition, h=h,
+                    max_momentum_drift=out["max_momentum_drift"], work=out["work"], wall_time=wall,
+                    origin=(model, q0.copy(), p0.copy(), {
+                        "method": method, "tableau": tableau,
+                        "composition": None if resolved_composition == "none" else resolved_composition, "h": h,
+                        "t_end": t_end, "n_steps": None if t_end is not None else n_steps,
+                        "save_every": save_every, "work": work}))
 
 
 def steps_for(t_end: float, h: float) -> tuple[int, float]:

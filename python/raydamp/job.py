@@ -2,7 +2,7 @@
 the provenance every Solution carries (so a saved result can be run again).
 
     {"model": "elastic_pendulum", "parameters": {"eps": 0.1}}   or   {"system": System.to_dict()}
-    + {"method": "3s", "tableau": null, "step_size": 0.1, "t_end": 100 | "n_steps": 1000,
+    + {"method": "3s", "tableau": null, "composition": null, "step_size": 0.1, "t_end": 100 | "n_steps": 1000,
        "save_every": 1, "initial_state": {"q": [...], "p": [...]}, "work": false}
 
 Errors are ValueErrors whose message starts with the JSON path of the bad field.
@@ -21,7 +21,7 @@ from .system import SpecError, System
 
 __all__ = ["JOB_KEYS", "PROVENANCE_KEYS", "describe_model", "model_from_spec", "job_arguments", "job_spec"]
 
-JOB_KEYS = ("model", "system", "parameters", "method", "tableau", "step_size", "t_end", "n_steps", "save_every",
+JOB_KEYS = ("model", "system", "parameters", "method", "tableau", "composition", "step_size", "t_end", "n_steps", "save_every",
             "initial_state", "work")
 # What a Solution's provenance adds to the job (a saved result's provenance runs as a job).
 PROVENANCE_KEYS = ("raydamp_version", "job_id", "coordinates", "momentum_names")
@@ -91,19 +91,20 @@ def job_arguments(spec: Mapping[str, Any]) -> tuple[Model, Any, Any, dict[str, A
             raise ValueError(f"{key}: missing")
     options: dict[str, Any] = {"method": spec["method"], "h": spec["step_size"],
                                "save_every": spec.get("save_every", 1), "work": spec.get("work", False)}
-    for key in ("tableau", "t_end", "n_steps"):
+    for key in ("tableau", "composition", "t_end", "n_steps"):
         if spec.get(key) is not None:
             options[key] = spec[key]
     return model, state["q"], state["p"], options
 
 
-def job_spec(model: Model, q0: np.ndarray, p0: np.ndarray, *, method: str, tableau: str | None, h: float,
-             t_end: float | None, n_steps: int | None, save_every: int, work: bool) -> dict[str, Any]:
+def job_spec(model: Model, q0: np.ndarray, p0: np.ndarray, *, method: str, tableau: str | None,
+             composition: str | None, h: float, t_end: float | None, n_steps: int | None, save_every: int,
+             work: bool) -> dict[str, Any]:
     """The job spec of a run: what Solution.provenance holds."""
     from . import __version__
 
     spec = describe_model(model)
-    spec.update({"method": method, "tableau": tableau, "step_size": h, "save_every": save_every, "work": work,
+    spec.update({"method": method, "tableau": tableau, "composition": composition, "step_size": h, "save_every": save_every, "work": work,
                  "initial_state": {"q": np.asarray(q0, float).tolist(), "p": np.asarray(p0, float).tolist()}})
     if t_end is not None:
         spec["t_end"] = t_end

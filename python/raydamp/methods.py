@@ -6,7 +6,7 @@ from typing import NamedTuple
 
 from . import _core
 
-__all__ = ["MethodInfo", "TableauInfo", "methods", "tableaux"]
+__all__ = ["MethodInfo", "TableauInfo", "CompositionInfo", "methods", "tableaux", "compositions"]
 
 
 class MethodInfo(NamedTuple):
@@ -19,6 +19,17 @@ class MethodInfo(NamedTuple):
     default: bool
     damped: bool
     description: str
+    symmetric: bool = False
+
+
+class CompositionInfo(NamedTuple):
+    """A composition Psi_h = Phi_{gamma_m h} o ... o Phi_{gamma_1 h} of a symmetric step Phi."""
+
+    name: str
+    order: int
+    stages: int
+    gammas: list[float]
+    reference: str
 
 
 class TableauInfo(NamedTuple):
@@ -36,7 +47,9 @@ def methods() -> list[MethodInfo]:
 
     Methods taking a Runge-Kutta tableau ('rks', 'rksb') are listed once per
     tableau they accept; ``default`` marks the one used when ``tableau=None``;
-    ``damped`` is False for 'sv', which refuses models with eps > 0.
+    ``damped`` is False for 'sv', which refuses models with eps > 0;
+    ``symmetric`` marks the symmetric order-2 steps a composition can raise to
+    higher order (see :func:`compositions`).
     Orders are computed from the tableau's order conditions, not typed in.
     """
     return [MethodInfo(**{k: row[k] for k in MethodInfo._fields}) for row in _core.methods()]
@@ -45,3 +58,15 @@ def methods() -> list[MethodInfo]:
 def tableaux() -> list[TableauInfo]:
     """The Butcher tableaux raydamp ships, with their computed orders."""
     return [TableauInfo(**row) for row in _core.tableaux()]
+
+
+def compositions() -> list[CompositionInfo]:
+    """The compositions ``integrate(..., composition=...)`` accepts, with their order.
+
+    Each raises a symmetric order-2 method (a row of :func:`methods` with
+    ``symmetric=True``) to its order; "none" is the method itself. The
+    coefficients are symmetric, sum to 1 and satisfy the odd-power order
+    conditions, all checked when the core builds them; every composition of
+    order above 2 has a negative coefficient (a backward sub-step).
+    """
+    return [CompositionInfo(**row) for row in _core.compositions()]

@@ -20,7 +20,8 @@ from .solution import Solution
 __all__ = ["to_xarray", "from_xarray", "save", "load", "FORMATS"]
 
 FORMATS = (".nc", ".npz", ".csv")
-_SCALARS = ("status", "steps", "failed_step", "message", "method", "tableau", "h", "max_momentum_drift", "wall_time")
+_SCALARS = ("status", "steps", "failed_step", "message", "method", "tableau", "composition", "h", "max_momentum_drift",
+            "wall_time")
 
 
 def _attributes(sol: Solution) -> dict[str, Any]:
@@ -29,7 +30,7 @@ def _attributes(sol: Solution) -> dict[str, Any]:
     attrs: dict[str, Any] = {"provenance": json.dumps(provenance)}
     for key in _SCALARS:
         value = getattr(sol, key)
-        # NetCDF has no null: -1 for "no failed step", "" for "no tableau".
+        # NetCDF has no null: -1 for "no failed step", "" for "no tableau" or "no composition".
         if value is None:
             value = -1 if key == "failed_step" else ""
         attrs[key] = value
@@ -38,10 +39,11 @@ def _attributes(sol: Solution) -> dict[str, Any]:
 
 
 def _scalars_from(attrs: dict[str, Any]) -> dict[str, Any]:
-    out = {key: attrs[key] for key in _SCALARS}
+    out = {key: attrs.get(key, "") for key in _SCALARS}
     out["steps"] = int(out["steps"])
     out["failed_step"] = None if int(out["failed_step"]) < 0 else int(out["failed_step"])
     out["tableau"] = out["tableau"] or None
+    out["composition"] = out.get("composition") or None
     out["h"] = float(out["h"])
     out["max_momentum_drift"] = float(out["max_momentum_drift"])
     out["wall_time"] = float(out["wall_time"])

@@ -29,6 +29,7 @@ class Solution:
         "cancelled".
     steps : steps taken (all with finite results).
     work : (N,) damping work W(t) if the run was asked for it (``work=True``), else None.
+    composition : the composition the method was raised to higher order with, or None.
     provenance : what produced it, as the job JSON the service and ``raydamp run`` take
         (model or system, initial state, method, tableau, step size, span, save_every)
         plus ``raydamp_version``; ``raydamp.integrate(*raydamp.job.job_arguments(...))``
@@ -55,6 +56,7 @@ class Solution:
     max_momentum_drift: float
     work: np.ndarray | None = field(default=None)
     wall_time: float = field(default=0.0)
+    composition: str | None = field(default=None)
     # (model, q0, p0, options) of the run, turned into `provenance` when asked for (cheap
     # runs stay cheap); or the provenance dict itself, for a loaded solution.
     origin: Any = field(default=None, compare=False)
@@ -143,6 +145,7 @@ class Solution:
             "message": self.message,
             "method": self.method,
             "tableau": self.tableau,
+            "composition": self.composition,
             "step_size": self.h,
             "steps": self.steps,
             "failed_step": self.failed_step,

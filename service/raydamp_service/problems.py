@@ -28,6 +28,7 @@ _FIELD_OF_ARGUMENT: dict[str, tuple[str, ...]] = {
     "p0": ("initial_state", "p"),
     "method": ("method",),
     "tableau": ("tableau",),
+    "composition": ("composition",),
     "save_every": ("save_every",),
     "n_steps": ("n_steps",),
     "t_end": ("t_end",),
@@ -109,6 +110,8 @@ def build_call(spec: JobSpec) -> RaydampCall:
     options: dict[str, Any] = {"method": spec.method, "h": spec.step_size, "save_every": spec.save_every}
     if spec.tableau is not None:
         options["tableau"] = spec.tableau
+    if spec.composition is not None:
+        options["composition"] = spec.composition
     if spec.n_steps is not None:
         options["n_steps"] = spec.n_steps
     if spec.t_end is not None:

@@ -21,6 +21,7 @@ ModelName = Literal[tuple(model["name"] for model in describe_models())]  # type
 MethodName = Literal[tuple(dict.fromkeys(method.name for method in raydamp.methods()))]  # type: ignore[valid-type]
 TableauName = Literal[tuple(dict.fromkeys(  # type: ignore[valid-type]
     method.tableau for method in raydamp.methods() if method.tableau is not None))]
+CompositionName = Literal[tuple(c.name for c in raydamp.compositions())]  # type: ignore[valid-type]
 
 # JSON parsing accepts NaN and Infinity (and 1e999 overflows to inf); no run may start from them.
 FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
@@ -121,6 +122,9 @@ class JobSpec(_Input):
         default_factory=dict, max_length=64, description="model parameters by name; the rest take their defaults")
     method: MethodName = Field(description="a name from GET /v1/methods")
     tableau: TableauName | None = Field(None, description="Runge-Kutta tableau for rks/rksb")
+    composition: CompositionName | None = Field(None, description="raises a symmetric method's order: a name from "
+                                                                 "raydamp.compositions() (GET /v1/methods lists the "
+                                                                 "symmetric methods)")
     step_size: FiniteFloat = Field(gt=0, description="step_size x the number of steps must be finite")
     t_end: FiniteFloat | None = Field(None, gt=0, description="the end time; give this or n_steps, not both")
     n_steps: int | None = Field(None, ge=1, description="the number of steps; give this or t_end, not both")
@@ -142,6 +146,7 @@ class JobSummary(BaseModel):
     message: str
     method: str
     tableau: str | None
+    composition: str | None = None
     step_size: float
     steps: int
     failed_step: int | None
@@ -218,6 +223,7 @@ class MethodInfo(BaseModel):
     default: bool = Field(description="the tableau used when none is given")
     damped: bool = Field(description="False for methods that refuse eps > 0")
     description: str
+    symmetric: bool = Field(False, description="a symmetric order-2 step, which a composition raises to higher order")
 
 
 class Health(BaseModel):

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "raydamp/methods/butcher_tableau.hpp"
+#include "raydamp/methods/composition.hpp"
 #include "raydamp/methods/splitting.hpp"
 
 namespace raydamp {
@@ -22,14 +23,16 @@ struct MethodEntry {
   std::string default_tableau;  // "" when the method has no Runge-Kutta stage
   bool tableau_fixed;           // heun and rk4 are one tableau each
   bool ignores_damping;         // sv: applying it to a damped model would silently drop eps
+  bool symmetric_table;         // its table can be composed (with a symmetric tableau, if it takes one)
 };
 
 // An entry whose table, tableau use and order come from the Method type itself.
 template <class Method>
 MethodEntry entry(std::string name, std::string description, std::string default_tableau = "",
                   bool tableau_fixed = false, bool ignores_damping = false) {
-  return {std::move(name), std::move(description), Method::name, Method::tableau, Method::splitting_order,
-          std::move(default_tableau), tableau_fixed, ignores_damping};
+  return {std::move(name),    std::move(description), Method::name,    Method::tableau,
+          Method::splitting_order, std::move(default_tableau), tableau_fixed, ignores_damping,
+          is_mergeable<Method>()};
 }
 
 inline const std::vector<MethodEntry>& method_entries() {
@@ -96,6 +99,32 @@ inline void require_applicable(const MethodEntry& method, double eps) {
 inline int method_order(const MethodEntry& method, const ButcherTableau& tab) {
   if (method.tableau_use == TableauUse::none) return method.splitting_order;
   return std::min(method.splitting_order, tab.order());
+}
+
+// Whether (method, tableau) is a symmetric step of order 2, the base a composition
+// raises to its order: a symmetric table whose Runge-Kutta sub-flow, if any, is
+// itself symmetric (implicit midpoint; no explicit tableau is).
+inline bool is_composable(const MethodEntry& method, const ButcherTableau& tab) {
+  if (!method.symmetric_table) return false;
+  if (method.tableau_use != TableauUse::none && !tab.is_symmetric()) return false;
+  return method_order(method, tab) == 2;
+}
+
+// The composition a run of (method, tableau) uses when asked for `composition`
+// ("" = none); refuses, naming the argument, a base that is not symmetric.
+inline const Composition& resolve_composition(const MethodEntry& method, const ButcherTableau& tab,
+                                              const std::string& composition) {
+  const Composition& c = builtin_composition(composition);
+  if (c.stages() == 1 || is_composable(method, tab)) return c;
+  std::string base = "'" + method.name + "'";
+  if (method.tableau_use != TableauUse::none) base += " with tableau '" + tab.name() + "'";
+  throw std::invalid_argument("composition: '" + c.name() + "' composes a symmetric order-2 step, and method " + base +
+                              " is not one; use sv, 3s, 2s or rks with tableau='midpoint'");
+}
+
+// The order of a run: the composition's, over a symmetric order-2 base.
+inline int method_order(const MethodEntry& method, const ButcherTableau& tab, const Composition& composition) {
+  return composition.stages() == 1 ? method_order(method, tab) : composition.order();
 }
 
 namespace detail {

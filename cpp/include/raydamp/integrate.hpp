@@ -7,12 +7,24 @@
 #include <atomic>
 #include <cmath>
 #include <functional>
+#include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "raydamp/concepts.hpp"
 #include "raydamp/diagnostics.hpp"
+#include "raydamp/amplification.hpp"
+#include "raydamp/composed_step.hpp"
 #include "raydamp/step.hpp"
+
+#ifndef RAYDAMP_FLATTEN
+#if defined(__GNUC__) || defined(__clang__)
+#define RAYDAMP_FLATTEN __attribute__((flatten))
+#else
+#define RAYDAMP_FLATTEN
+#endif
+#endif
 
 namespace raydamp {
 
@@ -32,6 +44,9 @@ struct RunSpec {
   double h_last = 0.1;   // size of the final step (lands exactly on t_end)
   long save_every = 1;
   bool track_work = false;  // record W(t) = eps int qdot^T D qdot dt at the saved points
+  // Merge the last sub-flow of a step with the first of the next between steps
+  // that save nothing (see composed_step.hpp); false runs every step whole (tests).
+  bool merge_steps = true;
 };
 
 struct Control {
@@ -52,7 +67,7 @@ struct RunResult {
   long steps = 0;          // steps taken whose result is finite
   long failed_step = -1;   // 1-based index of the step whose result was not finite
   std::string message;
-  double max_momentum_drift = 0.0;  // max over every step of max_j |J_j - J_j(0)|
+  double max_momentum_drift = 0.0;  // max over every step of max_j |J_j - J_j(0)| (merged steps: see run_steps)
   Trajectory trajectory;
 };
 
@@ -91,6 +106,25 @@ double momentum_drift(const Model& model, const State<Dim>& z, MomentumBuffers& 
   return drift;
 }
 
+// The same for a model with a fixed number of momentum maps, on J(0) copied into
+// this object: a local of the step loop, so J(0) and J stay in registers instead of
+// being reloaded from the heap after every call into the model.
+template <class Model, int M = Model::n_momenta>
+struct FixedMomentumDrift {
+  std::array<double, (M > 0 ? M : 1)> j0{};
+  explicit FixedMomentumDrift(const MomentumBuffers& mb) {
+    for (int i = 0; i < M; ++i) j0[i] = mb.j0[i];
+  }
+  template <int Dim>
+  double operator()(const Model& model, const State<Dim>& z) const {
+    std::array<double, (M > 0 ? M : 1)> j{};
+    model.momenta(z.q, z.p, j.data());
+    double drift = 0.0;
+    for (int i = 0; i < M; ++i) drift = std::max(drift, std::abs(j[i] - j0[i]));
+    return drift;
+  }
+};
+
 }  // namespace detail
 
 // Steps between finiteness checks. A blown-up block is replayed step by step from
@@ -99,8 +133,73 @@ inline constexpr long kBlock = 256;
 
 namespace detail {
 
+// The steps of a method with a table that cannot be composed or merged (rk):
+// whole steps only.
+template <class Method>
+struct WholeStepper {
+  double h, h_last;
+  long last_step;
+  template <class Model, class Tab, int Dim, class DF>
+  void step(const Model& model, const Tab& tab, State<Dim>& z, long i, Workspace<Dim, DF>& ws) const {
+    raydamp::step<Method>(model, tab, z, i == last_step ? h_last : h, ws);
+  }
+};
+
+template <class Method>
+auto make_stepper(const Composition& composition, const RunSpec& spec) {
+  if constexpr (is_mergeable<Method>()) {
+    return ComposedStepper<Method>(composition, spec.h, spec.h_last, spec.n_steps);
+  } else {
+    if (composition.stages() != 1)
+      throw std::invalid_argument(std::string("composition: method table '") + Method::name +
+                                  "' is not symmetric, so it cannot be composed");
+    return WholeStepper<Method>{spec.h, spec.h_last, spec.n_steps - 1};
+  }
+}
+
+// Steps k .. end-1 of y, with nothing saved in between; returns the largest
+// momentum-map drift seen. Flattened: every call in it (sub-flows, the model,
+// Eigen) is inlined, whatever the compiler's budget in a translation unit that
+// instantiates every method for every model (the bindings' does; without it the
+// elastic pendulum's 3s took 43 ns/step instead of 30).
+template <bool Mergeable, class Model, class Tab, class Stepper, int Dim, class DF, class Advance, class Drift>
+RAYDAMP_FLATTEN double run_block(const Model& model, const Tab& shared_tab, const Stepper& stepper, Workspace<Dim, DF>& ws,
+                                 State<Dim>& state, long k, long end, bool merge, bool track_momenta,
+                                 const Advance& advance, const Drift& step_drift) {
+  // Stepped on local copies (state and durations) that no opaque call (sin, exp)
+  // can be assumed to touch, so the compiler keeps them in registers.
+  State<Dim> y = state;
+  const Stepper local = stepper;  // a few hundred bytes, once per block
+  // A fixed-size tableau is copied too; a run-time one (vectors) is read in place.
+  using LocalTab = std::conditional_t<std::is_trivially_copyable_v<Tab>, const Tab, const Tab&>;
+  LocalTab tab = shared_tab;
+  double block_drift = 0.0;
+  if constexpr (Mergeable) {
+    if (merge) {
+      local.lead(model, tab, y, k, ws);
+      for (long i = k; i + 1 < end; ++i) {
+        local.body(model, tab, y, i, ws);
+        if (track_momenta) block_drift = std::max(block_drift, step_drift(y));
+        local.join(model, tab, y, i, ws);
+      }
+      local.body(model, tab, y, end - 1, ws);
+      local.trail(model, tab, y, end - 1, ws);
+      if (track_momenta) block_drift = std::max(block_drift, step_drift(y));
+      state = y;
+      return block_drift;
+    }
+  }
+  for (long i = k; i < end; ++i) {
+    advance(y, i);
+    if (track_momenta) block_drift = std::max(block_drift, step_drift(y));
+  }
+  state = y;
+  return block_drift;
+}
+
 template <class Method, class Model, class Tab, int Dim>
-RunResult run_steps(const Model& model, const Tab& tab, State<Dim> z, const RunSpec& spec, const Control& control) {
+RunResult run_steps(const Model& model, const Tab& tab, const Composition& composition, State<Dim> z,
+                    const RunSpec& spec, const Control& control) {
   static_assert(is_model_v<Model>, "Model lacks part of the interface listed in raydamp/concepts.hpp");
   const long N = spec.n_steps;
   const int n = model.size();
@@ -123,6 +222,10 @@ RunResult run_steps(const Model& model, const Tab& tab, State<Dim> z, const RunS
   // that only inlined code sees, so the compiler can keep it in registers.
   State<Dim> checkpoint = z, before = z, y = z;
   if (mb.count() > 0) model.momenta(z.q, z.p, mb.j0.data());
+  auto step_drift = [&, fixed = FixedMomentumDrift<Model>(mb)](const State<Dim>& x) {
+    if constexpr (Model::n_momenta > 0) return fixed(model, x);
+    else return momentum_drift(model, x, mb);
+  };
   const bool track_momenta = mb.count() > 0;
   auto time_at = [&](long k) { return k == N && spec.h_last != spec.h ? (N - 1) * spec.h + spec.h_last : k * spec.h; };
   auto step_size = [&](long k) { return k == N - 1 ? spec.h_last : spec.h; };  // size of step k -> k+1
@@ -141,8 +244,16 @@ RunResult run_steps(const Model& model, const Tab& tab, State<Dim> z, const RunS
   // method integrates it itself (see integrates_work).
   constexpr bool trapezoid = !integrates_work<Method>::value;
   double power = spec.track_work && trapezoid ? dissipated_power(model, z, ws) : 0.0;
+  const auto stepper = make_stepper<Method>(composition, spec);
+  // First-same-as-last merging needs no intermediate state except the momentum
+  // maps', which are read before the merged sub-flow: an exact flow of a part of
+  // H or of the damping, each of which conserves J (paper section 5), so up to
+  // rounding that is J at the step's end. The damping work needs the step's end
+  // points: with work tracked, steps run whole.
+  constexpr bool mergeable = is_mergeable<Method>();
+  const bool merge = mergeable && spec.merge_steps && !spec.track_work;
   auto advance = [&](State<Dim>& x, long i) {
-    step<Method>(model, tab, x, step_size(i), ws);
+    stepper.step(model, tab, x, i, ws);
     if constexpr (trapezoid) {
       if (spec.track_work) {
         const double next = dissipated_power(model, x, ws);
@@ -163,10 +274,7 @@ RunResult run_steps(const Model& model, const Tab& tab, State<Dim> z, const RunS
     const double checkpoint_work = ws.work, checkpoint_power = power;
     double block_drift = 0.0;
     y = z;
-    for (long i = k; i < end; ++i) {
-      advance(y, i);
-      if (track_momenta) block_drift = std::max(block_drift, momentum_drift(model, y, mb));
-    }
+    block_drift = run_block<mergeable>(model, tab, stepper, ws, y, k, end, merge, track_momenta, advance, step_drift);
     z = y;
     if (!z.all_finite()) {
       // Replay the block one checked step at a time from its start.
@@ -217,18 +325,28 @@ RunResult run_steps(const Model& model, const Tab& tab, State<Dim> z, const RunS
 // Integrates spec.n_steps steps of Method from z. The built-in tableaux have 1, 2 or
 // 4 stages; for those the loop is instantiated with the stage count fixed, so
 // Runge-Kutta stages unroll. Any other tableau runs from the run-time table.
+// `composition` composes a symmetric Method (builtin_composition("none") is Method
+// itself); a composed run past the amplification guard (amplification.hpp) is
+// refused with std::invalid_argument.
 template <class Method, class Model, int Dim = Model::dim>
-RunResult integrate(const Model& model, const ButcherTableau& tab, State<Dim> z, const RunSpec& spec,
-                    const Control& control = {}) {
+RunResult integrate(const Model& model, const ButcherTableau& tab, const Composition& composition, State<Dim> z,
+                    const RunSpec& spec, const Control& control = {}) {
+  check_amplification<Method>(model, z.q, tab, composition, spec.h);
   if constexpr (uses_tableau<Method>()) {
     switch (tab.stages()) {
-      case 1: return detail::run_steps<Method>(model, FixedTableau<1>(tab), std::move(z), spec, control);
-      case 2: return detail::run_steps<Method>(model, FixedTableau<2>(tab), std::move(z), spec, control);
-      case 4: return detail::run_steps<Method>(model, FixedTableau<4>(tab), std::move(z), spec, control);
+      case 1: return detail::run_steps<Method>(model, FixedTableau<1>(tab), composition, std::move(z), spec, control);
+      case 2: return detail::run_steps<Method>(model, FixedTableau<2>(tab), composition, std::move(z), spec, control);
+      case 4: return detail::run_steps<Method>(model, FixedTableau<4>(tab), composition, std::move(z), spec, control);
       default: break;
     }
   }
-  return detail::run_steps<Method>(model, tab, std::move(z), spec, control);
+  return detail::run_steps<Method>(model, tab, composition, std::move(z), spec, control);
+}
+
+template <class Method, class Model, int Dim = Model::dim>
+RunResult integrate(const Model& model, const ButcherTableau& tab, State<Dim> z, const RunSpec& spec,
+                    const Control& control = {}) {
+  return integrate<Method>(model, tab, builtin_composition("none"), std::move(z), spec, control);
 }
 
 }  // namespace raydamp

@@ -43,6 +43,7 @@ class ButcherTableau {
           else if (kind_ == TableauKind::explicit_) kind_ = TableauKind::diagonally_implicit;
         }
     order_ = computed_order();
+    symmetric_ = computed_symmetry();
     if (order_ < 1) throw std::invalid_argument("tableau " + name_ + ": weights b do not sum to 1 (not consistent)");
   }
 
@@ -54,8 +55,23 @@ class ButcherTableau {
   TableauKind kind() const { return kind_; }
   bool is_explicit() const { return kind_ == TableauKind::explicit_; }
   int order() const { return order_; }
+  // Symmetric (self-adjoint, Phi_{-h} = Phi_h^{-1}): the one-step maps a composition
+  // may raise to higher order.
+  bool is_symmetric() const { return symmetric_; }
 
  private:
+  // b_i = b_{s+1-i} and a_ij + a_{s+1-i,s+1-j} = b_j (Hairer, Lubich & Wanner,
+  // Geometric Numerical Integration, Theorem V.2.3).
+  bool computed_symmetry() const {
+    auto close = [](double x, double y) { return std::abs(x - y) < 1e-14; };
+    for (int i = 0; i < s_; ++i) {
+      if (!close(b_[i], b_[s_ - 1 - i])) return false;
+      for (int j = 0; j < s_; ++j)
+        if (!close(a(i, j) + a(s_ - 1 - i, s_ - 1 - j), b_[j])) return false;
+    }
+    return true;
+  }
+
   // Checks the order conditions for trees up to order 4 in long double; returns
   // the highest order whose conditions all hold (up to 4, the highest we ship).
   int computed_order() const {
@@ -98,6 +114,7 @@ class ButcherTableau {
   std::vector<double> b_, c_;
   TableauKind kind_;
   int order_;
+  bool symmetric_;
 };
 
 // A validated tableau copied into fixed-size storage: the step loop instantiated

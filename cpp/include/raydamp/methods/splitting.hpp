@@ -123,6 +123,19 @@ constexpr bool uses_tableau() {
   return false;
 }
 
+inline constexpr bool is_exact_flow(Flow f) {
+  return f == Flow::drift || f == Flow::kick || f == Flow::damp || f == Flow::kick_damp;
+}
+
+// A table whose ends can be merged (composed_step.hpp): symmetric, at least three stages, and its end
+// sub-flow an exact flow (a Runge-Kutta step for h1 then h2 is not the step for h1 + h2).
+template <class Method>
+constexpr bool is_mergeable() {
+  constexpr std::size_t S = Method::stages.size();
+  if constexpr (S < 3) return false;
+  else return is_symmetric(Method::stages) && is_exact_flow(Method::stages[0].flow);
+}
+
 template <class Method>
 constexpr bool valid_table() {
   return fractions_sum_to_one(Method::stages) && is_symmetric(Method::stages);

@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "raydamp/damping/isotropic_damping.hpp"
-#include "raydamp/mass/scalar_mass.hpp"
+#include "raydamp/mass/unit_mass.hpp"
 #include "raydamp/models/check.hpp"
 #include "raydamp/state.hpp"
 
@@ -17,7 +17,7 @@ struct DampedPendulum {
   using Vec = Vector<dim>;
 
   double eps;
-  ScalarMass mass{1.0};
+  UnitMass mass;
   IsotropicDamping damping;
 
   explicit DampedPendulum(double eps_ = 0.01) : eps(eps_) {

@@ -1,0 +1,139 @@
+// A step of a symmetric splitting table composed with coefficients gamma_i, as
+// the durations of its sub-flows, and the step loop's three ways of applying it.
+//
+// A symmetric table starts and ends with the same exact flow (damp for 3s, drift
+// for sv, 2s and rks, kick for rksb). Two such sub-flows in a row are one flow
+// for the summed time (exp(a X) exp(b X) = exp((a + b) X)), so
+// - inside a composed step, the end of stage i and the start of stage i + 1 are
+//   merged (a "joint"), always;
+// - between two steps whose intermediate state nobody reads, the end of one and
+//   the start of the next are merged too (first-same-as-last): 3s then runs
+//   damp h/2, [drift h/2, kick h, drift h/2, damp h]*, ..., drift h/2, damp h/2.
+// Results equal the unmerged steps to rounding.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <stdexcept>
+#include <utility>
+
+#include "raydamp/methods/composition.hpp"
+#include "raydamp/step.hpp"
+
+namespace raydamp {
+
+// Sub-flow durations of one step of size h: the first sub-flow (lead), then for
+// each composition stage c its inner sub-flows 1 .. S-2 followed (except after the
+// last stage) by the joint, then the last sub-flow (trail). Fixed storage, so the
+// step loop can copy it into a local the compiler keeps in registers.
+template <class Method>
+struct StepDurations {
+  static constexpr int S = static_cast<int>(Method::stages.size());
+  static constexpr int stride = S - 1;  // inner sub-flows and the joint after them
+  double lead = 0.0, trail = 0.0;
+  int m = 1;
+  std::array<double, kMaxCompositionStages * stride> body{};  // m * stride used; the last joint slot unused
+
+  StepDurations(const Composition& c, double h) : m(c.stages()) {
+    const double first = Method::stages[0].fraction, last = Method::stages[S - 1].fraction;
+    lead = first * c.gamma(0) * h;
+    trail = last * c.gamma(m - 1) * h;
+    for (int s = 0; s < m; ++s) {
+      for (int j = 1; j < S - 1; ++j) body[s * stride + j - 1] = Method::stages[j].fraction * c.gamma(s) * h;
+      if (s + 1 < m) body[s * stride + S - 2] = (last * c.gamma(s) + first * c.gamma(s + 1)) * h;
+    }
+  }
+
+  // Every sub-flow of the step in order, with its duration (for the amplification bound).
+  template <class F>
+  void for_each(F f) const {
+    f(Method::stages[0].flow, lead);
+    for (int s = 0; s < m; ++s) {
+      for (int j = 1; j < S - 1; ++j) f(Method::stages[j].flow, body[s * stride + j - 1]);
+      if (s + 1 < m) f(Method::stages[0].flow, body[s * stride + S - 2]);
+    }
+    f(Method::stages[S - 1].flow, trail);
+  }
+};
+
+namespace detail {
+
+template <class Method, class Model, class Tab, int Dim, class DF, std::size_t... I>
+inline void inner_stages(const Model& model, const Tab& tab, State<Dim>& z, const double* t, Workspace<Dim, DF>& ws,
+                         std::index_sequence<I...>) {
+  (apply_flow<Method::stages[I + 1].flow>(model, tab, z, t[I], ws), ...);
+}
+
+}  // namespace detail
+
+// The steps of one run: Method composed with a composition, for a run of n_steps
+// steps of size h whose last step has size h_last.
+template <class Method>
+class ComposedStepper {
+ public:
+  static constexpr int S = StepDurations<Method>::S;
+  static_assert(is_mergeable<Method>(), "ComposedStepper needs a symmetric table with an exact end sub-flow");
+
+  ComposedStepper(const Composition& c, double h, double h_last, long n_steps)
+      : regular_(c, h), last_(c, h_last), last_step_(n_steps - 1), join_regular_(regular_.trail + regular_.lead),
+        single_(c.stages() == 1) {
+    for (int j = 0; j < S - 2; ++j) inner_regular_[j] = regular_.body[j];
+  }
+
+  const StepDurations<Method>& durations(long i) const { return i == last_step_ ? last_ : regular_; }
+
+  // The whole step i, unmerged at both ends.
+  template <class Model, class Tab, int Dim, class DF>
+  void step(const Model& model, const Tab& tab, State<Dim>& z, long i, Workspace<Dim, DF>& ws) const {
+    const StepDurations<Method>& d = durations(i);
+    apply_flow<Method::stages[0].flow>(model, tab, z, d.lead, ws);
+    body(model, tab, z, d, ws);
+    apply_flow<Method::stages[S - 1].flow>(model, tab, z, d.trail, ws);
+  }
+
+  // Step i without its first sub-flow (run by lead() or the previous join()) and
+  // without its last (run by join() or trail()).
+  template <class Model, class Tab, int Dim, class DF>
+  void lead(const Model& model, const Tab& tab, State<Dim>& z, long i, Workspace<Dim, DF>& ws) const {
+    apply_flow<Method::stages[0].flow>(model, tab, z, durations(i).lead, ws);
+  }
+  template <class Model, class Tab, int Dim, class DF>
+  void body(const Model& model, const Tab& tab, State<Dim>& z, long i, Workspace<Dim, DF>& ws) const {
+    // The uncomposed method's regular step reads its durations from this object,
+    // a local of the step loop that nothing else can write, so the compiler keeps
+    // them in registers across the model's calls (heap data it must reload).
+    if (single_ && i != last_step_)
+      detail::inner_stages<Method>(model, tab, z, inner_regular_.data(), ws, std::make_index_sequence<S - 2>{});
+    else
+      body(model, tab, z, durations(i), ws);
+  }
+  // The last sub-flow of step i and the first of step i + 1, as one flow.
+  template <class Model, class Tab, int Dim, class DF>
+  void join(const Model& model, const Tab& tab, State<Dim>& z, long i, Workspace<Dim, DF>& ws) const {
+    const double t = i + 1 == last_step_ ? regular_.trail + last_.lead : join_regular_;
+    apply_flow<Method::stages[0].flow>(model, tab, z, t, ws);
+  }
+  template <class Model, class Tab, int Dim, class DF>
+  void trail(const Model& model, const Tab& tab, State<Dim>& z, long i, Workspace<Dim, DF>& ws) const {
+    apply_flow<Method::stages[S - 1].flow>(model, tab, z, durations(i).trail, ws);
+  }
+
+ private:
+  template <class Model, class Tab, int Dim, class DF>
+  static void body(const Model& model, const Tab& tab, State<Dim>& z, const StepDurations<Method>& d,
+                   Workspace<Dim, DF>& ws) {
+    const double* t = d.body.data();
+    for (int s = 0; s < d.m; ++s, t += StepDurations<Method>::stride) {
+      detail::inner_stages<Method>(model, tab, z, t, ws, std::make_index_sequence<S - 2>{});
+      if (s + 1 < d.m) apply_flow<Method::stages[0].flow>(model, tab, z, t[S - 2], ws);
+    }
+  }
+
+  StepDurations<Method> regular_, last_;
+  long last_step_;
+  double join_regular_;
+  bool single_;  // one composition stage: the method itself
+  std::array<double, S - 2> inner_regular_{};
+};
+
+}  // namespace raydamp
