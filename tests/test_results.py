@@ -139,3 +139,17 @@ def test_job_arguments_name_the_bad_field():
     for spec, message in cases:
         with pytest.raises(ValueError, match=message):
             job_arguments(spec)
+
+
+def test_composed_run_keeps_its_composition(tmp_path):
+    sol = raydamp.integrate(ElasticPendulum(eps=0.1), ELASTIC_Q0, ELASTIC_P0, method="3s", composition="yoshida4",
+                            h=0.1, n_steps=200, save_every=20)
+    assert sol.provenance["composition"] == "yoshida4"
+    model, q0, p0, options = job_arguments(sol.provenance)
+    np.testing.assert_array_equal(raydamp.integrate(model, q0, p0, **options).q, sol.q)
+    sol.save(tmp_path / "c.nc")
+    assert raydamp.load(tmp_path / "c.nc").composition == "yoshida4"
+    plain = raydamp.integrate(ElasticPendulum(eps=0.1), ELASTIC_Q0, ELASTIC_P0, method="3s", h=0.1, n_steps=200)
+    assert plain.provenance["composition"] is None
+    plain.save(tmp_path / "p.nc")
+    assert raydamp.load(tmp_path / "p.nc").composition is None
