@@ -18,7 +18,7 @@ import pytest
 CHROMIUM = "/usr/bin/chromium"
 SCREENSHOT = Path(__file__).resolve().parents[2] / "docs" / "page.png"
 RUN_TIMEOUT_MS = 120_000  # a loaded machine is slow, not red
-SERVER_ENV: dict[str, str] = {}
+SERVER_ENV = {"RAYDAMP_MAX_STEPS": str(10**10)}  # a run the cancel test can never see finish
 
 
 @contextmanager
@@ -207,3 +207,46 @@ def test_docs_are_served_locally(module_server) -> None:
         page.wait_for_selector(".swagger-ui .info .title", timeout=30_000)
         assert page.inner_text(".swagger-ui .info .title").startswith("raydamp")
         page.wait_for_selector('.opblock-summary-path[data-path="/v1/jobs/{job_id}/trajectory"]', timeout=30_000)
+
+
+def test_every_example_runs(module_server) -> None:
+    """The editor's examples are specs the service accepts and completes, and the suggested starts
+    are for models the service has, with their dimension."""
+    examples = module_server.client.get("/static/examples.json").json()
+    models = {model["name"]: model for model in module_server.client.get("/v1/models").json()}
+    for name, start in examples["models"].items():
+        assert name in models and len(start["q"]) == len(start["p"]) == models[name]["dim"], name
+    for example in examples["systems"]:
+        spec = {"system": example["system"], "method": example["method"], "step_size": example["step_size"],
+                "t_end": example["t_end"], "save_every": example["save_every"],
+                "initial_state": {"q": example["q"], "p": example["p"]}}
+        job = module_server.wait_finished(module_server.submit(spec))
+        assert job["status"] == "completed", (example["label"], job["error"])
+        # Damped, so each example loses energy: the plots show something happening.
+        assert job["summary"]["energy_dissipated"] > 0, example["label"]
+
+
+def test_progress_is_live_and_cancel_stops_the_run(module_server) -> None:
+    """A long run: the bar shows a fraction strictly between 0 and 1 while it runs (the service's
+    live progress), Cancel stops it, and what it computed is still plotted."""
+    base = _base(module_server)
+    with open_page(base) as page:
+        _ready(page)
+        page.select_option("#model", "damped_pendulum")
+        page.fill("#step_size", "0.001")
+        page.fill("#t_end", "10000000")  # 10^10 steps: hours, far longer than the test waits
+        page.fill("#save_every", "100000")
+        page.click("#submit")
+        page.wait_for_function("() => { const bar = document.getElementById('progress');"
+                               " return bar.value > 0 && bar.value < 1; }", timeout=RUN_TIMEOUT_MS)
+        assert page.inner_text("#job-status") == "running"
+        page.click("#cancel")
+        page.wait_for_function("() => document.getElementById('plots').dataset.ready === 'true'",
+                               timeout=RUN_TIMEOUT_MS)
+        job = module_server.job(page.inner_text("#job-id"))
+        assert job["status"] == "cancelled" and 0 < job["progress"] < 1
+        energy = _traces(page, "energy")
+        saved = job["summary"]["saved_points"]
+        assert saved > 1
+        # The page fetches every k-th point, k = ceil(saved / 5000), for its plots.
+        assert len(energy[0]["x"]) == len(range(0, saved, -(-saved // 5000)))

@@ -7,7 +7,8 @@ const FINAL = new Set(["completed", "failed", "cancelled"]);
 const PLOT_POINTS = 5000; // points fetched for the plots at most; the downloads carry every point
 const POLL_MS = 250;
 
-const state = { models: [], methods: [], examples: { models: {}, systems: [] }, job: null, poll: null, overlays: [] };
+const state = { models: [], methods: [], examples: { models: {}, systems: [] }, job: null, poll: null, overlays: [],
+  followed: 0 }; // followed counts the jobs opened, so that a poll still in flight for an earlier one stops
 
 async function getJSON(url) {
   const response = await fetch(url);
@@ -179,11 +180,12 @@ function follow(id) {
   $("downloads").hidden = true;
   $("job-error").hidden = true;
   $("summary").replaceChildren();
-  poll(id);
+  state.followed += 1;
+  poll(id, state.followed);
 }
 
-async function poll(id) {
-  if ($("job-id").textContent !== id) return; // another job was opened meanwhile
+async function poll(id, followed) {
+  if (followed !== state.followed) return; // another job (or this one again) was opened meanwhile
   let job;
   try {
     job = await getJSON(`/v1/jobs/${id}`);
@@ -191,13 +193,14 @@ async function poll(id) {
     $("job-status").textContent = String(error.message);
     return;
   }
+  if (followed !== state.followed) return;
   $("job-status").textContent = job.status;
   $("job-status").className = `status-${job.status}`;
   $("progress").value = job.progress;
   $("progress-text").textContent = `${Math.round(100 * job.progress)} %`;
   $("cancel").hidden = FINAL.has(job.status);
   if (!FINAL.has(job.status)) {
-    state.poll = setTimeout(() => poll(id), POLL_MS);
+    state.poll = setTimeout(() => poll(id, followed), POLL_MS);
     return;
   }
   state.job = job;
