@@ -92,6 +92,7 @@ def test_kepler_run_through_the_form(module_server) -> None:
         page.check("input[name=source][value=system]")
         page.select_option("#example", label="Kepler orbit with a dashpot on the radius")
         assert '"potential": "-1/sqrt(x^2 + y^2)"' in page.input_value("#system")
+        assert page.is_hidden("#tableau-label")  # 2s has no tableau to choose
         job_id = _run(page)
 
         job = module_server.job(job_id)
@@ -145,7 +146,12 @@ def test_models_overlay_and_delete(module_server) -> None:
 
         page.check("#overlay")
         page.select_option("#model", "damped_pendulum")
+        page.select_option("#method", "rks")
+        assert page.is_visible("#tableau") and page.input_value("#tableau") == "heun"  # rks's default
+        assert page.eval_on_selector_all("#tableau option", "options => options.map(o => o.value)") == [
+            "euler", "heun", "midpoint", "rk4"]
         page.select_option("#method", "2s")
+        assert page.is_hidden("#tableau-label")
         pendulum = _run(page, previous=elastic)
         job = module_server.job(pendulum)
         assert job["spec"]["method"] == "2s" and job["status"] == "completed"

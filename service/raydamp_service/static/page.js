@@ -311,7 +311,9 @@ function draw(job, trajectory) {
       const values = column(trajectory.momentum, k);
       return { x: trajectory.t, y: values.map((v) => v - values[0]), mode: "lines", name: `${name}(t) - ${name}(0)` };
     });
-    Plotly.newPlot(momentum, drift, layout("momentum drift", "t", "drift"), config);
+    // Drifts are near rounding (1e-14): "2e-14" on the axis, not Plotly's SI "20f".
+    Plotly.newPlot(momentum, drift, layout("momentum drift", "t", "drift",
+      { yaxis: { title: { text: "drift" }, exponentformat: "e" } }), config);
   }
 }
 
