@@ -6,8 +6,11 @@ VENV := .venv
 PY := $(VENV)/bin/python
 PIP := $(VENV)/bin/pip
 INSTALLED := $(VENV)/.raydamp-installed
-SOURCES := $(shell find cpp python service -type f \( -name '*.hpp' -o -name '*.cpp' -o -name '*.py' -o -name '*.pyi' \) 2>/dev/null)
+SOURCES := $(shell find cpp python service -type f \( -name '*.hpp' -o -name '*.cpp' -o -name '*.py' -o -name '*.pyi' \
+             -o -name '*.html' -o -name '*.js' -o -name '*.css' -o -name '*.json' \) 2>/dev/null)
 APT_PACKAGES := libeigen3-dev g++ make
+# The page test (tests/service/test_page.py) drives Debian's chromium; only the test targets need it.
+test pytest: APT_PACKAGES += chromium
 SUDO := $(if $(filter 0,$(shell id -u)),,sudo)
 HOST ?= 127.0.0.1
 PORT ?= 8000

@@ -14,7 +14,7 @@ from fastapi.exceptions import RequestValidationError
 from .config import Settings
 from .errors import validation_error_handler
 from .guard import UNGUARDED_PATHS, RequestGuard
-from .routes import catalogue, health, jobs
+from .routes import catalogue, health, jobs, page
 from .runner import Runner
 from .store import JobStore
 
@@ -37,14 +37,16 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             runner.stop()
             store.close()
 
-    app = FastAPI(title="raydamp", version=raydamp.__version__, lifespan=lifespan,
+    # /docs is ours (routes/page.py), with Swagger UI served locally; ReDoc would load from a CDN.
+    app = FastAPI(title="raydamp", version=raydamp.__version__, lifespan=lifespan, docs_url=None, redoc_url=None,
                   summary="Damped Hamiltonian integrations as jobs: submit, poll, fetch the trajectory.")
     app.state.settings = settings
     app.state.large_fetches = threading.Semaphore(settings.max_large_fetches)
     app.add_middleware(RequestGuard, settings=settings)
     app.add_exception_handler(RequestValidationError, validation_error_handler)
-    for router in (jobs.router, catalogue.router, health.router):
+    for router in (jobs.router, catalogue.router, health.router, page.router):
         app.include_router(router)
+    page.mount_assets(app)
     _document_limits(app, settings)
     return app
 

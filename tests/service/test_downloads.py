@@ -73,6 +73,13 @@ def test_decimation_applies_to_files(server, jobs, tmp_path):
     np.testing.assert_array_equal(raydamp.load(tmp_path / "d.npz").q, reference["q"])
 
 
+def test_empty_selection_is_422_naming_start(server, jobs):
+    """Found by the schemathesis run: this 422's detail was a string, not the declared list."""
+    response = server.client.get(f"/v1/jobs/{jobs['pendulum']}/trajectory", params={"format": "csv", "start": 10**6})
+    assert response.status_code == 422
+    assert [tuple(e["loc"]) for e in response.json()["detail"]] == [("query", "start")]
+
+
 def test_unknown_format_is_422_naming_format(server, jobs):
     response = server.client.get(f"/v1/jobs/{jobs['pendulum']}/trajectory", params={"format": "xlsx"})
     assert response.status_code == 422

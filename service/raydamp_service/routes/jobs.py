@@ -159,7 +159,9 @@ def _stored_solution(record: JobRecord, store: JobStore, points: slice):
                             + (f": {record.error}" if record.error else ""))
     picked = TrajectoryArrays(*(getattr(arrays, name)[points] for name in ("t", "q", "p", "energy", "momentum")))
     if picked.t.size == 0:
-        raise HTTPException(422, detail="start, stop, every select no saved point")
+        # The same shape as every other 422 (detail[] with loc), as /openapi.json declares.
+        raise RequestValidationError([{"type": "value_error", "loc": ("query", "start"), "input": points.start,
+                                       "msg": f"start, stop, every select none of the {arrays.t.size} saved points"}])
     return stored_solution(record, picked)
 
 

@@ -1,0 +1,393 @@
+// The raydamp page: a client of the service's own /v1 API, nothing more. It builds a job spec from
+// the form, POSTs it, polls the job, then draws the trajectory with Plotly (served by this service).
+"use strict";
+
+const $ = (id) => document.getElementById(id);
+const FINAL = new Set(["completed", "failed", "cancelled"]);
+const PLOT_POINTS = 5000; // points fetched for the plots at most; the downloads carry every point
+const POLL_MS = 250;
+
+const state = { models: [], methods: [], examples: { models: {}, systems: [] }, job: null, poll: null, overlays: [],
+  followed: 0 }; // followed counts the jobs opened, so that a poll still in flight for an earlier one stops
+
+async function getJSON(url) {
+  const response = await fetch(url);
+  if (!response.ok) throw new Error(`${url}: ${response.status} ${await response.text()}`);
+  return response.json();
+}
+
+// ---- the form ---------------------------------------------------------------------------------
+
+function option(select, value, text) {
+  const element = document.createElement("option");
+  element.value = value;
+  element.textContent = text;
+  select.append(element);
+}
+
+function setNumbers(id, values) { $(id).value = values.join(", "); }
+
+function showModel() {
+  const model = state.models.find((m) => m.name === $("model").value);
+  if (!model) return;
+  $("model-description").textContent = `${model.description} (dim ${model.dim})`;
+  const defaults = Object.fromEntries(model.parameters.map((p) => [p.name, p.default]));
+  $("parameters").value = JSON.stringify(defaults);
+  // The paper's initial data where we have them; otherwise q = (1, 0, ...), p = 0.
+  const start = state.examples.models[model.name] ||
+    { q: Array.from({ length: model.dim }, (_, i) => (i === 0 ? 1 : 0)), p: Array(model.dim).fill(0) };
+  setNumbers("q", start.q);
+  setNumbers("p", start.p);
+  for (const key of ["step_size", "t_end", "save_every"]) if (start[key] !== undefined) $(key).value = start[key];
+}
+
+function showExample() {
+  const example = state.examples.systems[Number($("example").value)];
+  if (!example) return;
+  $("system").value = JSON.stringify(example.system, null, 2);
+  setNumbers("q", example.q);
+  setNumbers("p", example.p);
+  for (const key of ["step_size", "t_end", "save_every"]) $(key).value = example[key];
+  $("method").value = example.method;
+  showMethod();
+}
+
+function showSource() {
+  const system = document.querySelector("input[name=source]:checked").value === "system";
+  $("model-fields").hidden = system;
+  $("system-fields").hidden = !system;
+  if (system) showExample(); else showModel();
+}
+
+function showMethod() {
+  const name = $("method").value;
+  const rows = state.methods.filter((m) => m.name === name);
+  const tableau = $("tableau");
+  tableau.replaceChildren();
+  const tableaux = rows.filter((m) => m.tableau !== null);
+  for (const m of tableaux) option(tableau, m.tableau, `${m.tableau} (order ${m.order})${m.default ? " (default)" : ""}`);
+  const fallback = tableaux.find((m) => m.default);
+  if (fallback) tableau.value = fallback.tableau;
+  $("tableau-label").hidden = tableaux.length === 0;
+  $("method-description").textContent = rows.length ? rows[0].description : "";
+}
+
+// A number the user typed, or the text itself so that the service's 422 names the field.
+function numberOr(text) {
+  const trimmed = text.trim();
+  const value = Number(trimmed);
+  return trimmed !== "" && Number.isFinite(value) ? value : trimmed;
+}
+
+function numbers(text) { return text.split(/[,\s]+/).filter((s) => s !== "").map(numberOr); }
+
+class FormError extends Error {
+  constructor(loc, message) { super(message); this.loc = loc; }
+}
+
+function parseJSON(field, text) {
+  try { return JSON.parse(text); } catch (error) { throw new FormError([field], `not valid JSON: ${error.message}`); }
+}
+
+function buildSpec() {
+  const spec = {};
+  if (document.querySelector("input[name=source]:checked").value === "system") {
+    spec.system = parseJSON("system", $("system").value);
+  } else {
+    spec.model = $("model").value;
+    spec.parameters = parseJSON("parameters", $("parameters").value || "{}");
+  }
+  spec.method = $("method").value;
+  if (!$("tableau-label").hidden && $("tableau").value) spec.tableau = $("tableau").value;
+  spec.step_size = numberOr($("step_size").value);
+  spec.t_end = numberOr($("t_end").value);
+  spec.save_every = numberOr($("save_every").value);
+  spec.initial_state = { q: numbers($("q").value), p: numbers($("p").value) };
+  return spec;
+}
+
+// ["body", "system", "damping", "dampers", 0, "on"] -> "system.damping.dampers[0].on"
+function jsonPath(loc) {
+  return loc.filter((part, i) => !(i === 0 && part === "body"))
+    .map((part, i) => (typeof part === "number" ? `[${part}]` : (i ? "." : "") + part)).join("");
+}
+
+// The form control a path belongs to, to outline it.
+function controlFor(loc) {
+  const parts = loc[0] === "body" ? loc.slice(1) : loc;
+  if (parts[0] === "initial_state") return $(parts[1] === "p" ? "p" : "q");
+  return $(String(parts[0])) || null;
+}
+
+function showErrors(errors) {
+  const box = $("errors");
+  for (const element of document.querySelectorAll(".invalid")) element.classList.remove("invalid");
+  box.replaceChildren();
+  box.hidden = errors.length === 0;
+  for (const { loc, msg } of errors) {
+    const line = document.createElement("div");
+    if (loc && loc.length) {
+      const path = document.createElement("code");
+      path.textContent = jsonPath(loc);
+      line.append(path, ": ");
+      const control = controlFor(loc);
+      if (control) control.classList.add("invalid");
+    }
+    line.append(msg);
+    box.append(line);
+  }
+}
+
+async function submit(event) {
+  event.preventDefault();
+  let spec;
+  try {
+    spec = buildSpec();
+  } catch (error) {
+    if (!(error instanceof FormError)) throw error;
+    showErrors([{ loc: error.loc, msg: error.message }]);
+    return;
+  }
+  $("submit").disabled = true;
+  try {
+    const response = await fetch("/v1/jobs", {
+      method: "POST", headers: { "content-type": "application/json" }, body: JSON.stringify(spec) });
+    const body = await response.json().catch(() => ({ detail: response.statusText }));
+    if (response.status === 422 && Array.isArray(body.detail)) {
+      showErrors(body.detail);
+    } else if (!response.ok) {
+      showErrors([{ loc: null, msg: `${response.status}: ${typeof body.detail === "string" ? body.detail : JSON.stringify(body.detail)}` }]);
+    } else {
+      showErrors([]);
+      follow(body.id);
+      refreshJobs();
+    }
+  } finally {
+    $("submit").disabled = false;
+  }
+}
+
+// ---- one job: progress, then results ------------------------------------------------------------
+
+function follow(id) {
+  if (state.poll) clearTimeout(state.poll);
+  if (state.job && $("overlay").checked) keepOverlay();
+  state.job = null;
+  $("job").hidden = false;
+  $("job-id").textContent = id;
+  $("plots").dataset.ready = "false";
+  $("plots").dataset.job = id;
+  $("downloads").hidden = true;
+  $("job-error").hidden = true;
+  $("summary").replaceChildren();
+  state.followed += 1;
+  poll(id, state.followed);
+}
+
+async function poll(id, followed) {
+  if (followed !== state.followed) return; // another job (or this one again) was opened meanwhile
+  let job;
+  try {
+    job = await getJSON(`/v1/jobs/${id}`);
+  } catch (error) {
+    $("job-status").textContent = String(error.message);
+    return;
+  }
+  if (followed !== state.followed) return;
+  $("job-status").textContent = job.status;
+  $("job-status").className = `status-${job.status}`;
+  $("progress").value = job.progress;
+  $("progress-text").textContent = `${Math.round(100 * job.progress)} %`;
+  $("cancel").hidden = FINAL.has(job.status);
+  if (!FINAL.has(job.status)) {
+    state.poll = setTimeout(() => poll(id, followed), POLL_MS);
+    return;
+  }
+  state.job = job;
+  showFinished(job);
+  refreshJobs();
+}
+
+function showSummary(summary) {
+  const rows = [["steps", summary.steps], ["t final", summary.t_final], ["saved points", summary.saved_points],
+    ["H initial", summary.energy_initial], ["H final", summary.energy_final],
+    ["energy dissipated", summary.energy_dissipated], ["momentum drift", summary.momentum_drift],
+    ["wall time (s)", summary.wall_time]];
+  const table = $("summary");
+  table.replaceChildren();
+  for (const [name, value] of rows) {
+    if (value === null || value === undefined) continue;
+    const row = table.insertRow();
+    row.insertCell().textContent = name;
+    row.insertCell().textContent = typeof value === "number" && !Number.isInteger(value) ? value.toPrecision(6) : value;
+  }
+}
+
+async function showFinished(job) {
+  if (job.error) {
+    $("job-error").hidden = false;
+    $("job-error").textContent = job.error + (job.failed_step !== null ? ` (step ${job.failed_step})` : "");
+  }
+  if (job.summary) showSummary(job.summary);
+  if (!job.trajectory) { $("plots").dataset.ready = "true"; return; } // nothing was computed
+  for (const link of document.querySelectorAll("#downloads a[data-format]")) {
+    link.href = `${job.trajectory}?format=${link.dataset.format}`;
+  }
+  for (const link of document.querySelectorAll("#downloads a[data-plot]")) {
+    link.href = `/v1/jobs/${job.id}/plots/${link.dataset.plot}.png`;
+  }
+  $("downloads").hidden = false;
+  const points = job.summary ? job.summary.saved_points : PLOT_POINTS;
+  const every = Math.max(1, Math.ceil(points / PLOT_POINTS));
+  const trajectory = await getJSON(`${job.trajectory}?every=${every}`);
+  if ($("job-id").textContent !== job.id) return;
+  draw(job, trajectory);
+  $("plots").dataset.ready = "true";
+}
+
+// ---- plots --------------------------------------------------------------------------------------
+
+function coordinateNames(spec, dim) {
+  const coordinates = spec.system ? spec.system.coordinates : null;
+  if (Array.isArray(coordinates)) return coordinates;
+  return Array.from({ length: dim }, (_, i) => `q${i}`);
+}
+
+function momentumNames(spec, count) {
+  const declared = spec.system && spec.system.momenta ? Object.keys(spec.system.momenta) : [];
+  const model = state.models.find((m) => m.name === spec.model);
+  const names = declared.length ? declared : model ? model.momenta : [];
+  return Array.from({ length: count }, (_, i) => names[i] || `m${i}`);
+}
+
+function label(job) {
+  const spec = job.spec;
+  const system = spec.model || (spec.system && spec.system.name) || "system";
+  return `${system} ${spec.method}${spec.tableau ? "/" + spec.tableau : ""} h=${spec.step_size}`;
+}
+
+const column = (rows, k) => rows.map((row) => row[k]);
+const layout = (title, x, y, extra = {}) => ({
+  title: { text: title }, xaxis: { title: { text: x } }, yaxis: { title: { text: y } },
+  margin: { l: 60, r: 20, t: 40, b: 45 }, legend: { orientation: "h" }, ...extra });
+const config = { responsive: true, displaylogo: false };
+
+function keepOverlay() {
+  const plot = $("plot-energy");
+  if (plot.data) state.overlays = plot.data.map((trace) => ({ ...trace, line: { dash: "dot" } }));
+}
+
+function draw(job, trajectory) {
+  const dim = trajectory.q.length ? trajectory.q[0].length : 0;
+  const names = coordinateNames(job.spec, dim);
+  const overlays = $("overlay").checked ? state.overlays : [];
+  if (!$("overlay").checked) state.overlays = [];
+
+  Plotly.newPlot("plot-energy", [...overlays,
+    { x: trajectory.t, y: trajectory.energy, mode: "lines", name: label(job) }],
+  layout("energy H(t)", "t", "H"), config);
+
+  const phase = names.map((name, k) => ({
+    x: column(trajectory.q, k), y: column(trajectory.p, k), mode: "lines", name: `(${name}, p_${name})` }));
+  Plotly.newPlot("plot-phase", phase, layout("phase portraits", "q", "p"), config);
+
+  const projection = $("plot-projection");
+  projection.hidden = dim !== 2 && dim !== 3;
+  if (projection.hidden) {
+    Plotly.purge(projection);
+  } else {
+    Plotly.newPlot(projection, [{ x: column(trajectory.q, 0), y: column(trajectory.q, 1), mode: "lines",
+      name: `(${names[0]}, ${names[1]})` }],
+    layout("x-y projection", names[0], names[1], { yaxis: { title: { text: names[1] }, scaleanchor: "x" } }), config);
+  }
+
+  const count = trajectory.momentum.length ? trajectory.momentum[0].length : 0;
+  const momentum = $("plot-momentum");
+  momentum.hidden = count === 0;
+  if (momentum.hidden) {
+    Plotly.purge(momentum);
+  } else {
+    const drift = momentumNames(job.spec, count).map((name, k) => {
+      const values = column(trajectory.momentum, k);
+      return { x: trajectory.t, y: values.map((v) => v - values[0]), mode: "lines", name: `${name}(t) - ${name}(0)` };
+    });
+    // Drifts are near rounding (1e-14): "2e-14" on the axis, not Plotly's SI "20f".
+    Plotly.newPlot(momentum, drift, layout("momentum drift", "t", "drift",
+      { yaxis: { title: { text: "drift" }, exponentformat: "e" } }), config);
+  }
+}
+
+// ---- past jobs ----------------------------------------------------------------------------------
+
+let refreshTimer = null;
+
+async function refreshJobs() {
+  if (refreshTimer) clearTimeout(refreshTimer);
+  let list;
+  try {
+    list = await getJSON("/v1/jobs?limit=100");
+  } catch (error) {
+    return;
+  }
+  const body = document.querySelector("#jobs tbody");
+  body.replaceChildren();
+  for (const job of list.jobs) {
+    const row = body.insertRow();
+    row.dataset.job = job.id;
+    row.insertCell().textContent = new Date(job.created_at).toLocaleString();
+    row.insertCell().textContent = job.model;
+    row.insertCell().textContent = job.method;
+    const status = row.insertCell();
+    status.textContent = FINAL.has(job.status) ? job.status : `${job.status} ${Math.round(100 * job.progress)} %`;
+    status.className = `status-${job.status}`;
+    const actions = row.insertCell();
+    const show = document.createElement("button");
+    show.textContent = "show";
+    show.className = "show";
+    show.addEventListener("click", () => follow(job.id));
+    const remove = document.createElement("button");
+    remove.textContent = FINAL.has(job.status) ? "delete" : "cancel";
+    remove.className = "delete";
+    remove.addEventListener("click", () => deleteJob(job.id));
+    actions.append(show, " ", remove);
+  }
+  if (list.jobs.some((job) => !FINAL.has(job.status))) refreshTimer = setTimeout(refreshJobs, 2000);
+}
+
+async function deleteJob(id) {
+  // A finished job is removed (204); a queued or running one is cancelled (202).
+  const response = await fetch(`/v1/jobs/${id}`, { method: "DELETE" });
+  if (!response.ok && response.status !== 404) {
+    const body = await response.json().catch(() => ({}));
+    alert(`delete ${id}: ${response.status} ${body.detail || ""}`);
+  }
+  if (response.status === 204 && $("job-id").textContent === id) $("job").hidden = true;
+  refreshJobs();
+}
+
+// ---- start --------------------------------------------------------------------------------------
+
+async function start() {
+  [state.models, state.methods, state.examples] = await Promise.all(
+    [getJSON("/v1/models"), getJSON("/v1/methods"), getJSON("/static/examples.json")]);
+  for (const model of state.models) option($("model"), model.name, model.name);
+  for (const name of new Set(state.methods.map((m) => m.name))) {
+    const rows = state.methods.filter((m) => m.name === name);
+    option($("method"), name, `${name} (order ${Math.max(...rows.map((m) => m.order))}${rows[0].damped ? "" : ", undamped only"})`);
+  }
+  state.examples.systems.forEach((example, i) => option($("example"), i, example.label));
+  $("method").value = state.methods.some((m) => m.name === "3s") ? "3s" : state.methods[0].name;
+  showMethod();
+  showSource();
+  $("model").addEventListener("change", showModel);
+  $("example").addEventListener("change", showExample);
+  $("method").addEventListener("change", showMethod);
+  for (const radio of document.querySelectorAll("input[name=source]")) radio.addEventListener("change", showSource);
+  $("job-form").addEventListener("submit", submit);
+  $("cancel").addEventListener("click", () => fetch(`/v1/jobs/${$("job-id").textContent}/cancel`, { method: "POST" }));
+  $("refresh").addEventListener("click", refreshJobs);
+  document.body.dataset.ready = "true";
+  refreshJobs();
+}
+
+start().catch((error) => showErrors([{ loc: null, msg: `the page could not start: ${error.message}` }]));

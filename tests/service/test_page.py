@@ -1,0 +1,258 @@
+"""The page at / in a real browser: Debian's chromium driven by Playwright, against a real
+`python -m raydamp_service`. Playwright's own browser download cannot work here, so the test
+launches /usr/bin/chromium; when it cannot start, the test fails with the reason (never a skip).
+
+The screenshot of the Kepler run is written to docs/page.png (the README shows it).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+import pytest
+
+CHROMIUM = "/usr/bin/chromium"
+SCREENSHOT = Path(__file__).resolve().parents[2] / "docs" / "page.png"
+RUN_TIMEOUT_MS = 120_000  # a loaded machine is slow, not red
+SERVER_ENV = {"RAYDAMP_MAX_STEPS": str(10**10)}  # a run the cancel test can never see finish
+
+
+@contextmanager
+def chromium() -> Iterator:
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError as error:
+        pytest.fail(f"playwright is not installed ({error}); `make test` installs it with the test extra")
+    with sync_playwright() as playwright:
+        try:
+            browser = playwright.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
+        except Exception as error:  # noqa: BLE001 - any reason the browser did not start fails the test with it
+            pytest.fail(f"{CHROMIUM} did not start ({error}); `make test` installs the Debian package chromium")
+        try:
+            yield browser
+        finally:
+            browser.close()
+
+
+@contextmanager
+def open_page(base: str, path: str = "/") -> Iterator:
+    """A page on the service that records every URL it requests and every script error."""
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 1000})
+        requests: list[str] = []
+        errors: list[str] = []
+        page.on("request", lambda request: requests.append(request.url))
+        page.on("pageerror", lambda error: errors.append(str(error)))
+        page.goto(base + path)
+        yield page
+        assert errors == [], errors
+        outside = [url for url in requests if not url.startswith(base + "/")]
+        assert outside == [], f"the page loaded from other hosts: {outside}"
+
+
+def _base(server) -> str:
+    return f"http://127.0.0.1:{server.port}"
+
+
+def _ready(page) -> None:
+    page.wait_for_selector('body[data-ready="true"]', timeout=30_000)
+
+
+def _run(page, previous: str | None = None) -> str:
+    """Click Run and wait until the plots of the new job are drawn; its id."""
+    page.click("#submit")
+    page.wait_for_function(
+        "previous => { const plots = document.getElementById('plots');"
+        " return plots.dataset.job && plots.dataset.job !== previous && plots.dataset.ready === 'true'; }",
+        arg=previous or "", timeout=RUN_TIMEOUT_MS)
+    return page.eval_on_selector("#plots", "plots => plots.dataset.job")
+
+
+def _traces(page, plot: str) -> list[dict]:
+    """Plotly's own record of what it drew (gd.data): name and the x, y arrays of each trace."""
+    return page.eval_on_selector(f"#plot-{plot}",
+                                 "gd => (gd.data || []).map(t => ({name: t.name, x: Array.from(t.x), y: Array.from(t.y)}))")
+
+
+def _drawn(page, plot: str) -> bool:
+    """Visible and holding an SVG Plotly drew (not just a div with data)."""
+    return page.eval_on_selector(f"#plot-{plot}", "gd => !gd.hidden && gd.querySelector('svg.main-svg') !== null")
+
+
+def test_kepler_run_through_the_form(module_server) -> None:
+    """A user's system from the JSON editor: submit, progress to 100 %, four plots with the right
+    traces holding the service's numbers, download links, the run in the list; screenshot."""
+    base = _base(module_server)
+    with open_page(base) as page:
+        _ready(page)
+        page.check("input[name=source][value=system]")
+        page.select_option("#example", label="Kepler orbit with a dashpot on the radius")
+        assert '"potential": "-1/sqrt(x^2 + y^2)"' in page.input_value("#system")
+        assert page.is_hidden("#tableau-label")  # 2s has no tableau to choose
+        job_id = _run(page)
+
+        job = module_server.job(job_id)
+        assert job["status"] == "completed" and job["spec"]["system"]["name"] == "kepler with drag"
+        assert page.eval_on_selector("#progress", "bar => bar.value") == 1.0
+        assert page.inner_text("#job-status") == "completed"
+
+        points = job["summary"]["saved_points"]
+        energy = _traces(page, "energy")
+        assert len(energy) == 1 and len(energy[0]["x"]) == points
+        # H(q0, p0) = |p0|^2 / 2 - 1 / |q0| = 0.72 - 1; the last point is the service's final energy.
+        assert energy[0]["y"][0] == pytest.approx(-0.28, abs=1e-12)
+        assert energy[0]["y"][-1] == pytest.approx(job["summary"]["energy_final"], rel=1e-12)
+        assert energy[0]["y"][-1] < energy[0]["y"][0]  # the dashpot took energy out
+
+        phase = _traces(page, "phase")
+        assert [trace["name"] for trace in phase] == ["(x, p_x)", "(y, p_y)"]
+        assert phase[0]["x"][0] == 1.0 and phase[1]["y"][0] == 1.2  # (q0, p0) per coordinate
+
+        projection = _traces(page, "projection")
+        assert len(projection) == 1 and projection[0]["x"][0] == 1.0 and projection[0]["y"][0] == 0.0
+
+        # 2s conserves the angular momentum to rounding (the README's ~1e-13): the drift plotted is that.
+        drift = _traces(page, "momentum")
+        assert [trace["name"] for trace in drift] == ["L(t) - L(0)"]
+        assert max(abs(value) for value in drift[0]["y"]) < 1e-10
+        assert all(_drawn(page, plot) for plot in ("energy", "phase", "projection", "momentum"))
+
+        links = page.eval_on_selector_all("#downloads a[data-format]", "links => links.map(a => a.getAttribute('href'))")
+        assert links == [f"/v1/jobs/{job_id}/trajectory?format={fmt}" for fmt in ("json", "csv", "npz", "netcdf")]
+        csv = module_server.client.get(links[1])
+        assert csv.status_code == 200 and csv.text.count("\n") >= points
+
+        page.wait_for_selector(f'#jobs tr[data-job="{job_id}"] td.status-completed', timeout=30_000)
+        SCREENSHOT.parent.mkdir(exist_ok=True)
+        page.screenshot(path=str(SCREENSHOT), full_page=True)
+
+
+def test_models_overlay_and_delete(module_server) -> None:
+    """A built-in model (3-D: three phase portraits, a projection, J3's drift), then the 1-D pendulum
+    overlaid on its energy plot (no projection, no momentum plot); deleting runs from the list."""
+    base = _base(module_server)
+    with open_page(base) as page:
+        _ready(page)
+        page.select_option("#model", "elastic_pendulum")
+        assert page.input_value("#q") == "0, 1.55884573, -0.6"  # the paper's section 6.2 data
+        elastic = _run(page)
+        assert module_server.job(elastic)["spec"]["model"] == "elastic_pendulum"
+        assert len(_traces(page, "phase")) == 3
+        assert len(_traces(page, "projection")) == 1 and len(_traces(page, "momentum")) == 1
+
+        page.check("#overlay")
+        page.select_option("#model", "damped_pendulum")
+        page.select_option("#method", "rks")
+        assert page.is_visible("#tableau") and page.input_value("#tableau") == "heun"  # rks's default
+        assert page.eval_on_selector_all("#tableau option", "options => options.map(o => o.value)") == [
+            "euler", "heun", "midpoint", "rk4"]
+        page.select_option("#method", "2s")
+        assert page.is_hidden("#tableau-label")
+        pendulum = _run(page, previous=elastic)
+        job = module_server.job(pendulum)
+        assert job["spec"]["method"] == "2s" and job["status"] == "completed"
+        energy = _traces(page, "energy")
+        assert len(energy) == 2  # the elastic pendulum's curve kept, the pendulum's added
+        assert energy[1]["y"][0] == pytest.approx(1 - math.cos(2.827433388), abs=1e-9)
+        assert len(_traces(page, "phase")) == 1
+        assert page.eval_on_selector("#plot-projection", "gd => gd.hidden")
+        assert page.eval_on_selector("#plot-momentum", "gd => gd.hidden")
+
+        page.wait_for_selector(f'#jobs tr[data-job="{elastic}"] td.status-completed', timeout=30_000)
+        page.click(f'#jobs tr[data-job="{elastic}"] button.delete')
+        page.wait_for_selector(f'#jobs tr[data-job="{elastic}"]', state="detached", timeout=30_000)
+        assert module_server.client.get(f"/v1/jobs/{elastic}").status_code == 404
+
+
+def test_invalid_spec_shows_the_json_path(module_server) -> None:
+    """The service's 422 is shown next to the form with the path inside the spec, and the field it
+    names is outlined; JSON that does not parse is caught before sending."""
+    base = _base(module_server)
+    with open_page(base) as page:
+        _ready(page)
+        ids_before = [job["id"] for job in module_server.client.get("/v1/jobs").json()["jobs"]]
+        page.check("input[name=source][value=system]")
+        page.select_option("#example", label="damped pendulum")
+        page.fill("#system", page.input_value("#system").replace("1 - cos(theta)", "1 - cos(theta"))
+        page.click("#submit")
+        page.wait_for_selector("#errors:not([hidden])", timeout=30_000)
+        assert page.inner_text("#errors code") == "system.potential"
+        assert "system" in page.eval_on_selector_all(".invalid", "controls => controls.map(c => c.id)")
+
+        page.fill("#system", page.input_value("#system").replace("cos(theta", "cos(theta)"))
+        page.fill("#step_size", "-0.1")
+        page.click("#submit")
+        page.wait_for_function("() => document.querySelector('#errors code').textContent === 'step_size'",
+                               timeout=30_000)
+        assert "greater than 0" in page.inner_text("#errors")
+
+        page.fill("#system", "{not json")
+        page.click("#submit")
+        page.wait_for_function("() => document.querySelector('#errors code').textContent === 'system'",
+                               timeout=30_000)
+        assert "not valid JSON" in page.inner_text("#errors")
+        ids = [job["id"] for job in module_server.client.get("/v1/jobs").json()["jobs"]]
+        assert ids == ids_before  # none of the three was queued
+
+
+def test_docs_are_served_locally(module_server) -> None:
+    """/docs references no external host, and Swagger UI renders the API from the local bundle."""
+    html = module_server.client.get("/docs").text
+    referenced = re.findall(r"""(?:src|href|url)\s*[=:]\s*["']([^"']+)["']""", html)
+    assert referenced, html
+    assert [url for url in referenced if "//" in url] == [], html
+    assert not re.search(r"https?://", html), html
+    for url in referenced:
+        assert module_server.client.get(url).status_code == 200, url
+    with open_page(_base(module_server), "/docs") as page:
+        # Swagger UI read /openapi.json (3.1, which an old bundled Swagger UI refuses to render).
+        page.wait_for_selector(".swagger-ui .info .title", timeout=30_000)
+        assert page.inner_text(".swagger-ui .info .title").startswith("raydamp")
+        page.wait_for_selector('.opblock-summary-path[data-path="/v1/jobs/{job_id}/trajectory"]', timeout=30_000)
+
+
+def test_every_example_runs(module_server) -> None:
+    """The editor's examples are specs the service accepts and completes, and the suggested starts
+    are for models the service has, with their dimension."""
+    examples = module_server.client.get("/static/examples.json").json()
+    models = {model["name"]: model for model in module_server.client.get("/v1/models").json()}
+    for name, start in examples["models"].items():
+        assert name in models and len(start["q"]) == len(start["p"]) == models[name]["dim"], name
+    for example in examples["systems"]:
+        spec = {"system": example["system"], "method": example["method"], "step_size": example["step_size"],
+                "t_end": example["t_end"], "save_every": example["save_every"],
+                "initial_state": {"q": example["q"], "p": example["p"]}}
+        job = module_server.wait_finished(module_server.submit(spec))
+        assert job["status"] == "completed", (example["label"], job["error"])
+        # Damped, so each example loses energy: the plots show something happening.
+        assert job["summary"]["energy_dissipated"] > 0, example["label"]
+
+
+def test_progress_is_live_and_cancel_stops_the_run(module_server) -> None:
+    """A long run: the bar shows a fraction strictly between 0 and 1 while it runs (the service's
+    live progress), Cancel stops it, and what it computed is still plotted."""
+    base = _base(module_server)
+    with open_page(base) as page:
+        _ready(page)
+        page.select_option("#model", "damped_pendulum")
+        page.fill("#step_size", "0.001")
+        page.fill("#t_end", "10000000")  # 10^10 steps: hours, far longer than the test waits
+        page.fill("#save_every", "100000")
+        page.click("#submit")
+        page.wait_for_function("() => { const bar = document.getElementById('progress');"
+                               " return bar.value > 0 && bar.value < 1; }", timeout=RUN_TIMEOUT_MS)
+        assert page.inner_text("#job-status") == "running"
+        page.click("#cancel")
+        page.wait_for_function("() => document.getElementById('plots').dataset.ready === 'true'",
+                               timeout=RUN_TIMEOUT_MS)
+        job = module_server.job(page.inner_text("#job-id"))
+        assert job["status"] == "cancelled" and 0 < job["progress"] < 1
+        energy = _traces(page, "energy")
+        saved = job["summary"]["saved_points"]
+        assert saved > 1
+        # The page fetches every k-th point, k = ceil(saved / 5000), for its plots.
+        assert len(energy[0]["x"]) == len(range(0, saved, -(-saved // 5000)))
