@@ -24,7 +24,8 @@ class Solution:
     q, p : (N, n) positions and momenta.
     energy : (N,) H(q, p).
     momentum : (N, m) the model's momentum maps (m = 0 for a model without symmetry).
-    status : "completed", "non_finite" (the state overflowed; ``failed_step`` is the
+    status : "completed", "out_of_memory" (the saved points outgrew memory: those that fit are
+        kept, the message says where; raise save_every), "non_finite" (the state overflowed; ``failed_step`` is the
         first step whose result was not finite and every saved row is finite) or
         "cancelled".
     steps : steps taken (all with finite results).

@@ -174,8 +174,9 @@ class Runner:
             self._store.finish(job_id, "failed", error="the time overflowed to a non-finite value", **outcome)
         elif solution.status == "completed":
             self._store.finish(job_id, "completed", **outcome)
-        elif solution.status == "non_finite":
-            # A blow-up is a failed job that keeps everything computed up to it.
+        elif solution.status in ("non_finite", "out_of_memory"):
+            # A blow-up (or a trajectory that outgrew memory) is a failed job that keeps everything
+            # computed up to it.
             self._store.finish(job_id, "failed", error=solution.message, failed_step=solution.failed_step, **outcome)
         else:
             self._store.finish(job_id, "cancelled", **outcome)

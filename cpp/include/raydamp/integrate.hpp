@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cmath>
 #include <functional>
+#include <new>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -28,12 +29,13 @@
 
 namespace raydamp {
 
-enum class Status { completed, non_finite, cancelled };
+enum class Status { completed, non_finite, cancelled, out_of_memory };
 
 inline const char* status_name(Status s) {
   switch (s) {
     case Status::completed: return "completed";
     case Status::non_finite: return "non_finite";
+    case Status::out_of_memory: return "out_of_memory";
     default: return "cancelled";
   }
 }
@@ -130,6 +132,7 @@ struct FixedMomentumDrift {
 // Steps between finiteness checks. A blown-up block is replayed step by step from
 // its start, so the failing step is found exactly without a check on every step.
 inline constexpr long kBlock = 256;
+inline constexpr long kReserveRows = 1L << 16;  // saved rows reserved before the first step
 
 namespace detail {
 
@@ -208,7 +211,10 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
   out.n = n;
   MomentumBuffers mb(momentum_count(model));
   out.n_momenta = mb.count();
-  const long rows = N / spec.save_every + 2;
+  // Reserved up to kReserveRows rows; past that the buffers grow at save points (never inside a
+  // block of steps), so a run asking for more rows than memory holds saves what fits and stops
+  // with out_of_memory instead of failing before its first step.
+  const long rows = std::min(N / spec.save_every + 2, kReserveRows);
   out.t.reserve(rows);
   out.q.reserve(rows * n);
   out.p.reserve(rows * n);
@@ -237,6 +243,31 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
     return result;
   }
   save_point(model, z, 0.0, ws, mb, out);
+  // A save that runs out of memory takes back its partial row, so every array keeps the same rows.
+  auto save = [&](double t) {
+    const std::size_t sizes[] = {out.t.size(), out.q.size(), out.p.size(), out.energy.size(), out.momentum.size(),
+                                 out.work.size()};
+    try {
+      save_point(model, z, t, ws, mb, out);
+      return true;
+    } catch (const std::bad_alloc&) {
+      out.t.resize(sizes[0]);
+      out.q.resize(sizes[1]);
+      out.p.resize(sizes[2]);
+      out.energy.resize(sizes[3]);
+      out.momentum.resize(sizes[4]);
+      out.work.resize(sizes[5]);
+      return false;
+    }
+  };
+  // The run then ends at its last saved row (rows are saved every save_every steps from step 0),
+  // so steps and the last row agree, as for every other way a run ends.
+  auto out_of_memory = [&](long at) {
+    result.status = Status::out_of_memory;
+    result.message = "out of memory after saving " + std::to_string(out.rows()) + " points (at step " +
+                     std::to_string(at) + " of " + std::to_string(N) + "); the saved points are kept: raise save_every";
+    return (out.rows() - 1) * spec.save_every;
+  };
   const long progress_every = std::max(1L, N / std::max(1L, control.max_progress_calls));
   long next_save = spec.save_every, next_progress = progress_every, k = 0;
   double max_drift = 0.0;
@@ -303,7 +334,10 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
     max_drift = std::max(max_drift, block_drift);
     k = end;
     if (k == next_save) {
-      save_point(model, z, time_at(k), ws, mb, out);
+      if (!save(time_at(k))) {
+        k = out_of_memory(k);
+        break;
+      }
       next_save += spec.save_every;
     }
     if (k == next_progress) {
@@ -312,7 +346,7 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
     }
   }
   // The final state is always the last row, saved or not by save_every.
-  if (out.t.back() != time_at(k)) save_point(model, z, time_at(k), ws, mb, out);
+  if (out.t.back() != time_at(k) && result.status != Status::out_of_memory && !save(time_at(k))) k = out_of_memory(k);
   if (control.progress && result.status == Status::completed && next_progress - progress_every != N) control.progress(N, N);
   result.steps = k;
   result.max_momentum_drift = max_drift;
