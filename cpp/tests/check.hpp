@@ -4,10 +4,22 @@
 
 #include <cmath>
 #include <cstdio>
+#include <functional>
+#include <stdexcept>
 
 namespace raydamp::test {
 inline int failures = 0;
+
+// Whether f refuses with std::invalid_argument (how the core reports a bad table or argument).
+inline bool throws(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const std::invalid_argument&) {
+    return true;
+  }
+  return false;
 }
+}  // namespace raydamp::test
 
 #define CHECK(cond)                                                                   \
   do {                                                                                \

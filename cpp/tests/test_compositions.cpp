@@ -31,14 +31,7 @@ double max_difference(const Trajectory& a, const Trajectory& b) {
   return d;
 }
 
-bool throws(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const std::invalid_argument&) {
-    return true;
-  }
-  return false;
-}
+using raydamp::test::throws;
 
 int main() {
   const State<1> pend0{Vector<1>(0.9 * M_PI), Vector<1>(0.0)};

@@ -7,14 +7,7 @@
 
 using namespace raydamp;
 
-static bool throws(void (*f)()) {
-  try {
-    f();
-  } catch (const std::invalid_argument&) {
-    return true;
-  }
-  return false;
-}
+using raydamp::test::throws;
 
 int main() {
   CHECK(builtin_tableau("euler").order() == 1);

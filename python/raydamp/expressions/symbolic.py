@@ -14,7 +14,7 @@ from collections.abc import Mapping
 
 import symengine as se
 
-from .tree import FUNCTIONS, Binary, Call, Name, Node, Number, Unary, fold, postorder
+from .tree import FUNCTIONS, OPERATORS, Binary, Call, Name, Node, Number, Unary, fold, postorder
 
 __all__ = ["Expression", "number"]
 
@@ -147,17 +147,7 @@ def _build(tree: Node, symbolic: Mapping[str, se.Basic], field: str, find_infini
         if isinstance(node, Unary):
             result = -args[0] if node.op == "-" else args[0]
         elif isinstance(node, Binary):
-            a, b = args
-            if node.op == "+":
-                result = a + b
-            elif node.op == "-":
-                result = a - b
-            elif node.op == "*":
-                result = a * b
-            elif node.op == "/":
-                result = a / b
-            else:
-                result = a ** b
+            result = OPERATORS[node.op](*args)
         else:
             result = _SYMENGINE[node.function](*args)
         # SymEngine simplifies as it builds (x - x is 0), so an operation on

@@ -14,11 +14,13 @@ tests and debugging, and the package itself never calls them.)
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import NamedTuple, TypeVar, Union
 
-__all__ = ["Number", "Name", "Unary", "Binary", "Call", "Node", "FUNCTIONS", "MAX_LENGTH", "MAX_NODES",
+__all__ = ["Number", "Name", "Unary", "Binary", "Call", "Node", "FUNCTIONS", "OPERATORS", "MAX_LENGTH",
+           "MAX_NODES",
            "MAX_DEPTH", "MAX_EXPONENT", "children", "postorder", "fold"]
 
 # Limits. Each one bounds the work some hostile text could cause; each is checked
@@ -89,6 +91,11 @@ FUNCTIONS: dict[str, tuple[int, str]] = {
     "cbrt": (1, "cube root x^(1/3), for x >= 0"),
     "atan2": (2, "atan2(y, x): the angle of the point (x, y), in (-pi, pi]"),
 }
+
+
+# What each binary operator computes, on floats (constant folding) and on SymEngine expressions alike.
+OPERATORS: dict[str, Callable] = {"+": operator.add, "-": operator.sub, "*": operator.mul, "/": operator.truediv,
+                                  "^": operator.pow}
 
 
 def children(node: Node) -> tuple[Node, ...]:
@@ -250,22 +257,14 @@ def _evaluate(node: Node, args: list[float]) -> float:
             result = -args[0] if node.op == "-" else args[0]
         elif isinstance(node, Binary):
             a, b = args
-            if node.op == "+":
-                result = a + b
-            elif node.op == "-":
-                result = a - b
-            elif node.op == "*":
-                result = a * b
-            elif node.op == "/":
-                if b == 0:
-                    raise _Undefined("divides by zero")
-                result = a / b
-            else:  # '^'
+            if node.op == "/" and b == 0:
+                raise _Undefined("divides by zero")
+            if node.op == "^":
                 if a == 0 and b < 0:
                     raise _Undefined("divides by zero")
                 if a < 0 and not b.is_integer():
                     raise _Undefined("is not a real number (a negative number to a non-integer power)")
-                result = math.pow(a, b)
+            result = OPERATORS[node.op](a, b)
         else:
             function, domain = FLOAT_FUNCTIONS[node.function]
             try:
