@@ -13,7 +13,7 @@ from fastapi.exceptions import RequestValidationError
 
 from .config import Settings
 from .errors import validation_error_handler
-from .guard import UNGUARDED_PATHS, RequestGuard
+from .guard import RequestGuard, needs_token
 from .routes import catalogue, health, jobs, page
 from .runner import Runner
 from .store import JobStore
@@ -73,7 +73,7 @@ def _document_limits(app: FastAPI, settings: Settings) -> None:
                 responses.setdefault("400", {"description": "the Host is not one of trusted_hosts"})
                 if operation.get("requestBody"):
                     responses["413"] = {"description": f"the body is over max_body_bytes = {settings.max_body_bytes}"}
-                if settings.token is not None and path not in UNGUARDED_PATHS:
+                if settings.token is not None and needs_token(path):
                     operation["security"] = [{"bearer": []}]
                     responses["401"] = {"description": "no or wrong Authorization: Bearer <token>"}
         return schema

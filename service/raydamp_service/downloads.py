@@ -46,7 +46,7 @@ def stored_solution(record: JobRecord, arrays: TrajectoryArrays) -> raydamp.Solu
                   "coordinates": coordinates, "momentum_names": momentum_names}
     drift = summary.get("momentum_drift")
     return raydamp.Solution(
-        t=arrays.t, q=arrays.q, p=arrays.p, energy=arrays.energy, momentum=arrays.momentum,
+        t=arrays.t, q=arrays.q, p=arrays.p, energy=arrays.energy, momentum=arrays.momentum, work=arrays.work,
         status=summary.get("status", record.status), steps=int(summary.get("steps", 0)),
         failed_step=record.failed_step, message=summary.get("message") or record.error or "",
         method=record.spec["method"], tableau=summary.get("tableau"), composition=summary.get("composition"),

@@ -13,10 +13,18 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from .config import Settings
 
-__all__ = ["RequestGuard", "UNGUARDED_PATHS"]
+__all__ = ["RequestGuard", "UNGUARDED_PATHS", "needs_token"]
 
-# Liveness probes need no token (the answer says only "ok", the version and the worker count).
-UNGUARDED_PATHS = frozenset({"/healthz"})
+# Paths that answer without the token. Liveness probes (the answer says only "ok", the version and
+# the worker count); the page shell, its scripts and the API description, which hold no job data
+# and which a browser fetches by navigation, where it cannot add an Authorization header. The page
+# then asks for the token and sends it with every /v1 request; Swagger UI's Authorize does the same.
+UNGUARDED_PATHS = frozenset({"/healthz", "/", "/docs", "/openapi.json"})
+UNGUARDED_PREFIXES = ("/static/", "/vendor/")
+
+
+def needs_token(path: str) -> bool:
+    return path not in UNGUARDED_PATHS and not path.startswith(UNGUARDED_PREFIXES)
 
 
 class _BodyTooLarge(Exception):
@@ -54,7 +62,7 @@ class RequestGuard:
         if "*" not in self.trusted and host not in self.trusted:
             return JSONResponse({"detail": f"Host {host[:100]!r} is not one of this service's trusted_hosts "
                                            "(RAYDAMP_TRUSTED_HOSTS)"}, status_code=400)
-        if self.token is not None and scope["path"] not in UNGUARDED_PATHS:
+        if self.token is not None and needs_token(scope["path"]):
             scheme, _, credentials = headers.get("authorization", "").partition(" ")
             if scheme.lower() != "bearer" or not hmac.compare_digest(credentials.strip().encode(), self.token):
                 return JSONResponse({"detail": "this service needs Authorization: Bearer <RAYDAMP_TOKEN>"},

@@ -157,7 +157,8 @@ class Runner:
                     log.warning("job %s: could not save progress", job_id, exc_info=True)
 
         try:
-            solution = build_call(spec).run(progress=on_progress, cancel=run.token)
+            # work=True: the damping work W(t) is stored beside H(t), for the energy balance H - H0 + W.
+            solution = build_call(spec).run(progress=on_progress, cancel=run.token, work=True)
         except ValueError as error:  # the spec passed the checks at submission; report, do not crash
             self._store.finish(job_id, "failed", error=str(error))
             return
@@ -166,7 +167,7 @@ class Runner:
             self._store.requeue(job_id)
             return
         trajectory = TrajectoryArrays(t=solution.t, q=solution.q, p=solution.p, energy=solution.energy,
-                                      momentum=solution.momentum)
+                                      momentum=solution.momentum, work=solution.work)
         outcome = {"summary": solution.summary(), "trajectory": trajectory, "progress": run.progress}
         if solution.status == "completed" and not math.isfinite(float(solution.t[-1])):
             # Refused at submission (step_size x steps must be finite); kept as a last guard, since a

@@ -199,6 +199,10 @@ class Trajectory(BaseModel):
     p: list[list[float | None]]
     energy: list[float | None]
     momentum: list[list[float | None]] = Field(description="momentum maps per point; [] rows if the model has none")
+    work: list[float | None] | None = Field(None, description="the damping work W(t) per point, so that "
+                                            "H(t) - H(0) + W(t) is the energy balance residual (zero for the exact "
+                                            "flow, O(h^2) for the order-2 methods); null for jobs stored before "
+                                            "it was kept")
 
 
 class ParameterInfo(BaseModel):
@@ -224,6 +228,14 @@ class MethodInfo(BaseModel):
     damped: bool = Field(description="False for methods that refuse eps > 0")
     description: str
     symmetric: bool = Field(False, description="a symmetric order-2 step, which a composition raises to higher order")
+
+
+class CompositionInfo(BaseModel):
+    name: str
+    order: int = Field(description="the order of the composed method (a symmetric order-2 base raised)")
+    stages: int = Field(description="base steps per composed step")
+    gammas: list[float] = Field(description="the fractions of h of the base steps (a palindrome summing to 1)")
+    reference: str
 
 
 class Health(BaseModel):

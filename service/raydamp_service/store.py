@@ -47,14 +47,15 @@ CREATE TABLE IF NOT EXISTS trajectories (
     points INTEGER NOT NULL,
     dim INTEGER NOT NULL,
     momenta INTEGER NOT NULL,
-    t BLOB NOT NULL, q BLOB NOT NULL, p BLOB NOT NULL, energy BLOB NOT NULL, momentum BLOB NOT NULL
+    t BLOB NOT NULL, q BLOB NOT NULL, p BLOB NOT NULL, energy BLOB NOT NULL, momentum BLOB NOT NULL,
+    work BLOB                               -- the damping work W(t) (N), NULL for jobs stored before it was kept
 );
 CREATE INDEX IF NOT EXISTS jobs_by_status ON jobs (status, finished_at);
 CREATE TABLE IF NOT EXISTS service (key TEXT PRIMARY KEY, value TEXT);
 """
 _INCREMENTAL = 2  # PRAGMA auto_vacuum value
-# Stored bytes of a trajectory row: t, energy (N), q, p (N x dim), momentum (N x m), float64.
-_TRAJECTORY_BYTES = "(t.points * (2 + 2 * t.dim + t.momenta) * 8)"
+# Stored bytes of a trajectory row: t, energy, work (N), q, p (N x dim), momentum (N x m), float64.
+_TRAJECTORY_BYTES = "(t.points * (2 + (t.work IS NOT NULL) + 2 * t.dim + t.momenta) * 8)"
 _JOB_COLUMNS = ("id, status, spec, progress, attempts, cancel_requested, summary, error, failed_step, "
                 "created_at, started_at, finished_at, "
                 "EXISTS (SELECT 1 FROM trajectories WHERE job_id = jobs.id) AS has_trajectory")
@@ -105,13 +106,14 @@ class JobRecord:
 
 @dataclass(frozen=True)
 class TrajectoryArrays:
-    """The saved points: t (N,), q and p (N, n), energy (N,), momentum (N, m)."""
+    """The saved points: t (N,), q and p (N, n), energy (N,), momentum (N, m), work W(t) (N,) or None."""
 
     t: np.ndarray
     q: np.ndarray
     p: np.ndarray
     energy: np.ndarray
     momentum: np.ndarray
+    work: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -122,6 +124,7 @@ class StoredTrajectory:
     points: int
     dim: int
     momenta: int
+    has_work: bool = False
 
 
 def _blob(array: np.ndarray) -> bytes:
@@ -155,6 +158,9 @@ class JobStore:
                 connection.execute("VACUUM")
             with self._transaction() as db:
                 db.executescript(_SCHEMA)
+                columns = {row["name"] for row in db.execute("PRAGMA table_info(trajectories)")}
+                if "work" not in columns:  # a database from before the work integral was stored
+                    db.execute("ALTER TABLE trajectories ADD COLUMN work BLOB")
                 # A real write: a read-only file or directory fails here, not at the first job.
                 db.execute("INSERT OR REPLACE INTO service (key, value) VALUES ('opened_at', ?)", (_now(),))
         except (sqlite3.DatabaseError, OSError) as error:
@@ -214,7 +220,8 @@ class JobStore:
             return None
         n, dim, m = row["points"], row["dim"], row["momenta"]
         return TrajectoryArrays(t=_array(row["t"], n), q=_array(row["q"], n, dim), p=_array(row["p"], n, dim),
-                                energy=_array(row["energy"], n), momentum=_array(row["momentum"], n, m))
+                                energy=_array(row["energy"], n), momentum=_array(row["momentum"], n, m),
+                                work=_array(row["work"], n) if row["work"] is not None else None)
 
     def open_trajectory(self, job_id: str) -> tuple[sqlite3.Connection, StoredTrajectory] | None:
         """A read-only connection holding a snapshot in which the job's trajectory exists, and where it is.
@@ -223,15 +230,15 @@ class JobStore:
                                      check_same_thread=False)  # used by one response, one piece at a time
         try:
             connection.execute("BEGIN")  # the snapshot: later deletions do not cut the body short
-            row = connection.execute("SELECT rowid, points, dim, momenta FROM trajectories WHERE job_id = ?",
-                                     (job_id,)).fetchone()
+            row = connection.execute("SELECT rowid, points, dim, momenta, work IS NOT NULL FROM trajectories "
+                                     "WHERE job_id = ?", (job_id,)).fetchone()
         except BaseException:
             connection.close()
             raise
         if row is None:
             connection.close()
             return None
-        return connection, StoredTrajectory(*row)
+        return connection, StoredTrajectory(*row[:4], has_work=bool(row[4]))
 
     # ---- state changes ----
 
@@ -330,9 +337,11 @@ class JobStore:
         with self._transaction() as db:
             if trajectory is not None:
                 n, dim = trajectory.q.shape
-                db.execute("INSERT OR REPLACE INTO trajectories VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                db.execute("INSERT OR REPLACE INTO trajectories (job_id, points, dim, momenta, t, q, p, energy, "
+                           "momentum, work) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
                            (job_id, n, dim, trajectory.momentum.shape[1], _blob(trajectory.t), _blob(trajectory.q),
-                            _blob(trajectory.p), _blob(trajectory.energy), _blob(trajectory.momentum)))
+                            _blob(trajectory.p), _blob(trajectory.energy), _blob(trajectory.momentum),
+                            _blob(trajectory.work) if trajectory.work is not None else None))
             db.execute("UPDATE jobs SET status = ?, summary = ?, error = ?, failed_step = ?, finished_at = ?, "
                        "progress = COALESCE(?, progress) WHERE id = ?",
                        (status, json.dumps(summary) if summary is not None else None, error, failed_step, _now(),

@@ -104,12 +104,14 @@ def trajectory_chunks(connection: sqlite3.Connection, stored: StoredTrajectory, 
     """The body of GET .../trajectory. Owns the read connection (a snapshot: a concurrent DELETE or
     retention pass does not change what is being sent) and the lease; both end when the body does."""
     try:
-        arrays = (("t", None), ("q", stored.dim), ("p", stored.dim), ("energy", None), ("momentum", stored.momenta))
+        arrays = [("t", None), ("q", stored.dim), ("p", stored.dim), ("energy", None), ("momentum", stored.momenta)]
+        if stored.has_work:
+            arrays.append(("work", None))
         for i, (column, width) in enumerate(arrays):
             yield f'{"{" if i == 0 else ","}"{column}":'.encode()
             for piece in _array_json(connection, stored, column, width, selection):
                 yield piece.encode()
-        yield b"}"
+        yield b"}" if stored.has_work else b',"work":null}'
     finally:
         connection.close()
         lease.release()

@@ -39,7 +39,7 @@ def test_a_token_is_required_when_set(start_server):
     base = str(server.client.base_url)
     with httpx.Client(base_url=base, timeout=30.0) as anonymous:
         for method, path in (("GET", "/v1/jobs"), ("POST", "/v1/jobs"), ("GET", "/v1/models"),
-                             ("GET", "/openapi.json"), ("DELETE", "/v1/jobs/x")):
+                             ("GET", "/v1/jobs/x/trajectory"), ("DELETE", "/v1/jobs/x")):
             response = anonymous.request(method, path, json=PENDULUM if method == "POST" else None)
             assert response.status_code == 401, (method, path)
             assert response.headers["www-authenticate"] == "Bearer"
@@ -48,6 +48,11 @@ def test_a_token_is_required_when_set(start_server):
         # A big body from someone without the token is refused before it is read.
         assert anonymous.post("/v1/jobs", content=b"x" * 3_000_000).status_code == 401
         assert anonymous.get("/healthz").status_code == 200  # liveness probes need no secret
+        # The page shell, its scripts and the API description hold no job data; a browser fetches them
+        # by navigation, without a header. The page then asks for the token (tests/service/test_page.py).
+        for path in ("/", "/static/page.js", "/vendor/plotly.min.js", "/docs", "/openapi.json"):
+            assert anonymous.get(path).status_code == 200, path
+        assert anonymous.get("/static/../v1/jobs").status_code in (401, 404)  # no way around through a prefix
     job_id = server.submit(PENDULUM)  # the fixture's client sends the token
     assert server.wait_finished(job_id)["status"] == "completed"
     schema = server.client.get("/openapi.json").json()

@@ -108,6 +108,14 @@ def test_kepler_run_through_the_form(module_server) -> None:
         assert energy[0]["y"][-1] == pytest.approx(job["summary"]["energy_final"], rel=1e-12)
         assert energy[0]["y"][-1] < energy[0]["y"][0]  # the dashpot took energy out
 
+        # The energy balance H - H0 + W drawn from the service's own H and W, small against what was dissipated.
+        data = module_server.client.get(f"/v1/jobs/{job_id}/trajectory").json()
+        balance = _traces(page, "balance")
+        assert len(balance) == 1 and len(balance[0]["y"]) == points
+        expected = [e - data["energy"][0] + w for e, w in zip(data["energy"], data["work"])]
+        assert balance[0]["y"] == pytest.approx(expected, abs=1e-15)
+        assert max(map(abs, expected)) < 1e-3 * (data["energy"][0] - data["energy"][-1])
+
         phase = _traces(page, "phase")
         assert [trace["name"] for trace in phase] == ["(x, p_x)", "(y, p_y)"]
         assert phase[0]["x"][0] == 1.0 and phase[1]["y"][0] == 1.2  # (q0, p0) per coordinate
@@ -119,7 +127,7 @@ def test_kepler_run_through_the_form(module_server) -> None:
         drift = _traces(page, "momentum")
         assert [trace["name"] for trace in drift] == ["L(t) - L(0)"]
         assert max(abs(value) for value in drift[0]["y"]) < 1e-10
-        assert all(_drawn(page, plot) for plot in ("energy", "phase", "projection", "momentum"))
+        assert all(_drawn(page, plot) for plot in ("energy", "balance", "phase", "projection", "momentum"))
 
         links = page.eval_on_selector_all("#downloads a[data-format]", "links => links.map(a => a.getAttribute('href'))")
         assert links == [f"/v1/jobs/{job_id}/trajectory?format={fmt}" for fmt in ("json", "csv", "npz", "netcdf")]
@@ -150,13 +158,19 @@ def test_models_overlay_and_delete(module_server) -> None:
         assert page.is_visible("#tableau") and page.input_value("#tableau") == "heun"  # rks's default
         assert page.eval_on_selector_all("#tableau option", "options => options.map(o => o.value)") == [
             "euler", "heun", "midpoint", "rk4"]
+        assert page.is_hidden("#composition-label")  # heun is not symmetric: nothing to compose
+        page.select_option("#tableau", "midpoint")
+        assert page.is_visible("#composition-label")
         page.select_option("#method", "2s")
-        assert page.is_hidden("#tableau-label")
+        assert page.is_hidden("#tableau-label") and page.is_visible("#composition-label")
+        page.select_option("#composition", "yoshida4")
         pendulum = _run(page, previous=elastic)
         job = module_server.job(pendulum)
         assert job["spec"]["method"] == "2s" and job["status"] == "completed"
+        assert job["spec"]["composition"] == "yoshida4" and job["summary"]["composition"] == "yoshida4"
         energy = _traces(page, "energy")
         assert len(energy) == 2  # the elastic pendulum's curve kept, the pendulum's added
+        assert energy[1]["name"] == "damped_pendulum 2s ∘ yoshida4 h=0.1"
         assert energy[1]["y"][0] == pytest.approx(1 - math.cos(2.827433388), abs=1e-9)
         assert len(_traces(page, "phase")) == 1
         assert page.eval_on_selector("#plot-projection", "gd => gd.hidden")
@@ -256,3 +270,29 @@ def test_progress_is_live_and_cancel_stops_the_run(module_server) -> None:
         assert saved > 1
         # The page fetches every k-th point, k = ceil(saved / 5000), for its plots.
         assert len(energy[0]["x"]) == len(range(0, saved, -(-saved // 5000)))
+
+
+def test_a_service_with_a_token(start_server, tmp_path) -> None:
+    """RAYDAMP_TOKEN set: the page loads, asks for the token (a wrong one is refused), then runs a
+    job with it; a download, which a plain link could not authorise, is fetched with the token."""
+    server = start_server(RAYDAMP_TOKEN="page-s3cret")
+    base = _base(server)
+    with open_page(base) as page:
+        page.wait_for_selector("#token-form:not([hidden])", timeout=30_000)
+        assert page.get_attribute("body", "data-ready") is None  # nothing loaded without the token
+        page.fill("#token", "wrong")
+        page.click("#token-submit")
+        page.wait_for_function("() => document.getElementById('token-message').textContent.includes('refused')",
+                               timeout=30_000)
+        page.fill("#token", "page-s3cret")
+        page.click("#token-submit")
+        _ready(page)
+        assert page.is_hidden("#token-form")
+        job_id = _run(page)
+        assert server.job(job_id)["status"] == "completed"
+        with page.expect_download(timeout=30_000) as download:
+            page.click('#downloads a[data-format="csv"]')
+        saved = tmp_path / "download.csv"
+        download.value.save_as(saved)
+        assert saved.read_text() == server.client.get(f"/v1/jobs/{job_id}/trajectory?format=csv").text
+        assert download.value.suggested_filename == f"{job_id}-trajectory.csv"

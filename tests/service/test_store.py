@@ -35,7 +35,44 @@ def test_trajectory_round_trips_exactly(store):
     back = store.trajectory(job.id)
     for name in ("t", "q", "p", "energy", "momentum"):
         np.testing.assert_array_equal(getattr(back, name), getattr(arrays, name))
+    assert back.work is None
     assert store.get(job.id).has_trajectory and store.get(job.id).failed_step == 5
+
+    with_work = store.create(SPEC)
+    store.finish(with_work.id, "completed", trajectory=TrajectoryArrays(**{**arrays.__dict__, "work": np.arange(5.0)}))
+    np.testing.assert_array_equal(store.trajectory(with_work.id).work, np.arange(5.0))
+    assert store.stored_bytes() == 8 * (5 * (2 + 6) + 5 * (3 + 6))  # the work column is counted
+
+
+def test_a_database_from_before_the_work_column_is_upgraded(tmp_path):
+    """A file written by an older service (no trajectories.work) opens, keeps its trajectories
+    (their work reads as None) and stores work for new jobs."""
+    path = tmp_path / "old.sqlite3"
+    with sqlite3.connect(path) as db:
+        db.executescript("""
+            CREATE TABLE jobs (seq INTEGER PRIMARY KEY AUTOINCREMENT, id TEXT NOT NULL UNIQUE, status TEXT NOT NULL,
+                spec TEXT NOT NULL, progress REAL NOT NULL DEFAULT 0, attempts INTEGER NOT NULL DEFAULT 0,
+                cancel_requested INTEGER NOT NULL DEFAULT 0, summary TEXT, error TEXT, failed_step INTEGER,
+                created_at TEXT NOT NULL, started_at TEXT, finished_at TEXT);
+            CREATE TABLE trajectories (job_id TEXT PRIMARY KEY REFERENCES jobs(id) ON DELETE CASCADE,
+                points INTEGER NOT NULL, dim INTEGER NOT NULL, momenta INTEGER NOT NULL,
+                t BLOB NOT NULL, q BLOB NOT NULL, p BLOB NOT NULL, energy BLOB NOT NULL, momentum BLOB NOT NULL);""")
+        one = np.ones(2).tobytes()
+        db.execute("INSERT INTO jobs (id, status, spec, created_at, finished_at) VALUES "
+                   "('old', 'completed', '{}', '2026-01-01T00:00:00+00:00', '2026-01-01T00:00:00+00:00')")
+        db.execute("INSERT INTO trajectories VALUES ('old', 2, 1, 0, ?, ?, ?, ?, ?)", (one, one, one, one, b""))
+    store = JobStore(path)
+    store.open()
+    try:
+        old = store.trajectory("old")
+        assert old.work is None and old.t.tolist() == [1.0, 1.0]
+        job = store.create(SPEC)
+        store.finish(job.id, "completed", trajectory=TrajectoryArrays(
+            t=np.zeros(2), q=np.zeros((2, 1)), p=np.zeros((2, 1)), energy=np.zeros(2), momentum=np.empty((2, 0)),
+            work=np.array([0.0, 0.5])))
+        assert store.trajectory(job.id).work.tolist() == [0.0, 0.5]
+    finally:
+        store.close()
 
 
 def test_a_cancelled_queued_job_cannot_be_claimed(store):

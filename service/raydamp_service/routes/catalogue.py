@@ -1,4 +1,4 @@
-"""GET /v1/models and /v1/methods: what a job may ask for, read from raydamp's own catalogue."""
+"""GET /v1/models, /v1/methods and /v1/compositions: what a job may ask for, read from raydamp's own catalogue."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import raydamp
 from fastapi import APIRouter
 from raydamp.models import describe_models
 
-from ..schemas import MethodInfo, ModelInfo
+from ..schemas import CompositionInfo, MethodInfo, ModelInfo
 
 router = APIRouter(prefix="/v1", tags=["catalogue"])
 
@@ -21,3 +21,10 @@ def list_models() -> list[ModelInfo]:
 def list_methods() -> list[MethodInfo]:
     """Every usable (method, tableau) pair with its order."""
     return [MethodInfo.model_validate(method._asdict()) for method in raydamp.methods()]
+
+
+@router.get("/compositions", response_model=list[CompositionInfo])
+def list_compositions() -> list[CompositionInfo]:
+    """Every composition a job's `composition` may name; it applies to the symmetric methods
+    (GET /v1/methods, symmetric = true)."""
+    return [CompositionInfo.model_validate(composition._asdict()) for composition in raydamp.compositions()]

@@ -157,7 +157,8 @@ def _stored_solution(record: JobRecord, store: JobStore, points: slice):
     if arrays is None:
         raise HTTPException(409, detail=f"job {record.id} is {record.status} and has no trajectory"
                             + (f": {record.error}" if record.error else ""))
-    picked = TrajectoryArrays(*(getattr(arrays, name)[points] for name in ("t", "q", "p", "energy", "momentum")))
+    picked = TrajectoryArrays(*(getattr(arrays, name)[points] for name in ("t", "q", "p", "energy", "momentum")),
+                              work=arrays.work[points] if arrays.work is not None else None)
     if picked.t.size == 0:
         # The same shape as every other 422 (detail[] with loc), as /openapi.json declares.
         raise RequestValidationError([{"type": "value_error", "loc": ("query", "start"), "input": points.start,

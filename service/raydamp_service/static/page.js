@@ -10,10 +10,64 @@ const POLL_MS = 250;
 const state = { models: [], methods: [], examples: { models: {}, systems: [] }, job: null, poll: null, overlays: [],
   followed: 0 }; // followed counts the jobs opened, so that a poll still in flight for an earlier one stops
 
+// ---- talking to the service --------------------------------------------------------------------
+
+// A service started with RAYDAMP_TOKEN answers /v1 with 401 until the request carries the token. The
+// page asks for it once, keeps it for this tab only (sessionStorage) and sends it as a bearer header.
+const TOKEN_KEY = "raydamp-token";
+
+class NeedsToken extends Error {}
+
+function authorization() {
+  const token = sessionStorage.getItem(TOKEN_KEY);
+  return token ? { Authorization: `Bearer ${token}` } : {};
+}
+
+async function api(url, options = {}) {
+  const response = await fetch(url, { ...options, headers: { ...authorization(), ...(options.headers || {}) } });
+  if (response.status === 401) {
+    askForToken(sessionStorage.getItem(TOKEN_KEY) ? "that token was refused; try again" : "");
+    throw new NeedsToken(`${url}: this service needs a token`);
+  }
+  return response;
+}
+
 async function getJSON(url) {
-  const response = await fetch(url);
+  const response = await api(url);
   if (!response.ok) throw new Error(`${url}: ${response.status} ${await response.text()}`);
   return response.json();
+}
+
+function askForToken(message) {
+  $("token-form").hidden = false;
+  $("token-message").textContent = message;
+  $("token").focus();
+}
+
+function useToken(event) {
+  event.preventDefault();
+  sessionStorage.setItem(TOKEN_KEY, $("token").value.trim());
+  $("token").value = "";
+  $("token-form").hidden = true;
+  if (document.body.dataset.ready !== "true") loadPage(); else refreshJobs();
+}
+
+// A link cannot carry the header: with a token, a download is fetched and handed over as a blob.
+async function download(event) {
+  const link = event.target.closest("a[href]");
+  if (!link || !sessionStorage.getItem(TOKEN_KEY)) return; // without a token the plain link works
+  event.preventDefault();
+  const response = await api(link.getAttribute("href"));
+  if (!response.ok) { alert(`${link.textContent}: ${response.status} ${await response.text()}`); return; }
+  const url = URL.createObjectURL(await response.blob());
+  if (link.hasAttribute("download")) {
+    const name = /filename="([^"]+)"/.exec(response.headers.get("content-disposition") || "");
+    const save = Object.assign(document.createElement("a"), { href: url, download: name ? name[1] : "" });
+    save.click();
+  } else {
+    window.open(url, "_blank");
+  }
+  setTimeout(() => URL.revokeObjectURL(url), 60_000);
 }
 
 // ---- the form ---------------------------------------------------------------------------------
@@ -70,6 +124,15 @@ function showMethod() {
   if (fallback) tableau.value = fallback.tableau;
   $("tableau-label").hidden = tableaux.length === 0;
   $("method-description").textContent = rows.length ? rows[0].description : "";
+  showComposition();
+}
+
+// A composition raises a symmetric step's order (sv, 3s, 2s, rks with the midpoint tableau).
+function showComposition() {
+  const name = $("method").value;
+  const tableau = $("tableau-label").hidden ? null : $("tableau").value;
+  const row = state.methods.find((m) => m.name === name && (tableau === null || m.tableau === tableau));
+  $("composition-label").hidden = !(row && row.symmetric);
 }
 
 // A number the user typed, or the text itself so that the service's 422 names the field.
@@ -99,6 +162,7 @@ function buildSpec() {
   }
   spec.method = $("method").value;
   if (!$("tableau-label").hidden && $("tableau").value) spec.tableau = $("tableau").value;
+  if (!$("composition-label").hidden && $("composition").value !== "none") spec.composition = $("composition").value;
   spec.step_size = numberOr($("step_size").value);
   spec.t_end = numberOr($("t_end").value);
   spec.save_every = numberOr($("save_every").value);
@@ -150,7 +214,7 @@ async function submit(event) {
   }
   $("submit").disabled = true;
   try {
-    const response = await fetch("/v1/jobs", {
+    const response = await api("/v1/jobs", {
       method: "POST", headers: { "content-type": "application/json" }, body: JSON.stringify(spec) });
     const body = await response.json().catch(() => ({ detail: response.statusText }));
     if (response.status === 422 && Array.isArray(body.detail)) {
@@ -162,6 +226,8 @@ async function submit(event) {
       follow(body.id);
       refreshJobs();
     }
+  } catch (error) {
+    if (!(error instanceof NeedsToken)) throw error;
   } finally {
     $("submit").disabled = false;
   }
@@ -263,7 +329,8 @@ function momentumNames(spec, count) {
 function label(job) {
   const spec = job.spec;
   const system = spec.model || (spec.system && spec.system.name) || "system";
-  return `${system} ${spec.method}${spec.tableau ? "/" + spec.tableau : ""} h=${spec.step_size}`;
+  const composed = spec.composition ? ` ∘ ${spec.composition}` : "";
+  return `${system} ${spec.method}${spec.tableau ? "/" + spec.tableau : ""}${composed} h=${spec.step_size}`;
 }
 
 const column = (rows, k) => rows.map((row) => row[k]);
@@ -286,6 +353,20 @@ function draw(job, trajectory) {
   Plotly.newPlot("plot-energy", [...overlays,
     { x: trajectory.t, y: trajectory.energy, mode: "lines", name: label(job) }],
   layout("energy H(t)", "t", "H"), config);
+
+  // H(t) - H(0) + W(t): what the method lost or gained beyond the damping work (zero for the exact
+  // flow, O(h^2) for the order-2 splittings; the paper's measure of dissipating at the right rate).
+  const balance = $("plot-balance");
+  balance.hidden = !Array.isArray(trajectory.work) || trajectory.energy.length === 0;
+  if (balance.hidden) {
+    Plotly.purge(balance);
+  } else {
+    const h0 = trajectory.energy[0];
+    Plotly.newPlot(balance, [{ x: trajectory.t, y: trajectory.energy.map((e, i) => e - h0 + trajectory.work[i]),
+      mode: "lines", name: `H - H0 + W, ${label(job)}` }],
+    layout("energy balance H(t) - H(0) + W(t)", "t", "residual", { yaxis: { title: { text: "residual" },
+      exponentformat: "e" } }), config);
+  }
 
   const phase = names.map((name, k) => ({
     x: column(trajectory.q, k), y: column(trajectory.p, k), mode: "lines", name: `(${name}, p_${name})` }));
@@ -356,7 +437,13 @@ async function refreshJobs() {
 
 async function deleteJob(id) {
   // A finished job is removed (204); a queued or running one is cancelled (202).
-  const response = await fetch(`/v1/jobs/${id}`, { method: "DELETE" });
+  let response;
+  try {
+    response = await api(`/v1/jobs/${id}`, { method: "DELETE" });
+  } catch (error) {
+    if (error instanceof NeedsToken) return;
+    throw error;
+  }
   if (!response.ok && response.status !== 404) {
     const body = await response.json().catch(() => ({}));
     alert(`delete ${id}: ${response.status} ${body.detail || ""}`);
@@ -367,27 +454,45 @@ async function deleteJob(id) {
 
 // ---- start --------------------------------------------------------------------------------------
 
-async function start() {
-  [state.models, state.methods, state.examples] = await Promise.all(
-    [getJSON("/v1/models"), getJSON("/v1/methods"), getJSON("/static/examples.json")]);
+// The controls work before the catalogue is loaded; load() runs again once a token is given.
+function wire() {
+  $("model").addEventListener("change", showModel);
+  $("example").addEventListener("change", showExample);
+  $("method").addEventListener("change", showMethod);
+  $("tableau").addEventListener("change", showComposition);
+  for (const radio of document.querySelectorAll("input[name=source]")) radio.addEventListener("change", showSource);
+  $("job-form").addEventListener("submit", submit);
+  $("cancel").addEventListener("click", () => api(`/v1/jobs/${$("job-id").textContent}/cancel`, { method: "POST" }));
+  $("refresh").addEventListener("click", refreshJobs);
+  $("token-form").addEventListener("submit", useToken);
+  $("downloads").addEventListener("click", download);
+}
+
+async function load() {
+  [state.models, state.methods, state.compositions, state.examples] = await Promise.all(
+    [getJSON("/v1/models"), getJSON("/v1/methods"), getJSON("/v1/compositions"), getJSON("/static/examples.json")]);
+  for (const select of ["model", "method", "composition", "example"]) $(select).replaceChildren();
   for (const model of state.models) option($("model"), model.name, model.name);
   for (const name of new Set(state.methods.map((m) => m.name))) {
     const rows = state.methods.filter((m) => m.name === name);
     option($("method"), name, `${name} (order ${Math.max(...rows.map((m) => m.order))}${rows[0].damped ? "" : ", undamped only"})`);
   }
+  for (const c of state.compositions) {
+    option($("composition"), c.name, c.name === "none" ? "none (order 2)" : `${c.name} (order ${c.order}, ${c.stages} stages)`);
+  }
   state.examples.systems.forEach((example, i) => option($("example"), i, example.label));
   $("method").value = state.methods.some((m) => m.name === "3s") ? "3s" : state.methods[0].name;
   showMethod();
   showSource();
-  $("model").addEventListener("change", showModel);
-  $("example").addEventListener("change", showExample);
-  $("method").addEventListener("change", showMethod);
-  for (const radio of document.querySelectorAll("input[name=source]")) radio.addEventListener("change", showSource);
-  $("job-form").addEventListener("submit", submit);
-  $("cancel").addEventListener("click", () => fetch(`/v1/jobs/${$("job-id").textContent}/cancel`, { method: "POST" }));
-  $("refresh").addEventListener("click", refreshJobs);
   document.body.dataset.ready = "true";
   refreshJobs();
 }
 
-start().catch((error) => showErrors([{ loc: null, msg: `the page could not start: ${error.message}` }]));
+function loadPage() {
+  load().catch((error) => {
+    if (!(error instanceof NeedsToken)) showErrors([{ loc: null, msg: `the page could not start: ${error.message}` }]);
+  });
+}
+
+wire();
+loadPage();
