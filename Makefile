@@ -34,10 +34,12 @@ $(PY):
 	$(PYTHON) -m venv $(VENV)
 	$(PIP) install --upgrade pip
 
-# cmake and ninja come from PyPI into the venv: they build the C++ tests too.
+# cmake and ninja come from PyPI into the venv: they build the C++ tests too. The build backend
+# lives in the venv as well (--no-build-isolation): an isolated build gets pybind11 from a new
+# temporary directory each time, so every file recompiles; from the venv, build/ stays incremental.
 $(INSTALLED): $(PY) pyproject.toml CMakeLists.txt $(SOURCES)
-	$(PIP) install cmake ninja
-	$(PIP) install '.[service,analysis,io,test]'
+	$(PIP) install cmake ninja 'scikit-build-core>=0.10' 'pybind11>=2.13'
+	$(PIP) install --no-build-isolation '.[service,analysis,io,test]'
 	@touch $@
 
 serve: setup

@@ -170,8 +170,11 @@ def test_loop_releases_the_gil():
 def test_methods_catalogue():
     rows = raydamp.methods()
     names = {m.name for m in rows}
-    assert names == {"sv", "3s", "2s", "rks", "rksb", "heun", "rk4"}
+    assert names == {"sv", "3s", "2s", "rks", "rksb", "heun", "rk4", "rk"}
     by_key = {(m.name, m.tableau): m for m in rows}
+    # rk: any explicit tableau on the whole system (rk4 by default); never an implicit one.
+    assert {m.tableau for m in rows if m.name == "rk"} == {"euler", "heun", "rk4"}
+    assert by_key[("rk", "rk4")].default and by_key[("rk", "rk4")].order == 4
     assert by_key[("rks", "midpoint")].explicit is False
     assert by_key[("rks", "heun")].default and by_key[("rks", "heun")].order == 2
     assert by_key[("rk4", "rk4")].order == 4

@@ -34,7 +34,9 @@ def test_elastic_pendulum_as_system_matches_builtin(method, tableau, damped):
     assert _relative(ours.q, builtin.q) <= 1e-12
     assert _relative(ours.p, builtin.p) <= 1e-12
     assert _relative(ours.energy, builtin.energy) <= 1e-12
-    np.testing.assert_allclose(ours.momentum[:, 0], builtin.momentum[:, 0], rtol=0, atol=1e-12)
+    # Relative to the largest |J3| (explicit Euler on the whole system grows it to 1e42 here).
+    scale = max(1.0, float(np.abs(builtin.momentum[:, 0]).max()))
+    np.testing.assert_allclose(ours.momentum[:, 0], builtin.momentum[:, 0], rtol=0, atol=1e-12 * scale)
 
 
 @pytest.mark.parametrize("method,tableau,damped", ROWS, ids=[f"{m}-{t}" for m, t, _ in ROWS])

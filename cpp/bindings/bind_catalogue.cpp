@@ -94,6 +94,16 @@ void bind_catalogue(py::module_& m) {
     const Composition& c = resolve_composition(e, tab, composition);
     return py::make_tuple(c.name(), method_order(e, tab, c));
   });
+  // A user's tableau, validated and stored; its name and what was computed of it.
+  m.def("define_tableau", [](std::vector<std::vector<double>> a, std::vector<double> b, std::vector<double> c) {
+    const ButcherTableau& tab = define_tableau(std::move(a), std::move(b), std::move(c));
+    py::dict row;
+    row["name"] = tab.name();
+    row["order"] = tab.order();
+    row["kind"] = kind_name(tab.kind());
+    row["symmetric"] = tab.is_symmetric();
+    return row;
+  });
   // Validates a (method, tableau) pair the way a run would; returns the tableau used.
   m.def("resolve", [](const std::string& method, const std::string& tableau) {
     return resolve_tableau(method_entry(method), tableau).name();

@@ -41,6 +41,23 @@ int main() {
   require_applicable(method_entry("3s"), 0.5);
   CHECK(resolve_tableau(method_entry("rks"), "midpoint").name() == "midpoint");
 
+  // A user's tableau: validated like ours, named by its coefficients, found by that name, and
+  // held to what the method can run.
+  const ButcherTableau& kutta3 = define_tableau({{0, 0, 0}, {0.5, 0, 0}, {-1, 2, 0}}, {1.0 / 6, 2.0 / 3, 1.0 / 6},
+                                                {0, 0.5, 1});
+  CHECK(kutta3.order() == 3 && kutta3.name().rfind("custom-", 0) == 0 && kutta3.name().size() == 23);
+  CHECK(&define_tableau({{0, 0, 0}, {0.5, 0, 0}, {-1, 2, 0}}, {1.0 / 6, 2.0 / 3, 1.0 / 6}, {0, 0.5, 1}) == &kutta3);
+  CHECK(&tableau_named(kutta3.name()) == &kutta3);
+  CHECK(&resolve_tableau(method_entry("rk"), kutta3.name()) == &kutta3);
+  CHECK(define_tableau({{0.5}}, {1.0}, {0.5}).name() != kutta3.name());
+  CHECK(throws([] { define_tableau({{0, 0}, {0.6, 0}}, {0.5, 0.5}, {0, 1}); }));  // row 1 misses c[1]
+  CHECK(throws([] { tableau_named("custom-0000000000000000"); }));
+  const ButcherTableau& gauss2 = define_tableau({{0.25, 0.25 - 0.2886751345948129}, {0.25 + 0.2886751345948129, 0.25}},
+                                                {0.5, 0.5}, {0.5 - 0.2886751345948129, 0.5 + 0.2886751345948129});
+  CHECK(gauss2.kind() == TableauKind::implicit && gauss2.order() == 4);
+  CHECK(throws([&] { resolve_tableau(method_entry("rks"), gauss2.name()); }));  // fully implicit
+  CHECK(throws([&] { resolve_tableau(method_entry("rk"), define_tableau({{0.5}}, {1.0}, {0.5}).name()); }));
+
   // Palindromes are derived from their half: the tables really are symmetric.
   CHECK(is_symmetric(ThreeTermSplitting::stages));
   CHECK(ThreeTermSplitting::stages.size() == 5);

@@ -5,12 +5,13 @@ from __future__ import annotations
 import functools
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 
 from . import _core
-from ._validation import integer, real, vector
+from ._validation import _short, integer, real, vector
 from .models import Model
 from .solution import Solution
+from .user_tableau import resolve_user_tableau
 
 __all__ = ["integrate", "steps_for", "CancelToken", "MAX_SAVED_BYTES", "MAX_STEPS", "MAX_AMPLIFICATION"]
 
@@ -38,8 +39,18 @@ def _catalogue() -> tuple[tuple[str, ...], frozenset[str]]:
     return names, frozenset(row["name"] for row in rows if row["tableau"] is not None)
 
 
+def _tableau(tableau) -> tuple[str, str | dict | None]:
+    """(the name the core knows it by, "" for the default; the tableau as provenance keeps it)."""
+    if tableau is None or isinstance(tableau, str):
+        return tableau or "", tableau
+    if isinstance(tableau, Mapping):
+        name, plain = resolve_user_tableau(tableau)
+        return name, plain
+    raise ValueError(f"tableau must be a tableau name, a dict with A, b, c, or None, got {_short(tableau)}")
+
+
 def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: float | None = None,
-              n_steps: int | None = None, save_every: int = 1, tableau: str | None = None,
+              n_steps: int | None = None, save_every: int = 1, tableau: str | Mapping | None = None,
               composition: str | None = None, work: bool = False,
               progress: Callable[[int, int], object] | None = None,
               cancel: CancelToken | None = None) -> Solution:
@@ -49,14 +60,18 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
     ----------
     model : a model from :mod:`raydamp.models`.
     q0, p0 : initial positions and momenta, length ``model.dim``.
-    method : "3s" (default), "2s", "rks", "rksb", "sv", "heun" or "rk4"; see
-        :func:`raydamp.methods`.
+    method : "3s" (default), "2s", "rks", "rksb", "sv", "heun", "rk4" or "rk" (any
+        explicit tableau on the whole system, default "rk4"); see :func:`raydamp.methods`.
     h : step size, > 0.
     t_end, n_steps : give exactly one. With ``t_end`` not a whole multiple of ``h``
         the last step is shortened to land on ``t_end``.
     save_every : save every this many steps (the final state is always saved).
     tableau : Runge-Kutta tableau for "rks" (default "heun"; also "euler", "rk4",
-        "midpoint") or "rksb" (explicit tableaux only).
+        "midpoint"), "rksb" and "rk" (explicit tableaux only); or your own,
+        ``{"A": [[...]], "b": [...], "c": [...], "order": k}`` (order optional): each
+        row of A must sum to c, the order is computed from the order conditions (up
+        to 4) and a claimed ``order`` must hold; rks takes diagonally implicit
+        tableaux, and a fully implicit one is refused with the reason.
     composition : raise a symmetric order-2 method ("sv", "3s", "2s", or "rks" with
         ``tableau="midpoint"``) to higher order by composing its steps:
         "yoshida4", "suzuki4", "kahan_li6", "mclachlan8" or "kahan_li8" (see
@@ -86,13 +101,12 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
     names, with_tableau = _catalogue()
     if not isinstance(method, str) or method not in names:
         raise ValueError(f"method: unknown method {method!r} (known: {', '.join(names)})")
-    if tableau is not None and not isinstance(tableau, str):
-        raise ValueError(f"tableau must be a tableau name or None, got {tableau!r}")
-    resolved_tableau = _core.resolve(method, tableau or "")  # raises ValueError naming the tableau
+    tableau_name, tableau = _tableau(tableau)
+    resolved_tableau = _core.resolve(method, tableau_name)  # raises ValueError naming the tableau
     if composition is not None and not isinstance(composition, str):
         raise ValueError(f"composition must be a composition name or None, got {composition!r}")
     # raises ValueError naming the composition (unknown, or a base that is not symmetric)
-    resolved_composition, _order = _core.resolve_composition(method, tableau or "", composition or "")
+    resolved_composition, _order = _core.resolve_composition(method, tableau_name, composition or "")
     h = real("h", h, positive=True)
     q0 = model.check_configuration("q0", vector("q0", q0, model.dim))
     p0 = vector("p0", p0, model.dim)
@@ -117,7 +131,7 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
                          f"(limit {MAX_SAVED_BYTES / 2**30:.0f} GiB); raise save_every")
 
     start = time.perf_counter()
-    out = _core.integrate(model._core_model, method, tableau or "", composition or "", q0, p0, h, n_steps, h_last,
+    out = _core.integrate(model._core_model, method, tableau_name, composition or "", q0, p0, h, n_steps, h_last,
                           save_every, work, progress, cancel)
     wall = time.perf_counter() - start
     message = out["message"]

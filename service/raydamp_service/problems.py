@@ -107,9 +107,11 @@ def _model(spec: JobSpec) -> raydamp.models.Model:
 def build_call(spec: JobSpec) -> RaydampCall:
     """The model and arguments for raydamp.integrate; raises SpecError for a bad model, system or parameter."""
     model = _model(spec)
-    options: dict[str, Any] = {"method": spec.method, "h": spec.step_size, "save_every": spec.save_every}
+    options: dict[str, Any] = {"method": spec.method, "h": spec.step_size, "save_every": spec.save_every,
+                               "work": spec.work}
     if spec.tableau is not None:
-        options["tableau"] = spec.tableau
+        options["tableau"] = spec.tableau if isinstance(spec.tableau, str) else spec.tableau.model_dump(
+            exclude_none=True)
     if spec.composition is not None:
         options["composition"] = spec.composition
     if spec.n_steps is not None:

@@ -157,8 +157,7 @@ class Runner:
                     log.warning("job %s: could not save progress", job_id, exc_info=True)
 
         try:
-            # work=True: the damping work W(t) is stored beside H(t), for the energy balance H - H0 + W.
-            solution = build_call(spec).run(progress=on_progress, cancel=run.token, work=True)
+            solution = build_call(spec).run(progress=on_progress, cancel=run.token)
         except ValueError as error:  # the spec passed the checks at submission; report, do not crash
             self._store.finish(job_id, "failed", error=str(error))
             return

@@ -10,7 +10,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from raydamp.models import describe_models
 
 __all__ = [
-    "FiniteFloat", "InitialState", "JobSpec", "SystemInput",
+    "FiniteFloat", "InitialState", "JobSpec", "SystemInput", "TableauInput",
     "JobStatus", "JobCreated", "JobSummary", "JobView", "JobListItem", "JobList", "Trajectory",
     "ParameterInfo", "ModelInfo", "MethodInfo", "Health",
 ]
@@ -55,6 +55,21 @@ _MAX_EXPRESSION = 10_000
 _MAX_DENSE = 32
 Expression = Annotated[str, Field(min_length=1, max_length=_MAX_EXPRESSION)]
 Name = Annotated[str, Field(min_length=1, max_length=100, pattern=r"^[A-Za-z_][A-Za-z0-9_]*$")]
+
+
+_MAX_STAGES = 16  # raydamp.user_tableau.MAX_STAGES
+_Coefficients = Annotated[list[FiniteFloat], Field(min_length=1, max_length=_MAX_STAGES)]
+
+
+class TableauInput(_Input):
+    """Your own Butcher tableau: each row of A sums to c; the order is computed from the order
+    conditions (up to 4) and a claimed order must hold. rks takes diagonally implicit tableaux,
+    rksb and rk explicit ones."""
+
+    A: list[_Coefficients] = Field(min_length=1, max_length=_MAX_STAGES, description="s rows of s coefficients")
+    b: _Coefficients = Field(description="the s weights")
+    c: _Coefficients = Field(description="the s nodes")
+    order: int | None = Field(None, ge=1, description="the order you claim; checked against the order conditions")
 
 
 class ScalarDamping(_Input):
@@ -121,7 +136,8 @@ class JobSpec(_Input):
     parameters: dict[str, ParameterValue] = Field(
         default_factory=dict, max_length=64, description="model parameters by name; the rest take their defaults")
     method: MethodName = Field(description="a name from GET /v1/methods")
-    tableau: TableauName | None = Field(None, description="Runge-Kutta tableau for rks/rksb")
+    tableau: TableauName | TableauInput | None = Field(
+        None, description="Runge-Kutta tableau for rks, rksb and rk: a name, or your own {A, b, c}")
     composition: CompositionName | None = Field(None, description="raises a symmetric method's order: a name from "
                                                                  "raydamp.compositions() (GET /v1/methods lists the "
                                                                  "symmetric methods)")
@@ -130,6 +146,9 @@ class JobSpec(_Input):
     n_steps: int | None = Field(None, ge=1, description="the number of steps; give this or t_end, not both")
     initial_state: InitialState
     save_every: int = Field(1, ge=1, description="save every this many steps; the final state is always saved")
+    work: bool = Field(True, description="record the damping work W(t), so that H(t) - H(0) + W(t) (the energy "
+                                         "balance) can be plotted; false skips it and lets 3s merge the damping "
+                                         "sub-flows of consecutive steps (a little faster, equal to rounding)")
 
 
 # ---- output -----------------------------------------------------------------------------------

@@ -54,7 +54,7 @@ def test_every_format_carries_the_json_numbers(server, jobs, tmp_path, name):
         assert sol.provenance["job_id"] == job_id and sol.provenance["method"] == spec["method"]
         model, q0, p0, options = job_arguments(sol.provenance)
         again = raydamp.integrate(model, q0, p0, **options)
-        np.testing.assert_allclose(again.q, sol.q, rtol=0, atol=1e-13)  # the provenance reruns the job
+        np.testing.assert_array_equal(again.q, sol.q)  # the provenance reruns the job, bit for bit
     csv = server.client.get(f"/v1/jobs/{job_id}/trajectory", params={"format": "csv"})
     assert csv.status_code == 200 and csv.headers["content-type"].startswith("text/csv")
     header, *lines = csv.text.strip().splitlines()
@@ -76,6 +76,17 @@ def test_the_damping_work_is_kept_and_balances_the_energy(server, jobs):
         assert np.abs(balance).max() < tolerance, (name, np.abs(balance).max())
     part = _json(server, jobs["kepler"], start=5, every=3)
     np.testing.assert_array_equal(part["work"], _json(server, jobs["kepler"])["work"][5::3])
+
+
+def test_a_job_without_work_stores_none_and_runs_merged(server):
+    job_id = server.submit({**PENDULUM, "work": False})
+    assert server.wait_finished(job_id)["status"] == "completed"
+    data = server.client.get(f"/v1/jobs/{job_id}/trajectory").json()
+    assert data["work"] is None
+    merged = raydamp.integrate(raydamp.models.DampedPendulum(eps=0.01), [2.827433388], [0.0], method="3s", h=0.2,
+                               t_end=40, save_every=2)
+    assert data["q"] == merged.q.tolist()  # the same run as raydamp's default (work=False), bit for bit
+    server.client.delete(f"/v1/jobs/{job_id}")
 
 
 def test_decimation_applies_to_files(server, jobs, tmp_path):

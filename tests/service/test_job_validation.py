@@ -58,6 +58,15 @@ BAD_SPECS = [
     ("too long a t_end", {**VALID, "t_end": 1e300, "save_every": 10**6}, ("t_end",)),
     ("too many saved points", {**without(VALID, "t_end"), "n_steps": 10**7}, ("save_every",)),
     ("save_every beyond a C++ long", {**VALID, "save_every": 10**20}, ("save_every",)),
+    ("fully implicit user tableau", {**VALID, "method": "rks", "tableau": {
+        "A": [[0.25, -0.0386751345948129], [0.5386751345948129, 0.25]], "b": [0.5, 0.5],
+        "c": [0.2113248654051871, 0.7886751345948129]}}, ("tableau",)),
+    ("user tableau whose rows miss c", {**VALID, "method": "rk", "tableau": {
+        "A": [[0, 0], [0.6, 0]], "b": [0.5, 0.5], "c": [0, 1]}}, ("tableau",)),
+    ("user tableau claiming too high an order", {**VALID, "method": "rk", "tableau": {
+        "A": [[0, 0], [1, 0]], "b": [0.5, 0.5], "c": [0, 1], "order": 3}}, ("tableau",)),
+    ("user tableau with a string coefficient", {**VALID, "method": "rk", "tableau": {
+        "A": [[0, 0], ["1", 0]], "b": [0.5, 0.5], "c": [0, 1]}}, ("tableau",)),
     ("elastic pendulum at the origin", {**ELASTIC, "initial_state": {"q": [0.0, 0.0, 0.0], "p": [1.0, 0.0, 0.0]}},
      ("initial_state", "q")),
 ]
@@ -111,3 +120,20 @@ def test_nothing_invalid_was_queued(server):
     for case in BAD_SPECS:
         server.client.post("/v1/jobs", json=case[1])
     assert server.client.get("/v1/jobs").json()["jobs"] == []
+
+
+def test_a_user_tableau_runs_as_in_python(server):
+    """Kutta's third-order tableau on the whole system: the job's final state is raydamp's."""
+    import raydamp
+    from raydamp.models import DampedPendulum
+
+    kutta3 = {"A": [[0, 0, 0], [0.5, 0, 0], [-1, 2, 0]], "b": [1 / 6, 2 / 3, 1 / 6], "c": [0, 0.5, 1], "order": 3}
+    job_id = server.submit({**VALID, "method": "rk", "tableau": kutta3, "t_end": 20})
+    job = server.wait_finished(job_id)
+    assert job["status"] == "completed" and job["spec"]["tableau"] == kutta3
+    assert job["summary"]["tableau"].startswith("custom-")
+    sol = raydamp.integrate(DampedPendulum(eps=0.01), [0.9 * math.pi], [0.0], method="rk", tableau=kutta3, h=0.2,
+                            t_end=20)
+    final = server.client.get(f"/v1/jobs/{job_id}/trajectory", params={"start": sol.t.size - 1}).json()
+    assert final["q"][0][0] == sol.q[-1, 0] and final["p"][0][0] == sol.p[-1, 0]
+    server.client.delete(f"/v1/jobs/{job_id}")  # the module's last test expects no jobs

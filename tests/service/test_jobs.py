@@ -29,7 +29,9 @@ SUMMARY_NUMBERS = ("step_size", "t_final", "energy_initial", "energy_final", "en
 
 def direct(spec: dict) -> raydamp.Solution:
     """The same problem through raydamp.integrate, no service involved."""
-    options = {"method": spec["method"], "h": spec["step_size"], "save_every": spec.get("save_every", 1)}
+    # A job records the damping work unless asked not to (which runs 3s's steps unmerged).
+    options = {"method": spec["method"], "h": spec["step_size"], "save_every": spec.get("save_every", 1),
+               "work": spec.get("work", True)}
     for key in ("t_end", "n_steps", "tableau"):
         if key in spec:
             options[key] = spec[key]

@@ -11,6 +11,7 @@
 #include "raydamp/methods/butcher_tableau.hpp"
 #include "raydamp/methods/composition.hpp"
 #include "raydamp/methods/splitting.hpp"
+#include "raydamp/methods/user_tableaux.hpp"
 
 namespace raydamp {
 
@@ -50,6 +51,8 @@ inline const std::vector<MethodEntry>& method_entries() {
                                   "heun"),
       entry<RungeKutta>("heun", "Heun's method on the whole system (the paper's baseline)", "heun", true),
       entry<RungeKutta>("rk4", "classical fourth-order Runge-Kutta on the whole system", "rk4", true),
+      entry<RungeKutta>("rk", "any explicit Runge-Kutta tableau on the whole system (ours by name, or your own)",
+                        "rk4"),
   };
   return entries;
 }
@@ -77,13 +80,16 @@ inline const ButcherTableau& resolve_tableau(const MethodEntry& method, const st
   if (method.tableau_fixed && !tableau.empty() && tableau != method.default_tableau)
     throw std::invalid_argument("tableau: method '" + method.name + "' is the tableau '" + method.default_tableau +
                                 "'; for another tableau on the whole system there is no separate method yet");
-  const ButcherTableau& tab = builtin_tableau(tableau.empty() ? method.default_tableau : tableau);
+  const ButcherTableau& tab = tableau_named(tableau.empty() ? method.default_tableau : tableau);
+  const bool users = tab.name().rfind("custom-", 0) == 0;
+  const std::string which = users ? "the given tableau" : "'" + tab.name() + "'";
   if (method.tableau_use == TableauUse::explicit_only && !tab.is_explicit())
-    throw std::invalid_argument("tableau: method '" + method.name + "' needs an explicit tableau; '" + tab.name() +
-                                "' is implicit");
+    throw std::invalid_argument("tableau: method '" + method.name + "' needs an explicit tableau (a_ij = 0 for "
+                                "j >= i); " + which + " is implicit");
   if (tab.kind() == TableauKind::implicit)
-    throw std::invalid_argument("tableau: '" + tab.name() +
-                                "' is fully implicit; rks solves diagonally implicit stages only");
+    throw std::invalid_argument("tableau: " + which + " is fully implicit (a_ij != 0 above the diagonal): its "
+                                "stages would be one coupled nonlinear system per step; rks solves diagonally "
+                                "implicit stages one at a time, each a linear solve in p");
   return tab;
 }
 

@@ -330,7 +330,8 @@ function label(job) {
   const spec = job.spec;
   const system = spec.model || (spec.system && spec.system.name) || "system";
   const composed = spec.composition ? ` ∘ ${spec.composition}` : "";
-  return `${system} ${spec.method}${spec.tableau ? "/" + spec.tableau : ""}${composed} h=${spec.step_size}`;
+  const tableau = spec.tableau ? "/" + (typeof spec.tableau === "string" ? spec.tableau : "own tableau") : "";
+  return `${system} ${spec.method}${tableau}${composed} h=${spec.step_size}`;
 }
 
 const column = (rows, k) => rows.map((row) => row[k]);

@@ -19,13 +19,15 @@ class ButcherTableau {
   ButcherTableau(std::string name, std::vector<std::vector<double>> a, std::vector<double> b,
                  std::vector<double> c)
       : name_(std::move(name)), s_(static_cast<int>(b.size())), b_(std::move(b)), c_(std::move(c)) {
-    if (s_ < 1) throw std::invalid_argument("tableau " + name_ + ": b must have at least one weight");
+    // "tableau rk4: ..." for ours; "tableau: ..." for a user's table, which has no name yet.
+    const std::string where = name_.empty() ? "tableau" : "tableau " + name_;
+    if (s_ < 1) throw std::invalid_argument(where + ": b must have at least one weight");
     if (static_cast<int>(c_.size()) != s_ || static_cast<int>(a.size()) != s_)
-      throw std::invalid_argument("tableau " + name_ + ": a, b and c must all have s = len(b) rows");
+      throw std::invalid_argument(where + ": a, b and c must all have s = len(b) rows");
     a_.assign(static_cast<std::size_t>(s_ * s_), 0.0);
     for (int i = 0; i < s_; ++i) {
       if (static_cast<int>(a[i].size()) != s_)
-        throw std::invalid_argument("tableau " + name_ + ": row " + std::to_string(i) + " of a must have s entries");
+        throw std::invalid_argument(where + ": row " + std::to_string(i) + " of a must have s entries");
       long double row = 0.0L;
       for (int j = 0; j < s_; ++j) {
         a_[i * s_ + j] = a[i][j];
@@ -33,7 +35,8 @@ class ButcherTableau {
       }
       // Row sums equal c: the stages are then consistent at the times they claim.
       if (std::abs(row - c_[i]) > 1e-14L)
-        throw std::invalid_argument("tableau " + name_ + ": row " + std::to_string(i) + " of a does not sum to c");
+        throw std::invalid_argument(where + ": row " + std::to_string(i) + " of a does not sum to c[" +
+                                    std::to_string(i) + "]");
     }
     kind_ = TableauKind::explicit_;
     for (int i = 0; i < s_; ++i)
@@ -44,10 +47,11 @@ class ButcherTableau {
         }
     order_ = computed_order();
     symmetric_ = computed_symmetry();
-    if (order_ < 1) throw std::invalid_argument("tableau " + name_ + ": weights b do not sum to 1 (not consistent)");
+    if (order_ < 1) throw std::invalid_argument(where + ": weights b do not sum to 1 (not consistent)");
   }
 
   const std::string& name() const { return name_; }
+  void rename(std::string name) { name_ = std::move(name); }
   int stages() const { return s_; }
   double a(int i, int j) const { return a_[i * s_ + j]; }
   double b(int i) const { return b_[i]; }
