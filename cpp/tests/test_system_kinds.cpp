@@ -4,6 +4,8 @@
 // - dashpots on linear functions give a constant D, so their exact flows must equal
 //   the constant-matrix kind's, and both must equal exp(-tA) where it is known in
 //   closed form (diagonal A);
+// - one dashpot's cached phi1, phi2 (kept while x = -t eps c w.grad g repeats) are
+//   refreshed when x changes: each flow equals its closed form at every new q;
 // - phi2 is continuous across its series/direct switch.
 #include <cmath>
 #include <cstdio>
@@ -42,6 +44,12 @@ void j3(double* out, const double* in, void*) { out[0] = in[0] * in[4] - in[1] *
 void chain_gradients(double* out, const double*, void*) {
   const double rows[6] = {-1.0, 1.0, 0.0, 0.0, -1.0, 1.0};
   for (int i = 0; i < 6; ++i) out[i] = rows[i];
+}
+
+// A dashpot on g = (x^2 + y^2) / 2: grad g = (x, y), so |grad g| and x change with q.
+void planar_gradient(double* out, const double* q, void*) {
+  out[0] = q[0];
+  out[1] = q[1];
 }
 
 CompiledFunction fn(CompiledFunction::Fn f) { return {f, nullptr}; }
@@ -140,6 +148,32 @@ void diagonal_constant_damping_is_exponential() {
   CHECK_NEAR(p[1], -std::exp(-t * eps * 3.0 / 0.5), 1e-15);
 }
 
+// One Factors object carried from q to q, as a run does: q1 -> q2 keeps x (q2 = -q1,
+// same |grad g|), q2 -> q3 changes it. With M = m I and A = eps c g g^T / m,
+//   exp(-tA) p = p + expm1(-t a) (g.p / |g|^2) g,  a = eps c |g|^2 / m,
+//   t phi1(-tA) v = t v + (t phi1(-t a) - t) (g.v / |g|^2) g.
+void rank_one_cache_follows_x() {
+  const double m = 2.0, eps = 0.3, c = 1.5, t = 0.8;
+  const Eigen::MatrixXd mass = m * Eigen::MatrixXd::Identity(2, 2);
+  const DamperDamping damping(mass, eps, {c}, fn(planar_gradient));
+  auto decay = damping.factors(t), affine = damping.factors(t);
+  Vec p(2), v(2), q(2);
+  v << 0.4, -0.9;
+  for (const auto& at : {std::array<double, 2>{0.6, -0.8}, {-0.6, 0.8}, {1.7, 0.4}, {0.1, 0.2}}) {
+    q << at[0], at[1];
+    const double gg = q.squaredNorm(), a = eps * c * gg / m;
+    p << 1.0, -2.0;
+    Vec expected = p + std::expm1(-t * a) * (q.dot(p) / gg) * q;
+    damping.decay(q, decay, p);
+    CHECK((p - expected).cwiseAbs().maxCoeff() <= 4e-15);
+    p << 1.0, -2.0;
+    const double x = -t * a, t_phi1 = t * std::expm1(x) / x;
+    expected = p + std::expm1(x) * (q.dot(p) / gg) * q - (t * v + (t_phi1 - t) * (q.dot(v) / gg) * q);
+    damping.decay_affine(q, affine, v, p);
+    CHECK((p - expected).cwiseAbs().maxCoeff() <= 1e-14);
+  }
+}
+
 void phi2_is_continuous() {
   for (double x : {1e-3, -1e-3, 0.05, -0.05, 0.5, -0.5}) {
     const double below = phi2(std::nextafter(x, 0.0)), at = phi2(x);
@@ -162,6 +196,7 @@ int main() {
   elastic_pendulum_as_system();
   linear_dampers_equal_constant_damping();
   diagonal_constant_damping_is_exponential();
+  rank_one_cache_follows_x();
   phi2_is_continuous();
   TEST_MAIN_RETURN();
 }

@@ -33,7 +33,7 @@ class DamperDamping {
     // the scalars t phi1(x), t^2 phi2(x) (the second only for kick+damp, so computed
     // when first needed). Plain arrays and Maps: no temporaries in the step loop.
     std::array<double, kMaxDenseDim> grad, w;
-    double x = 0.0, t_phi1 = 0.0, t2_phi2 = 0.0;
+    double x = std::numeric_limits<double>::quiet_NaN(), t_phi1 = 0.0, t2_phi2 = 0.0;
     bool has_phi2 = false;
     // Several: exp(-tA) = L V diag(decay) V^T L^{-1}; t phi1(-tA) likewise with t_phi1s.
     SmallMatrix vectors;
@@ -189,20 +189,24 @@ class DamperDamping {
   AtConfiguration& evaluate(const Q& q, const Factors& f) const {
     AtConfiguration& at = f.at;
     if (at.valid && same(at.q, q)) return at;
-    for (int i = 0; i < n_; ++i) at.q[i] = q[i];
+    Eigen::Map<Eigen::VectorXd>(at.q.data(), n_) = q;  // an Eigen copy: no call to memmove
     at.valid = true;
     const double t = f.t;
     if (c_.size() == 1) {
       gradients_(at.grad.data(), q.data());
       const auto grad = map(at.grad);
-      if (scalar_inverse_ != 0.0) {
-        for (int i = 0; i < n_; ++i) at.w[i] = scalar_inverse_ * at.grad[i];
-      } else {
-        Eigen::Map<Eigen::VectorXd>(at.w.data(), n_).noalias() = inverse_ * grad;
+      auto w = Eigen::Map<Eigen::VectorXd>(at.w.data(), n_);
+      if (scalar_inverse_ != 0.0) w = scalar_inverse_ * grad;
+      else w.noalias() = inverse_ * grad;
+      const double x = -t * eps_c_ * w.dot(grad);
+      // phi1 and phi2 are functions of x alone (t is fixed per Factors), and x often
+      // repeats from q to q: a dashpot on a spring's length has |grad g| = 1, so x is
+      // -t eps c / m up to rounding, which takes a handful of values. Same x, same bits.
+      if (x != at.x) {
+        at.x = x;
+        at.t_phi1 = t * phi1(x);
+        at.has_phi2 = false;
       }
-      at.x = -t * eps_c_ * map(at.w).dot(grad);
-      at.t_phi1 = t * phi1(at.x);
-      at.has_phi2 = false;
       return at;
     }
     Buffer g;

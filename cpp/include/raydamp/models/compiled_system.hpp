@@ -69,8 +69,9 @@ struct CompiledSystem {
     constexpr int kStack = 256;
     if (2 * n <= kStack) {
       std::array<double, kStack> in;
-      std::copy(q.data(), q.data() + n, in.begin());
-      std::copy(p.data(), p.data() + n, in.begin() + n);
+      // Eigen copies: std::copy of a run-time length becomes two calls to memmove.
+      Eigen::Map<Eigen::VectorXd>(in.data(), n) = q;
+      Eigen::Map<Eigen::VectorXd>(in.data() + n, n) = p;
       functions.momenta(out, in.data());
     } else {
       std::vector<double> in(2 * n);
