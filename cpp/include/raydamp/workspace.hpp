@@ -20,9 +20,12 @@ struct Workspace {
   double work = 0.0;
   Factors damp_factors, kick_damp_factors;  // for the last t each exact damping flow ran for
 
-  Workspace(int n, int stages)
-      : v(fresh(n)), g(fresh(n)), f(fresh(n)), stage_q(fresh(n)), stage_p(fresh(n)),
-        kq(stages, fresh(n)), kp(stages, fresh(n)) {}
+  Workspace(int n, int stages) : v(fresh(n)), g(fresh(n)), f(fresh(n)), stage_q(fresh(n)), stage_p(fresh(n)) {
+    for (int i = 0; i < stages; ++i) {  // each its own fresh vector (a copy of one would write it)
+      kq.push_back(fresh(n));
+      kp.push_back(fresh(n));
+    }
+  }
 
   // Every flow writes a scratch vector before reading it. A Dynamic one is left
   // unwritten here: a lattice of 10^6 sites whose drift and kick need no scratch

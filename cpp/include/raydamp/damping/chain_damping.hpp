@@ -67,6 +67,7 @@ class ChainDamping {
       return i;
     };
     const int first = chain_bonds_first(boundary), end = chain_bonds_end(boundary, n);
+    const double scale = eps / mass;  // A = eps D M^{-1} with M = m I
     for (std::size_t k = 0; k < bonds.size(); ++k) {
       const int b = bonds[k];
       if (b < first || b >= end)
@@ -74,6 +75,9 @@ class ChainDamping {
                                     " is not a bond of this chain (bonds " + std::to_string(first) + ".." +
                                     std::to_string(end - 1) + ")");
       check_coefficient("dampers.c", k, bond_c[k]);
+      // A damper with eps c = 0 does nothing: no block, so at eps = 0 the damping flows are
+      // the identity exactly (not V V^T, which is I only to rounding).
+      if (scale * bond_c[k] == 0.0) continue;
       const auto [l, r] = chain_bond_sites(boundary, n, b);
       if (l >= 0) touched[l] = 1;
       if (r >= 0) touched[r] = 1;
@@ -84,7 +88,7 @@ class ChainDamping {
         throw std::invalid_argument("dampers.sites[" + std::to_string(k) + "]: site " + std::to_string(sites[k]) +
                                     " is not a site of this chain (0.." + std::to_string(n - 1) + ")");
       check_coefficient("dampers.c", k, site_c[k]);
-      touched[sites[k]] = 1;
+      if (scale * site_c[k] != 0.0) touched[sites[k]] = 1;
     }
     // Blocks in order of their first site; local index of each damped site.
     std::vector<int> block_of_root(n, -1), local(n, -1);
@@ -109,8 +113,8 @@ class ChainDamping {
                                     " sites: damp fewer adjacent bonds, or use on-site friction (dampers.sites)");
       a[k] = Eigen::MatrixXd::Zero(s, s);
     }
-    const double scale = eps / mass;  // A = eps D M^{-1} with M = m I
     for (std::size_t k = 0; k < bonds.size(); ++k) {
+      if (scale * bond_c[k] == 0.0) continue;
       const auto [l, r] = chain_bond_sites(boundary, n, bonds[k]);
       const double w = scale * bond_c[k];
       const int site = l >= 0 ? l : r;
@@ -123,7 +127,7 @@ class ChainDamping {
       }
     }
     for (std::size_t k = 0; k < sites.size(); ++k)
-      a[block_of_root[root(sites[k])]](local[sites[k]], local[sites[k]]) += scale * site_c[k];
+      if (scale * site_c[k] != 0.0) a[block_of_root[root(sites[k])]](local[sites[k]], local[sites[k]]) += scale * site_c[k];
 
     for (std::size_t k = 0; k < members.size(); ++k) {
       const int s = static_cast<int>(members[k].size());
