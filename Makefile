@@ -61,6 +61,7 @@ bench: setup
 	$(PY) benchmarks/bench_steps.py
 	$(PY) benchmarks/bench_system.py
 	$(PY) benchmarks/bench_service_load.py
+	$(PY) benchmarks/bench_large.py
 
 # The paper's experiments in full: figures and REPORT.md in reproduce-out/.
 reproduce: setup

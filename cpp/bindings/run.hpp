@@ -33,12 +33,14 @@ inline py::array_t<double> to_numpy(std::vector<double>&& data, std::vector<py::
 template <class Model>
 py::dict run(const Model& model, const std::string& method, const std::string& tableau,
              const std::string& composition, const typename Model::Vec& q0, const typename Model::Vec& p0, double h, long n_steps, double h_last,
-             long save_every, bool track_work, py::object progress, CancelToken* cancel) {
+             long save_every, bool track_work, py::object progress, CancelToken* cancel,
+             const std::vector<int>& save_dofs) {
   const MethodEntry& entry = method_entry(method);
   require_applicable(entry, model.eps);
   const ButcherTableau& tab = resolve_tableau(entry, tableau);
   const Composition& comp = resolve_composition(entry, tab, composition);
-  const RunSpec spec{h, n_steps, h_last, save_every, track_work};
+  RunSpec spec{h, n_steps, h_last, save_every, track_work};
+  spec.save_dofs = save_dofs;
   Control control;
   if (cancel) control.cancel = &cancel->flag;
   if (!progress.is_none())
@@ -77,7 +79,8 @@ void def_integrate(py::module_& m) {
   m.def("integrate", &run<Model>, py::arg("model"), py::arg("method"), py::arg("tableau"), py::arg("composition"),
         py::arg("q0"),
         py::arg("p0"), py::arg("h"), py::arg("n_steps"), py::arg("h_last"), py::arg("save_every"),
-        py::arg("track_work"), py::arg("progress"), py::arg("cancel").none(true));
+        py::arg("track_work"), py::arg("progress"), py::arg("cancel").none(true),
+        py::arg("save_dofs") = std::vector<int>{});
 }
 
 }  // namespace raydamp::bindings

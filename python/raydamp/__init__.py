@@ -11,6 +11,7 @@ equilibria.
 """
 
 from . import models
+from .chain import Chain, chain_mode_energies
 from ._core import __version__
 from .integrate import CancelToken, integrate, steps_for
 from .methods import CompositionInfo, MethodInfo, TableauInfo, compositions, methods, tableaux
@@ -19,6 +20,6 @@ from .results import load
 from .solution import Solution
 from .system import SpecError, System
 
-__all__ = ["__version__", "models", "System", "SpecError", "integrate", "steps_for", "CancelToken", "Solution",
+__all__ = ["__version__", "models", "System", "Chain", "chain_mode_energies", "SpecError", "integrate", "steps_for", "CancelToken", "Solution",
            "load", "rayleigh_coefficients", "modal_damping_ratio", "methods", "tableaux", "compositions",
            "MethodInfo", "TableauInfo", "CompositionInfo"]

@@ -45,6 +45,14 @@ class ElasticPendulum(_Model):
     g: np.ndarray
     def __init__(self, eps: float, m: float, k: float, l: float, g: list[float]) -> None: ...
 
+class Chain(_Model):
+    damping_blocks: int
+    largest_damping_block: int
+    damping_spectral_radius: float
+    def __init__(self, n: int, boundary: str, bond: str, parameters: dict[str, float], mass: float, eps: float,
+                 bonds: list[int], bond_c: list[float], sites: list[int], site_c: list[float], functions: list[int],
+                 keep_alive: object) -> None: ...
+
 def integrate(model: _Model, method: str, tableau: str, composition: str, q0: np.ndarray, p0: np.ndarray, h: float, n_steps: int,
               h_last: float, save_every: int, track_work: bool, progress: Callable[[int, int], object] | None,
-              cancel: CancelToken | None) -> dict[str, Any]: ...
+              cancel: CancelToken | None, save_dofs: list[int] = ...) -> dict[str, Any]: ...

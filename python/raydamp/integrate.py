@@ -8,6 +8,8 @@ import time
 from collections.abc import Callable, Mapping
 
 from . import _core
+import numpy as np
+
 from ._validation import _short, integer, real, vector
 from .models import Model
 from .solution import Solution
@@ -51,7 +53,7 @@ def _tableau(tableau) -> tuple[str, str | dict | None]:
 
 def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: float | None = None,
               n_steps: int | None = None, save_every: int = 1, tableau: str | Mapping | None = None,
-              composition: str | None = None, work: bool = False,
+              composition: str | None = None, work: bool = False, save_dofs=None,
               progress: Callable[[int, int], object] | None = None,
               cancel: CancelToken | None = None) -> Solution:
     """Integrate ``model`` from (q0, p0) with fixed steps of size ``h``.
@@ -87,6 +89,10 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
         the largest h that passes. Order 2 (no composition) has no backward
         sub-step. 3s composes most gently: its backward damping is only the
         merged (gamma_i + gamma_{i+1}) h / 2 between stages.
+    save_dofs : save q and p of these coordinates only (indices, in the order given); None
+        (default) saves all. Energy, W and the momentum maps are still computed from the whole
+        state at each saved point, so a 10^6-site chain run keeps a few numbers per row.
+        ``Solution.dofs`` holds the indices.
     progress : called as ``progress(steps_done, n_steps)`` about 100 times per run
         (never once per step), from the integrating thread.
     cancel : a :class:`CancelToken`; cancelling it stops the run.
@@ -124,15 +130,17 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
         raise ValueError(f"work must be True or False, got {work!r}")
     if cancel is not None and not isinstance(cancel, _core.CancelToken):
         raise ValueError(f"cancel must be a raydamp.CancelToken or None, got {cancel!r}")
+    dofs = _save_dofs(save_dofs, model.dim)
     rows = n_steps // save_every + 2
-    row_bytes = 8 * (2 + work + 2 * model.dim + len(model.momentum_names))
+    saved = model.dim if dofs is None else len(dofs)
+    row_bytes = 8 * (2 + work + 2 * saved + len(model.momentum_names))
     if rows * row_bytes > MAX_SAVED_BYTES:
         raise ValueError(f"save_every: {rows} saved points would take {rows * row_bytes / 2**30:.1f} GiB "
                          f"(limit {MAX_SAVED_BYTES / 2**30:.0f} GiB); raise save_every")
 
     start = time.perf_counter()
     out = _core.integrate(model._core_model, method, tableau_name, composition or "", q0, p0, h, n_steps, h_last,
-                          save_every, work, progress, cancel)
+                          save_every, work, progress, cancel, save_dofs=[] if dofs is None else dofs)
     wall = time.perf_counter() - start
     message = out["message"]
     explain = getattr(model, "_explain_failure", None)
@@ -143,11 +151,30 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
                     message=message, method=method, tableau=resolved_tableau if method in with_tableau else None,
                     composition=None if resolved_composition == "none" else resolved_composition, h=h,
                     max_momentum_drift=out["max_momentum_drift"], work=out["work"], wall_time=wall,
+                    dofs=None if dofs is None else np.asarray(dofs, dtype=np.int64),
                     origin=(model, q0.copy(), p0.copy(), {
                         "method": method, "tableau": tableau,
                         "composition": None if resolved_composition == "none" else resolved_composition, "h": h,
                         "t_end": t_end, "n_steps": None if t_end is not None else n_steps,
-                        "save_every": save_every, "work": work}))
+                        "save_every": save_every, "work": work, "save_dofs": dofs}))
+
+
+def _save_dofs(save_dofs, dim: int) -> list[int] | None:
+    """The coordinates to save, checked: distinct integers in [0, dim)."""
+    if save_dofs is None:
+        return None
+    if isinstance(save_dofs, (str, bytes)) or not hasattr(save_dofs, "__len__"):
+        raise ValueError(f"save_dofs must be a list of coordinate indices or None, got {_short(save_dofs)}")
+    out = []
+    for i, x in enumerate(save_dofs):
+        if isinstance(x, bool) or not isinstance(x, (int, np.integer)):
+            raise ValueError(f"save_dofs[{i}] must be an integer, got {_short(x)}")
+        if not 0 <= int(x) < dim:
+            raise ValueError(f"save_dofs[{i}]: {int(x)} is not a coordinate (0..{dim - 1})")
+        out.append(int(x))
+    if len(set(out)) != len(out):
+        raise ValueError("save_dofs: an index appears twice")
+    return out
 
 
 def steps_for(t_end: float, h: float) -> tuple[int, float]:

@@ -16,13 +16,14 @@ from typing import Any
 
 import numpy as np
 
+from .chain import Chain
 from .models import MODELS, Model
 from .system import SpecError, System
 
 __all__ = ["JOB_KEYS", "PROVENANCE_KEYS", "describe_model", "model_from_spec", "job_arguments", "job_spec"]
 
 JOB_KEYS = ("model", "system", "parameters", "method", "tableau", "composition", "step_size", "t_end", "n_steps", "save_every",
-            "initial_state", "work")
+            "initial_state", "work", "save_dofs")
 # What a Solution's provenance adds to the job (a saved result's provenance runs as a job).
 PROVENANCE_KEYS = ("raydamp_version", "job_id", "coordinates", "momentum_names")
 
@@ -40,6 +41,8 @@ def _plain(value: Any) -> Any:
 def describe_model(model: Model) -> dict[str, Any]:
     """{"model": name, "parameters": {...}} for a built-in model, {"system": {...}} for a System
     ({"system": None, "label": ...} for one built from Python functions, which has no plain form)."""
+    if isinstance(model, Chain):
+        return {"system": model.to_dict()}
     if isinstance(model, System):
         try:
             return {"system": model.to_dict()}
@@ -57,6 +60,11 @@ def model_from_spec(spec: Mapping[str, Any]) -> Model:
     if has_system:
         if spec.get("parameters"):
             raise ValueError("parameters: a system carries its parameters inside system.parameters")
+        if isinstance(spec["system"], Mapping) and spec["system"].get("kind") == "chain":
+            try:
+                return Chain.from_dict(spec["system"])
+            except ValueError as error:
+                raise ValueError(f"system.{error}") from None
         try:
             return System.from_dict(spec["system"])
         except SpecError as error:
@@ -84,28 +92,46 @@ def job_arguments(spec: Mapping[str, Any]) -> tuple[Model, Any, Any, dict[str, A
         raise ValueError(f"{unknown[0]}: unknown key (known: {', '.join(JOB_KEYS)})")
     model = model_from_spec(spec)
     state = spec.get("initial_state")
+    if isinstance(model, Chain) and isinstance(state, Mapping) and "mode" in state:
+        state = _chain_mode_state(model, state)
     if not isinstance(state, Mapping) or "q" not in state or "p" not in state:
-        raise ValueError('initial_state: must be {"q": [...], "p": [...]}')
+        raise ValueError('initial_state: must be {"q": [...], "p": [...]}'
+                         + (' or {"mode": k, "amplitude": a} for a chain' if isinstance(model, Chain) else ""))
     for key in ("method", "step_size"):
         if key not in spec:
             raise ValueError(f"{key}: missing")
     options: dict[str, Any] = {"method": spec["method"], "h": spec["step_size"],
                                "save_every": spec.get("save_every", 1), "work": spec.get("work", False)}
-    for key in ("tableau", "composition", "t_end", "n_steps"):
+    for key in ("tableau", "composition", "t_end", "n_steps", "save_dofs"):
         if spec.get(key) is not None:
             options[key] = spec[key]
     return model, state["q"], state["p"], options
 
 
+def _chain_mode_state(chain: Chain, state: Mapping[str, Any]) -> dict[str, Any]:
+    """{"mode": k, "amplitude": a}: a chain started in one normal mode at rest (Chain.normal_mode),
+    so a job for a million sites need not carry two million numbers."""
+    for key in state:
+        if key not in ("mode", "amplitude"):
+            raise ValueError(f"initial_state.{key}: unknown key (a chain's mode start has mode, amplitude)")
+    try:
+        q, p = chain.normal_mode(state["mode"], state.get("amplitude", 1.0))
+    except ValueError as error:
+        raise ValueError(f"initial_state.{error}") from None
+    return {"q": q, "p": p}
+
+
 def job_spec(model: Model, q0: np.ndarray, p0: np.ndarray, *, method: str, tableau: str | None,
              composition: str | None, h: float, t_end: float | None, n_steps: int | None, save_every: int,
-             work: bool) -> dict[str, Any]:
+             work: bool, save_dofs: list[int] | None = None) -> dict[str, Any]:
     """The job spec of a run: what Solution.provenance holds."""
     from . import __version__
 
     spec = describe_model(model)
     spec.update({"method": method, "tableau": tableau, "composition": composition, "step_size": h, "save_every": save_every, "work": work,
                  "initial_state": {"q": np.asarray(q0, float).tolist(), "p": np.asarray(p0, float).tolist()}})
+    if save_dofs is not None:
+        spec["save_dofs"] = list(save_dofs)
     if t_end is not None:
         spec["t_end"] = t_end
     else:

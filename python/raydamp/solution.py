@@ -21,7 +21,7 @@ class Solution:
     Attributes
     ----------
     t : (N,) times.
-    q, p : (N, n) positions and momenta.
+    q, p : (N, n) positions and momenta (N, k with ``save_dofs``: the coordinates in ``dofs``).
     energy : (N,) H(q, p).
     momentum : (N, m) the model's momentum maps (m = 0 for a model without symmetry).
     status : "completed", "out_of_memory" (the saved points outgrew memory: those that fit are
@@ -30,6 +30,8 @@ class Solution:
         "cancelled".
     steps : steps taken (all with finite results).
     work : (N,) damping work W(t) if the run was asked for it (``work=True``), else None.
+    dofs : the indices of the saved coordinates when the run saved only some (``save_dofs``),
+        else None.
     composition : the composition the method was raised to higher order with, or None.
     provenance : what produced it, as the job JSON the service and ``raydamp run`` take
         (model or system, initial state, method, tableau, step size, span, save_every)
@@ -58,6 +60,7 @@ class Solution:
     work: np.ndarray | None = field(default=None)
     wall_time: float = field(default=0.0)
     composition: str | None = field(default=None)
+    dofs: np.ndarray | None = field(default=None)
     # (model, q0, p0, options) of the run, turned into `provenance` when asked for (cheap
     # runs stay cheap); or the provenance dict itself, for a loaded solution.
     origin: Any = field(default=None, compare=False)
@@ -75,9 +78,12 @@ class Solution:
     def coordinates(self) -> tuple[str, ...]:
         """The names of the coordinates (q0, q1, ... when the model does not name them)."""
         if isinstance(self.origin, tuple):
-            return tuple(self.origin[0].coordinates)
+            names = self.origin[0].coordinates
+            return tuple(names) if self.dofs is None else tuple(names[int(i)] for i in self.dofs)
         names = (self.provenance or {}).get("coordinates")
-        return tuple(names) if names else tuple(f"q{i}" for i in range(self.q.shape[1]))
+        if names:
+            return tuple(names)
+        return tuple(f"q{i}" for i in (range(self.q.shape[1]) if self.dofs is None else self.dofs))
 
     @property
     def momentum_names(self) -> tuple[str, ...]:

@@ -28,6 +28,10 @@ SUFFIXES = {"csv": ".csv", "npz": ".npz", "netcdf": ".nc"}
 
 def _names(spec: dict[str, Any], dim: int, momenta: int) -> tuple[list[str], list[str]]:
     system = spec.get("system")
+    if system is not None and system.get("kind") == "chain":
+        # The saved sites (save_dofs) or all of them; sum p is the one momentum map a chain may have.
+        dofs = spec.get("save_dofs")
+        return [f"q{i}" for i in (dofs if dofs is not None else range(dim))], ["P"] * momenta
     if system is not None:
         coordinates = system["coordinates"]
         coordinates = [f"q{i}" for i in range(coordinates)] if isinstance(coordinates, int) else list(coordinates)

@@ -17,7 +17,7 @@ import raydamp
 from raydamp.models import make_model
 
 from .config import Settings
-from .schemas import JobSpec
+from .schemas import ChainInput, JobSpec, ModeState
 
 __all__ = ["SpecError", "RaydampCall", "build_call", "check_spec", "planned_steps"]
 
@@ -30,6 +30,7 @@ _FIELD_OF_ARGUMENT: dict[str, tuple[str, ...]] = {
     "tableau": ("tableau",),
     "composition": ("composition",),
     "save_every": ("save_every",),
+    "save_dofs": ("save_dofs",),
     "n_steps": ("n_steps",),
     "t_end": ("t_end",),
 }
@@ -86,6 +87,32 @@ def _system_error(error: raydamp.SpecError) -> SpecError:
     return SpecError(("system", *error.path), f"system.{error}")
 
 
+def _chain(system: ChainInput) -> raydamp.Chain:
+    """raydamp builds and checks the chain; its messages name the key inside "system"."""
+    try:
+        return raydamp.Chain.from_dict(system.model_dump(exclude_none=True))
+    except ValueError as error:
+        # raydamp's message starts with the path: "dampers.bonds[3]: ..." or "n must be ...".
+        message = str(error)
+        path = message.split(" ", 1)[0].rstrip(":").replace("]", "").replace("[", ".").split(".")
+        loc = tuple(int(part) if part.isdigit() else part for part in path if part)
+        if not loc or loc[0] not in ChainInput.model_fields:
+            loc = ()
+        raise SpecError(("system", *loc), f"system.{message}") from None
+
+
+def _initial_state(spec: JobSpec, model) -> tuple[Any, Any]:
+    state = spec.initial_state
+    if isinstance(state, ModeState):
+        if not isinstance(model, raydamp.Chain):
+            raise SpecError(("initial_state",), "initial_state: {mode, amplitude} starts a chain; give q and p")
+        try:
+            return model.normal_mode(state.mode, state.amplitude)
+        except ValueError as error:
+            raise SpecError(("initial_state", "mode"), f"initial_state.{error}") from None
+    return list(state.q), list(state.p)
+
+
 def _model(spec: JobSpec) -> raydamp.models.Model:
     if (spec.model is None) == (spec.system is None):
         raise SpecError(("model",) if spec.model is None else ("system",),
@@ -94,6 +121,8 @@ def _model(spec: JobSpec) -> raydamp.models.Model:
     if spec.system is not None:
         if spec.parameters:
             raise SpecError(("parameters",), "parameters: a system carries its parameters inside system.parameters")
+        if isinstance(spec.system, ChainInput):
+            return _chain(spec.system)
         return _system(spec)
     try:
         return make_model(spec.model, spec.parameters)
@@ -118,7 +147,10 @@ def build_call(spec: JobSpec) -> RaydampCall:
         options["n_steps"] = spec.n_steps
     if spec.t_end is not None:
         options["t_end"] = spec.t_end
-    return RaydampCall(model, list(spec.initial_state.q), list(spec.initial_state.p), options)
+    if spec.save_dofs is not None:
+        options["save_dofs"] = list(spec.save_dofs)
+    q0, p0 = _initial_state(spec, model)
+    return RaydampCall(model, q0, p0, options)
 
 
 def planned_steps(spec: JobSpec) -> int:
@@ -137,7 +169,8 @@ def check_spec(spec: JobSpec, settings: Settings) -> RaydampCall:
         both = spec.t_end is not None
         raise SpecError(("n_steps",) if both else ("t_end",),
                         "give exactly one of t_end and n_steps" + (", not both" if both else ""))
-    for name, values in (("q", spec.initial_state.q), ("p", spec.initial_state.p)):
+    for name in ("q", "p"):
+        values = getattr(spec.initial_state, name, ())
         if len(values) > settings.max_dim:
             raise SpecError(("initial_state", name), f"initial_state.{name} has {len(values)} components; "
                             f"this service accepts at most max_dim = {settings.max_dim}")
@@ -161,7 +194,8 @@ def check_spec(spec: JobSpec, settings: Settings) -> RaydampCall:
 
     call = build_call(spec)
     # The largest stored array is q or p: saved_points x dim float64.
-    largest = saved_points * max(call.model.dim, len(call.model.momentum_names)) * 8
+    saved = call.model.dim if spec.save_dofs is None else len(spec.save_dofs)
+    largest = saved_points * max(saved, len(call.model.momentum_names)) * 8
     if largest > settings.max_trajectory_bytes:
         raise SpecError(("save_every",), f"save_every: the trajectory would take {largest / 2**20:.0f} MiB per "
                         f"array (limit {settings.max_trajectory_bytes / 2**20:.0f} MiB); raise save_every")

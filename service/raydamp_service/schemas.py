@@ -28,6 +28,7 @@ FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
 # The longest vector any job may carry (Settings.max_dim is at most this, and usually lower). In the
 # schema, so that a list of 200,000 bad items is one error found at once, not 200,000 found one by one.
 MAX_VECTOR = 10_000
+MAX_CHAIN_SITES = 10**7  # a chain's state is built by raydamp from its description, not sent
 Vector = Annotated[list[FiniteFloat], Field(max_length=MAX_VECTOR)]
 ParameterValue = FiniteFloat | Vector
 JobStatus = Literal["queued", "running", "completed", "failed", "cancelled"]
@@ -118,6 +119,40 @@ class SystemInput(_Input):
     name: str | None = Field(None, max_length=200)
 
 
+class ChainDampers(_Input):
+    bonds: list[Annotated[int, Field(ge=0)]] = Field(default_factory=list, max_length=MAX_VECTOR,
+                                                     description="damped bonds (bond b joins sites b-1 and b)")
+    sites: list[Annotated[int, Field(ge=0)]] = Field(default_factory=list, max_length=MAX_VECTOR,
+                                                     description="sites with on-site friction")
+    c: FiniteFloat | Annotated[list[FiniteFloat], Field(max_length=2 * MAX_VECTOR)] = Field(
+        description="the dashpot coefficient, or one per damper (bonds, then sites)")
+
+
+class ChainInput(_Input):
+    """A lattice: raydamp.Chain.to_dict()'s form. n sites of mass m, neighbours joined by bonds of one
+    family, dashpots on chosen bonds or friction on chosen sites (raydamp.chain documents it)."""
+
+    kind: Literal["chain"]
+    n: int = Field(ge=2, le=MAX_CHAIN_SITES, description="number of sites")
+    bond: Literal["harmonic", "fput", "toda", "morse", "lennard_jones", "expression"] = "fput"
+    parameters: dict[Name, FiniteFloat | Expression] = Field(
+        default_factory=dict, max_length=64,
+        description="the family's parameters (fput: k, alpha, beta; ...); an expression bond gives "
+                    "potential: V(r) as text, and its named parameters")
+    mass: FiniteFloat = Field(1.0, gt=0)
+    boundary: Literal["fixed", "periodic", "free"] = "fixed"
+    dampers: ChainDampers | None = None
+    eps: FiniteFloat = Field(1.0, ge=0, description="damping strength (D is scaled by it)")
+
+
+class ModeState(_Input):
+    """A chain started at rest with all its energy in one normal mode (raydamp.Chain.normal_mode):
+    a job for a million sites need not carry two million numbers."""
+
+    mode: int = Field(ge=0, description="the mode number (fixed ends: 1..n)")
+    amplitude: FiniteFloat = 1.0
+
+
 def _exactly_one(first: str, second: str, first_type: str, second_type: str) -> dict:
     """JSON Schema for "exactly one of first and second is given (not null)"."""
     return {"oneOf": [{"required": [first], "properties": {first: {"type": first_type}, second: {"type": "null"}}},
@@ -132,7 +167,9 @@ class JobSpec(_Input):
                                                            _exactly_one("t_end", "n_steps", "number", "integer")]})
 
     model: ModelName | None = Field(None, description="a name from GET /v1/models")
-    system: SystemInput | None = Field(None, description="a user-defined system, in place of model/parameters")
+    system: SystemInput | ChainInput | None = Field(
+        None, description="a user-defined system or a lattice ({\"kind\": \"chain\", ...}), in place of "
+                          "model/parameters")
     parameters: dict[str, ParameterValue] = Field(
         default_factory=dict, max_length=64, description="model parameters by name; the rest take their defaults")
     method: MethodName = Field(description="a name from GET /v1/methods")
@@ -144,11 +181,14 @@ class JobSpec(_Input):
     step_size: FiniteFloat = Field(gt=0, description="step_size x the number of steps must be finite")
     t_end: FiniteFloat | None = Field(None, gt=0, description="the end time; give this or n_steps, not both")
     n_steps: int | None = Field(None, ge=1, description="the number of steps; give this or t_end, not both")
-    initial_state: InitialState
+    initial_state: InitialState | ModeState
     save_every: int = Field(1, ge=1, description="save every this many steps; the final state is always saved")
     work: bool = Field(True, description="record the damping work W(t), so that H(t) - H(0) + W(t) (the energy "
                                          "balance) can be plotted; false skips it and lets 3s merge the damping "
                                          "sub-flows of consecutive steps (a little faster, equal to rounding)")
+    save_dofs: list[Annotated[int, Field(ge=0)]] | None = Field(
+        None, max_length=MAX_VECTOR, description="save q and p of these coordinates only (energy, W and momenta "
+                                                 "still from the whole state); null saves all")
 
 
 # ---- output -----------------------------------------------------------------------------------

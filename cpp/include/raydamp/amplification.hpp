@@ -20,6 +20,8 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
+#include <utility>
 
 #include "raydamp/composed_step.hpp"
 #include "raydamp/methods/butcher_tableau.hpp"
@@ -34,8 +36,15 @@ inline constexpr double kMaxAmplification = 10.0;
 // The spectral radius of A = eps D(q) M^{-1} at q, from the damping kind's own
 // rate(q, p) = A p: A is similar to the symmetric PSD eps L^{-1} D L^{-T}, so its
 // eigenvalues are real and >= 0. Dense for small n; power iteration beyond.
+template <class D, class = void>
+struct has_spectral_radius : std::false_type {};
+template <class D>
+struct has_spectral_radius<D, std::void_t<decltype(std::declval<const D&>().spectral_radius())>> : std::true_type {};
+
 template <class Model>
 double damping_spectral_radius(const Model& model, const typename Model::Vec& q) {
+  // A damping kind that knows its eigenvalues (a lattice's blocks) says so directly.
+  if constexpr (has_spectral_radius<decltype(model.damping)>::value) return model.damping.spectral_radius();
   const int n = model.size();
   typename Model::Vec e = Model::Vec::Zero(n), column = Model::Vec::Zero(n);
   if (n <= 64) {

@@ -2,6 +2,9 @@
 // the modified Hamiltonian of Stormer-Verlet.
 #pragma once
 
+#include <type_traits>
+#include <utility>
+
 #include "raydamp/state.hpp"
 #include "raydamp/workspace.hpp"
 
@@ -10,8 +13,18 @@ namespace raydamp {
 // eps d_q(qdot, qdot) = eps qdot^T D(q) qdot, the rate of energy loss of the exact
 // flow (paper equation exact_energy_dissipation_rate). With v = M^{-1} p and
 // A p = eps D M^{-1} p it is v . (A p), so it needs no model function of its own.
+// A model whose damping touches few coordinates (a lattice with a few dashpots) may
+// give the power itself, model.dissipated_power(q, p), without two passes over n.
+template <class M, class = void>
+struct has_dissipated_power : std::false_type {};
+template <class M>
+struct has_dissipated_power<M, std::void_t<decltype(std::declval<const M&>().dissipated_power(
+                                   std::declval<const typename M::Vec&>(), std::declval<const typename M::Vec&>()))>>
+    : std::true_type {};
+
 template <class Model, int Dim, class DF>
 double dissipated_power(const Model& model, const State<Dim>& z, Workspace<Dim, DF>& ws) {
+  if constexpr (has_dissipated_power<Model>::value) return model.dissipated_power(z.q, z.p);
   model.mass.velocity(z.p, ws.v);
   model.damping.rate(z.q, z.p, ws.f);
   return ws.v.dot(ws.f);

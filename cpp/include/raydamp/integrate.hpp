@@ -49,6 +49,9 @@ struct RunSpec {
   // Merge the last sub-flow of a step with the first of the next between steps
   // that save nothing (see composed_step.hpp); false runs every step whole (tests).
   bool merge_steps = true;
+  // The coordinates whose q and p each saved point keeps (empty: all). A large
+  // lattice saves a few sites and the scalar diagnostics, not n numbers per row.
+  std::vector<int> save_dofs;
 };
 
 struct Control {
@@ -57,7 +60,8 @@ struct Control {
   long max_progress_calls = 100;
 };
 
-// Saved points, row-major: t[k], q[k*n + i], p[k*n + i], energy[k], momentum[k*m + j].
+// Saved points, row-major: t[k], q[k*n + i], p[k*n + i], energy[k], momentum[k*m + j]
+// (n: the saved coordinates, all of them or RunSpec::save_dofs).
 struct Trajectory {
   int n = 0, n_momenta = 0;
   std::vector<double> t, q, p, energy, momentum, work;  // work: empty unless tracked
@@ -89,11 +93,16 @@ struct MomentumBuffers {
 
 template <class Model, int Dim, class DF>
 void save_point(const Model& model, const State<Dim>& z, double t, const Workspace<Dim, DF>& ws,
-                MomentumBuffers& mb, Trajectory& out) {
+                MomentumBuffers& mb, const std::vector<int>& dofs, Trajectory& out) {
   out.t.push_back(t);
   if (ws.track_work) out.work.push_back(ws.work);
-  out.q.insert(out.q.end(), z.q.data(), z.q.data() + z.q.size());
-  out.p.insert(out.p.end(), z.p.data(), z.p.data() + z.p.size());
+  if (dofs.empty()) {
+    out.q.insert(out.q.end(), z.q.data(), z.q.data() + z.q.size());
+    out.p.insert(out.p.end(), z.p.data(), z.p.data() + z.p.size());
+  } else {
+    for (int i : dofs) out.q.push_back(z.q[i]);
+    for (int i : dofs) out.p.push_back(z.p[i]);
+  }
   out.energy.push_back(energy(model, z));
   if (mb.count() == 0) return;
   model.momenta(z.q, z.p, mb.j.data());
@@ -170,8 +179,12 @@ RAYDAMP_FLATTEN double run_block(const Model& model, const Tab& shared_tab, cons
                                  State<Dim>& state, long k, long end, bool merge, bool track_momenta,
                                  const Advance& advance, const Drift& step_drift) {
   // Stepped on local copies (state and durations) that no opaque call (sin, exp)
-  // can be assumed to touch, so the compiler keeps them in registers.
-  State<Dim> y = state;
+  // can be assumed to touch, so the compiler keeps them in registers. A state on the
+  // heap (Dynamic size: a lattice of 10^6 sites) stays out of registers anyway, and
+  // its copy would cost two passes over memory and a fresh buffer's page faults per
+  // block: it is stepped in place.
+  constexpr bool in_place = Dim == Eigen::Dynamic;
+  std::conditional_t<in_place, State<Dim>&, State<Dim>> y = state;
   const Stepper local = stepper;  // a few hundred bytes, once per block
   // A fixed-size tableau is copied too; a run-time one (vectors) is read in place.
   using LocalTab = std::conditional_t<std::is_trivially_copyable_v<Tab>, const Tab, const Tab&>;
@@ -188,7 +201,7 @@ RAYDAMP_FLATTEN double run_block(const Model& model, const Tab& shared_tab, cons
       local.body(model, tab, y, end - 1, ws);
       local.trail(model, tab, y, end - 1, ws);
       if (track_momenta) block_drift = std::max(block_drift, step_drift(y));
-      state = y;
+      if constexpr (!in_place) state = y;
       return block_drift;
     }
   }
@@ -196,7 +209,7 @@ RAYDAMP_FLATTEN double run_block(const Model& model, const Tab& shared_tab, cons
     advance(y, i);
     if (track_momenta) block_drift = std::max(block_drift, step_drift(y));
   }
-  state = y;
+  if constexpr (!in_place) state = y;
   return block_drift;
 }
 
@@ -208,7 +221,9 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
   const int n = model.size();
   RunResult result;
   Trajectory& out = result.trajectory;
-  out.n = n;
+  for (int i : spec.save_dofs)
+    if (i < 0 || i >= n) throw std::invalid_argument("save_dofs: " + std::to_string(i) + " is not a coordinate");
+  out.n = spec.save_dofs.empty() ? n : static_cast<int>(spec.save_dofs.size());
   MomentumBuffers mb(momentum_count(model));
   out.n_momenta = mb.count();
   // Reserved up to kReserveRows rows; past that the buffers grow at save points (never inside a
@@ -216,8 +231,8 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
   // with out_of_memory instead of failing before its first step.
   const long rows = std::min(N / spec.save_every + 2, kReserveRows);
   out.t.reserve(rows);
-  out.q.reserve(rows * n);
-  out.p.reserve(rows * n);
+  out.q.reserve(rows * out.n);
+  out.p.reserve(rows * out.n);
   out.energy.reserve(rows);
   out.momentum.reserve(rows * mb.count());
 
@@ -226,7 +241,8 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
   if (spec.track_work) out.work.reserve(rows);
   // Copies made now, so the loop never allocates. The block loop steps y, a local
   // that only inlined code sees, so the compiler can keep it in registers.
-  State<Dim> checkpoint = z, before = z, y = z;
+  State<Dim> checkpoint = z, before = z;
+  State<Dim> y = Dim == Eigen::Dynamic ? State<Dim>{} : z;  // a Dynamic state is stepped in place
   if (mb.count() > 0) model.momenta(z.q, z.p, mb.j0.data());
   auto step_drift = [&, fixed = FixedMomentumDrift<Model>(mb)](const State<Dim>& x) {
     if constexpr (Model::n_momenta > 0) return fixed(model, x);
@@ -242,13 +258,13 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
     result.message = "the initial state is not finite";
     return result;
   }
-  save_point(model, z, 0.0, ws, mb, out);
+  save_point(model, z, 0.0, ws, mb, spec.save_dofs, out);
   // A save that runs out of memory takes back its partial row, so every array keeps the same rows.
   auto save = [&](double t) {
     const std::size_t sizes[] = {out.t.size(), out.q.size(), out.p.size(), out.energy.size(), out.momentum.size(),
                                  out.work.size()};
     try {
-      save_point(model, z, t, ws, mb, out);
+      save_point(model, z, t, ws, mb, spec.save_dofs, out);
       return true;
     } catch (const std::bad_alloc&) {
       out.t.resize(sizes[0]);
@@ -304,9 +320,13 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
     checkpoint = z;
     const double checkpoint_work = ws.work, checkpoint_power = power;
     double block_drift = 0.0;
-    y = z;
-    block_drift = run_block<mergeable>(model, tab, stepper, ws, y, k, end, merge, track_momenta, advance, step_drift);
-    z = y;
+    if constexpr (Dim == Eigen::Dynamic) {  // stepped in place (see run_block)
+      block_drift = run_block<mergeable>(model, tab, stepper, ws, z, k, end, merge, track_momenta, advance, step_drift);
+    } else {
+      y = z;
+      block_drift = run_block<mergeable>(model, tab, stepper, ws, y, k, end, merge, track_momenta, advance, step_drift);
+      z = y;
+    }
     if (!z.all_finite()) {
       // Replay the block one checked step at a time from its start.
       z = checkpoint;

@@ -9,3 +9,4 @@
 #include "raydamp/models/compiled_system.hpp"
 #include "raydamp/models/damped_pendulum.hpp"
 #include "raydamp/models/elastic_pendulum.hpp"
+#include "raydamp/models/chain.hpp"

@@ -20,10 +20,20 @@ struct Workspace {
   double work = 0.0;
   Factors damp_factors, kick_damp_factors;  // for the last t each exact damping flow ran for
 
-  Workspace(int n, int stages)
-      : v(Vector<Dim>::Zero(n)), g(Vector<Dim>::Zero(n)), f(Vector<Dim>::Zero(n)),
-        stage_q(Vector<Dim>::Zero(n)), stage_p(Vector<Dim>::Zero(n)),
-        kq(stages, Vector<Dim>::Zero(n)), kp(stages, Vector<Dim>::Zero(n)) {}
+  Workspace(int n, int stages) : v(fresh(n)), g(fresh(n)), f(fresh(n)), stage_q(fresh(n)), stage_p(fresh(n)) {
+    for (int i = 0; i < stages; ++i) {  // each its own fresh vector (a copy of one would write it)
+      kq.push_back(fresh(n));
+      kp.push_back(fresh(n));
+    }
+  }
+
+  // Every flow writes a scratch vector before reading it. A Dynamic one is left
+  // unwritten here: a lattice of 10^6 sites whose drift and kick need no scratch
+  // then never touches (never faults in) those pages.
+  static Vector<Dim> fresh(int n) {
+    if constexpr (Dim == Eigen::Dynamic) return Vector<Dim>(n);
+    else return Vector<Dim>::Zero(n);
+  }
 };
 
 // The workspace a Model's step loop needs.

@@ -65,10 +65,11 @@ def _value_at(data: Any, loc: tuple[str | int, ...]) -> Any:
 
 
 def _model_label(spec: dict[str, Any]) -> str:
-    """A built-in model's name, or a system's label ("system" when it has none)."""
+    """A built-in model's name, or a system's label (its kind, such as "chain", or "system" when it has none)."""
     if spec.get("model"):
         return spec["model"]
-    return (spec.get("system") or {}).get("name") or "system"
+    system = spec.get("system") or {}
+    return system.get("name") or system.get("kind") or "system"
 
 
 @router.post("", status_code=202, response_model=JobCreated,

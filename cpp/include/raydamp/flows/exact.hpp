@@ -2,23 +2,50 @@
 // the state in place over time t.
 #pragma once
 
+#include <type_traits>
+#include <utility>
+
 #include "raydamp/state.hpp"
 #include "raydamp/workspace.hpp"
 
 namespace raydamp::flows {
 
+// A model may do a drift or a kick itself in one pass (model.drift(q, p, t),
+// model.kick(q, p, t)): a large lattice then reads and writes its state once per
+// sub-flow instead of going through the v or g scratch vector.
+template <class M, class = void>
+struct has_drift : std::false_type {};
+template <class M>
+struct has_drift<M, std::void_t<decltype(std::declval<const M&>().drift(
+                        std::declval<typename M::Vec&>(), std::declval<const typename M::Vec&>(), 0.0))>>
+    : std::true_type {};
+template <class M, class = void>
+struct has_kick : std::false_type {};
+template <class M>
+struct has_kick<M, std::void_t<decltype(std::declval<const M&>().kick(
+                       std::declval<const typename M::Vec&>(), std::declval<typename M::Vec&>(), 0.0))>>
+    : std::true_type {};
+
 // exp(t X_T): q <- q + t M^{-1} p.
 template <class Model, int Dim, class DF>
 inline void drift(const Model& model, State<Dim>& z, double t, Workspace<Dim, DF>& ws) {
-  model.mass.velocity(z.p, ws.v);
-  z.q += t * ws.v;
+  if constexpr (has_drift<Model>::value) {
+    model.drift(z.q, z.p, t);
+  } else {
+    model.mass.velocity(z.p, ws.v);
+    z.q += t * ws.v;
+  }
 }
 
 // exp(t X_V): p <- p - t grad V(q).
 template <class Model, int Dim, class DF>
 inline void kick(const Model& model, State<Dim>& z, double t, Workspace<Dim, DF>& ws) {
-  model.gradient(z.q, ws.g);
-  z.p -= t * ws.g;
+  if constexpr (has_kick<Model>::value) {
+    model.kick(z.q, z.p, t);
+  } else {
+    model.gradient(z.q, ws.g);
+    z.p -= t * ws.g;
+  }
 }
 
 // exp(t eps Y): p <- exp(-t eps D(q) M^{-1}) p.

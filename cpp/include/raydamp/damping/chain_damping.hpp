@@ -1,0 +1,295 @@
+// Dashpots on the bonds of a chain and friction on its sites, with M = m I:
+//   D = sum_b c_b g_b g_b^T + sum_i c_i e_i e_i^T,
+// g_b the gradient of bond b's stretch (+1 at its right site, -1 at its left; a
+// wall contributes nothing). A stretch is linear in q, so D is constant and
+// A = eps D / m is a constant symmetric PSD matrix whose nonzero entries sit on the
+// damped sites only. Those sites split into blocks coupled by damping (connected
+// components: a dashpot joins its two sites): disjoint dashpots are 2x2 blocks,
+// adjacent damped bonds a tridiagonal block (a weighted path Laplacian), on-site
+// friction a 1x1 block. Blocks commute, so exp(-tA) = prod over blocks of exp(-t A_k),
+// each exact from the block's eigendecomposition (formed once here); undamped
+// sites are left alone. Blocks are dense, so their size is capped (kMaxChainBlock).
+#pragma once
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "raydamp/phi.hpp"
+
+namespace raydamp {
+
+inline constexpr int kMaxChainBlock = 256;  // sites in one block of adjacent dampers
+
+// Where a chain's bond b sits: its left and right sites (-1 for a wall).
+// fixed: bonds 0..n, bond b joins sites b-1 and b (bond 0 and bond n touch the walls);
+// periodic: bonds 0..n-1, bond b joins sites b-1 and b with site -1 = site n-1;
+// free: bonds 1..n-1, bond b joins sites b-1 and b.
+enum class ChainBoundary { fixed, periodic, free };
+
+inline int chain_bonds_first(ChainBoundary b) { return b == ChainBoundary::free ? 1 : 0; }
+inline int chain_bonds_end(ChainBoundary b, int n) { return b == ChainBoundary::fixed ? n + 1 : n; }
+
+inline std::array<int, 2> chain_bond_sites(ChainBoundary boundary, int n, int b) {
+  int left = b - 1, right = b;
+  if (boundary == ChainBoundary::periodic && left < 0) left = n - 1;
+  if (boundary == ChainBoundary::fixed && right == n) right = -1;
+  return {left, right};
+}
+
+class ChainDamping {
+ public:
+  struct Factors {
+    double t = std::numeric_limits<double>::quiet_NaN();
+    std::vector<double> exp, t_phi1;     // per block, s x s column-major: exp(-t A_k), t phi1(-t A_k)
+    mutable std::vector<double> scratch;  // one value per damped site (kick+damp keeps results here)
+  };
+
+  ChainDamping() = default;
+
+  // bonds/bond_c: damped bonds and their coefficients; sites/site_c: damped sites.
+  ChainDamping(ChainBoundary boundary, int n, double mass, double eps, const std::vector<int>& bonds,
+               const std::vector<double>& bond_c, const std::vector<int>& sites, const std::vector<double>& site_c) {
+    if (bonds.size() != bond_c.size()) throw std::invalid_argument("dampers.c: one coefficient per bond");
+    if (sites.size() != site_c.size()) throw std::invalid_argument("dampers.c: one coefficient per site");
+    // Union-find over the sites a damper touches.
+    std::vector<int> parent(n);
+    std::iota(parent.begin(), parent.end(), 0);
+    std::vector<char> touched(n, 0);
+    auto root = [&](int i) {
+      while (parent[i] != i) i = parent[i] = parent[parent[i]];
+      return i;
+    };
+    const int first = chain_bonds_first(boundary), end = chain_bonds_end(boundary, n);
+    const double scale = eps / mass;  // A = eps D M^{-1} with M = m I
+    for (std::size_t k = 0; k < bonds.size(); ++k) {
+      const int b = bonds[k];
+      if (b < first || b >= end)
+        throw std::invalid_argument("dampers.bonds[" + std::to_string(k) + "]: bond " + std::to_string(b) +
+                                    " is not a bond of this chain (bonds " + std::to_string(first) + ".." +
+                                    std::to_string(end - 1) + ")");
+      check_coefficient("dampers.c", k, bond_c[k]);
+      // A damper with eps c = 0 does nothing: no block, so at eps = 0 the damping flows are
+      // the identity exactly (not V V^T, which is I only to rounding).
+      if (scale * bond_c[k] == 0.0) continue;
+      const auto [l, r] = chain_bond_sites(boundary, n, b);
+      if (l >= 0) touched[l] = 1;
+      if (r >= 0) touched[r] = 1;
+      if (l >= 0 && r >= 0) parent[root(l)] = root(r);
+    }
+    for (std::size_t k = 0; k < sites.size(); ++k) {
+      if (sites[k] < 0 || sites[k] >= n)
+        throw std::invalid_argument("dampers.sites[" + std::to_string(k) + "]: site " + std::to_string(sites[k]) +
+                                    " is not a site of this chain (0.." + std::to_string(n - 1) + ")");
+      check_coefficient("dampers.c", k, site_c[k]);
+      if (scale * site_c[k] != 0.0) touched[sites[k]] = 1;
+    }
+    // Blocks in order of their first site; local index of each damped site.
+    std::vector<int> block_of_root(n, -1), local(n, -1);
+    std::vector<std::vector<int>> members;
+    for (int i = 0; i < n; ++i) {
+      if (!touched[i]) continue;
+      int& k = block_of_root[root(i)];
+      if (k < 0) {
+        k = static_cast<int>(members.size());
+        members.emplace_back();
+      }
+      local[i] = static_cast<int>(members[k].size());
+      members[k].push_back(i);
+    }
+    std::vector<Eigen::MatrixXd> a(members.size());
+    for (std::size_t k = 0; k < members.size(); ++k) {
+      const int s = static_cast<int>(members[k].size());
+      if (s > kMaxChainBlock)
+        throw std::invalid_argument("dampers: " + std::to_string(s) + " adjacent sites (from site " +
+                                    std::to_string(members[k].front()) + ") are coupled by damped bonds; the exact "
+                                    "damping flow is formed for blocks of up to " + std::to_string(kMaxChainBlock) +
+                                    " sites: damp fewer adjacent bonds, or use on-site friction (dampers.sites)");
+      a[k] = Eigen::MatrixXd::Zero(s, s);
+    }
+    for (std::size_t k = 0; k < bonds.size(); ++k) {
+      if (scale * bond_c[k] == 0.0) continue;
+      const auto [l, r] = chain_bond_sites(boundary, n, bonds[k]);
+      const double w = scale * bond_c[k];
+      const int site = l >= 0 ? l : r;
+      Eigen::MatrixXd& block = a[block_of_root[root(site)]];
+      if (l >= 0) block(local[l], local[l]) += w;
+      if (r >= 0) block(local[r], local[r]) += w;
+      if (l >= 0 && r >= 0) {
+        block(local[l], local[r]) -= w;
+        block(local[r], local[l]) -= w;
+      }
+    }
+    for (std::size_t k = 0; k < sites.size(); ++k)
+      if (scale * site_c[k] != 0.0) a[block_of_root[root(sites[k])]](local[sites[k]], local[sites[k]]) += scale * site_c[k];
+
+    for (std::size_t k = 0; k < members.size(); ++k) {
+      const int s = static_cast<int>(members[k].size());
+      Block block{s, static_cast<int>(sites_.size()), static_cast<int>(matrices_.size())};
+      blocks_.push_back(block);
+      sites_.insert(sites_.end(), members[k].begin(), members[k].end());
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(a[k]);
+      if (eig.info() != Eigen::Success) throw std::invalid_argument("dampers: eigendecomposition failed");
+      const Eigen::VectorXd lambda = eig.eigenvalues().cwiseMax(0.0);  // PSD: clip rounding
+      lambda_.insert(lambda_.end(), lambda.data(), lambda.data() + s);
+      vectors_.insert(vectors_.end(), eig.eigenvectors().data(), eig.eigenvectors().data() + s * s);
+      matrices_.insert(matrices_.end(), a[k].data(), a[k].data() + s * s);
+      rho_ = std::max(rho_, lambda.size() ? lambda.maxCoeff() : 0.0);
+    }
+  }
+
+  int blocks() const { return static_cast<int>(blocks_.size()); }
+  int largest_block() const {
+    int s = 0;
+    for (const Block& b : blocks_) s = std::max(s, b.size);
+    return s;
+  }
+  const std::vector<int>& damped_sites() const { return sites_; }
+  // The largest eigenvalue of A: known exactly, no power iteration (amplification guard).
+  double spectral_radius() const { return rho_; }
+
+  Factors factors(double t) const {
+    Factors f;
+    f.t = t;
+    f.exp.resize(matrices_.size());
+    f.t_phi1.resize(matrices_.size());
+    f.scratch.resize(sites_.size());
+    for (const Block& b : blocks_) {
+      const int s = b.size;
+      const double* v = &vectors_[b.matrix];
+      std::array<double, kMaxChainBlock> decay, t_phi1s;
+      for (int m = 0; m < s; ++m) {
+        const double x = -t * lambda_[b.site + m];
+        decay[m] = std::exp(x);
+        t_phi1s[m] = t * phi1(x);
+      }
+      for (int j = 0; j < s; ++j)
+        for (int i = 0; i < s; ++i) {
+          double e = 0.0, p1 = 0.0;
+          for (int m = 0; m < s; ++m) {
+            const double vv = v[i + m * s] * v[j + m * s];
+            e += vv * decay[m];
+            p1 += vv * t_phi1s[m];
+          }
+          f.exp[b.matrix + i + j * s] = e;
+          f.t_phi1[b.matrix + i + j * s] = p1;
+        }
+    }
+    return f;
+  }
+
+  // p <- exp(-tA) p on every block; the undamped sites keep their p.
+  template <class Q, class P>
+  void decay(const Q&, const Factors& f, P& p) const {
+    std::array<double, kMaxChainBlock> y;
+    for (const Block& b : blocks_) {
+      multiply(b, &f.exp[b.matrix], p, y.data());
+      scatter(b, y.data(), p);
+    }
+  }
+
+  // p <- exp(-tA) p - t phi1(-tA) g: the blocks first (into scratch, from the old p),
+  // then the plain kick p - t g everywhere, then the blocks' values back.
+  template <class Q, class G, class P>
+  void decay_affine(const Q&, const Factors& f, const G& g, P& p) const {
+    for (const Block& b : blocks_) {
+      double* y = &f.scratch[b.site];
+      multiply(b, &f.exp[b.matrix], p, y);
+      const double* tp = &f.t_phi1[b.matrix];
+      for (int j = 0; j < b.size; ++j) {
+        const double gj = g[sites_[b.site + j]];
+        for (int i = 0; i < b.size; ++i) y[i] -= tp[i + j * b.size] * gj;
+      }
+    }
+    p -= f.t * g;
+    for (const Block& b : blocks_) scatter(b, &f.scratch[b.site], p);
+  }
+
+  // out = A p.
+  template <class Q, class P, class O>
+  void rate(const Q&, const P& p, O& out) const {
+    out.setZero(p.size());
+    std::array<double, kMaxChainBlock> y;
+    for (const Block& b : blocks_) {
+      multiply(b, &matrices_[b.matrix], p, y.data());
+      scatter(b, y.data(), out);
+    }
+  }
+
+  // p^T A p / m = v . A p: the dissipated power, from the damped sites alone.
+  template <class P>
+  double power(const P& p, double inverse_mass) const {
+    std::array<double, kMaxChainBlock> y;
+    double sum = 0.0;
+    for (const Block& b : blocks_) {
+      multiply(b, &matrices_[b.matrix], p, y.data());
+      for (int i = 0; i < b.size; ++i) sum += p[sites_[b.site + i]] * y[i];
+    }
+    return inverse_mass * sum;
+  }
+
+  // x <- (I + c A)^{-1} x = V diag(1 / (1 + c lambda)) V^T x on each block.
+  template <class Q, class X>
+  void solve_shifted(const Q&, double c, X& x) const {
+    std::array<double, kMaxChainBlock> y, z;
+    for (const Block& b : blocks_) {
+      const int s = b.size;
+      const double* v = &vectors_[b.matrix];
+      for (int m = 0; m < s; ++m) {
+        double sum = 0.0;
+        for (int i = 0; i < s; ++i) sum += v[i + m * s] * x[sites_[b.site + i]];
+        y[m] = sum / (1.0 + c * lambda_[b.site + m]);
+      }
+      for (int i = 0; i < s; ++i) {
+        double sum = 0.0;
+        for (int m = 0; m < s; ++m) sum += v[i + m * s] * y[m];
+        z[i] = sum;
+      }
+      scatter(b, z.data(), x);
+    }
+  }
+
+ private:
+  struct Block {
+    int size;    // sites in the block
+    int site;    // offset into sites_ and lambda_
+    int matrix;  // offset into vectors_, matrices_ and the factors' blocks
+  };
+
+  static void check_coefficient(const char* argument, std::size_t k, double c) {
+    if (!(std::isfinite(c) && c >= 0.0))
+      throw std::invalid_argument(std::string(argument) + "[" + std::to_string(k) +
+                                  "] must be a finite number >= 0, got " + std::to_string(c));
+  }
+
+  // y = B p restricted to the block (B s x s column-major).
+  template <class P>
+  void multiply(const Block& b, const double* m, const P& p, double* y) const {
+    const int s = b.size;
+    for (int i = 0; i < s; ++i) y[i] = 0.0;
+    for (int j = 0; j < s; ++j) {
+      const double pj = p[sites_[b.site + j]];
+      for (int i = 0; i < s; ++i) y[i] += m[i + j * s] * pj;
+    }
+  }
+
+  template <class P>
+  void scatter(const Block& b, const double* y, P& p) const {
+    for (int i = 0; i < b.size; ++i) p[sites_[b.site + i]] = y[i];
+  }
+
+  std::vector<Block> blocks_;
+  std::vector<int> sites_;          // the damped sites, block by block
+  std::vector<double> lambda_;      // eigenvalues of each block's A_k
+  std::vector<double> vectors_;     // its eigenvectors (column-major s x s)
+  std::vector<double> matrices_;    // A_k itself
+  double rho_ = 0.0;
+};
+
+}  // namespace raydamp

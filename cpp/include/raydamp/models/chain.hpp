@@ -1,0 +1,174 @@
+// A one-dimensional lattice: n sites of mass m on a line, neighbours joined by
+// bonds of one family (chain_bonds.hpp), H = sum p_i^2 / 2m + sum_b V(r_b) with r_b
+// the stretch of bond b (the difference of its sites' displacements, see
+// chain_bond_sites for the numbering and the boundaries), damped by dashpots on
+// chosen bonds and friction on chosen sites (damping/chain_damping.hpp).
+//
+// Built for n up to 10^6 and beyond: the kick and the drift are single contiguous
+// passes over q and p (the `kick`/`drift` members the exact flows use in place of
+// gradient-then-update), the bond family is chosen once per pass (a switch outside
+// the loop, so one model type serves every family), and damping touches only the
+// damped sites.
+#pragma once
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "raydamp/concepts.hpp"
+#include "raydamp/damping/chain_damping.hpp"
+#include "raydamp/mass/scalar_mass.hpp"
+#include "raydamp/models/chain_bonds.hpp"
+#include "raydamp/state.hpp"
+
+namespace raydamp {
+
+struct ChainBonds {
+  BondKind kind = BondKind::fput;
+  HarmonicBond harmonic;
+  FputBond fput;
+  TodaBond toda;
+  MorseBond morse;
+  LennardJonesBond lennard_jones;
+  ExpressionBond expression;
+
+  // f(bond) for the chain's family: one branch per call, outside every loop.
+  template <class F>
+  decltype(auto) visit(F&& f) const {
+    switch (kind) {
+      case BondKind::harmonic: return f(harmonic);
+      case BondKind::fput: return f(fput);
+      case BondKind::toda: return f(toda);
+      case BondKind::morse: return f(morse);
+      case BondKind::lennard_jones: return f(lennard_jones);
+      default: return f(expression);
+    }
+  }
+};
+
+struct Chain {
+  static constexpr int dim = Eigen::Dynamic;
+  static constexpr int n_momenta = kDynamicMomenta;
+  using Vec = Vector<dim>;
+
+  double eps;
+  ScalarMass mass;
+  ChainDamping damping;
+  ChainBonds bonds;
+  ChainBoundary boundary;
+  int n;
+  bool conserves_momentum;  // periodic or free with no on-site friction: sum p is a momentum map
+
+  Chain(int n_, ChainBoundary boundary_, ChainBonds bonds_, double m, double eps_, ChainDamping damping_,
+        bool site_friction)
+      : eps(eps_), mass(m, "mass"), damping(std::move(damping_)), bonds(bonds_), boundary(boundary_), n(n_),
+        conserves_momentum(boundary_ != ChainBoundary::fixed && !site_friction) {
+    if (n < 2) throw std::invalid_argument("n must be >= 2 (sites of the chain), got " + std::to_string(n));
+    if (!(std::isfinite(eps) && eps >= 0.0)) throw std::invalid_argument("eps must be a finite number >= 0");
+    if (bonds.kind == BondKind::expression && !(bonds.expression.v && bonds.expression.dv && bonds.expression.d2v))
+      throw std::invalid_argument("bond: the expression bond is not compiled");
+  }
+
+  int size() const { return n; }
+  int momentum_count() const { return conserves_momentum ? 1 : 0; }
+  void momenta(const Vec&, const Vec& p, double* out) const {
+    if (conserves_momentum) out[0] = p.sum();
+  }
+
+  double potential(const Vec& q) const {
+    return bonds.visit([&](const auto& bond) {
+      double sum = 0.0;
+      for (int i = 1; i < n; ++i) sum += bond.energy(q[i] - q[i - 1]);
+      if (boundary == ChainBoundary::fixed) sum += bond.energy(q[0]) + bond.energy(-q[n - 1]);
+      if (boundary == ChainBoundary::periodic) sum += bond.energy(q[0] - q[n - 1]);
+      return sum;
+    });
+  }
+
+  // op(i, dV/dq_i) for every site, in order. dV/dq_i = V'(r of the bond to its left)
+  // - V'(r of the bond to its right).
+  template <class Op>
+  void for_each_gradient(const Vec& q, Op&& op) const {
+    bonds.visit([&](const auto& bond) { sweep(bond, q.data(), op); });
+  }
+
+  void gradient(const Vec& q, Vec& g) const {
+    double* __restrict out = g.data();
+    for_each_gradient(q, [out](int i, double gi) { out[i] = gi; });
+  }
+
+  // The exact kick p <- p - t grad V(q) in one pass (flows::kick uses it).
+  void kick(const Vec& q, Vec& p, double t) const {
+    double* __restrict out = p.data();
+    for_each_gradient(q, [out, t](int i, double gi) { out[i] -= t * gi; });
+  }
+
+  // The exact drift q <- q + t p / m in one pass (flows::drift uses it).
+  void drift(Vec& q, const Vec& p, double t) const {
+    const double s = t * mass.inverse;
+    double* __restrict x = q.data();
+    const double* __restrict y = p.data();
+    for (int i = 0; i < n; ++i) x[i] += s * y[i];
+  }
+
+  // v . A p / m: the dissipated power from the damped sites only (diagnostics.hpp).
+  double dissipated_power(const Vec&, const Vec& p) const { return damping.power(p, mass.inverse); }
+
+  // (Hess V v)_i = V''(r_left) (v_i - v_left) - V''(r_right) (v_right - v_i).
+  void hessian_product(const Vec& q, const Vec& v, Vec& out) const {
+    bonds.visit([&](const auto& bond) {
+      out.setZero(n);
+      auto add_bond = [&](int l, int r) {  // -1: a wall (displacement 0)
+        const double ql = l >= 0 ? q[l] : 0.0, qr = r >= 0 ? q[r] : 0.0;
+        const double vl = l >= 0 ? v[l] : 0.0, vr = r >= 0 ? v[r] : 0.0;
+        const double f = bond.stiffness(qr - ql) * (vr - vl);
+        if (r >= 0) out[r] += f;
+        if (l >= 0) out[l] -= f;
+      };
+      for (int b = chain_bonds_first(boundary); b < chain_bonds_end(boundary, n); ++b) {
+        const auto s = chain_bond_sites(boundary, n, b);
+        add_bond(s[0], s[1]);
+      }
+    });
+  }
+
+ private:
+  // The bonds' forces at the two ends: the bond left of site 0 and right of site n-1
+  // (a wall's, the periodic bond n-1 -> 0, or none).
+  template <class Bond>
+  double left_end_force(const Bond& bond, const double* q) const {
+    if (boundary == ChainBoundary::fixed) return bond.force(q[0]);
+    if (boundary == ChainBoundary::periodic) return bond.force(q[0] - q[n - 1]);
+    return 0.0;
+  }
+  template <class Bond>
+  double right_end_force(const Bond& bond, const double* q, double left_end) const {
+    if (boundary == ChainBoundary::fixed) return bond.force(-q[n - 1]);
+    if (boundary == ChainBoundary::periodic) return left_end;  // the same bond
+    return 0.0;
+  }
+
+  template <class Bond, class Op>
+  void sweep(const Bond& bond, const double* __restrict q, Op& op) const {
+    const double first = left_end_force(bond, q);
+    const double last = right_end_force(bond, q, first);
+    if constexpr (Bond::polynomial) {
+      // Each interior bond's force evaluated for both of its sites: no loop-carried
+      // value, so the loop vectorises; the arithmetic is cheap beside the memory traffic.
+      op(0, first - bond.force(q[1] - q[0]));
+      for (int i = 1; i < n - 1; ++i) op(i, bond.force(q[i] - q[i - 1]) - bond.force(q[i + 1] - q[i]));
+      op(n - 1, bond.force(q[n - 1] - q[n - 2]) - last);
+    } else {
+      double left = first;
+      for (int i = 0; i < n - 1; ++i) {
+        const double right = bond.force(q[i + 1] - q[i]);
+        op(i, left - right);
+        left = right;
+      }
+      op(n - 1, left - last);
+    }
+  }
+};
+
+}  // namespace raydamp

@@ -1,0 +1,220 @@
+"""raydamp.Chain: lattices with damped bonds or sites (issue 7, Lattices).
+
+- the normal-mode transforms are orthonormal: mode energies sum to the harmonic energy;
+- FPUT at eps = 0 (N = 32, 10^6 steps of sv): bounded energy error with no drift, and the
+  recurrence: mode 1 gives most of its energy away and takes it back;
+- dashpots on every 10th bond: 3s, 2s, rks order 2 (and yoshida4 order 4) against DOP853,
+  H - H0 + W = O(h^2);
+- a periodic chain with damped bonds (adjacent ones too) conserves sum p to rounding;
+- save_dofs keeps chosen columns, the same numbers as a full run;
+- the expression bond equals the built-in family it spells out; bad input names its path.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import raydamp
+from raydamp import Chain, chain_mode_energies
+from raydamp.job import job_arguments
+
+FAMILIES = {
+    "harmonic": {"k": 1.3},
+    "fput": {"alpha": 0.25, "beta": 1.0},
+    "toda": {"a": 1.0, "b": 0.7},
+    "morse": {"depth": 1.2, "a": 0.8},
+    "lennard_jones": {"depth": 0.5, "spacing": 1.0},
+}
+
+
+def _state(n: int, seed: int = 1, scale: float = 0.1):
+    rng = np.random.default_rng(seed)
+    return scale * rng.standard_normal(n), scale * rng.standard_normal(n)
+
+
+@pytest.mark.parametrize("boundary", ["fixed", "periodic", "free"])
+def test_mode_energies_sum_to_the_harmonic_energy(boundary):
+    chain = Chain(9, bond="harmonic", parameters={"k": 1.7}, mass=2.0, boundary=boundary)
+    q, p = _state(9, scale=1.0)
+    energies = chain.mode_energies(q, p)
+    assert energies.sum() == pytest.approx(chain.energy(q, p), rel=1e-13)
+    assert np.all(energies >= 0)
+    # Each normal mode carries its energy alone, in its own slot of mode_energies.
+    for mode in ({"fixed": 3, "periodic": 2, "free": 4}[boundary],):
+        q1, p1 = chain.normal_mode(mode, amplitude=0.7)
+        e = chain.mode_energies(q1, p1)
+        slot = mode - 1 if boundary == "fixed" else mode
+        assert e[slot] == pytest.approx(chain.energy(q1, p1), rel=1e-13)
+        assert np.delete(e, slot).max() <= 1e-13 * e[slot]
+
+
+def test_fput_energy_bounded_and_recurrence():
+    """The classic FPUT-alpha experiment: N = 32 mobile sites, alpha = 0.25, all the energy in
+    mode 1. sv (= 3s at eps = 0), h = 0.05, 10^6 steps (t = 5e4, about 750 periods of mode 1)."""
+    chain = Chain(32, bond="fput", parameters={"alpha": 0.25}, boundary="fixed", eps=0.0)
+    q0, p0 = chain.normal_mode(1, amplitude=1.0)
+    sol = raydamp.integrate(chain, q0, p0, method="sv", h=0.05, n_steps=10**6, save_every=200)
+    assert sol.success and sol.t.size == 5001
+    h0 = sol.energy[0]
+    error = np.abs(sol.energy - h0) / h0
+    half = sol.t.size // 2
+    # Bounded: O(h^2) oscillation, and no drift (the second half no worse than the first).
+    assert error.max() < 2e-4
+    assert error[half:].max() < 1.2 * error[:half].max()
+    e1 = chain_mode_energies(sol)[:, 0] / chain.mode_energies(q0, p0)[0]
+    # Recurrence: mode 1 loses most of its energy to modes 2, 3, ... and gets it back.
+    first_low = np.argmax(e1 < 0.5)
+    assert first_low > 0
+    assert e1[first_low:].max() > 0.95, e1[first_low:].max()
+    assert e1.min() < 0.4
+
+
+def _reference(chain, q0, p0, t_end):
+    n = chain.dim
+
+    def field(_t, y):
+        qd, pd = chain.vector_field(y[:n], y[n:])
+        return np.concatenate([qd, pd])
+
+    ref = solve_ivp(field, (0.0, t_end), np.concatenate([q0, p0]), method="DOP853", rtol=1e-13, atol=1e-13)
+    return ref.y[:n, -1], ref.y[n:, -1]
+
+
+def _slope(hs, errors):
+    return np.polyfit(np.log(hs), np.log(errors), 1)[0]
+
+
+DAMPED = dict(n=40, bond="fput", parameters={"alpha": 0.25, "beta": 1.0}, boundary="fixed",
+              dampers={"bonds": list(range(9, 41, 10)), "c": 0.1})
+
+
+@pytest.mark.parametrize("method, tableau, composition, order, hs", [
+    ("3s", None, None, 2, (0.2, 0.1, 0.05, 0.025)),
+    ("2s", None, None, 2, (0.2, 0.1, 0.05, 0.025)),
+    ("rks", "midpoint", None, 2, (0.2, 0.1, 0.05, 0.025)),
+    ("3s", None, "yoshida4", 4, (0.2, 0.1, 0.05)),
+])
+def test_damped_fput_order_and_energy_balance(method, tableau, composition, order, hs):
+    chain = Chain(**DAMPED)
+    q0, p0 = chain.normal_mode(1, amplitude=0.8)
+    p0 = p0 + 0.2 * np.sin(np.arange(chain.dim))  # so the dashpots work from the start
+    t_end = 8.0
+    q_ref, p_ref = _reference(chain, q0, p0, t_end)
+    errors, balance = [], []
+    for h in hs:
+        sol = raydamp.integrate(chain, q0, p0, method=method, tableau=tableau, composition=composition, h=h,
+                                t_end=t_end, save_every=1, work=True)
+        errors.append(max(np.abs(sol.q[-1] - q_ref).max(), np.abs(sol.p[-1] - p_ref).max()))
+        balance.append(np.abs(sol.energy_balance).max())
+    assert sol.work[-1] > 1e-3  # the dashpots took energy
+    assert abs(_slope(hs, errors) - order) < 0.1, errors
+    if composition is None:
+        assert abs(_slope(hs, balance) - 2) < 0.15, balance
+
+
+def test_damped_chain_equals_sv_at_eps_zero():
+    chain = Chain(**{**DAMPED, "eps": 0.0})
+    q0, p0 = _state(chain.dim)
+    runs = {m: raydamp.integrate(chain, q0, p0, method=m, h=0.05, n_steps=400, save_every=400)
+            for m in ("sv", "3s", "2s", "rks")}
+    for m in ("3s", "2s", "rks"):  # the same arithmetic: equal to the last bit
+        assert np.array_equal(runs[m].q, runs["sv"].q) and np.array_equal(runs[m].p, runs["sv"].p), m
+
+
+@pytest.mark.parametrize("method", ["3s", "2s", "rks"])
+def test_periodic_chain_conserves_momentum_with_damped_bonds(method):
+    # Bonds 0, 1, 63 are adjacent across the seam (one block of 4 sites); 20 and 40 alone.
+    chain = Chain(64, bond="toda", parameters={"a": 1.0, "b": 1.0}, boundary="periodic",
+                  dampers={"bonds": [0, 1, 63, 20, 40], "c": 0.5})
+    assert chain.momentum_names == ("P",) and chain.damping_blocks == 3
+    q0, p0 = _state(64, seed=3, scale=0.5)
+    p0 += 0.3  # net momentum
+    sol = raydamp.integrate(chain, q0, p0, method=method, h=0.05, n_steps=20000, save_every=1000)
+    assert sol.success
+    assert sol.momentum[0, 0] == pytest.approx(p0.sum(), rel=1e-15)
+    assert sol.max_momentum_drift < 1e-12
+    assert sol.energy[-1] < sol.energy[0] - 1e-3  # damped all the same
+    # On-site friction breaks translation invariance: no momentum map then.
+    assert Chain(8, boundary="periodic", dampers={"sites": [2], "c": 0.1}).momentum_names == ()
+
+
+def test_save_dofs_keeps_chosen_columns():
+    chain = Chain(200, bond="fput", parameters={"beta": 1.0}, dampers={"sites": [5, 6, 100], "c": 0.2})
+    q0, p0 = _state(200, seed=5, scale=0.3)
+    full = raydamp.integrate(chain, q0, p0, method="2s", h=0.05, n_steps=1000, save_every=100, work=True)
+    dofs = [150, 3, 77]
+    part = raydamp.integrate(chain, q0, p0, method="2s", h=0.05, n_steps=1000, save_every=100, work=True,
+                             save_dofs=dofs)
+    assert part.q.shape == (11, 3) and part.p.shape == (11, 3)
+    assert np.array_equal(part.q, full.q[:, dofs]) and np.array_equal(part.p, full.p[:, dofs])
+    assert np.array_equal(part.energy, full.energy) and np.array_equal(part.work, full.work)
+    assert list(part.dofs) == dofs and part.coordinates == ("q150", "q3", "q77")
+    assert part.provenance["save_dofs"] == dofs
+    with pytest.raises(ValueError, match=r"save_dofs\[1\]: 200 is not a coordinate"):
+        raydamp.integrate(chain, q0, p0, method="2s", h=0.05, n_steps=10, save_dofs=[0, 200])
+    with pytest.raises(ValueError, match="save_dofs: an index appears twice"):
+        raydamp.integrate(chain, q0, p0, method="2s", h=0.05, n_steps=10, save_dofs=[4, 4])
+    with pytest.raises(ValueError, match="mode energies need every site"):
+        chain_mode_energies(part)
+
+
+def test_expression_bond_equals_fput():
+    fput = Chain(16, bond="fput", parameters={"alpha": 0.3, "beta": 0.8}, dampers={"bonds": [4, 5], "c": 0.2})
+    text = "r^2/2 + a*r^3/3 + b*r^4/4"
+    expr = Chain(16, bond="expression", parameters={"potential": text, "a": 0.3, "b": 0.8},
+                 dampers={"bonds": [4, 5], "c": 0.2})
+    assert expr.harmonic_stiffness == pytest.approx(1.0)
+    q0, p0 = _state(16, seed=2, scale=0.4)
+    a = raydamp.integrate(fput, q0, p0, method="3s", h=0.05, n_steps=2000, save_every=500)
+    b = raydamp.integrate(expr, q0, p0, method="3s", h=0.05, n_steps=2000, save_every=500)
+    # The same V(r), evaluated as compiled from the expression (another rounding) or by the built-in.
+    assert np.abs(a.q - b.q).max() < 1e-9 and np.abs(a.energy - b.energy).max() < 1e-9
+
+
+@pytest.mark.parametrize("bond", sorted(FAMILIES))
+def test_every_family_runs_with_small_energy_error(bond):
+    chain = Chain(24, bond=bond, parameters=FAMILIES[bond], boundary="free", eps=0.0)
+    q0, p0 = _state(24, seed=4, scale=0.05)
+    # h omega_max <= 0.06 for every family (Lennard-Jones is the stiffest: V''(0) = 36 here).
+    sol = raydamp.integrate(chain, q0, p0, method="sv", h=0.005, n_steps=5000, save_every=500)
+    assert sol.success
+    assert np.abs(sol.energy - sol.energy[0]).max() < 5e-3 * sol.energy[0]
+    assert sol.max_momentum_drift < 1e-13  # free chain: sum p conserved
+
+
+def test_json_round_trip_and_mode_start():
+    chain = Chain(50, bond="morse", parameters={"depth": 2.0}, boundary="periodic",
+                  dampers={"bonds": [3, 30], "c": [0.1, 0.2]}, eps=0.5)
+    spec = chain.to_dict()
+    assert spec["kind"] == "chain"
+    again = Chain.from_dict(spec)
+    assert again.to_dict() == spec
+    model, q0, p0, options = job_arguments({"system": spec, "method": "3s", "step_size": 0.1, "n_steps": 10,
+                                            "initial_state": {"mode": 2, "amplitude": 0.1}, "save_dofs": [0, 7]})
+    assert isinstance(model, Chain) and options["save_dofs"] == [0, 7]
+    assert np.allclose(q0, 0.1 * np.cos(2 * math.pi * 2 * np.arange(50) / 50))
+    sol = raydamp.integrate(model, q0, p0, **options)
+    assert sol.q.shape == (11, 2)
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"n": 10, "dampers": {"bonds": [11], "c": 0.1}}, r"dampers.bonds\[0\]: bond 11 is not in this fixed chain \(0..10\)"),
+    ({"n": 10, "boundary": "free", "dampers": {"bonds": [0], "c": 0.1}}, r"dampers.bonds\[0\]: bond 0"),
+    ({"n": 10, "dampers": {"sites": [1]}}, "dampers.c: missing"),
+    ({"n": 10, "dampers": {"bonds": [1, 2], "c": [0.1]}}, "dampers.c: 1 coefficients for 2 dampers"),
+    ({"n": 10, "dampers": {"bonds": [1], "c": -1}}, "dampers.c must be >= 0"),
+    ({"n": 1}, "n must be >= 2"),
+    ({"n": 10, "bond": "spring"}, "bond: unknown bond family"),
+    ({"n": 10, "boundary": "open"}, "boundary: unknown boundary"),
+    ({"n": 10, "bond": "toda", "parameters": {"b": 0}}, r"parameters.b must be > 0"),
+    ({"n": 10, "bond": "fput", "parameters": {"gamma": 1}}, "parameters.gamma: the fput bond has no parameter"),
+    ({"n": 10, "bond": "expression", "parameters": {"potential": "r^2 + s"}}, "parameters.potential"),
+    ({"n": 400, "dampers": {"bonds": list(range(300)), "c": 0.1}}, "coupled by damped bonds"),
+])
+def test_bad_input_names_its_path(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        Chain(**kwargs)
