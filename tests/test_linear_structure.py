@@ -45,10 +45,17 @@ def _operator(structure, t: float, g=None):
         p, s = x[:n], x[n]
         return np.concatenate([-t * (a * p + b * (K @ solve(p))) - t * s * g, [0.0]])
 
+    def apply_transpose(x):  # expm_multiply's norm estimates need the transpose; K, M are symmetric
+        x = np.asarray(x, dtype=float).reshape(-1)
+        if g is None:
+            return -t * (a * x + b * solve(K @ x))
+        p = x[:n]
+        return np.concatenate([-t * (a * p + b * solve(K @ p)), [-t * (g @ p)]])
+
     size = n if g is None else n + 1
     # expm_multiply shifts by trace / size; any shift is exact, this one is cheap.
     trace = -t * (a * n + b * float(np.sum(K.diagonal() / M.diagonal())))
-    return sla.LinearOperator((size, size), matvec=apply, dtype=float), trace
+    return sla.LinearOperator((size, size), matvec=apply, rmatvec=apply_transpose, dtype=float), trace
 
 
 @pytest.mark.parametrize("mass", ["lumped", "consistent"])
@@ -219,3 +226,51 @@ def test_sv_refused_when_damped_and_equal_to_3s_when_not(small_plate):
     a = raydamp.integrate(undamped, q0, np.zeros(small_plate.n), method="sv", h=0.01, n_steps=50)
     b = raydamp.integrate(undamped, q0, np.zeros(small_plate.n), method="3s", h=0.01, n_steps=50)
     np.testing.assert_allclose(b.q, a.q, rtol=0, atol=1e-15)
+
+
+# -- the plain (JSON) form --------------------------------------------------------------------------
+
+def test_plain_form_round_trips_and_runs_as_a_job(small_plate):
+    from raydamp.job import job_arguments
+
+    f = np.zeros(small_plate.n)
+    f[small_plate.tip] = -1e-3
+    for M in (small_plate.M, small_plate.M_lumped):
+        s = raydamp.LinearStructure(M, small_plate.K, alpha=0.1, beta=1e-3, f=f)
+        data = s.to_dict()
+        assert data["kind"] == "linear_structure"
+        assert ("diagonal" in data["M"]) == (s.mass_kind == "lumped")
+        back = raydamp.LinearStructure.from_dict(data)
+        assert back.mass_kind == s.mass_kind
+        assert (back.K != s.K).nnz == 0 and (back.M != s.M).nnz == 0 and np.array_equal(back.f, s.f)
+        sol = raydamp.integrate(s, np.zeros(s.dim), np.zeros(s.dim), method="2s", h=0.01, n_steps=20)
+        model, q0, p0, options = job_arguments(sol.provenance)
+        again = raydamp.integrate(model, q0, p0, **options)
+        np.testing.assert_array_equal(again.q, sol.q)
+
+
+@pytest.mark.parametrize("change,message", [
+    (lambda d: d.update(kind="chain"), "kind: expected 'linear_structure'"),
+    (lambda d: d.pop("K"), "K: missing"),
+    (lambda d: d["K"]["coo"].update(rows=d["K"]["coo"]["rows"][:-1]), "K.coo: rows, cols and values"),
+    (lambda d: d["K"]["coo"]["cols"].__setitem__(0, 99), r"K.coo.cols\[0\]: index 99 outside 0..3"),
+    (lambda d: d["K"]["coo"]["values"].__setitem__(1, "x"), r"K.coo.values\[1\]: must be a number"),
+    (lambda d: d["K"]["coo"].update(shape=[3, 3]), r"K.coo.shape: must be \[4, 4\]"),
+    (lambda d: d.update(M={"dense": []}), "M: must be"),
+    (lambda d: d.update(extra=1), "extra: unknown key"),
+    (lambda d: d.update(f=[1.0]), "f: must be null or a list of 4 numbers"),
+])
+def test_plain_form_errors_name_the_path(change, message):
+    data = raydamp.LinearStructure(np.eye(4), 2 * np.eye(4) - np.eye(4, k=1) - np.eye(4, k=-1), alpha=0.1).to_dict()
+    change(data)
+    with pytest.raises(ValueError, match=message):
+        raydamp.LinearStructure.from_dict(data)
+
+
+def test_plain_form_is_size_limited(monkeypatch):
+    import raydamp.structure
+
+    monkeypatch.setattr(raydamp.structure, "MAX_PLAIN_ENTRIES", 3)
+    data = raydamp.LinearStructure(np.eye(4), np.eye(4)).to_dict()
+    with pytest.raises(ValueError, match="K.coo.rows: 4 entries, more than the limit 3"):
+        raydamp.LinearStructure.from_dict(data)

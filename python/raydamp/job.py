@@ -40,6 +40,10 @@ def _plain(value: Any) -> Any:
 def describe_model(model: Model) -> dict[str, Any]:
     """{"model": name, "parameters": {...}} for a built-in model, {"system": {...}} for a System
     ({"system": None, "label": ...} for one built from Python functions, which has no plain form)."""
+    from .structure import LinearStructure
+
+    if isinstance(model, LinearStructure):
+        return {"system": model.to_dict()}
     if isinstance(model, System):
         try:
             return {"system": model.to_dict()}
@@ -57,6 +61,13 @@ def model_from_spec(spec: Mapping[str, Any]) -> Model:
     if has_system:
         if spec.get("parameters"):
             raise ValueError("parameters: a system carries its parameters inside system.parameters")
+        if isinstance(spec["system"], Mapping) and spec["system"].get("kind") == "linear_structure":
+            from .structure import LinearStructure
+
+            try:
+                return LinearStructure.from_dict(dict(spec["system"]))
+            except ValueError as error:
+                raise ValueError(f"system.{error}") from None
         try:
             return System.from_dict(spec["system"])
         except SpecError as error:

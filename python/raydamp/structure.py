@@ -43,7 +43,12 @@ from . import _core
 from ._validation import real
 from .models import Model
 
-__all__ = ["LinearStructure"]
+__all__ = ["LinearStructure", "MAX_PLAIN_ENTRIES"]
+
+# The plain (JSON) form carries matrices as COO triplets; past this many stored entries per matrix
+# a structure belongs in a Matrix Market file, not in a JSON document.
+MAX_PLAIN_ENTRIES = 1_000_000
+PLAIN_KEYS = ("kind", "M", "K", "alpha", "beta", "f")
 
 
 def _scipy_sparse():
@@ -191,6 +196,40 @@ class LinearStructure(Model):
         """(degree of exp(-t C M^{-1}), degree of t phi1(-t C M^{-1})): products with K per flow of length t."""
         return tuple(self._core_model.chebyshev_degrees(real("t", t)))
 
+    # -- the plain form -------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        """The structure as plain JSON-ready data (matrices as COO triplets, a lumped M as its
+        diagonal); ``LinearStructure.from_dict`` inverts it. It is the service's ``"system"``."""
+        mass = ({"diagonal": self._mass.diagonal().tolist()} if self.mass_kind == "lumped"
+                else {"coo": _coo_plain(self._mass)})
+        return {"kind": "linear_structure", "M": mass, "K": {"coo": _coo_plain(self._stiffness)},
+                "alpha": self.alpha, "beta": self.beta,
+                "f": self._load.tolist() if self._load.any() else None}
+
+    @classmethod
+    def from_dict(cls, data) -> LinearStructure:
+        """Build from ``to_dict()``'s form; a bad field raises ValueError starting with its path (``K.coo.rows``)."""
+        if not isinstance(data, dict):
+            raise ValueError("a linear structure must be an object with the keys " + ", ".join(PLAIN_KEYS))
+        unknown = [k for k in data if k not in PLAIN_KEYS]
+        if unknown:
+            raise ValueError(f"{unknown[0]}: unknown key (known: {', '.join(PLAIN_KEYS)})")
+        if data.get("kind") != "linear_structure":
+            raise ValueError(f"kind: expected 'linear_structure', got {data.get('kind')!r}")
+        for key in ("M", "K"):
+            if key not in data:
+                raise ValueError(f"{key}: missing")
+        n = None
+        matrices = {}
+        for key in ("M", "K"):
+            matrices[key] = _matrix_from_plain(key, data[key], n)
+            n = matrices[key].shape[0]
+        f = data.get("f")
+        if f is not None and (not isinstance(f, list) or len(f) != n
+                              or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in f)):
+            raise ValueError(f"f: must be null or a list of {n} numbers")
+        return cls(matrices["M"], matrices["K"], alpha=data.get("alpha", 0.0), beta=data.get("beta", 0.0), f=f)
+
     def replace(self, **changes) -> LinearStructure:
         unknown = set(changes) - {"M", "K", "alpha", "beta", "f"}
         if unknown:
@@ -202,3 +241,55 @@ class LinearStructure(Model):
     def __repr__(self) -> str:
         return (f"LinearStructure(n={self.dim}, mass={self.mass_kind}, nnz(K)={self._stiffness.nnz}, "
                 f"alpha={self.alpha!r}, beta={self.beta!r})")
+
+
+def _coo_plain(matrix) -> dict[str, Any]:
+    coo = matrix.tocoo()
+    return {"shape": list(coo.shape), "rows": coo.row.tolist(), "cols": coo.col.tolist(), "values": coo.data.tolist()}
+
+
+def _numbers(path: str, value, *, integer: bool = False) -> np.ndarray:
+    if not isinstance(value, list):
+        raise ValueError(f"{path}: must be a list of numbers")
+    if len(value) > MAX_PLAIN_ENTRIES:
+        raise ValueError(f"{path}: {len(value)} entries, more than the limit {MAX_PLAIN_ENTRIES}; "
+                         "give such a structure as Matrix Market files to raydamp.LinearStructure")
+    kinds = (int,) if integer else (int, float)
+    for i, x in enumerate(value):
+        if isinstance(x, bool) or not isinstance(x, kinds):
+            raise ValueError(f"{path}[{i}]: must be {'an integer' if integer else 'a number'}, got {x!r}")
+    array = np.asarray(value, dtype=np.int64 if integer else float)
+    if not integer and not np.isfinite(array).all():
+        raise ValueError(f"{path}[{int(np.argmin(np.isfinite(array)))}]: must be finite")
+    return array
+
+
+def _matrix_from_plain(key: str, value, n: int | None):
+    sparse = _scipy_sparse()
+    if not isinstance(value, dict) or len(value) != 1 or next(iter(value)) not in ("coo", "diagonal"):
+        raise ValueError(f'{key}: must be {{"coo": {{"shape", "rows", "cols", "values"}}}} or {{"diagonal": [...]}}')
+    if "diagonal" in value:
+        diagonal = _numbers(f"{key}.diagonal", value["diagonal"])
+        if diagonal.size == 0 or (n is not None and diagonal.size != n):
+            raise ValueError(f"{key}.diagonal: must have {n if n is not None else 'at least one'} entries")
+        return sparse.diags(diagonal).tocsc()
+    coo = value["coo"]
+    if not isinstance(coo, dict) or set(coo) != {"shape", "rows", "cols", "values"}:
+        raise ValueError(f"{key}.coo: must have exactly the keys shape, rows, cols, values")
+    shape = coo["shape"]
+    if (not isinstance(shape, list) or len(shape) != 2 or not all(isinstance(x, int) and not isinstance(x, bool)
+                                                                  for x in shape)
+            or shape[0] != shape[1] or shape[0] < 1):
+        raise ValueError(f"{key}.coo.shape: must be [n, n] with n >= 1")
+    if n is not None and shape[0] != n:
+        raise ValueError(f"{key}.coo.shape: must be [{n}, {n}] (the size of M)")
+    rows = _numbers(f"{key}.coo.rows", coo["rows"], integer=True)
+    cols = _numbers(f"{key}.coo.cols", coo["cols"], integer=True)
+    values = _numbers(f"{key}.coo.values", coo["values"])
+    if not rows.size == cols.size == values.size:
+        raise ValueError(f"{key}.coo: rows, cols and values must have the same length")
+    for name, index in (("rows", rows), ("cols", cols)):
+        bad = np.flatnonzero((index < 0) | (index >= shape[0]))
+        if bad.size:
+            raise ValueError(f"{key}.coo.{name}[{bad[0]}]: index {index[bad[0]]} outside 0..{shape[0] - 1}")
+    return sparse.csc_matrix((values, (rows, cols)), shape=tuple(shape))
