@@ -18,8 +18,10 @@ from .methods import CompositionInfo, MethodInfo, TableauInfo, compositions, met
 from .rayleigh import modal_damping_ratio, rayleigh_coefficients
 from .results import load
 from .solution import Solution
+from .structure import LinearStructure
 from .system import SpecError, System
 
-__all__ = ["__version__", "models", "System", "Chain", "chain_mode_energies", "SpecError", "integrate", "steps_for", "CancelToken", "Solution",
+__all__ = ["__version__", "models", "System", "Chain", "chain_mode_energies", "LinearStructure", "SpecError",
+           "integrate", "steps_for", "CancelToken", "Solution",
            "load", "rayleigh_coefficients", "modal_damping_ratio", "methods", "tableaux", "compositions",
            "MethodInfo", "TableauInfo", "CompositionInfo"]

@@ -41,7 +41,9 @@ def _plain(value: Any) -> Any:
 def describe_model(model: Model) -> dict[str, Any]:
     """{"model": name, "parameters": {...}} for a built-in model, {"system": {...}} for a System
     ({"system": None, "label": ...} for one built from Python functions, which has no plain form)."""
-    if isinstance(model, Chain):
+    from .structure import LinearStructure
+
+    if isinstance(model, (Chain, LinearStructure)):
         return {"system": model.to_dict()}
     if isinstance(model, System):
         try:
@@ -60,9 +62,14 @@ def model_from_spec(spec: Mapping[str, Any]) -> Model:
     if has_system:
         if spec.get("parameters"):
             raise ValueError("parameters: a system carries its parameters inside system.parameters")
-        if isinstance(spec["system"], Mapping) and spec["system"].get("kind") == "chain":
+        kind = spec["system"].get("kind") if isinstance(spec["system"], Mapping) else None
+        if kind in ("chain", "linear_structure"):
+            from .structure import LinearStructure
+
             try:
-                return Chain.from_dict(spec["system"])
+                if kind == "chain":
+                    return Chain.from_dict(spec["system"])
+                return LinearStructure.from_dict(dict(spec["system"]))
             except ValueError as error:
                 raise ValueError(f"system.{error}") from None
         try:

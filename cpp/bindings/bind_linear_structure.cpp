@@ -1,0 +1,49 @@
+// The linear-structure kinds (lumped and consistent mass), each bound once: M and
+// K arrive as scipy.sparse matrices (pybind11's Eigen sparse caster copies their
+// CSC arrays; nothing is densified).
+#include <pybind11/eigen.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include "model_functions.hpp"
+#include "raydamp/models/linear_structure.hpp"
+#include "run.hpp"
+
+namespace raydamp::bindings {
+
+namespace py = pybind11;
+
+namespace {
+
+template <class Mass, class MassArgument>
+void bind_structure_kind(py::module_& m, const char* name) {
+  using Model = LinearStructure<Mass>;
+  py::class_<Model> cls(m, name);
+  cls.def(py::init([](const MassArgument& mass, const SparseColMajor& k, const Eigen::VectorXd& f, double alpha,
+                      double beta) {
+            // Factorising M and estimating the spectrum take a while for large n.
+            py::gil_scoped_release release;
+            return Model(Mass(mass, "M"), k, f, alpha, beta);
+          }),
+          py::arg("M"), py::arg("K"), py::arg("f"), py::arg("alpha"), py::arg("beta"));
+  cls.def_property_readonly("mass_kind", [](const Model&) { return Mass::kind; })
+      .def_property_readonly("alpha", [](const Model& s) { return s.damping.alpha(); })
+      .def_property_readonly("beta", [](const Model& s) { return s.damping.beta(); })
+      .def_property_readonly("spectral_bound", [](const Model& s) { return s.damping.spectral_bound(); })
+      .def_property_readonly("damping_rate_bound", [](const Model& s) { return s.damping.rate_bound(); })
+      .def("chebyshev_degrees", [](const Model& s, double t) {
+        const auto series = s.damping.series(t);
+        return py::make_tuple(series->exp.degree(), series->t_phi1.degree());
+      });
+  add_model_functions<Model>(cls);
+  def_integrate<Model>(m);
+}
+
+}  // namespace
+
+void bind_linear_structure(py::module_& m) {
+  bind_structure_kind<LumpedMass, Eigen::VectorXd>(m, "LinearStructure_lumped");
+  bind_structure_kind<ConsistentMass, SparseColMajor>(m, "LinearStructure_consistent");
+}
+
+}  // namespace raydamp::bindings

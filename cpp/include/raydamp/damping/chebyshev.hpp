@@ -1,0 +1,120 @@
+// Chebyshev expansions of a scalar function of a linear operator B with spectrum in
+// [0, L]: f(B) x = sum_k c_k T_k(Y) x with Y = (2/L) B - I, using only products with
+// B. For the sparse Rayleigh kind B = K M^{-1} and f is exp(-t(alpha + beta lambda))
+// or t phi1(-t(alpha + beta lambda)), both entire, so the coefficients fall off
+// faster than geometrically once k passes about sqrt(t beta L): a degree a little
+// above that gives the function to rounding on the whole interval.
+#pragma once
+
+#include <Eigen/Core>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace raydamp {
+
+// The truncated series leaves out at most this much (sum of the dropped |c_k|)
+// relative to max |f| on the interval. B is self-adjoint in an inner product in
+// which |T_k(Y)| <= 1, so this bounds the error of f(B) x relative to |x| in that
+// norm; with the three-term recurrence's rounding it keeps the flows within 1e-12.
+inline constexpr double kChebyshevTolerance = 1e-13;
+inline constexpr int kMaxChebyshevDegree = 8192;
+
+struct ChebyshevSeries {
+  std::vector<double> c;  // c_0 .. c_degree (c_0 already halved)
+  double scale = 0.0;     // max |f| at the sample points
+  int degree() const { return static_cast<int>(c.size()) - 1; }
+};
+
+namespace detail {
+
+// Coefficients of the interpolant of g at the N Chebyshev points y_j = cos(pi (j + 1/2) / N):
+// c_k = (2/N) sum_j g(y_j) cos(pi k (j + 1/2) / N), c_0 halved. O(N^2), run once per
+// sub-step length; the cosines come from one table of the 4N multiples of pi / (2N).
+inline std::vector<double> chebyshev_interpolant(const std::vector<double>& values) {
+  const int n = static_cast<int>(values.size());
+  const int period = 4 * n;
+  std::vector<double> table(period);
+  for (int m = 0; m < period; ++m) table[m] = std::cos(M_PI * m / (2.0 * n));
+  std::vector<double> c(n, 0.0);
+  for (int j = 0; j < n; ++j) {
+    const int stride = 2 * j + 1;  // cos(pi k (2j + 1) / (2N)) = table[k (2j + 1) mod 4N]
+    int m = 0;
+    for (int k = 0; k < n; ++k) {
+      c[k] += values[j] * table[m];
+      m += stride;
+      if (m >= period) m -= period;
+    }
+  }
+  for (double& x : c) x *= 2.0 / n;
+  c[0] *= 0.5;
+  return c;
+}
+
+}  // namespace detail
+
+// The series of g(y) on [-1, 1]: the number of samples doubles until the upper half
+// of the interpolant's coefficients is below the tolerance (then aliasing is too,
+// the true coefficients falling faster than geometrically), and the series is cut
+// at the lowest degree whose dropped tail stays below kChebyshevTolerance max |g|.
+template <class G>
+ChebyshevSeries chebyshev_series(G g, const char* what) {
+  for (int n = 32;; n *= 2) {
+    std::vector<double> values(n);
+    double scale = 0.0;
+    for (int j = 0; j < n; ++j) {
+      values[j] = g(std::cos(M_PI * (j + 0.5) / n));
+      if (!std::isfinite(values[j])) throw std::invalid_argument(std::string(what) + ": not finite on the spectrum");
+      scale = std::max(scale, std::abs(values[j]));
+    }
+    ChebyshevSeries s;
+    s.scale = scale;
+    if (scale == 0.0) {
+      s.c = {0.0};
+      return s;
+    }
+    std::vector<double> c = detail::chebyshev_interpolant(values);
+    double upper = 0.0;
+    for (int k = n / 2; k < n; ++k) upper += std::abs(c[k]);
+    if (upper > 0.5 * kChebyshevTolerance * scale) {
+      if (n > kMaxChebyshevDegree)
+        throw std::invalid_argument(std::string(what) + ": needs a Chebyshev degree above " +
+                                    std::to_string(kMaxChebyshevDegree) + " (t beta lambda_max too large); take a smaller h");
+      continue;
+    }
+    int degree = n - 1;
+    double dropped = 0.0;
+    while (degree > 0 && dropped + std::abs(c[degree]) <= kChebyshevTolerance * scale) dropped += std::abs(c[degree--]);
+    c.resize(degree + 1);
+    s.c = std::move(c);
+    return s;
+  }
+}
+
+// y = sum_k c_k T_k(Y) x, Y = (2/L) B - I, by the three-term recurrence
+// T_{k+1} = 2 Y T_k - T_{k-1} (one product with B per degree, through
+// apply_b(in, out), out = B in, out never aliasing in). t0, t1, t2 are scratch of
+// x's size; y must not alias x.
+template <class ApplyB, class X, class Y, class V>
+void chebyshev_apply(const ChebyshevSeries& s, double bound, ApplyB&& apply_b, const X& x, Y& y, V& t0, V& t1,
+                     V& t2) {
+  const auto& c = s.c;
+  const int degree = s.degree();
+  y = c[0] * x;
+  if (degree == 0) return;
+  const double two_over_l = 2.0 / bound;
+  t0 = x;
+  apply_b(t0, t1);
+  t1 = two_over_l * t1 - t0;  // T_1(Y) x
+  y += c[1] * t1;
+  for (int k = 2; k <= degree; ++k) {
+    apply_b(t1, t2);
+    t2 = (2.0 * two_over_l) * t2 - 2.0 * t1 - t0;  // T_k(Y) x
+    y += c[k] * t2;
+    t0.swap(t1);  // (t0, t1) <- (t1, t2): pointer swaps, no copies
+    t1.swap(t2);
+  }
+}
+
+}  // namespace raydamp

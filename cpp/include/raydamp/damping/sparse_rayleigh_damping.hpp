@@ -1,0 +1,155 @@
+// Rayleigh damping C = alpha M + beta K of a sparse linear structure, with eps = 1:
+// the damping force on the momenta is -A p, A = C M^{-1} = alpha I + beta B, B = K M^{-1}
+// (M^{-1} acts first: p -> velocity -> force). B is similar to the symmetric
+// M^{-1/2} K M^{-1/2}, so its spectrum is real, in [0, lambda_max], the squared
+// circular frequencies; B is self-adjoint in the M^{-1} inner product.
+// The exact flows (paper section 3, q frozen) are functions of B,
+//   damp:      p <- exp(-tA) p = e^{-t alpha} exp(-t beta B) p,
+//   kick_damp: p <- exp(-tA) p - t phi1(-tA) grad V,
+// evaluated by Chebyshev expansions on [0, L] (chebyshev.hpp), L an upper bound of
+// lambda_max (spectral_bound.hpp): only products with K and solves with M, never a
+// dense matrix. Coefficients are cached per sub-step length t (a run uses two or three).
+// solve_shifted (rks with a diagonally implicit tableau) is
+//   (I + cA)^{-1} x = M ((1 + c alpha) M + c beta K)^{-1} x,
+// one sparse Cholesky factorisation per distinct c (per run: h a_ii, and the last step's).
+#pragma once
+
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <stdexcept>
+#include <utility>
+#include <vector>
+
+#include "raydamp/damping/chebyshev.hpp"
+#include "raydamp/mass/sparse_mass.hpp"
+#include "raydamp/phi.hpp"
+#include "raydamp/thread_scratch.hpp"
+
+namespace raydamp {
+
+template <class Mass>
+class SparseRayleighDamping {
+ public:
+  // The series of one sub-step length t, in the variable of B's spectrum.
+  struct Series {
+    double t;
+    ChebyshevSeries exp;     // exp(-t (alpha + beta lambda))
+    ChebyshevSeries t_phi1;  // t phi1(-t (alpha + beta lambda))
+  };
+  struct Factors {
+    double t = std::numeric_limits<double>::quiet_NaN();
+    std::shared_ptr<const Series> series;
+  };
+
+  // bound: an upper bound of the spectrum of B (the caller estimates it once).
+  SparseRayleighDamping(double alpha, double beta, std::shared_ptr<const SparseRowMajor> stiffness, Mass mass,
+                        double bound)
+      : alpha_(alpha), beta_(beta), bound_(bound > 0.0 ? bound : 1.0), k_(std::move(stiffness)),
+        mass_(std::move(mass)), caches_(std::make_shared<Caches>()) {
+    if (!(alpha >= 0.0) || !std::isfinite(alpha)) throw std::invalid_argument("alpha: must be finite and >= 0");
+    if (!(beta >= 0.0) || !std::isfinite(beta)) throw std::invalid_argument("beta: must be finite and >= 0");
+  }
+
+  double alpha() const { return alpha_; }
+  double beta() const { return beta_; }
+  double spectral_bound() const { return bound_; }           // L >= lambda_max(K M^{-1})
+  double rate_bound() const { return alpha_ + beta_ * bound_; }  // >= the spectral radius of A
+
+  Factors factors(double t) const { return {t, series(t)}; }
+
+  std::shared_ptr<const Series> series(double t) const {
+    std::lock_guard<std::mutex> lock(caches_->mutex);
+    for (const auto& s : caches_->series)
+      if (s->t == t) return s;
+    // lambda = L (1 + y) / 2 maps [-1, 1] onto [0, L].
+    const double half = 0.5 * bound_, a = alpha_, b = beta_;
+    auto rate = [=](double y) { return a + b * half * (1.0 + y); };
+    auto made = std::make_shared<const Series>(Series{
+        t, chebyshev_series([&](double y) { return std::exp(-t * rate(y)); }, "damping flow"),
+        chebyshev_series([&](double y) { return t * phi1(-t * rate(y)); }, "kick+damp flow")});
+    if (caches_->series.size() >= kCachedLengths) caches_->series.erase(caches_->series.begin());
+    caches_->series.push_back(made);
+    return made;
+  }
+
+  // p <- exp(-tA) p.
+  template <class Q, class P>
+  void decay(const Q&, const Factors& f, P& p) const {
+    Eigen::VectorXd& y = thread_scratch(kScratchSum, p.size());
+    apply(f.series->exp, p, y);
+    p = y;
+  }
+
+  // p <- exp(-tA) p - t phi1(-tA) g.
+  template <class Q, class G, class P>
+  void decay_affine(const Q&, const Factors& f, const G& g, P& p) const {
+    Eigen::VectorXd& y = thread_scratch(kScratchSum, p.size());
+    Eigen::VectorXd& z = thread_scratch(kScratchSum2, p.size());
+    apply(f.series->exp, p, y);
+    apply(f.series->t_phi1, g, z);
+    p = y - z;
+  }
+
+  // out = A p = alpha p + beta K M^{-1} p (out must not alias p).
+  template <class Q, class P, class O>
+  void rate(const Q&, const P& p, O& out) const {
+    Eigen::VectorXd& v = thread_scratch(kScratchProduct, p.size());
+    mass_.velocity(p, v);
+    out.noalias() = *k_ * v;
+    out = beta_ * out + alpha_ * p;
+  }
+
+  // x <- (I + cA)^{-1} x.
+  template <class Q, class X>
+  void solve_shifted(const Q&, double c, X& x) const {
+    if (beta_ == 0.0) {
+      x /= 1.0 + c * alpha_;
+      return;
+    }
+    const auto chol = shifted(c);
+    Eigen::VectorXd& y = thread_scratch(kScratchProduct, x.size());
+    chol->solve(x, y);
+    mass_.multiply(y, x);
+  }
+
+ private:
+  static constexpr std::size_t kCachedLengths = 16, kCachedShifts = 4;
+  struct Caches {
+    std::mutex mutex;
+    std::vector<std::shared_ptr<const Series>> series;
+    std::vector<std::pair<double, std::shared_ptr<const SparseCholesky>>> shifted;
+  };
+
+  // y = sum_k c_k T_k(Y) x with B x = K M^{-1} x.
+  template <class X>
+  void apply(const ChebyshevSeries& s, const X& x, Eigen::VectorXd& y) const {
+    const Eigen::Index n = x.size();
+    auto apply_b = [&](const Eigen::VectorXd& in, Eigen::VectorXd& out) {
+      Eigen::VectorXd& v = thread_scratch(kScratchProduct, n);
+      mass_.velocity(in, v);
+      out.noalias() = *k_ * v;
+    };
+    chebyshev_apply(s, bound_, apply_b, x, y, thread_scratch(kScratchT0, n), thread_scratch(kScratchT1, n),
+                    thread_scratch(kScratchT2, n));
+  }
+
+  std::shared_ptr<const SparseCholesky> shifted(double c) const {
+    std::lock_guard<std::mutex> lock(caches_->mutex);
+    for (const auto& [key, chol] : caches_->shifted)
+      if (key == c) return chol;
+    const SparseColMajor a = (1.0 + c * alpha_) * mass_.matrix() + (c * beta_) * SparseColMajor(*k_);
+    auto made = std::make_shared<const SparseCholesky>(a, "M + c (alpha M + beta K)");
+    if (caches_->shifted.size() >= kCachedShifts) caches_->shifted.erase(caches_->shifted.begin());
+    caches_->shifted.emplace_back(c, made);
+    return made;
+  }
+
+  double alpha_, beta_, bound_;
+  std::shared_ptr<const SparseRowMajor> k_;
+  Mass mass_;
+  std::shared_ptr<Caches> caches_;
+};
+
+}  // namespace raydamp

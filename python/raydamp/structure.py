@@ -1,0 +1,295 @@
+"""raydamp.LinearStructure: a sparse linear structure (finite-element model) with Rayleigh damping.
+
+    H = 1/2 p^T M^{-1} p + V(q),   V = 1/2 q^T K q - f^T q,
+    p' = -grad V - C M^{-1} p,     C = alpha M + beta K,
+
+so in the paper's form p' = -grad V - eps D M^{-1} p it is eps = 1, D = C (alpha = beta = 0
+is undamped, and "sv" may run). ``raydamp.rayleigh_coefficients(omega1, omega2, zeta1,
+zeta2)`` gives (alpha, beta) for chosen damping ratios at two circular frequencies; a mode of
+frequency omega then has the damping ratio alpha / (2 omega) + beta omega / 2.
+
+Sparse from end to end: M and K stay scipy.sparse / Eigen::SparseMatrix; M is factorised once
+(sparse Cholesky; or, lumped, inverted elementwise). The exact damping flows
+exp(-t C M^{-1}) p = e^{-t alpha} exp(-t beta K M^{-1}) p and the kick+damp flow (with phi1)
+are Chebyshev expansions in K M^{-1} on [0, L], L an upper bound of the largest squared
+frequency (Lanczos, with a 5% margin; for a lumped M also the Gershgorin bound), of the
+lowest degree that leaves out less than 1e-13 of the function (about sqrt(35 t beta L) + 10
+products with K and solves with M per flow), coefficients cached per sub-step length.
+
+Which method when (rho = alpha + beta L, the largest damping rate):
+
+- h rho small (weak damping of every mode that the step resolves): 3s and 2s are explicit,
+  order 2, and cost one gradient and one or two Chebyshev flows per step.
+- h rho large (stiff beta K: the high modes, damping ratio beta omega / 2, are overdamped over
+  one step): the exact flows stay stable and exact, but 3s and 2s lose their order (order
+  reduction: the splitting error constants grow with h rho, and in the range h rho >> 1 the
+  error of a mode with h omega not small decays only like h); also the Chebyshev degree grows
+  like sqrt(h beta L). rks with ``tableau="midpoint"`` (implicit midpoint on the kick+damp
+  part) keeps its order there at one sparse Cholesky solve per step (M + (h/2) C, factorised
+  once per run). benchmarks/bench_structure.py shows both ranges.
+- Every explicit method here (3s, 2s, rks) is Stormer-Verlet in its drift and kick, so
+  h omega_max < 2 (omega_max^2 = L without the margin) is needed for stability of the
+  undamped part, whatever the damping.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+import numpy as np
+
+from . import _core
+from ._validation import real
+from .models import Model
+
+__all__ = ["LinearStructure", "MAX_PLAIN_ENTRIES"]
+
+# The plain (JSON) form carries matrices as COO triplets; past this many stored entries per matrix
+# a structure belongs in a Matrix Market file, not in a JSON document.
+MAX_PLAIN_ENTRIES = 1_000_000
+PLAIN_KEYS = ("kind", "M", "K", "alpha", "beta", "f")
+
+
+def _scipy_sparse():
+    try:
+        import scipy.sparse as sparse
+    except ImportError as error:  # pragma: no cover - scipy comes with the structures extra
+        raise ImportError("raydamp.LinearStructure needs scipy (pip install 'raydamp[structures]')") from error
+    return sparse
+
+
+def _read_matrix(name: str, value):
+    """A scipy.sparse CSC matrix from a dense array, a scipy.sparse matrix or a Matrix Market path."""
+    sparse = _scipy_sparse()
+    if isinstance(value, (str, os.PathLike)):
+        import scipy.io
+
+        path = os.fspath(value)
+        if not os.path.isfile(path):
+            raise ValueError(f"{name}: no Matrix Market file at {path!r}")
+        try:
+            value = scipy.io.mmread(path)
+        except Exception as error:  # noqa: BLE001 - say what the reader said
+            raise ValueError(f"{name}: cannot read {path!r} as Matrix Market: {error}") from None
+    if sparse.issparse(value):
+        matrix = sparse.csc_matrix(value, dtype=float)
+    else:
+        try:
+            array = np.asarray(value)
+        except (TypeError, ValueError):
+            array = None
+        if array is None or array.dtype.kind not in "iuf":
+            raise ValueError(f"{name} must be a real matrix (NumPy array, scipy.sparse or a Matrix Market path), "
+                             f"got {type(value).__name__}")
+        if array.ndim != 2:
+            raise ValueError(f"{name} must be a 2-D matrix, got shape {array.shape}")
+        matrix = sparse.csc_matrix(array.astype(float))
+    if matrix.shape[0] != matrix.shape[1] or matrix.shape[0] == 0:
+        raise ValueError(f"{name} must be square and non-empty, got shape {matrix.shape}")
+    matrix.sum_duplicates()
+    if not np.isfinite(matrix.data).all():
+        raise ValueError(f"{name} must be finite")
+    return matrix
+
+
+def _is_diagonal(matrix) -> bool:
+    coo = matrix.tocoo()
+    return bool(np.all(coo.row[coo.data != 0] == coo.col[coo.data != 0]))
+
+
+class LinearStructure(Model):
+    """A linear structure M q'' + (alpha M + beta K) q' + K q = f, sparse, run by every method.
+
+    Parameters
+    ----------
+    M : mass matrix, n x n symmetric positive definite: a dense array, a scipy.sparse matrix
+        or the path of a Matrix Market (.mtx) file. A diagonal M (lumped mass) is kept as its
+        diagonal; any other (consistent mass) is factorised once by a sparse Cholesky
+        factorisation.
+    K : stiffness matrix, n x n symmetric positive semi-definite, same forms as M.
+    alpha, beta : Rayleigh coefficients of C = alpha M + beta K, >= 0 (see
+        :func:`raydamp.rayleigh_coefficients`).
+    f : constant load vector (length n), or None for no load.
+
+    The module docstring says how the damping flows are computed and which method suits
+    which damping (``help(raydamp.structure)``). ``chebyshev_degrees(t)`` gives the degrees
+    the flows over time t use; ``spectral_bound`` the bound L of the squared frequencies.
+    """
+
+    name = "linear_structure"
+
+    def __init__(self, M, K, *, alpha: float = 0.0, beta: float = 0.0, f=None):
+        alpha = real("alpha", alpha, nonnegative=True)
+        beta = real("beta", beta, nonnegative=True)
+        mass = _read_matrix("M", M)
+        stiffness = _read_matrix("K", K)
+        n = mass.shape[0]
+        if stiffness.shape != mass.shape:
+            raise ValueError(f"K must have the shape of M, {mass.shape}, got {stiffness.shape}")
+        if f is None:
+            load = np.zeros(0)
+        else:
+            load = np.asarray(f, dtype=float).reshape(-1) if not isinstance(f, str) else None
+            if load is None or load.shape != (n,):
+                raise ValueError(f"f must be None or a vector of length {n}")
+            if not np.isfinite(load).all():
+                raise ValueError("f must be finite")
+        lumped = _is_diagonal(mass)
+        object.__setattr__(self, "alpha", alpha)
+        object.__setattr__(self, "beta", beta)
+        object.__setattr__(self, "_mass", mass)
+        object.__setattr__(self, "_stiffness", stiffness)
+        object.__setattr__(self, "_load", load if load.size else np.zeros(n))
+        try:
+            if lumped:
+                core = _core.LinearStructure_lumped(np.asarray(mass.diagonal(), dtype=float), stiffness, load,
+                                                    alpha, beta)
+            else:
+                core = _core.LinearStructure_consistent(mass, stiffness, load, alpha, beta)
+        except ValueError as error:  # the core names M, K or f first
+            raise ValueError(str(error)) from None
+        object.__setattr__(self, "_core_model", core)
+        self._freeze()
+
+    # -- what it is ---------------------------------------------------------
+    @property
+    def parameters(self) -> dict[str, Any]:
+        return {"alpha": self.alpha, "beta": self.beta}
+
+    @property
+    def M(self):
+        """The mass matrix (scipy.sparse CSC)."""
+        return self._mass.copy()
+
+    @property
+    def K(self):
+        """The stiffness matrix (scipy.sparse CSC)."""
+        return self._stiffness.copy()
+
+    @property
+    def f(self) -> np.ndarray:
+        """The load vector."""
+        return self._load.copy()
+
+    @property
+    def eps(self) -> float:
+        """1 when damped (D = alpha M + beta K), 0 when alpha = beta = 0."""
+        return self._core_model.eps
+
+    @property
+    def mass_kind(self) -> str:
+        """"lumped" (diagonal M) or "consistent" (sparse SPD M, factorised)."""
+        return self._core_model.mass_kind
+
+    @property
+    def spectral_bound(self) -> float:
+        """L >= the largest eigenvalue of M^{-1} K (squared circular frequency): the Chebyshev interval."""
+        return self._core_model.spectral_bound
+
+    @property
+    def damping_rate_bound(self) -> float:
+        """alpha + beta L: at least the largest damping rate (spectral radius of C M^{-1})."""
+        return self._core_model.damping_rate_bound
+
+    def chebyshev_degrees(self, t: float) -> tuple[int, int]:
+        """(degree of exp(-t C M^{-1}), degree of t phi1(-t C M^{-1})): products with K per flow of length t."""
+        return tuple(self._core_model.chebyshev_degrees(real("t", t)))
+
+    # -- the plain form -------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        """The structure as plain JSON-ready data (matrices as COO triplets, a lumped M as its
+        diagonal); ``LinearStructure.from_dict`` inverts it. It is the service's ``"system"``."""
+        mass = ({"diagonal": self._mass.diagonal().tolist()} if self.mass_kind == "lumped"
+                else {"coo": _coo_plain(self._mass)})
+        return {"kind": "linear_structure", "M": mass, "K": {"coo": _coo_plain(self._stiffness)},
+                "alpha": self.alpha, "beta": self.beta,
+                "f": self._load.tolist() if self._load.any() else None}
+
+    @classmethod
+    def from_dict(cls, data) -> LinearStructure:
+        """Build from ``to_dict()``'s form; a bad field raises ValueError starting with its path (``K.coo.rows``)."""
+        if not isinstance(data, dict):
+            raise ValueError("a linear structure must be an object with the keys " + ", ".join(PLAIN_KEYS))
+        unknown = [k for k in data if k not in PLAIN_KEYS]
+        if unknown:
+            raise ValueError(f"{unknown[0]}: unknown key (known: {', '.join(PLAIN_KEYS)})")
+        if data.get("kind") != "linear_structure":
+            raise ValueError(f"kind: expected 'linear_structure', got {data.get('kind')!r}")
+        for key in ("M", "K"):
+            if key not in data:
+                raise ValueError(f"{key}: missing")
+        n = None
+        matrices = {}
+        for key in ("M", "K"):
+            matrices[key] = _matrix_from_plain(key, data[key], n)
+            n = matrices[key].shape[0]
+        f = data.get("f")
+        if f is not None and (not isinstance(f, list) or len(f) != n
+                              or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in f)):
+            raise ValueError(f"f: must be null or a list of {n} numbers")
+        return cls(matrices["M"], matrices["K"], alpha=data.get("alpha", 0.0), beta=data.get("beta", 0.0), f=f)
+
+    def replace(self, **changes) -> LinearStructure:
+        unknown = set(changes) - {"M", "K", "alpha", "beta", "f"}
+        if unknown:
+            raise ValueError(f"{sorted(unknown)[0]}: LinearStructure has no such argument (M, K, alpha, beta, f)")
+        args = {"M": self._mass, "K": self._stiffness, "alpha": self.alpha, "beta": self.beta,
+                "f": self._load, **changes}
+        return LinearStructure(args.pop("M"), args.pop("K"), **args)
+
+    def __repr__(self) -> str:
+        return (f"LinearStructure(n={self.dim}, mass={self.mass_kind}, nnz(K)={self._stiffness.nnz}, "
+                f"alpha={self.alpha!r}, beta={self.beta!r})")
+
+
+def _coo_plain(matrix) -> dict[str, Any]:
+    coo = matrix.tocoo()
+    return {"shape": list(coo.shape), "rows": coo.row.tolist(), "cols": coo.col.tolist(), "values": coo.data.tolist()}
+
+
+def _numbers(path: str, value, *, integer: bool = False) -> np.ndarray:
+    if not isinstance(value, list):
+        raise ValueError(f"{path}: must be a list of numbers")
+    if len(value) > MAX_PLAIN_ENTRIES:
+        raise ValueError(f"{path}: {len(value)} entries, more than the limit {MAX_PLAIN_ENTRIES}; "
+                         "give such a structure as Matrix Market files to raydamp.LinearStructure")
+    kinds = (int,) if integer else (int, float)
+    for i, x in enumerate(value):
+        if isinstance(x, bool) or not isinstance(x, kinds):
+            raise ValueError(f"{path}[{i}]: must be {'an integer' if integer else 'a number'}, got {x!r}")
+    array = np.asarray(value, dtype=np.int64 if integer else float)
+    if not integer and not np.isfinite(array).all():
+        raise ValueError(f"{path}[{int(np.argmin(np.isfinite(array)))}]: must be finite")
+    return array
+
+
+def _matrix_from_plain(key: str, value, n: int | None):
+    sparse = _scipy_sparse()
+    if not isinstance(value, dict) or len(value) != 1 or next(iter(value)) not in ("coo", "diagonal"):
+        raise ValueError(f'{key}: must be {{"coo": {{"shape", "rows", "cols", "values"}}}} or {{"diagonal": [...]}}')
+    if "diagonal" in value:
+        diagonal = _numbers(f"{key}.diagonal", value["diagonal"])
+        if diagonal.size == 0 or (n is not None and diagonal.size != n):
+            raise ValueError(f"{key}.diagonal: must have {n if n is not None else 'at least one'} entries")
+        return sparse.diags(diagonal).tocsc()
+    coo = value["coo"]
+    if not isinstance(coo, dict) or set(coo) != {"shape", "rows", "cols", "values"}:
+        raise ValueError(f"{key}.coo: must have exactly the keys shape, rows, cols, values")
+    shape = coo["shape"]
+    if (not isinstance(shape, list) or len(shape) != 2 or not all(isinstance(x, int) and not isinstance(x, bool)
+                                                                  for x in shape)
+            or shape[0] != shape[1] or shape[0] < 1):
+        raise ValueError(f"{key}.coo.shape: must be [n, n] with n >= 1")
+    if n is not None and shape[0] != n:
+        raise ValueError(f"{key}.coo.shape: must be [{n}, {n}] (the size of M)")
+    rows = _numbers(f"{key}.coo.rows", coo["rows"], integer=True)
+    cols = _numbers(f"{key}.coo.cols", coo["cols"], integer=True)
+    values = _numbers(f"{key}.coo.values", coo["values"])
+    if not rows.size == cols.size == values.size:
+        raise ValueError(f"{key}.coo: rows, cols and values must have the same length")
+    for name, index in (("rows", rows), ("cols", cols)):
+        bad = np.flatnonzero((index < 0) | (index >= shape[0]))
+        if bad.size:
+            raise ValueError(f"{key}.coo.{name}[{bad[0]}]: index {index[bad[0]]} outside 0..{shape[0] - 1}")
+    return sparse.csc_matrix((values, (rows, cols)), shape=tuple(shape))
