@@ -7,6 +7,7 @@
 
 #include "check.hpp"
 #include "raydamp/ensemble.hpp"
+#include "raydamp/models/pendulum_lanes.hpp"
 #include "raydamp/raydamp.hpp"
 
 using namespace raydamp;
@@ -55,7 +56,38 @@ int main() {
     } catch (const std::invalid_argument& e) {
       what = e.what();
     }
-    CHECK(what == "member 11: h: bad for member 11");
+    CHECK(what == "h: bad for member 11");
+  }
+  // Pendulums as lanes of one run: lane i equals member i's single run bit for bit
+  // (3s, 2s and a composition; a shortened last step; rows every 7 steps).
+  {
+    const int lanes = 19;
+    const DampedPendulum member(0.3);
+    Eigen::VectorXd q0(lanes), p0(lanes);
+    for (int i = 0; i < lanes; ++i) {
+      q0[i] = -3.0 + 0.31 * i;
+      p0[i] = 0.05 * (i % 3);
+    }
+    const RunSpec lane_spec{0.05, 103, 0.02, 7};
+    const Composition& yoshida = builtin_composition("yoshida4");
+    auto compare = [&](auto method, const Composition& comp) {
+      using Method = decltype(method);
+      RunResult all = detail::run_steps<Method>(PendulumLanes(member, lanes), heun, comp,
+                                                State<Eigen::Dynamic>{q0, p0}, lane_spec, Control{});
+      CHECK(all.status == Status::completed);
+      for (int i = 0; i < lanes; ++i) {
+        RunResult one = integrate<Method>(member, heun, comp, State<1>{Vector<1>(q0[i]), Vector<1>(p0[i])}, lane_spec);
+        CHECK(one.trajectory.rows() == all.trajectory.rows());
+        CHECK(one.trajectory.t == all.trajectory.t);
+        for (long row = 0; row < one.trajectory.rows(); ++row) {
+          CHECK(one.trajectory.q[row] == all.trajectory.q[row * lanes + i]);
+          CHECK(one.trajectory.p[row] == all.trajectory.p[row * lanes + i]);
+        }
+      }
+    };
+    compare(ThreeTermSplitting{}, builtin_composition("none"));
+    compare(TwoTermSplitting{}, builtin_composition("none"));
+    compare(ThreeTermSplitting{}, yoshida);
   }
   CHECK(ensemble_threads(0, 5) >= 1);
   CHECK(ensemble_threads(4, 2) == 2);

@@ -36,8 +36,7 @@ inline int ensemble_threads(int threads, long members) {
 // one atomic counter, so a slow member never holds up the others. If run_member
 // throws, no further member starts; once every thread has joined, the exception of
 // the lowest member index is rethrown (every lower member had already started, so
-// which one that is does not depend on timing) as std::invalid_argument prefixed by
-// "member i: " when it was one.
+// which one that is does not depend on timing).
 template <class RunMember>
 void for_each_member(long members, int threads, RunMember&& run_member, const EnsembleControl& control = {}) {
   threads = ensemble_threads(threads, members);
@@ -83,12 +82,7 @@ void for_each_member(long members, int threads, RunMember&& run_member, const En
   }
   work();
   for (auto& th : pool) th.join();
-  if (!failure) return;
-  try {
-    std::rethrow_exception(failure);
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument("member " + std::to_string(failed_member) + ": " + e.what());
-  }
+  if (failure) std::rethrow_exception(failure);
 }
 
 }  // namespace raydamp
