@@ -37,7 +37,7 @@ $(PY):
 # cmake and ninja come from PyPI into the venv: they build the C++ tests too.
 $(INSTALLED): $(PY) pyproject.toml CMakeLists.txt $(SOURCES)
 	$(PIP) install cmake ninja
-	$(PIP) install '.[service,analysis,io,test]'
+	$(PIP) install '.[service,analysis,io,sweep,test]'
 	@touch $@
 
 serve: setup
@@ -59,6 +59,8 @@ bench: setup
 	$(PY) benchmarks/bench_steps.py
 	$(PY) benchmarks/bench_system.py
 	$(PY) benchmarks/bench_service_load.py
+	$(PY) benchmarks/bench_ensemble.py
+	$(PY) benchmarks/work_precision.py --out build/work_precision.png
 
 # The paper's experiments in full: figures and REPORT.md in reproduce-out/.
 reproduce: setup
