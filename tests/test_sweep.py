@@ -14,10 +14,14 @@ from raydamp.models import DampedPendulum
 distributed = pytest.importorskip("dask.distributed")
 xr = pytest.importorskip("xarray")
 
+# distributed's scheduler leaves sockets for the garbage collector (its warnings, not ours).
+pytestmark = [pytest.mark.filterwarnings("ignore::ResourceWarning"),
+              pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")]
+
 
 @pytest.fixture(scope="module")
 def client():
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:
         with distributed.Client(cluster) as c:
             yield c
 

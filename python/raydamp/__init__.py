@@ -22,6 +22,6 @@ from .solution import Solution
 from .sweep import sweep
 from .system import SpecError, System
 
-__all__ = ["__version__", "models", "System", "SpecError", "integrate", "steps_for", "CancelToken", "Solution", "integrate_ensemble", "EnsembleSolution", "sweep",
-           "load", "rayleigh_coefficients", "modal_damping_ratio", "methods", "tableaux", "compositions",
-           "MethodInfo", "TableauInfo", "CompositionInfo"]
+__all__ = ["__version__", "models", "System", "SpecError", "integrate", "steps_for", "CancelToken", "Solution",
+           "integrate_ensemble", "EnsembleSolution", "sweep", "load", "rayleigh_coefficients", "modal_damping_ratio",
+           "methods", "tableaux", "compositions", "MethodInfo", "TableauInfo", "CompositionInfo"]

@@ -223,6 +223,7 @@ def save_ensemble(ens: EnsembleSolution, path) -> None:
     if suffix == ".nc":
         ensemble_to_xarray(ens).to_netcdf(path, engine="h5netcdf")
     elif suffix == ".zarr":
-        ensemble_to_xarray(ens).to_zarr(path, mode="w")
+        # Zarr format 2: its string arrays (the dof names) have a settled spec, unlike format 3 yet.
+        ensemble_to_xarray(ens).to_zarr(path, mode="w", zarr_format=2)
     else:
         raise ValueError(f"path: unknown format {path.suffix!r} for an ensemble (known: {', '.join(ENSEMBLE_FORMATS)})")

@@ -282,7 +282,7 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
                                                               chunks=(chunk_size, *shape(dims)[1:])))
                                for k, (dims, dtype, fill) in _PER_MEMBER.items()} | statics,
                               coords=coords, attrs=attrs)
-        template.to_zarr(store, mode="w", compute=False)
+        template.to_zarr(store, mode="w", compute=False, zarr_format=2)  # see results.save_ensemble
         # q0, p0 and the coordinates now; the per-member results as their chunks arrive.
         xr.Dataset(statics).to_zarr(store, region={"member": slice(0, members)})
     messages: dict[str, str] = {}
@@ -291,7 +291,7 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
     if client is None:
         from dask.distributed import Client, LocalCluster
 
-        cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)
+        cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0")
         client = Client(cluster)
         close = [client, cluster]
     bar = None
