@@ -39,7 +39,7 @@ $(PY):
 # temporary directory each time, so every file recompiles; from the venv, build/ stays incremental.
 $(INSTALLED): $(PY) pyproject.toml CMakeLists.txt $(SOURCES)
 	$(PIP) install cmake ninja 'scikit-build-core>=0.10' 'pybind11>=2.13'
-	$(PIP) install --no-build-isolation '.[service,analysis,io,test]'
+	$(PIP) install --no-build-isolation '.[service,analysis,io,structures,sweep,test]'
 	@touch $@
 
 serve: setup
@@ -62,6 +62,8 @@ bench: setup
 	$(PY) benchmarks/bench_system.py
 	$(PY) benchmarks/bench_service_load.py
 	$(PY) benchmarks/bench_large.py
+	$(PY) benchmarks/bench_ensemble.py
+	$(PY) benchmarks/work_precision.py --out build/work_precision.png
 
 # The paper's experiments in full: figures and REPORT.md in reproduce-out/.
 reproduce: setup

@@ -1,5 +1,6 @@
-// _core.integrate for the built-in models, and the CancelToken every run takes.
+// _core.integrate and _core.integrate_ensemble for the built-in models, and the CancelToken every run takes.
 #include "run.hpp"
+#include "run_ensemble.hpp"
 
 namespace py = pybind11;
 
@@ -13,6 +14,8 @@ void bind_integrate(py::module_& m) {
       .def_property_readonly("cancelled", [](const CancelToken& c) { return c.flag.load(); });
   def_integrate<DampedPendulum>(m);
   def_integrate<ElasticPendulum>(m);
+  def_integrate_ensemble<DampedPendulum>(m);
+  def_integrate_ensemble<ElasticPendulum>(m);
 }
 
 }  // namespace raydamp::bindings

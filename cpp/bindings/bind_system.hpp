@@ -8,6 +8,7 @@
 
 #include "model_functions.hpp"
 #include "run.hpp"
+#include "run_ensemble.hpp"
 
 namespace raydamp::bindings {
 
@@ -62,6 +63,7 @@ void bind_system_kind(py::module_& m, const char* name) {
           py::keep_alive<1, 10>());
   add_model_functions<Model>(cls);
   def_integrate<Model>(m);
+  def_integrate_ensemble<Model>(m);
 }
 
 }  // namespace raydamp::bindings

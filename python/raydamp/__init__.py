@@ -13,15 +13,18 @@ equilibria.
 from . import models
 from .chain import Chain, chain_mode_energies
 from ._core import __version__
+from .ensemble import integrate_ensemble
+from .ensemble_solution import EnsembleSolution
 from .integrate import CancelToken, integrate, steps_for
 from .methods import CompositionInfo, MethodInfo, TableauInfo, compositions, methods, tableaux
 from .rayleigh import modal_damping_ratio, rayleigh_coefficients
 from .results import load
 from .solution import Solution
 from .structure import LinearStructure
+from .sweep import sweep
 from .system import SpecError, System
 
 __all__ = ["__version__", "models", "System", "Chain", "chain_mode_energies", "LinearStructure", "SpecError",
-           "integrate", "steps_for", "CancelToken", "Solution",
+           "integrate", "steps_for", "CancelToken", "Solution", "integrate_ensemble", "EnsembleSolution", "sweep",
            "load", "rayleigh_coefficients", "modal_damping_ratio", "methods", "tableaux", "compositions",
            "MethodInfo", "TableauInfo", "CompositionInfo"]

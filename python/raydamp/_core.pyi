@@ -56,3 +56,8 @@ class Chain(_Model):
 def integrate(model: _Model, method: str, tableau: str, composition: str, q0: np.ndarray, p0: np.ndarray, h: float, n_steps: int,
               h_last: float, save_every: int, track_work: bool, progress: Callable[[int, int], object] | None,
               cancel: CancelToken | None, save_dofs: list[int] = ...) -> dict[str, Any]: ...
+def integrate_ensemble(models: list[_Model], model_index: np.ndarray, names: list[str], values: np.ndarray,
+                       method: str, tableau: str, composition: str, q0: np.ndarray, p0: np.ndarray, h: float,
+                       n_steps: int, h_last: float, save_every: int, threads: int,
+                       progress: Callable[[int, int], object] | None,
+                       cancel: CancelToken | None) -> dict[str, Any]: ...

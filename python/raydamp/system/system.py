@@ -4,12 +4,14 @@ run by every method at compiled speed."""
 from __future__ import annotations
 
 import copy
+import dataclasses
 import json
 from typing import Any, Mapping
 
 import numpy as np
 
 from .. import _core
+from .._validation import real
 from ..models import Model
 from .compile import compile_system, evaluate
 from .errors import SpecError
@@ -145,6 +147,27 @@ class System(Model):
     def replace(self, **changes) -> System:
         """A new System with some fields changed (System is immutable)."""
         return System.from_dict({**self.to_dict(), **changes})
+
+    def _with_eps(self, eps: float) -> System:
+        """This system with another eps, sharing its compiled functions (no recompilation):
+        what an ensemble over eps builds once per distinct value."""
+        if eps == self._spec.eps:
+            return self
+        if self._spec.damping_form is None:
+            raise ValueError("parameters.eps: this system has no damping, so eps has nothing to act on")
+        if self._python is not None:
+            raise ValueError("system: a System built from Python functions cannot be rebuilt per member; "
+                             "write its potential as an expression")
+        spec = dataclasses.replace(self._spec, eps=real("parameters.eps", eps, nonnegative=True))
+        other = object.__new__(System)
+        for key in ("momentum_names", "label", "_compiled", "_python"):
+            object.__setattr__(other, key, getattr(self, key))
+        object.__setattr__(other, "_spec", spec)
+        object.__setattr__(other, "_core_model", _build_core(spec, self._compiled.addresses,
+                                                             [d.c for d in spec.dampers], len(self.momentum_names),
+                                                             self._compiled))
+        other._freeze()
+        return other
 
     # -- Model ---------------------------------------------------------------
     @property

@@ -1,0 +1,229 @@
+// The run_ensemble() every model kind binds as _core.integrate_ensemble: members x
+// dof initial states, per-member models, one call, the members spread over threads
+// with the GIL released (raydamp/ensemble.hpp). Saved points land in arrays
+// (member, row, ...) on the run's save grid; each worker copies its member's rows
+// there as soon as the member ends.
+#pragma once
+
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "run.hpp"
+#include "run_lanes.hpp"
+#include "raydamp/ensemble.hpp"
+
+namespace raydamp::bindings {
+
+using Rows = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+// A member's model: `base` with the per-member parameters `names` set to `values`,
+// built in C++ so that an ensemble over, say, eps costs no Python per member. Kinds
+// without per-member parameters (a System: Python builds one model per distinct
+// parameter set) take none.
+inline DampedPendulum with_parameters(const DampedPendulum& base, const std::vector<std::string>& names,
+                                      const double* values) {
+  double eps = base.eps;
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    if (names[k] != "eps") throw std::invalid_argument("parameters: damped_pendulum has no parameter '" + names[k] + "'");
+    eps = values[k];
+  }
+  return DampedPendulum(eps);
+}
+
+inline ElasticPendulum with_parameters(const ElasticPendulum& base, const std::vector<std::string>& names,
+                                       const double* values) {
+  double eps = base.eps, m = base.mass.m, k = base.k, l = base.l;
+  std::array<double, 3> g{base.g[0], base.g[1], base.g[2]};
+  for (std::size_t j = 0; j < names.size(); ++j) {
+    const std::string& name = names[j];
+    if (name == "eps") eps = values[j];
+    else if (name == "m") m = values[j];
+    else if (name == "k") k = values[j];
+    else if (name == "l") l = values[j];
+    else if (name == "g[0]" || name == "g[1]" || name == "g[2]") g[name[2] - '0'] = values[j];
+    else throw std::invalid_argument("parameters: elastic_pendulum has no parameter '" + name + "'");
+  }
+  return ElasticPendulum(eps, m, k, l, g);
+}
+
+template <class Model>
+Model with_parameters(const Model& base, const std::vector<std::string>& names, const double*) {
+  if (!names.empty()) throw std::invalid_argument("parameters: this model kind takes no per-member parameters");
+  return base;
+}
+
+template <class Model>
+py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long, py::array::c_style | py::array::forcecast> model_index,
+                      const std::vector<std::string>& names, Rows values, const std::string& method,
+                      const std::string& tableau, const std::string& composition, Rows q0, Rows p0, double h,
+                      long n_steps, double h_last, long save_every, int threads, py::object progress,
+                      CancelToken* cancel) {
+  if (q0.ndim() != 2 || q0.shape(0) < 1) throw std::invalid_argument("q0: expected an array of shape (members, n), members >= 1");
+  const long members = static_cast<long>(q0.shape(0));
+  if (models.empty()) throw std::invalid_argument("models: empty");
+  const int n = models.front()->size();
+  if (q0.ndim() != 2 || p0.ndim() != 2 || q0.shape(1) != n || p0.shape(1) != n || p0.shape(0) != members)
+    throw std::invalid_argument("q0, p0: expected two arrays of shape (members, " + std::to_string(n) + ")");
+  if (model_index.ndim() != 1 || model_index.shape(0) != members)
+    throw std::invalid_argument("model_index: expected one index per member");
+  if (values.ndim() != 2 || values.shape(0) != members || values.shape(1) != static_cast<py::ssize_t>(names.size()))
+    throw std::invalid_argument("values: expected an array of shape (members, len(names))");
+  const MethodEntry& entry = method_entry(method);
+  const ButcherTableau& tab = resolve_tableau(entry, tableau);
+  const Composition& comp = resolve_composition(entry, tab, composition);
+  const RunSpec spec{h, n_steps, h_last, save_every, false};
+
+  // Every member's model, checked here, before any thread starts.
+  const long* index = model_index.data();
+  std::vector<Model> built;
+  std::vector<const Model*> member_model(members);
+  if (!names.empty()) built.reserve(members);
+  for (long i = 0; i < members; ++i) {
+    if (index[i] < 0 || index[i] >= static_cast<long>(models.size()))
+      throw std::invalid_argument("model_index: out of range at member " + std::to_string(i));
+    const Model* model = models[index[i]];
+    if (model->size() != n) throw std::invalid_argument("models: every member needs the same dimension");
+    if (!names.empty()) {
+      try {
+        built.push_back(with_parameters(*model, names, values.data(i, 0)));
+      } catch (const std::invalid_argument& e) {
+        throw std::invalid_argument("member " + std::to_string(i) + ": parameters." + e.what());
+      }
+      model = &built.back();
+    }
+    try {
+      require_applicable(entry, model->eps);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("member " + std::to_string(i) + ": " + e.what());
+    }
+    member_model[i] = model;
+  }
+
+  // The save grid: the rows a completed run saves (every save_every steps, and the
+  // last step), at the times integrate.hpp's time_at gives them.
+  std::vector<double> grid;
+  for (long k = 0; k <= n_steps; k += save_every)
+    grid.push_back(k == n_steps && h_last != h ? (n_steps - 1) * h + h_last : k * h);
+  if (n_steps % save_every != 0) grid.push_back(h_last != h ? (n_steps - 1) * h + h_last : n_steps * h);
+  const py::ssize_t R = static_cast<py::ssize_t>(grid.size());
+  const int m = momentum_count(*member_model.front());
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  auto filled = [nan](std::vector<py::ssize_t> shape) {
+    py::array_t<double> a(shape);
+    std::fill(a.mutable_data(), a.mutable_data() + a.size(), nan);
+    return a;
+  };
+  py::array_t<double> q = filled({members, R, n}), p = filled({members, R, n}), e = filled({members, R}),
+                      J = filled({members, R, m}), q_final = filled({members, n}), p_final = filled({members, n}),
+                      t_final = filled({members}), e_final = filled({members}), J_final = filled({members, m}),
+                      drift = filled({members});
+  py::array_t<long> rows(members), steps(members), failed(members);
+  std::vector<std::string> status(members), message(members);
+  double *qd = q.mutable_data(), *pd = p.mutable_data(), *ed = e.mutable_data(), *Jd = J.mutable_data(),
+         *qf = q_final.mutable_data(), *pf = p_final.mutable_data(), *tf = t_final.mutable_data(),
+         *ef = e_final.mutable_data(), *Jf = J_final.mutable_data(), *dd = drift.mutable_data();
+  long *rd = rows.mutable_data(), *sd = steps.mutable_data(), *fd = failed.mutable_data();
+  const double *q0d = q0.data(), *p0d = p0.data();
+
+  Control member_control;
+  if (cancel) member_control.cancel = &cancel->flag;
+  EnsembleControl control;
+  if (!progress.is_none())
+    control.progress = [progress](long done, long total) {
+      py::gil_scoped_acquire gil;
+      progress(done, total);
+    };
+  // Copies a member's run into the arrays: rows on the grid to their place; the last
+  // row (the final or last finite state) to the *_final arrays, and to the grid as
+  // well when it lies on it.
+  auto store = [&](long i, RunResult&& r) {
+    const Trajectory& tr = r.trajectory;
+    long on_grid = 0;
+    for (long row = 0; row < tr.rows() && row < R && tr.t[row] == grid[row]; ++row) on_grid = row + 1;
+    std::copy(tr.q.begin(), tr.q.begin() + on_grid * n, qd + i * R * n);
+    std::copy(tr.p.begin(), tr.p.begin() + on_grid * n, pd + i * R * n);
+    std::copy(tr.energy.begin(), tr.energy.begin() + on_grid, ed + i * R);
+    std::copy(tr.momentum.begin(), tr.momentum.begin() + on_grid * m, Jd + i * R * m);
+    const long last = tr.rows() - 1;
+    std::copy(tr.q.begin() + last * n, tr.q.begin() + (last + 1) * n, qf + i * n);
+    std::copy(tr.p.begin() + last * n, tr.p.begin() + (last + 1) * n, pf + i * n);
+    std::copy(tr.momentum.begin() + last * m, tr.momentum.begin() + (last + 1) * m, Jf + i * m);
+    tf[i] = tr.t[last];
+    ef[i] = tr.energy[last];
+    rd[i] = on_grid;
+    sd[i] = r.steps;
+    fd[i] = r.failed_step;
+    dd[i] = r.max_momentum_drift;
+    status[i] = status_name(r.status);
+    message[i] = std::move(r.message);
+  };
+  auto initial = [&](long i) {
+    using Vec = typename Model::Vec;
+    return State<Model::dim>{Vec(Eigen::Map<const Vec>(q0d + i * n, n)), Vec(Eigen::Map<const Vec>(p0d + i * n, n))};
+  };
+  {
+    py::gil_scoped_release release;
+    with_method(method, [&](auto method_tag) {
+      using Method = decltype(method_tag);
+      auto run_member = [&](long i) {
+        try {
+          store(i, integrate<Method>(*member_model[i], tab, comp, initial(i), spec, member_control));
+        } catch (const std::invalid_argument& e) {
+          throw std::invalid_argument("member " + std::to_string(i) + ": " + e.what());
+        }
+      };
+      if constexpr (std::is_same_v<Model, DampedPendulum> && !uses_tableau<Method>()) {
+        // Runs of members sharing eps go as the lanes of one run (run_lanes.hpp).
+        const std::vector<LaneBatch> batches = lane_batches(member_model);
+        std::atomic<long> finished{0};
+        EnsembleControl batch_control;
+        if (control.progress) batch_control.progress = [&](long, long) { control.progress(finished.load(), members); };
+        for_each_member(static_cast<long>(batches.size()), threads, [&](long b) {
+          const LaneBatch& batch = batches[b];
+          if (batch.end - batch.begin < kMinLanes) {
+            for (long i = batch.begin; i < batch.end; ++i) run_member(i);
+          } else {
+            run_lanes<Method>(*member_model[batch.begin], batch, tab, comp, q0d, p0d, spec, member_control, store,
+                              run_member);
+          }
+          finished.fetch_add(batch.end - batch.begin);
+        }, batch_control);
+      } else {
+        for_each_member(members, threads, run_member, control);
+      }
+      return 0;
+    });
+  }
+  py::dict out;
+  out["tableau"] = tab.name();
+  out["t"] = py::array_t<double>(R, grid.data());
+  out["q"] = q;
+  out["p"] = p;
+  out["energy"] = e;
+  out["momentum"] = J;
+  out["rows"] = rows;
+  out["t_final"] = t_final;
+  out["q_final"] = q_final;
+  out["p_final"] = p_final;
+  out["energy_final"] = e_final;
+  out["momentum_final"] = J_final;
+  out["steps"] = steps;
+  out["failed_step"] = failed;
+  out["max_momentum_drift"] = drift;
+  out["status"] = status;
+  out["message"] = message;
+  out["threads"] = ensemble_threads(threads, members);
+  return out;
+}
+
+// Registers run_ensemble<Model> as one overload of _core.integrate_ensemble.
+template <class Model>
+void def_integrate_ensemble(py::module_& m) {
+  m.def("integrate_ensemble", &run_ensemble<Model>, py::arg("models"), py::arg("model_index"), py::arg("names"),
+        py::arg("values"), py::arg("method"), py::arg("tableau"), py::arg("composition"), py::arg("q0"),
+        py::arg("p0"), py::arg("h"), py::arg("n_steps"), py::arg("h_last"), py::arg("save_every"),
+        py::arg("threads"), py::arg("progress"), py::arg("cancel").none(true));
+}
+
+}  // namespace raydamp::bindings

@@ -1,0 +1,47 @@
+// Many damped pendulums (paper section 4.3) with one eps, laid out as lanes: q and p
+// hold one member per component, so the members are the inner, contiguous axis and
+// the one step loop (integrate.hpp) advances all of them at once. The pendulums are
+// uncoupled (M = I, D = I, V = sum_i 1 - cos q_i), so every exact sub-flow acts on
+// each lane exactly as on one DampedPendulum: drift q += t p, kick p -= t sin q,
+// damp p *= e^{-t eps} with the same factors. The mass and damping kinds are the
+// single pendulum's, and each lane's sin is the same std::sin call, so lane i of a
+// run equals the single run of member i bit for bit (no lane sees another, and with
+// the baseline x86-64 flags no fused multiply-add changes a rounding). Only the
+// multiplications and additions run as SIMD across lanes; sin stays the scalar libm
+// call, which is what keeps the equality exact.
+#pragma once
+
+#include <cmath>
+
+#include "raydamp/damping/isotropic_damping.hpp"
+#include "raydamp/mass/unit_mass.hpp"
+#include "raydamp/models/damped_pendulum.hpp"
+#include "raydamp/state.hpp"
+
+namespace raydamp {
+
+struct PendulumLanes {
+  static constexpr int dim = Eigen::Dynamic;
+  static constexpr int n_momenta = 0;
+  using Vec = Vector<dim>;
+
+  double eps;
+  UnitMass mass;
+  IsotropicDamping damping;
+  int lanes;
+
+  // Lanes of `member`'s kind: its eps, and so its damping rate.
+  PendulumLanes(const DampedPendulum& member, int lanes_) : eps(member.eps), damping(member.damping), lanes(lanes_) {}
+
+  int size() const { return lanes; }
+  // The step loop saves V summed over lanes; the ensemble recomputes each member's
+  // energy from its saved (q, p) with DampedPendulum's own formula.
+  double potential(const Vec& q) const { return (1.0 - q.array().cos()).sum(); }
+  void gradient(const Vec& q, Vec& g) const {
+    for (int i = 0; i < lanes; ++i) g[i] = std::sin(q[i]);
+  }
+  void hessian_product(const Vec& q, const Vec& v, Vec& out) const { out = q.array().cos() * v.array(); }
+  void momenta(const Vec&, const Vec&, double*) const {}
+};
+
+}  // namespace raydamp

@@ -1,0 +1,95 @@
+// Ensembles: members spread over threads equal their single runs bit for bit whatever
+// the thread count; a failing member reports the lowest failing index.
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "check.hpp"
+#include "raydamp/ensemble.hpp"
+#include "raydamp/models/pendulum_lanes.hpp"
+#include "raydamp/raydamp.hpp"
+
+using namespace raydamp;
+
+int main() {
+  const ButcherTableau heun = builtin_tableau("heun");
+  const long members = 37;
+  std::vector<DampedPendulum> models;
+  std::vector<State<1>> starts;
+  for (long i = 0; i < members; ++i) {
+    models.emplace_back(0.01 * i);
+    starts.push_back(State<1>{Vector<1>(-3.0 + 0.15 * i), Vector<1>(0.1 * (i % 5))});
+  }
+  const RunSpec spec{0.05, 301, 0.05, 7};
+  std::vector<RunResult> single(members);
+  for (long i = 0; i < members; ++i) single[i] = integrate<ThreeTermSplitting>(models[i], heun, starts[i], spec);
+
+  for (int threads : {1, 2, 3, 8}) {
+    std::vector<RunResult> ens(members);
+    long reported = 0;
+    EnsembleControl control;
+    control.progress = [&](long done, long total) {
+      CHECK(total == members);
+      CHECK(done > reported);  // one call at a time, counts only grow
+      reported = done;
+    };
+    for_each_member(members, threads, [&](long i) {
+      ens[i] = integrate<ThreeTermSplitting>(models[i], heun, starts[i], spec);
+    }, control);
+    CHECK(reported == members);
+    for (long i = 0; i < members; ++i) {
+      CHECK(ens[i].trajectory.q == single[i].trajectory.q);  // exact equality of every saved double
+      CHECK(ens[i].trajectory.p == single[i].trajectory.p);
+      CHECK(ens[i].trajectory.t == single[i].trajectory.t);
+      CHECK(ens[i].steps == single[i].steps);
+    }
+  }
+
+  // Members 11 and 23 fail; whatever the threads, member 11's error is the one reported.
+  for (int threads : {1, 2, 4}) {
+    std::string what;
+    try {
+      for_each_member(members, threads, [&](long i) {
+        if (i == 11 || i == 23) throw std::invalid_argument("h: bad for member " + std::to_string(i));
+      });
+    } catch (const std::invalid_argument& e) {
+      what = e.what();
+    }
+    CHECK(what == "h: bad for member 11");
+  }
+  // Pendulums as lanes of one run: lane i equals member i's single run bit for bit
+  // (3s, 2s and a composition; a shortened last step; rows every 7 steps).
+  {
+    const int lanes = 19;
+    const DampedPendulum member(0.3);
+    Eigen::VectorXd q0(lanes), p0(lanes);
+    for (int i = 0; i < lanes; ++i) {
+      q0[i] = -3.0 + 0.31 * i;
+      p0[i] = 0.05 * (i % 3);
+    }
+    const RunSpec lane_spec{0.05, 103, 0.02, 7};
+    const Composition& yoshida = builtin_composition("yoshida4");
+    auto compare = [&](auto method, const Composition& comp) {
+      using Method = decltype(method);
+      RunResult all = detail::run_steps<Method>(PendulumLanes(member, lanes), heun, comp,
+                                                State<Eigen::Dynamic>{q0, p0}, lane_spec, Control{});
+      CHECK(all.status == Status::completed);
+      for (int i = 0; i < lanes; ++i) {
+        RunResult one = integrate<Method>(member, heun, comp, State<1>{Vector<1>(q0[i]), Vector<1>(p0[i])}, lane_spec);
+        CHECK(one.trajectory.rows() == all.trajectory.rows());
+        CHECK(one.trajectory.t == all.trajectory.t);
+        for (long row = 0; row < one.trajectory.rows(); ++row) {
+          CHECK(one.trajectory.q[row] == all.trajectory.q[row * lanes + i]);
+          CHECK(one.trajectory.p[row] == all.trajectory.p[row * lanes + i]);
+        }
+      }
+    };
+    compare(ThreeTermSplitting{}, builtin_composition("none"));
+    compare(TwoTermSplitting{}, builtin_composition("none"));
+    compare(ThreeTermSplitting{}, yoshida);
+  }
+  CHECK(ensemble_threads(0, 5) >= 1);
+  CHECK(ensemble_threads(4, 2) == 2);
+  return raydamp::test::failures == 0 ? 0 : 1;
+}

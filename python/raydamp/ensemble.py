@@ -1,0 +1,225 @@
+"""raydamp.integrate_ensemble: many runs of one system in one compiled call, on threads."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Mapping
+from typing import Any
+
+import numpy as np
+
+from . import _core
+from ._validation import integer, real
+from .ensemble_solution import EnsembleSolution
+from .integrate import MAX_SAVED_BYTES, MAX_STEPS, CancelToken, _catalogue, steps_for
+from .models import DampedPendulum, ElasticPendulum, Model
+from .system import System
+
+__all__ = ["integrate_ensemble", "member_parameters"]
+
+# The parameters the core sets per member for the built-in models (run_ensemble.hpp's
+# with_parameters), so an ensemble over them costs no Python per member.
+_CORE_PARAMETERS: dict[type, tuple[str, ...]] = {DampedPendulum: ("eps",),
+                                                ElasticPendulum: ("eps", "m", "k", "l", "g")}
+
+
+def member_parameters(system: Model) -> tuple[str, ...]:
+    """The names ``integrate_ensemble``'s ``parameters`` may vary for ``system``."""
+    if isinstance(system, System):
+        return (*(("eps",) if system._spec.damping_form is not None else ()), *system.parameters)
+    return _CORE_PARAMETERS[type(system)]
+
+
+def _states(name: str, value, members: int | None, n: int) -> np.ndarray:
+    """(members, n) finite floats; a single state (n,) is repeated for every member."""
+    try:
+        array = np.asarray(value)
+    except (TypeError, ValueError):
+        array = None
+    if array is None or array.dtype.kind not in "iuf":
+        raise ValueError(f"{name} must be an array of shape (members, {n}) of real numbers")
+    array = array.astype(float)
+    if array.ndim == 1 and array.shape == (n,) and members is not None:
+        array = np.broadcast_to(array, (members, n))
+    if array.ndim != 2 or array.shape[1] != n or array.shape[0] < 1:
+        raise ValueError(f"{name} must have shape (members, {n}) with members >= 1, got shape {array.shape}")
+    if members is not None and array.shape[0] != members:
+        raise ValueError(f"{name} has {array.shape[0]} members, expected {members}")
+    bad = ~np.isfinite(array)
+    if bad.any():
+        i, j = np.argwhere(bad)[0]
+        raise ValueError(f"{name} must be finite, got {name}[{i}, {j}] = {array[i, j]!r}")
+    return np.ascontiguousarray(array)
+
+
+def _parameter_arrays(system: Model, parameters, members: int) -> dict[str, np.ndarray]:
+    """{name: (members,) floats} ((members, 3) for the elastic pendulum's g)."""
+    if parameters is None:
+        return {}
+    if not isinstance(parameters, Mapping):
+        raise ValueError("parameters must be a dict of name: per-member values, e.g. {'eps': [0.1, 0.2]}")
+    known = member_parameters(system)
+    out = {}
+    for name, values in parameters.items():
+        if name not in known:
+            raise ValueError(f"parameters.{name}: not a parameter of this model that can vary per member "
+                             f"(known: {', '.join(known) or 'none'})")
+        shape = (members, 3) if name == "g" else (members,)
+        try:
+            array = np.asarray(values, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError(f"parameters.{name} must be an array of real numbers") from None
+        if array.ndim == len(shape) - 1:
+            array = np.broadcast_to(array, shape)
+        if array.shape != shape:
+            raise ValueError(f"parameters.{name} must have shape {shape}, got {array.shape}")
+        if not np.isfinite(array).all():
+            raise ValueError(f"parameters.{name} must be finite")
+        out[name] = np.ascontiguousarray(array)
+    return out
+
+
+def _member_models(system: Model, params: dict[str, np.ndarray], members: int):
+    """(models, model_index, core names, core values): the core builds each member's model from
+    models[model_index[i]] and the values; a System gets one model per distinct parameter set,
+    built here before the run (eps alone reuses the compiled functions)."""
+    if not isinstance(system, System):
+        names, columns = [], []
+        for name, array in params.items():
+            if name == "g":
+                names += ["g[0]", "g[1]", "g[2]"]
+                columns += [array[:, 0], array[:, 1], array[:, 2]]
+            else:
+                names.append(name)
+                columns.append(array)
+        values = np.column_stack(columns) if columns else np.zeros((members, 0))
+        return [system], np.zeros(members, dtype=np.int64), names, values
+    if not params:
+        return [system], np.zeros(members, dtype=np.int64), [], np.zeros((members, 0))
+    names = list(params)
+    table = np.column_stack([params[name] for name in names])
+    distinct, index = np.unique(table, axis=0, return_inverse=True)
+    models = []
+    expression_names = [name for name in names if name != "eps"]
+    for row in distinct:
+        values = dict(zip(names, row.tolist()))
+        model = system
+        if expression_names:
+            model = system.replace(parameters={**system.parameters, **{k: values[k] for k in expression_names}})
+        if "eps" in values:
+            model = model._with_eps(values["eps"])
+        models.append(model)
+    return models, np.ascontiguousarray(index.reshape(-1), dtype=np.int64), [], np.zeros((members, 0))
+
+
+def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] | None = None, method: str = "3s",
+                       h: float, t_end: float | None = None, n_steps: int | None = None, save_every: int = 1,
+                       tableau: str | None = None, composition: str | None = None, threads: int | None = None,
+                       progress: Callable[[int, int], object] | None = None,
+                       cancel: CancelToken | None = None) -> EnsembleSolution:
+    """Integrate many members of one system in one compiled call, spread over threads.
+
+    Parameters
+    ----------
+    system : a built-in model or a :class:`raydamp.System` (one built from expressions).
+    q0, p0 : (members, n) initial states; a single state of length n is used for every member.
+    parameters : {name: per-member values} of the system's parameters: ``eps`` for every
+        damped model; ``m``, ``k``, ``l`` and ``g`` ((members, 3)) for the elastic pendulum; the
+        expression parameters of a System. Built-in models are rebuilt per member in C++; a
+        System is rebuilt once per distinct parameter set before the run (a change of eps alone
+        reuses its compiled functions; other parameters recompile it).
+    method, h, t_end, n_steps, save_every, tableau, composition : as :func:`raydamp.integrate`,
+        shared by every member.
+    threads : threads to spread the members over (None: one per hardware thread).
+    progress : called as ``progress(members_finished, members)`` about 100 times.
+    cancel : a :class:`raydamp.CancelToken`; cancelling it stops every member within a few
+        hundred steps (status "cancelled").
+
+    Member i's result equals ``raydamp.integrate`` of that member alone, bit for bit, whatever
+    ``threads`` is: each member runs the same compiled step loop. A member that blows up stops
+    alone, with its status and the rows it saved. The GIL is released during the run.
+    """
+    if not isinstance(system, Model):
+        raise ValueError(f"system must be a raydamp model or System, got {system!r}")
+    if isinstance(system, System) and system._python is not None:
+        raise ValueError("system: a System built from Python functions runs Python in its step loop and "
+                         "cannot run as an ensemble; write its potential as an expression")
+    names, with_tableau = _catalogue()
+    if not isinstance(method, str) or method not in names:
+        raise ValueError(f"method: unknown method {method!r} (known: {', '.join(names)})")
+    if tableau is not None and not isinstance(tableau, str):
+        raise ValueError(f"tableau must be a tableau name or None, got {tableau!r}")
+    resolved_tableau = _core.resolve(method, tableau or "")
+    if composition is not None and not isinstance(composition, str):
+        raise ValueError(f"composition must be a composition name or None, got {composition!r}")
+    resolved_composition, _order = _core.resolve_composition(method, tableau or "", composition or "")
+    h = real("h", h, positive=True)
+    n = system.dim
+    members = None
+    for name, value in (("q0", q0), ("p0", p0)):
+        if np.ndim(value) == 2:
+            members = np.shape(value)[0]
+            break
+    if members is None and parameters:
+        lengths = {len(np.atleast_1d(np.asarray(v, dtype=object))) for k, v in parameters.items() if k != "g"}
+        members = max(lengths) if lengths else None
+    q0 = _states("q0", q0, members, n)
+    members = q0.shape[0]
+    p0 = _states("p0", p0, members, n)
+    _check_configurations(system, q0)
+    params = _parameter_arrays(system, parameters, members)
+    save_every = integer("save_every", save_every, maximum=MAX_STEPS)
+    if (t_end is None) == (n_steps is None):
+        raise ValueError("give exactly one of t_end and n_steps")
+    if n_steps is not None:
+        n_steps = integer("n_steps", n_steps, maximum=MAX_STEPS)
+        h_last = h
+    else:
+        n_steps, h_last = steps_for(t_end, h)
+    if threads is None:
+        threads = 0
+    else:
+        threads = integer("threads", threads, maximum=4096)
+    if progress is not None and not callable(progress):
+        raise ValueError(f"progress must be callable or None, got {progress!r}")
+    if cancel is not None and not isinstance(cancel, _core.CancelToken):
+        raise ValueError(f"cancel must be a raydamp.CancelToken or None, got {cancel!r}")
+    rows = n_steps // save_every + 2
+    row_bytes = 8 * (1 + 2 * n + len(system.momentum_names))
+    if members * rows * row_bytes > MAX_SAVED_BYTES:
+        raise ValueError(f"save_every: {members} members x {rows} saved points would take "
+                         f"{members * rows * row_bytes / 2**30:.1f} GiB (limit {MAX_SAVED_BYTES / 2**30:.0f} GiB); "
+                         "raise save_every or split the ensemble")
+
+    models, index, core_names, core_values = _member_models(system, params, members)
+    start = time.perf_counter()
+    out = _core.integrate_ensemble([m._core_model for m in models], index, core_names, core_values, method,
+                                   tableau or "", composition or "", q0, p0, h, n_steps, h_last, save_every,
+                                   threads, progress, cancel)
+    wall = time.perf_counter() - start
+    composition_name = None if resolved_composition == "none" else resolved_composition
+    options = {"method": method, "tableau": tableau, "composition": composition_name, "h": h, "t_end": t_end,
+               "n_steps": None if t_end is not None else n_steps, "save_every": save_every, "work": False}
+    return EnsembleSolution(
+        t=out["t"], q=out["q"], p=out["p"], energy=out["energy"], momentum=out["momentum"], rows=out["rows"],
+        t_final=out["t_final"], q_final=out["q_final"], p_final=out["p_final"], energy_final=out["energy_final"],
+        momentum_final=out["momentum_final"], status=tuple(out["status"]), steps=out["steps"],
+        failed_step=out["failed_step"], message=tuple(out["message"]), max_momentum_drift=out["max_momentum_drift"],
+        q0=q0, p0=p0, parameters=params, method=method,
+        tableau=resolved_tableau if method in with_tableau else None, composition=composition_name, h=h,
+        wall_time=wall, threads=out["threads"], origin=(system, options))
+
+
+def _check_configurations(system: Model, q0: np.ndarray) -> None:
+    """The model's configuration check on every member's q0 (vectorised for the built-in models)."""
+    if isinstance(system, DampedPendulum):
+        return
+    if isinstance(system, ElasticPendulum):
+        origin = ~q0.any(axis=1)
+        if origin.any():
+            i = int(np.argmax(origin))
+            raise ValueError(f"q0[{i}] must not be the origin: the elastic pendulum's grad V and damping "
+                             "D(q) = q q^T/|q|^2 are undefined at q = 0")
+        return
+    for i, q in enumerate(q0):
+        system.check_configuration(f"q0[{i}]", q)

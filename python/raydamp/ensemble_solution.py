@@ -1,0 +1,167 @@
+"""The result of raydamp.integrate_ensemble: every member's saved points on one save grid."""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .solution import Solution
+
+__all__ = ["EnsembleSolution", "STATUSES"]
+
+# Status codes in files (NetCDF and Zarr keep numbers better than strings).
+STATUSES = ("completed", "non_finite", "cancelled", "out_of_memory")
+
+
+@dataclass(frozen=True, repr=False)
+class EnsembleSolution:
+    """Saved points of every member of an ensemble, and why each stopped.
+
+    Rows lie on the run's save grid ``t`` (every ``save_every`` steps from 0, and the
+    last step): ``q[i, k]`` is member i at ``t[k]``. A member that stopped early (status
+    "non_finite", "cancelled", "out_of_memory") keeps its first ``rows[i]`` rows, the
+    rest NaN; its last finite state, saved or not by the grid, is in ``q_final[i]``
+    (at ``t_final[i]``), as for every member.
+
+    Attributes
+    ----------
+    t : (R,) the save grid.
+    q, p : (members, R, n); energy : (members, R); momentum : (members, R, m).
+    rows : (members,) rows of the grid each member reached.
+    t_final, q_final, p_final, energy_final, momentum_final : each member's last state.
+    status, message : per member (tuples of str); steps, failed_step (-1: none),
+        max_momentum_drift : (members,) arrays.
+    q0, p0 : (members, n) initial states; parameters : {name: per-member values}.
+    method, tableau, composition, h : shared by every member; threads : threads used.
+    provenance : the job JSON of the base system and method, plus ``ensemble``: the swept
+        parameter names and member count, and ``raydamp_version``.
+
+    ``member(i)`` is member i as a :class:`raydamp.Solution`, equal bit for bit to a single
+    ``raydamp.integrate`` run of it. ``to_xarray()`` gives a Dataset with dims (member, time,
+    dof); ``save(path)`` writes NetCDF (.nc) or Zarr (.zarr); ``raydamp.load`` reads both back.
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    p: np.ndarray
+    energy: np.ndarray
+    momentum: np.ndarray
+    rows: np.ndarray
+    t_final: np.ndarray
+    q_final: np.ndarray
+    p_final: np.ndarray
+    energy_final: np.ndarray
+    momentum_final: np.ndarray
+    status: tuple[str, ...]
+    steps: np.ndarray
+    failed_step: np.ndarray
+    message: tuple[str, ...]
+    max_momentum_drift: np.ndarray
+    q0: np.ndarray
+    p0: np.ndarray
+    parameters: dict[str, np.ndarray]
+    method: str
+    tableau: str | None
+    composition: str | None
+    h: float
+    wall_time: float = field(default=0.0)
+    threads: int = field(default=1)
+    # (system, options) of the run, or the provenance dict itself for a loaded ensemble.
+    origin: Any = field(default=None, compare=False)
+
+    @property
+    def members(self) -> int:
+        return int(self.q.shape[0])
+
+    @property
+    def success(self) -> bool:
+        """True when every member completed."""
+        return all(s == "completed" for s in self.status)
+
+    @property
+    def provenance(self) -> dict[str, Any] | None:
+        if self.origin is None or isinstance(self.origin, dict):
+            return None if self.origin is None else copy.deepcopy(self.origin)
+        from .job import job_spec
+
+        system, options = self.origin
+        spec = job_spec(system, self.q0[0], self.p0[0], **options)
+        del spec["initial_state"]  # per member: the q0, p0 arrays
+        spec["coordinates"] = list(system.coordinates)
+        spec["momentum_names"] = list(system.momentum_names)
+        spec["ensemble"] = {"members": self.members, "parameters": list(self.parameters)}
+        return spec
+
+    @property
+    def coordinates(self) -> tuple[str, ...]:
+        if isinstance(self.origin, tuple):
+            return tuple(self.origin[0].coordinates)
+        names = (self.origin or {}).get("coordinates")
+        return tuple(names) if names else tuple(f"q{i}" for i in range(self.q.shape[2]))
+
+    @property
+    def momentum_names(self) -> tuple[str, ...]:
+        if isinstance(self.origin, tuple):
+            return tuple(self.origin[0].momentum_names)
+        names = (self.origin or {}).get("momentum_names")
+        return tuple(names) if names else tuple(f"J{i}" for i in range(self.momentum.shape[2]))
+
+    def member(self, i: int) -> Solution:
+        """Member i as a Solution: its rows on the grid, then its last state if off the grid."""
+        if not isinstance(i, (int, np.integer)) or not -self.members <= i < self.members:
+            raise ValueError(f"i: expected a member index in [0, {self.members}), got {i!r}")
+        i = int(i) % self.members
+        g = int(self.rows[i])
+        extra = g == 0 or self.t_final[i] != self.t[g - 1]
+
+        def rows(grid, final):
+            part = grid[i, :g]
+            return np.concatenate([part, final[i][None]]) if extra else part.copy()
+
+        t = np.concatenate([self.t[:g], [self.t_final[i]]]) if extra else self.t[:g].copy()
+        failed = int(self.failed_step[i])
+        return Solution(t=t, q=rows(self.q, self.q_final), p=rows(self.p, self.p_final),
+                        energy=rows(self.energy, self.energy_final),
+                        momentum=rows(self.momentum, self.momentum_final), status=self.status[i],
+                        steps=int(self.steps[i]), failed_step=None if failed < 0 else failed,
+                        message=self.message[i], method=self.method, tableau=self.tableau,
+                        composition=self.composition, h=self.h,
+                        max_momentum_drift=float(self.max_momentum_drift[i]), origin=self._member_spec(i))
+
+    def _member_spec(self, i: int) -> dict[str, Any] | None:
+        """Member i's job JSON: the base spec with its parameters and initial state."""
+        spec = self.provenance
+        if spec is None:
+            return None
+        spec.pop("ensemble", None)
+        values = {name: (array[i].tolist()) for name, array in self.parameters.items()}
+        if "system" in spec and spec["system"] is not None:
+            system = spec["system"]
+            if "eps" in values:
+                system["eps"] = values.pop("eps")
+            system["parameters"] = {**system.get("parameters", {}), **values}
+        else:
+            spec["parameters"] = {**spec.get("parameters", {}), **values}
+        spec["initial_state"] = {"q": self.q0[i].tolist(), "p": self.p0[i].tolist()}
+        return spec
+
+    def to_xarray(self):
+        """An xarray.Dataset with dims (member, time, dof[, momentum_map]), the swept parameters as
+        member coordinates and the provenance in attrs (needs the ``io`` extra: xarray)."""
+        from .results import ensemble_to_xarray
+
+        return ensemble_to_xarray(self)
+
+    def save(self, path) -> None:
+        """Write to ``path``: .nc (NetCDF via h5netcdf) or .zarr (a Zarr store), by its suffix."""
+        from .results import save_ensemble
+
+        save_ensemble(self, path)
+
+    def __repr__(self) -> str:
+        counts = {s: self.status.count(s) for s in dict.fromkeys(self.status)}
+        return (f"EnsembleSolution(members={self.members}, method={self.method!r}, h={self.h}, "
+                f"saved={self.t.size}, status={counts})")

@@ -1,0 +1,354 @@
+"""raydamp.sweep: a grid of runs cut into chunks of ensemble members, mapped over a Dask client.
+
+Every chunk is one compiled :func:`raydamp.integrate_ensemble` call on a worker; the chunks
+travel as plain data (the job JSON of the system, arrays of initial states and parameters)
+and come back as arrays, gathered into one xarray Dataset or written to a Zarr store chunk
+by chunk. Needs the ``sweep`` extra (dask[distributed], xarray, zarr).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from collections.abc import Callable, Mapping
+from typing import Any
+
+import numpy as np
+
+from ._validation import integer, real, vector
+from .ensemble import integrate_ensemble, member_parameters
+from .ensemble_solution import STATUSES
+from .integrate import _catalogue, steps_for
+from .job import JOB_KEYS, describe_model, job_arguments, model_from_spec
+from .models import MODELS, Model
+from .system import System
+
+__all__ = ["sweep", "SPEC_KEYS", "RUN_ARGUMENTS"]
+
+# The Python form of a sweep's spec: integrate's arguments and the model.
+SPEC_KEYS = ("model", "system", "parameters", "q0", "p0", "method", "tableau", "composition", "h", "t_end",
+             "n_steps", "save_every")
+# The integrate arguments a grid may vary; members differing in them run in different ensembles.
+RUN_ARGUMENTS = ("method", "tableau", "composition", "h")
+_STATE_COMPONENT = re.compile(r"^(q0|p0)\[(\d+)\]$")
+
+
+def _base(spec: Mapping[str, Any]) -> tuple[Model, np.ndarray, np.ndarray, dict[str, Any]]:
+    """(model, q0, p0, run options) from either form of the spec."""
+    if not isinstance(spec, Mapping):
+        raise ValueError("spec must be a dict of integrate's arguments (model, q0, p0, method, h, t_end ...) "
+                         "or a job JSON object")
+    if "initial_state" in spec or "step_size" in spec:  # the service's job form
+        model, q0, p0, options = job_arguments(spec)
+        if options.pop("work", False):
+            raise ValueError("work: a sweep does not record the damping work")
+    else:
+        unknown = [k for k in spec if k not in SPEC_KEYS]
+        if unknown:
+            raise ValueError(f"spec.{unknown[0]}: unknown key (known: {', '.join(SPEC_KEYS)}; or give the job "
+                             f"JSON form: {', '.join(JOB_KEYS)})")
+        model = spec.get("system", spec.get("model"))
+        if isinstance(model, str):
+            model = model_from_spec({"model": model, "parameters": spec.get("parameters")})
+        elif isinstance(model, Mapping):
+            model = model_from_spec({"system": model})
+        elif not isinstance(model, Model):
+            raise ValueError(f"spec.model: a built-in model's name ({', '.join(MODELS)}), a model or a System, "
+                             f"got {model!r}")
+        elif spec.get("parameters"):
+            raise ValueError("spec.parameters: give parameters with a model's name, or build the model with them")
+        for key in ("q0", "p0", "h"):
+            if key not in spec:
+                raise ValueError(f"spec.{key}: missing")
+        q0, p0 = spec["q0"], spec["p0"]
+        options = {k: spec[k] for k in ("method", "tableau", "composition", "h", "t_end", "n_steps", "save_every")
+                   if spec.get(k) is not None}
+    options.setdefault("method", "3s")
+    options.setdefault("save_every", 1)
+    if isinstance(model, System) and model._python is not None:
+        raise ValueError("spec.system: a System built from Python functions cannot be sent to workers; "
+                         "write its potential as an expression")
+    return model, vector("q0", q0, model.dim), vector("p0", p0, model.dim), options
+
+
+def _axis(name: str, values) -> np.ndarray:
+    if name in ("method", "tableau", "composition"):
+        if isinstance(values, str) or not isinstance(values, (list, tuple, np.ndarray)):
+            raise ValueError(f"grid.{name}: expected a list of names")
+        out = np.array(["" if v is None else v for v in values], dtype=object)
+        if any(not isinstance(v, str) for v in out):
+            raise ValueError(f"grid.{name}: expected a list of names (or None)")
+    else:
+        try:
+            out = np.asarray(values, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError(f"grid.{name}: expected a list of real numbers") from None
+        if out.ndim != 1:
+            raise ValueError(f"grid.{name}: expected a 1-D list of values, got shape {out.shape}")
+        if not np.isfinite(out).all():
+            raise ValueError(f"grid.{name}: every value must be finite")
+    if out.ndim != 1 or out.size == 0:
+        raise ValueError(f"grid.{name}: expected a non-empty 1-D list of values")
+    return out
+
+
+def _plan(model: Model, options: dict[str, Any], grid: Mapping[str, Any]):
+    """Members of the Cartesian product, ordered group by group (members of a group share the
+    run arguments, so a group's chunks are ensembles); returns (columns, groups) with columns
+    {grid name: per-member values} in that order and groups [(run options, start, stop)]."""
+    if not isinstance(grid, Mapping) or not grid:
+        raise ValueError("grid must be a non-empty dict of name: values")
+    known = member_parameters(model)
+    axes = {}
+    for name, values in grid.items():
+        state = _STATE_COMPONENT.match(name) if isinstance(name, str) else None
+        if state and int(state.group(2)) >= model.dim:
+            raise ValueError(f"grid.{name}: the model has {model.dim} coordinates")
+        if not (state or name in RUN_ARGUMENTS or name in known):
+            raise ValueError(f"grid.{name}: not a parameter of the model ({', '.join(known) or 'none'}), a run "
+                             f"argument ({', '.join(RUN_ARGUMENTS)}) or an initial-state component (q0[i], p0[i])")
+        if name == "g":
+            raise ValueError("grid.g: sweep the components of g through a model per value instead")
+        axes[name] = _axis(name, values)
+    names = list(axes)
+    index = np.stack(np.meshgrid(*[np.arange(a.size) for a in axes.values()], indexing="ij"), axis=-1)
+    index = index.reshape(-1, len(names))
+    columns = {name: axes[name][index[:, k]] for k, name in enumerate(names)}
+    members = index.shape[0]
+    run_names = [name for name in names if name in RUN_ARGUMENTS]
+    keys = [tuple(columns[name][i] for name in run_names) for i in range(members)] if run_names else [()] * members
+    distinct = list(dict.fromkeys(keys))
+    order = np.argsort(np.array([distinct.index(k) for k in keys]) if run_names else np.zeros(members), kind="stable")
+    columns = {name: values[order] for name, values in columns.items()}
+    groups, start = [], 0
+    counts = {k: 0 for k in distinct}
+    for k in keys:
+        counts[k] += 1
+    names_catalogue, _ = _catalogue()
+    for key in distinct:
+        run = dict(options)
+        for name, value in zip(run_names, key):
+            run[name] = (value or None) if name in ("tableau", "composition") else value
+        if run["method"] not in names_catalogue:
+            raise ValueError(f"method: unknown method {run['method']!r} (known: {', '.join(names_catalogue)})")
+        run["h"] = real("h", float(run["h"]), positive=True)
+        groups.append((run, start, start + counts[key]))
+        start += counts[key]
+    return columns, groups
+
+
+def _grid_times(run: dict[str, Any]) -> np.ndarray:
+    """The save grid of a run, as the core computes it (integrate.hpp's time_at)."""
+    h, save_every = run["h"], integer("save_every", run["save_every"])
+    if run.get("n_steps") is not None:
+        n, h_last = integer("n_steps", run["n_steps"]), h
+    else:
+        n, h_last = steps_for(run["t_end"], h)
+    ks = list(range(0, n + 1, save_every))
+    if n % save_every:
+        ks.append(n)
+    return np.array([(n - 1) * h + h_last if k == n and h_last != h else k * h for k in ks])
+
+
+def _run_chunk(task: dict[str, Any]) -> dict[str, Any]:
+    """A worker's part: one ensemble call; plain data in, arrays out."""
+    model = model_from_spec(task["model"])
+    run = task["run"]
+    ens = integrate_ensemble(model, task["q0"], task["p0"], parameters=task["parameters"] or None,
+                             method=run["method"], tableau=run.get("tableau"), composition=run.get("composition"),
+                             h=run["h"], t_end=run.get("t_end"), n_steps=run.get("n_steps"),
+                             save_every=run["save_every"], threads=task["threads"])
+    return {"start": task["start"], "t": ens.t, "q": ens.q, "p": ens.p, "energy": ens.energy,
+            "momentum": ens.momentum, "rows": ens.rows, "t_final": ens.t_final, "q_final": ens.q_final,
+            "p_final": ens.p_final, "energy_final": ens.energy_final, "momentum_final": ens.momentum_final,
+            "steps": ens.steps, "failed_step": ens.failed_step,
+            "status": np.array([STATUSES.index(s) for s in ens.status], dtype=np.int8),
+            "max_momentum_drift": ens.max_momentum_drift,
+            "messages": {str(task["start"] + i): m for i, (s, m) in enumerate(zip(ens.status, ens.message))
+                         if s != "completed"}}
+
+
+_PER_MEMBER = {  # variable: (dims after member, dtype, fill)
+    "q": (("time", "dof"), float, np.nan), "p": (("time", "dof"), float, np.nan),
+    "energy": (("time",), float, np.nan), "momentum": (("time", "momentum_map"), float, np.nan),
+    "rows": ((), np.int64, 0), "t_final": ((), float, np.nan), "q_final": (("dof",), float, np.nan),
+    "p_final": (("dof",), float, np.nan), "energy_final": ((), float, np.nan),
+    "momentum_final": (("momentum_map",), float, np.nan), "steps": ((), np.int64, 0),
+    "failed_step": ((), np.int64, -1), "status": ((), np.int8, -1), "max_momentum_drift": ((), float, np.nan),
+}
+
+
+def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chunk_size: int = 1000,
+          progress: bool | Callable[[int, int], object] | None = None, store=None, threads: int = 1):
+    """Run the Cartesian product of ``grid`` over ``spec`` on a Dask client; one Dataset back.
+
+    Parameters
+    ----------
+    spec : integrate's arguments as a dict: ``model`` (a built-in model's name with
+        ``parameters``, a model object or a System) or ``system``, ``q0``, ``p0``, ``method``,
+        ``h``, ``t_end`` or ``n_steps``, ``save_every``, ``tableau``, ``composition``; or the
+        service's job JSON (``model``/``system``, ``initial_state``, ``step_size`` ...).
+    grid : {name: values}. A name is a model parameter (``eps``, ``k``, ... or a System's
+        parameter: the model is rebuilt per member), a run argument (``h``, ``method``,
+        ``composition``, ``tableau``) or an initial-state component (``"q0[1]"``, ``"p0[0]"``).
+        The members are every combination, the first name varying slowest.
+    client : a ``dask.distributed.Client`` (e.g. ``Client("tcp://scheduler:8786")`` for a
+        cluster); None starts a LocalCluster of 2 worker processes on this machine and closes it
+        at the end.
+    chunk_size : members per task; each task is one compiled ensemble call. Members that differ
+        in a run argument go in different tasks, so members are ordered group by group (by
+        their run arguments) and within a group in grid order.
+    progress : True for a tqdm bar, or a callable ``progress(members_done, members)``; called
+        once per finished chunk.
+    store : a path ending in .zarr: each chunk is written there as it arrives (the sweep need
+        not fit in memory) and the returned Dataset reads from it lazily.
+    threads : threads per task (1: the workers' processes give the parallelism).
+
+    Returns an xarray.Dataset laid out as ``EnsembleSolution.to_xarray()``'s, with a member
+    coordinate per grid name; when the groups' save grids differ (a grid over h with t_end),
+    ``t`` has dims (member, time) and shorter grids are padded with NaN. Each member equals
+    ``raydamp.integrate`` of it alone bit for bit.
+    """
+    import xarray as xr
+
+    model, q0, p0, options = _base(spec)
+    chunk_size = integer("chunk_size", chunk_size)
+    threads = integer("threads", threads, maximum=4096)
+    columns, groups = _plan(model, options, grid)
+    members = groups[-1][2]
+    if progress is not None and progress is not True and progress is not False and not callable(progress):
+        raise ValueError(f"progress must be True, a callable or None, got {progress!r}")
+    if store is not None and not str(store).endswith(".zarr"):
+        raise ValueError(f"store: expected a path ending in .zarr, got {store!r}")
+
+    # Per-member initial states and model parameters.
+    Q0, P0 = np.tile(q0, (members, 1)), np.tile(p0, (members, 1))
+    parameters = {}
+    for name, values in columns.items():
+        if state := _STATE_COMPONENT.match(name):
+            (Q0 if state.group(1) == "q0" else P0)[:, int(state.group(2))] = values
+        elif name not in RUN_ARGUMENTS:
+            parameters[name] = values.astype(float)
+    model_spec = describe_model(model)
+    times = [_grid_times(run) for run, _, _ in groups]
+    R = max(t.size for t in times)
+    shared_times = all(t.shape == times[0].shape and np.array_equal(t, times[0]) for t in times)
+
+    tasks = []
+    for run, start, stop in groups:
+        for a in range(start, stop, chunk_size):
+            b = min(stop, a + chunk_size)
+            tasks.append({"model": model_spec, "run": run, "start": a, "q0": Q0[a:b], "p0": P0[a:b],
+                          "parameters": {k: v[a:b] for k, v in parameters.items()}, "threads": threads})
+    # The driver checks the first member before anything is sent: a bad argument is reported
+    # here, naming it, rather than from a worker.
+    first = dict(tasks[0], q0=Q0[:1], p0=P0[:1], parameters={k: v[:1] for k, v in parameters.items()})
+    first["run"] = dict(first["run"], n_steps=1, t_end=None)
+    _run_chunk(first)
+
+    n, m = model.dim, len(model.momentum_names)
+    sizes = {"time": R, "dof": n, "momentum_map": m}
+    coords: dict[str, Any] = {"member": np.arange(members), "dof": list(model.coordinates),
+                              "momentum_map": list(model.momentum_names)}
+    if shared_times:
+        coords["t"] = (("time",), times[0])
+    else:
+        t = np.full((members, R), np.nan)
+        for (run, start, stop), grid_t in zip(groups, times):
+            t[start:stop, :grid_t.size] = grid_t
+        coords["t"] = (("member", "time"), t)
+    for name, values in columns.items():
+        coords[name] = (("member",), values.astype(str) if values.dtype == object else values)
+    provenance = {**model_spec, **{k: v for k, v in options.items() if k != "h"}, "step_size": options.get("h"),
+                  "coordinates": list(model.coordinates), "momentum_names": list(model.momentum_names),
+                  "grid": {k: (v.tolist() if isinstance(v, np.ndarray) else list(v)) for k, v in
+                           ((k, _axis(k, g)) for k, g in grid.items())}, "chunk_size": chunk_size}
+    from . import __version__
+
+    provenance["raydamp_version"] = __version__
+    attrs = {"kind": "sweep", "provenance": json.dumps(provenance), "grid": json.dumps(list(columns)),
+             "raydamp_version": __version__}
+    statics = {"q0": (("member", "dof"), Q0), "p0": (("member", "dof"), P0)}
+
+    def shape(dims):
+        return (members, *(sizes[d] for d in dims))
+
+    if store is None:
+        arrays = {k: np.full(shape(dims), fill, dtype=dtype) for k, (dims, dtype, fill) in _PER_MEMBER.items()}
+    else:
+        import dask.array as da
+
+        template = xr.Dataset({k: (("member", *dims), da.full(shape(dims), fill, dtype=dtype,
+                                                              chunks=(chunk_size, *shape(dims)[1:])))
+                               for k, (dims, dtype, fill) in _PER_MEMBER.items()} | statics,
+                              coords=coords, attrs=attrs)
+        template.to_zarr(store, mode="w", compute=False, zarr_format=2)  # see results.save_ensemble
+        # q0, p0 and the coordinates now; the per-member results as their chunks arrive.
+        xr.Dataset(statics).to_zarr(store, region={"member": slice(0, members)})
+    messages: dict[str, str] = {}
+
+    close = []
+    if client is None:
+        from dask.distributed import Client, LocalCluster
+
+        cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0")
+        client = Client(cluster)
+        close = [client, cluster]
+    bar = None
+    if progress is True:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=members, unit="member", desc="sweep")
+    try:
+        from dask.distributed import as_completed
+
+        futures = client.map(_run_chunk, tasks, pure=False)
+        done = 0
+        for future in as_completed(futures):
+            out = future.result()
+            a = out["start"]
+            b = a + out["q"].shape[0]
+            rows = out["q"].shape[1]
+            messages.update(out["messages"])
+            if store is None:
+                for k in _PER_MEMBER:
+                    target = arrays[k]
+                    if target.ndim >= 2 and _PER_MEMBER[k][0][:1] == ("time",):
+                        target[a:b, :rows] = out[k]
+                    else:
+                        target[a:b] = out[k]
+            else:
+                part = {}
+                for k, (dims, dtype, fill) in _PER_MEMBER.items():
+                    value = np.full((b - a, *shape(dims)[1:]), fill, dtype=dtype)
+                    if dims[:1] == ("time",):
+                        value[:, :rows] = out[k]
+                    else:
+                        value[:] = out[k]
+                    part[k] = (("member", *dims), value)
+                # Written from this thread only, one chunk after another: no two writes share a Zarr chunk at once.
+                xr.Dataset(part).to_zarr(store, region={"member": slice(a, b)}, safe_chunks=False)
+            done += b - a
+            future.release()
+            if bar is not None:
+                bar.update(b - a)
+            elif callable(progress):
+                progress(done, members)
+    finally:
+        if bar is not None:
+            bar.close()
+        for thing in close:
+            thing.close()
+
+    attrs["messages"] = json.dumps(messages)
+    if store is not None:
+        import zarr
+
+        group = zarr.open_group(str(store), mode="a")
+        group.attrs["messages"] = attrs["messages"]
+        zarr.consolidate_metadata(str(store))  # open_zarr reads the consolidated copy of the attributes
+        return xr.open_zarr(store)
+    data = {k: (("member", *dims), arrays[k]) for k, (dims, _, _) in _PER_MEMBER.items()}
+    data["status"] = (("member",), arrays["status"], {"flag_values": list(range(len(STATUSES))),
+                                                      "flag_meanings": " ".join(STATUSES)})
+    return xr.Dataset(data | statics, coords=coords, attrs=attrs)

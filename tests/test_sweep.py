@@ -1,0 +1,104 @@
+"""Sweeps (issue 8): a grid cut into chunks of ensemble members on a real Dask LocalCluster
+(processes, 2 workers), equal bit for bit to the serial ensemble, with progress per chunk."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import raydamp
+from raydamp.models import DampedPendulum
+
+distributed = pytest.importorskip("dask.distributed")
+xr = pytest.importorskip("xarray")
+
+# distributed's scheduler leaves sockets for the garbage collector (its warnings, not ours).
+pytestmark = [pytest.mark.filterwarnings("ignore::ResourceWarning"),
+              pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")]
+
+
+@pytest.fixture(scope="module")
+def client():
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:
+        with distributed.Client(cluster) as c:
+            yield c
+
+
+SPEC = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "q0": [0.9 * math.pi], "p0": [0.0],
+        "method": "3s", "h": 0.1, "t_end": 2.0, "save_every": 4}
+
+
+def test_sweep_equals_the_serial_ensemble_bit_for_bit(client):
+    eps = [0.0, 0.05, 0.3]
+    q = [0.5, 1.5, 2.5, 3.0]
+    hs = [0.1, 0.15]  # t_end = 2 takes 20 steps of 0.1 and 14 (the last shortened) of 0.15
+    calls = []
+    ds = raydamp.sweep(SPEC, grid={"h": hs, "eps": eps, "q0[0]": q}, client=client, chunk_size=5,
+                       progress=lambda done, total: calls.append((done, total)))
+    members = len(eps) * len(q) * len(hs)
+    assert ds.sizes["member"] == members
+    # 12 members per h, chunks of 5: 3 chunks per h
+    assert len(calls) == 6 and calls[-1] == (members, members)
+    assert ds["t"].dims == ("member", "time")  # the two h give different save grids
+    for h in hs:
+        sel = np.flatnonzero(ds["h"].values == h)
+        serial = raydamp.integrate_ensemble(DampedPendulum(), ds["q0"].values[sel], ds["p0"].values[sel],
+                                            parameters={"eps": ds["eps"].values[sel]}, h=h, t_end=2.0, save_every=4)
+        rows = serial.t.size
+        assert np.array_equal(ds["t"].values[sel[0], :rows], serial.t)
+        assert np.isnan(ds["t"].values[sel[0], rows:]).all()
+        for name in ("q", "p", "energy"):
+            assert np.array_equal(ds[name].values[sel, :rows], getattr(serial, name)), name
+        for name in ("q_final", "p_final", "t_final", "steps", "rows"):
+            assert np.array_equal(ds[name].values[sel], getattr(serial, name)), name
+    # each grid point once
+    points = {(h, e, q0) for h, e, q0 in zip(ds["h"].values, ds["eps"].values, ds["q0[0]"].values)}
+    assert len(points) == members
+    assert np.array_equal(ds["q0"].values[:, 0], ds["q0[0]"].values)
+
+
+def test_sweep_of_ten_thousand_members_reports_progress(client, tmp_path):
+    calls = []
+    grid = {"eps": np.linspace(0.0, 0.5, 100), "q0[0]": np.linspace(-3.0, 3.0, 100)}
+    ds = raydamp.sweep({**SPEC, "t_end": None, "n_steps": 20, "save_every": 20}, grid=grid, client=client,
+                       chunk_size=2500, progress=lambda done, total: calls.append((done, total)),
+                       store=tmp_path / "sweep.zarr")
+    assert ds.sizes["member"] == 10**4 and ds.sizes["time"] == 2
+    assert [c[1] for c in calls] == [10**4] * 4 and sorted(c[0] for c in calls) == [2500, 5000, 7500, 10**4]
+    assert (ds["status"].values == 0).all() and (ds["steps"].values == 20).all()
+    # spot checks against single runs
+    for i in (0, 4321, 9999):
+        eps, q0 = float(ds["eps"].values[i]), float(ds["q0[0]"].values[i])
+        ref = raydamp.integrate(DampedPendulum(eps), [q0], [0.0], h=0.1, n_steps=20, save_every=20)
+        assert np.array_equal(ds["q"].values[i], ref.q) and np.array_equal(ds["p"].values[i], ref.p)
+
+
+def test_job_json_spec_and_method_grid_with_own_cluster():
+    # The service's job form, a grid over method and composition, and client=None: a LocalCluster
+    # of 2 worker processes is started and closed by the sweep.
+    job = {"model": "elastic_pendulum", "parameters": {"eps": 0.1}, "method": "3s", "step_size": 0.05,
+           "n_steps": 12, "save_every": 3, "initial_state": {"q": [0.0, 1.55884573, -0.6], "p": [1.34164079, 0, 0]}}
+    ds = raydamp.sweep(job, grid={"method": ["3s", "2s"], "composition": [None, "yoshida4"], "k": [1.0, 2.0]},
+                       chunk_size=2)
+    assert ds.sizes["member"] == 8
+    for i in range(8):
+        method, composition = str(ds["method"].values[i]), str(ds["composition"].values[i]) or None
+        model = raydamp.models.ElasticPendulum(eps=0.1, k=float(ds["k"].values[i]))
+        ref = raydamp.integrate(model, job["initial_state"]["q"], job["initial_state"]["p"], method=method,
+                                composition=composition, h=0.05, n_steps=12, save_every=3)
+        assert np.array_equal(ds["q"].values[i], ref.q) and np.array_equal(ds["momentum"].values[i], ref.momentum)
+
+
+def test_bad_grid_names_the_entry():
+    with pytest.raises(ValueError, match=r"grid.k: not a parameter"):
+        raydamp.sweep(SPEC, grid={"k": [1.0]})
+    with pytest.raises(ValueError, match=r"grid.q0\[3\]: the model has 1 coordinates"):
+        raydamp.sweep(SPEC, grid={"q0[3]": [1.0]})
+    with pytest.raises(ValueError, match=r"grid.eps: every value must be finite"):
+        raydamp.sweep(SPEC, grid={"eps": [0.1, math.inf]})
+    with pytest.raises(ValueError, match=r"spec.x0: unknown key"):
+        raydamp.sweep({**SPEC, "x0": 1}, grid={"eps": [0.1]})
+    with pytest.raises(ValueError, match=r"method: unknown method 'rk9'"):
+        raydamp.sweep(SPEC, grid={"method": ["3s", "rk9"]})
