@@ -51,7 +51,7 @@ struct RunSpec {
   bool merge_steps = true;
   // The coordinates whose q and p each saved point keeps (empty: all). A large
   // lattice saves a few sites and the scalar diagnostics, not n numbers per row.
-  std::vector<int> save_dofs;
+  std::vector<int> save_dofs{};
 };
 
 struct Control {

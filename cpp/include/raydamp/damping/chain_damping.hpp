@@ -47,7 +47,12 @@ class ChainDamping {
  public:
   struct Factors {
     double t = std::numeric_limits<double>::quiet_NaN();
-    std::vector<double> exp, t_phi1;     // per block, s x s column-major: exp(-t A_k), t phi1(-t A_k)
+    // Per block, s x s column-major: exp(-t A_k) - I and t (phi1(-t A_k) - I). The flows add
+    // these corrections to the plain (undamped) update, so a block with a tiny t lambda
+    // loses no digits, and a block whose dashpots conserve sum p (no wall, no site
+    // friction) gets a correction with sum exactly zero (its mean removed): the flow then
+    // conserves sum p to rounding instead of drifting by the rounding of V V^T each step.
+    std::vector<double> exp_m1, t_phi1_m1;
     mutable std::vector<double> scratch;  // one value per damped site (kick+damp keeps results here)
   };
 
@@ -113,6 +118,7 @@ class ChainDamping {
                                     " sites: damp fewer adjacent bonds, or use on-site friction (dampers.sites)");
       a[k] = Eigen::MatrixXd::Zero(s, s);
     }
+    std::vector<char> leaks(members.size(), 0);  // a block with a wall bond or a damped site
     for (std::size_t k = 0; k < bonds.size(); ++k) {
       if (scale * bond_c[k] == 0.0) continue;
       const auto [l, r] = chain_bond_sites(boundary, n, bonds[k]);
@@ -124,14 +130,19 @@ class ChainDamping {
       if (l >= 0 && r >= 0) {
         block(local[l], local[r]) -= w;
         block(local[r], local[l]) -= w;
+      } else {
+        leaks[block_of_root[root(site)]] = 1;  // a wall takes momentum
       }
     }
     for (std::size_t k = 0; k < sites.size(); ++k)
-      if (scale * site_c[k] != 0.0) a[block_of_root[root(sites[k])]](local[sites[k]], local[sites[k]]) += scale * site_c[k];
+      if (scale * site_c[k] != 0.0) {
+        a[block_of_root[root(sites[k])]](local[sites[k]], local[sites[k]]) += scale * site_c[k];
+        leaks[block_of_root[root(sites[k])]] = 1;
+      }
 
     for (std::size_t k = 0; k < members.size(); ++k) {
       const int s = static_cast<int>(members[k].size());
-      Block block{s, static_cast<int>(sites_.size()), static_cast<int>(matrices_.size())};
+      Block block{s, static_cast<int>(sites_.size()), static_cast<int>(matrices_.size()), !leaks[k]};
       blocks_.push_back(block);
       sites_.insert(sites_.end(), members[k].begin(), members[k].end());
       Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(a[k]);
@@ -157,8 +168,8 @@ class ChainDamping {
   Factors factors(double t) const {
     Factors f;
     f.t = t;
-    f.exp.resize(matrices_.size());
-    f.t_phi1.resize(matrices_.size());
+    f.exp_m1.resize(matrices_.size());
+    f.t_phi1_m1.resize(matrices_.size());
     f.scratch.resize(sites_.size());
     for (const Block& b : blocks_) {
       const int s = b.size;
@@ -166,8 +177,8 @@ class ChainDamping {
       std::array<double, kMaxChainBlock> decay, t_phi1s;
       for (int m = 0; m < s; ++m) {
         const double x = -t * lambda_[b.site + m];
-        decay[m] = std::exp(x);
-        t_phi1s[m] = t * phi1(x);
+        decay[m] = std::expm1(x);
+        t_phi1s[m] = t * (phi1(x) - 1.0);
       }
       for (int j = 0; j < s; ++j)
         for (int i = 0; i < s; ++i) {
@@ -177,20 +188,21 @@ class ChainDamping {
             e += vv * decay[m];
             p1 += vv * t_phi1s[m];
           }
-          f.exp[b.matrix + i + j * s] = e;
-          f.t_phi1[b.matrix + i + j * s] = p1;
+          f.exp_m1[b.matrix + i + j * s] = e;
+          f.t_phi1_m1[b.matrix + i + j * s] = p1;
         }
     }
     return f;
   }
 
-  // p <- exp(-tA) p on every block; the undamped sites keep their p.
+  // p <- exp(-tA) p = p + (exp(-tA) - I) p on every block; the undamped sites keep their p.
   template <class Q, class P>
   void decay(const Q&, const Factors& f, P& p) const {
-    std::array<double, kMaxChainBlock> y;
+    std::array<double, kMaxChainBlock> d;
     for (const Block& b : blocks_) {
-      multiply(b, &f.exp[b.matrix], p, y.data());
-      scatter(b, y.data(), p);
+      multiply(b, &f.exp_m1[b.matrix], p, d.data());
+      if (b.conserving) remove_mean(b.size, d.data());
+      for (int i = 0; i < b.size; ++i) p[sites_[b.site + i]] += d[i];
     }
   }
 
@@ -198,13 +210,19 @@ class ChainDamping {
   // then the plain kick p - t g everywhere, then the blocks' values back.
   template <class Q, class G, class P>
   void decay_affine(const Q&, const Factors& f, const G& g, P& p) const {
+    // As (p - t g) + [(exp(-tA) - I) p - t (phi1(-tA) - I) g]: the plain kick plus a correction.
     for (const Block& b : blocks_) {
       double* y = &f.scratch[b.site];
-      multiply(b, &f.exp[b.matrix], p, y);
-      const double* tp = &f.t_phi1[b.matrix];
+      multiply(b, &f.exp_m1[b.matrix], p, y);
+      const double* tp = &f.t_phi1_m1[b.matrix];
       for (int j = 0; j < b.size; ++j) {
         const double gj = g[sites_[b.site + j]];
         for (int i = 0; i < b.size; ++i) y[i] -= tp[i + j * b.size] * gj;
+      }
+      if (b.conserving) remove_mean(b.size, y);
+      for (int i = 0; i < b.size; ++i) {
+        const int k = sites_[b.site + i];
+        y[i] += p[k] - f.t * g[k];
       }
     }
     p -= f.t * g;
@@ -257,10 +275,18 @@ class ChainDamping {
 
  private:
   struct Block {
-    int size;    // sites in the block
-    int site;    // offset into sites_ and lambda_
-    int matrix;  // offset into vectors_, matrices_ and the factors' blocks
+    int size;         // sites in the block
+    int site;         // offset into sites_ and lambda_
+    int matrix;       // offset into vectors_, matrices_ and the factors' blocks
+    bool conserving;  // only dashpots between its own sites: A_k annihilates (1, ..., 1)
   };
+
+  static void remove_mean(int s, double* d) {
+    double sum = 0.0;
+    for (int i = 0; i < s; ++i) sum += d[i];
+    const double mean = sum / s;
+    for (int i = 0; i < s; ++i) d[i] -= mean;
+  }
 
   static void check_coefficient(const char* argument, std::size_t k, double c) {
     if (!(std::isfinite(c) && c >= 0.0))
