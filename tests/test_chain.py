@@ -121,8 +121,11 @@ def test_damped_chain_equals_sv_at_eps_zero():
     q0, p0 = _state(chain.dim)
     runs = {m: raydamp.integrate(chain, q0, p0, method=m, h=0.05, n_steps=400, save_every=400)
             for m in ("sv", "3s", "2s", "rks")}
-    for m in ("3s", "2s", "rks"):  # the same arithmetic: equal to the last bit
+    for m in ("2s", "rks"):  # the same arithmetic: equal to the last bit
         assert np.array_equal(runs[m].q, runs["sv"].q) and np.array_equal(runs[m].p, runs["sv"].p), m
+    # sv merges the drift h/2 that ends a step with the one that starts the next; 3s cannot (its
+    # damping flows sit between them), so it equals sv to rounding (measured 1e-15 after 400 steps).
+    assert np.abs(runs["3s"].q - runs["sv"].q).max() < 1e-13 and np.abs(runs["3s"].p - runs["sv"].p).max() < 1e-13
 
 
 @pytest.mark.parametrize("method", ["3s", "2s", "rks"])
@@ -179,8 +182,9 @@ def test_expression_bond_equals_fput():
 def test_every_family_runs_with_small_energy_error(bond):
     chain = Chain(24, bond=bond, parameters=FAMILIES[bond], boundary="free", eps=0.0)
     q0, p0 = _state(24, seed=4, scale=0.05)
-    # h omega_max <= 0.06 for every family (Lennard-Jones is the stiffest: V''(0) = 36 here).
-    sol = raydamp.integrate(chain, q0, p0, method="sv", h=0.005, n_steps=5000, save_every=500)
+    # h omega_max <= 0.03 for every family (Lennard-Jones is the stiffest: V''(0) = 36 here; its energy
+    # error is 0.6% at h = 0.005 and falls as h^2: 0.14% here).
+    sol = raydamp.integrate(chain, q0, p0, method="sv", h=0.0025, n_steps=10_000, save_every=1000)
     assert sol.success
     assert np.abs(sol.energy - sol.energy[0]).max() < 5e-3 * sol.energy[0]
     assert sol.max_momentum_drift < 1e-13  # free chain: sum p conserved

@@ -16,6 +16,8 @@ from fastapi.encoders import jsonable_encoder
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 
+from .schemas import UNION_TAGS
+
 __all__ = ["validation_error_handler"]
 
 
@@ -42,8 +44,15 @@ def _json_safe(value: Any) -> Any:
     return value
 
 
+def _path(loc: list[Any]) -> list[Any]:
+    """The JSON path the client wrote: without the tag pydantic adds for the form of a field."""
+    if len(loc) >= 3 and loc[0] == "body" and loc[2] in UNION_TAGS.get(loc[1], ()):
+        return [*loc[:2], *loc[3:]]
+    return loc
+
+
 def _error(item: dict[str, Any]) -> dict[str, Any]:
-    out = _json_safe(item)
+    out = _json_safe({**item, "loc": _path(list(item.get("loc", [])))})
     if isinstance(item.get("msg"), str):
         out["msg"] = _text(item["msg"], MAX_MESSAGE)
     return out
