@@ -11,7 +11,7 @@ import numpy as np
 from . import _core
 from ._validation import integer, real
 from .ensemble_solution import EnsembleSolution
-from .integrate import MAX_SAVED_BYTES, MAX_STEPS, CancelToken, _catalogue, steps_for
+from .integrate import MAX_SAVED_BYTES, MAX_STEPS, CancelToken, _catalogue, span
 from .models import DampedPendulum, ElasticPendulum, Model
 from .system import System
 
@@ -169,13 +169,7 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
     _check_configurations(system, q0)
     params = _parameter_arrays(system, parameters, members)
     save_every = integer("save_every", save_every, maximum=MAX_STEPS)
-    if (t_end is None) == (n_steps is None):
-        raise ValueError("give exactly one of t_end and n_steps")
-    if n_steps is not None:
-        n_steps = integer("n_steps", n_steps, maximum=MAX_STEPS)
-        h_last = h
-    else:
-        n_steps, h_last = steps_for(t_end, h)
+    n_steps, h_last = span(h, t_end, n_steps)
     if threads is None:
         threads = 0
     else:

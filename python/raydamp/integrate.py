@@ -117,13 +117,7 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
     q0 = model.check_configuration("q0", vector("q0", q0, model.dim))
     p0 = vector("p0", p0, model.dim)
     save_every = integer("save_every", save_every, maximum=MAX_STEPS)
-    if (t_end is None) == (n_steps is None):
-        raise ValueError("give exactly one of t_end and n_steps")
-    if n_steps is not None:
-        n_steps = integer("n_steps", n_steps, maximum=MAX_STEPS)
-        h_last = h
-    else:
-        n_steps, h_last = steps_for(t_end, h)
+    n_steps, h_last = span(h, t_end, n_steps)
     if progress is not None and not callable(progress):
         raise ValueError(f"progress must be callable or None, got {progress!r}")
     if not isinstance(work, bool):
@@ -175,6 +169,15 @@ def _save_dofs(save_dofs, dim: int) -> list[int] | None:
     if len(set(out)) != len(out):
         raise ValueError("save_dofs: an index appears twice")
     return out
+
+
+def span(h: float, t_end: float | None, n_steps: int | None) -> tuple[int, float]:
+    """(the number of steps, the size of the last) for exactly one of t_end and n_steps."""
+    if (t_end is None) == (n_steps is None):
+        raise ValueError("give exactly one of t_end and n_steps")
+    if n_steps is not None:
+        return integer("n_steps", n_steps, maximum=MAX_STEPS), h
+    return steps_for(t_end, h)
 
 
 def steps_for(t_end: float, h: float) -> tuple[int, float]:
