@@ -102,3 +102,54 @@ def test_bad_grid_names_the_entry():
         raydamp.sweep({**SPEC, "x0": 1}, grid={"eps": [0.1]})
     with pytest.raises(ValueError, match=r"method: unknown method 'rk9'"):
         raydamp.sweep(SPEC, grid={"method": ["3s", "rk9"]})
+
+
+def test_ranges_and_command_line_items():
+    # {start, stop, num[, scale]} ranges include both ends; "log" is geometric.
+    plan = raydamp.check_sweep(SPEC, {"eps": {"start": 0.001, "stop": 0.1, "num": 3, "scale": "log"},
+                                      "q0[0]": {"start": 0.0, "stop": 1.0, "num": 5}}, chunk_size=4)
+    assert np.allclose(plan.grid["eps"], [0.001, 0.01, 0.1], rtol=1e-14, atol=0)
+    assert plan.grid["q0[0]"] == [0.0, 0.25, 0.5, 0.75, 1.0]
+    # 15 members of 1 dof, 6 saved points (20 steps, every 4th, and the last), 4 per chunk
+    assert (plan.members, plan.rows, plan.chunks) == (15, 6, 4)
+    assert plan.values == 15 * 6 * (2 + 2 * 1 + 0)
+    assert raydamp.parse_grid_item("eps=0.001:0.1:20") == ("eps", {"start": 0.001, "stop": 0.1, "num": 20,
+                                                                     "scale": "linear"})
+    assert raydamp.parse_grid_item("eps=1e-3:0.1:5:log")[1]["scale"] == "log"
+    assert raydamp.parse_grid_item("method=3s, 2s") == ("method", ["3s", "2s"])
+    assert raydamp.parse_grid_item("q0[0]=0.5,1.5") == ("q0[0]", [0.5, 1.5])
+    for bad, match in (("eps", "expected name="), ("eps=1:2", "a range is"), ("eps=a:2:3", "must be numbers"),
+                       ("eps=1,x", "expected numbers")):
+        with pytest.raises(ValueError, match=match):
+            raydamp.parse_grid_item(bad)
+    for grid, match in (({"eps": {"start": 0, "stop": 1}}, r"grid.eps.num: missing"),
+                        ({"eps": {"start": 0, "stop": 1, "num": 0}}, r"grid.eps.num must be >= 1"),
+                        ({"eps": {"start": 0, "stop": 1, "num": 2, "scale": "log"}}, r"grid.eps: a log range"),
+                        ({"eps": {"start": 0, "stop": 1, "num": 2, "step": 1}}, r"grid.eps.step: unknown key")):
+        with pytest.raises(ValueError, match=match):
+            raydamp.check_sweep(SPEC, grid)
+
+
+def test_cancel_keeps_the_finished_chunks(client, tmp_path):
+    token = raydamp.CancelToken()
+    calls = []
+
+    def progress(done, total):
+        calls.append(done)
+        token.cancel()  # after the first chunk
+
+    grid = {"eps": np.linspace(0.0, 0.2, 40)}
+    spec = {**SPEC, "t_end": None, "n_steps": 20000, "save_every": 10000}
+    for store in (None, tmp_path / "cancelled.zarr"):
+        calls.clear()
+        token.reset()
+        ds = raydamp.sweep(spec, grid=grid, client=client, chunk_size=2, progress=progress, cancel=token, store=store)
+        status = ds["status"].values
+        done = status == 0
+        assert len(calls) == 1 and done.sum() == calls[0] == 2, store
+        assert (status[~done] == raydamp.ensemble_solution.STATUSES.index("cancelled")).all()
+        assert ds.attrs["cancelled"] == 1 and (ds["rows"].values[~done] == 0).all()
+        i = int(np.flatnonzero(done)[0])
+        ref = raydamp.integrate(DampedPendulum(float(ds["eps"].values[i])), SPEC["q0"], [0.0], h=0.1, n_steps=20000,
+                                save_every=10000)
+        assert np.array_equal(ds["q"].values[i], ref.q)

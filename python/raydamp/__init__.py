@@ -21,10 +21,10 @@ from .rayleigh import modal_damping_ratio, rayleigh_coefficients
 from .results import load
 from .solution import Solution
 from .structure import LinearStructure
-from .sweep import sweep
+from .sweep import SweepPlan, check_sweep, parse_grid_item, sweep
 from .system import SpecError, System
 
 __all__ = ["__version__", "models", "System", "Chain", "chain_mode_energies", "LinearStructure", "SpecError",
            "integrate", "steps_for", "CancelToken", "Solution", "integrate_ensemble", "EnsembleSolution", "sweep",
-           "load", "rayleigh_coefficients", "modal_damping_ratio", "methods", "tableaux", "compositions",
-           "MethodInfo", "TableauInfo", "CompositionInfo"]
+           "check_sweep", "parse_grid_item", "SweepPlan", "load", "rayleigh_coefficients", "modal_damping_ratio",
+           "methods", "tableaux", "compositions", "MethodInfo", "TableauInfo", "CompositionInfo"]

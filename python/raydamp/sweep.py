@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import re
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -23,7 +24,7 @@ from .job import JOB_KEYS, describe_model, job_arguments, model_from_spec
 from .models import MODELS, Model
 from .system import System
 
-__all__ = ["sweep", "SPEC_KEYS", "RUN_ARGUMENTS"]
+__all__ = ["sweep", "check_sweep", "SweepPlan", "parse_grid_item", "SPEC_KEYS", "RUN_ARGUMENTS"]
 
 # The Python form of a sweep's spec: integrate's arguments and the model.
 SPEC_KEYS = ("model", "system", "parameters", "q0", "p0", "method", "tableau", "composition", "h", "t_end",
@@ -71,7 +72,58 @@ def _base(spec: Mapping[str, Any]) -> tuple[Model, np.ndarray, np.ndarray, dict[
     return model, vector("q0", q0, model.dim), vector("p0", p0, model.dim), options
 
 
+_RANGE_KEYS = ("start", "stop", "num", "scale")
+
+
+def _range(name: str, spec: Mapping[str, Any]) -> np.ndarray:
+    """{"start", "stop", "num", "scale": "linear" | "log"}: num values from start to stop, both included."""
+    unknown = [k for k in spec if k not in _RANGE_KEYS]
+    if unknown:
+        raise ValueError(f"grid.{name}.{unknown[0]}: unknown key (a range has {', '.join(_RANGE_KEYS)})")
+    for key in ("start", "stop", "num"):
+        if key not in spec:
+            raise ValueError(f"grid.{name}.{key}: missing (a range is {{start, stop, num[, scale]}})")
+    start, stop = real(f"grid.{name}.start", spec["start"]), real(f"grid.{name}.stop", spec["stop"])
+    num = integer(f"grid.{name}.num", spec["num"])
+    scale = spec.get("scale", "linear")
+    if scale == "linear":
+        return np.linspace(start, stop, num)
+    if scale == "log":
+        if start <= 0 or stop <= 0:
+            raise ValueError(f"grid.{name}: a log range needs start and stop > 0, got {start} and {stop}")
+        return np.geomspace(start, stop, num)
+    raise ValueError(f"grid.{name}.scale: expected \"linear\" or \"log\", got {scale!r}")
+
+
+def parse_grid_item(text: str) -> tuple[str, Any]:
+    """One command-line grid entry: ``name=start:stop:num`` (num values, ends included; append
+    ``:log`` for a geometric range) or ``name=v1,v2,...`` (numbers, or names for method,
+    composition and tableau). Returns (name, values) for :func:`sweep`'s ``grid``."""
+    name, sep, values = text.partition("=")
+    name = name.strip()
+    if not sep or not name or not values.strip():
+        raise ValueError(f"--grid {text!r}: expected name=start:stop:num or name=v1,v2,...")
+    if ":" in values:
+        parts = values.split(":")
+        if len(parts) not in (3, 4) or (len(parts) == 4 and parts[3] not in ("linear", "log")):
+            raise ValueError(f"--grid {text!r}: a range is name=start:stop:num or name=start:stop:num:log")
+        try:
+            start, stop, num = float(parts[0]), float(parts[1]), int(parts[2])
+        except ValueError:
+            raise ValueError(f"--grid {text!r}: start and stop must be numbers and num an integer") from None
+        return name, {"start": start, "stop": stop, "num": num, "scale": parts[3] if len(parts) == 4 else "linear"}
+    items = [v.strip() for v in values.split(",")]
+    if name in ("method", "tableau", "composition"):
+        return name, items
+    try:
+        return name, [float(v) for v in items]
+    except ValueError:
+        raise ValueError(f"--grid {text!r}: expected numbers separated by commas") from None
+
+
 def _axis(name: str, values) -> np.ndarray:
+    if isinstance(values, Mapping) and name not in ("method", "tableau", "composition"):
+        values = _range(name, values)
     if name in ("method", "tableau", "composition"):
         if isinstance(values, str) or not isinstance(values, (list, tuple, np.ndarray)):
             raise ValueError(f"grid.{name}: expected a list of names")
@@ -168,6 +220,35 @@ def _run_chunk(task: dict[str, Any]) -> dict[str, Any]:
                          if s != "completed"}}
 
 
+def _finished(client, futures, cancel):
+    """The futures as they finish; once ``cancel`` is cancelled, the rest are cancelled on the
+    cluster and no longer waited for."""
+    import time
+
+    from dask.distributed import as_completed
+
+    pending = as_completed(futures)
+    while not pending.is_empty():
+        if cancel is not None and cancel.cancelled:
+            client.cancel([f for f in futures if not f.done()])
+            return
+        if pending.has_ready():
+            yield next(pending)
+        else:
+            time.sleep(0.02)
+
+
+def _write_unfinished(store, finished: np.ndarray, status: int) -> None:
+    """Marks the members a cancel left unfinished in a Zarr store (written directly: their chunks
+    were never written, so no chunk is shared with a write in flight)."""
+    import zarr
+
+    array = zarr.open_group(str(store), mode="a")["status"]
+    values = array[:]
+    values[~finished] = status
+    array[:] = values
+
+
 _PER_MEMBER = {  # variable: (dims after member, dtype, fill)
     "q": (("time", "dof"), float, np.nan), "p": (("time", "dof"), float, np.nan),
     "energy": (("time",), float, np.nan), "momentum": (("time", "momentum_map"), float, np.nan),
@@ -178,8 +259,73 @@ _PER_MEMBER = {  # variable: (dims after member, dtype, fill)
 }
 
 
+@dataclass(frozen=True)
+class SweepPlan:
+    """What a sweep will run, checked: see :func:`check_sweep`."""
+
+    model: Model
+    q0: np.ndarray  # (members, n)
+    p0: np.ndarray
+    options: dict[str, Any]
+    columns: dict[str, np.ndarray]  # grid name: per-member values, in run order
+    parameters: dict[str, np.ndarray]  # model parameter: per-member values
+    groups: list  # [(run options, first member, end)]
+    times: list  # each group's save grid
+    chunk_size: int
+    grid: dict[str, list]  # the axes as values (ranges expanded), for provenance
+
+    @property
+    def members(self) -> int:
+        return self.groups[-1][2]
+
+    @property
+    def rows(self) -> int:
+        """Saved points per member (the longest save grid)."""
+        return max(t.size for t in self.times)
+
+    @property
+    def chunks(self) -> int:
+        return sum(-(-(stop - start) // self.chunk_size) for _, start, stop in self.groups)
+
+    @property
+    def values(self) -> int:
+        """Numbers the result holds: per member and saved point, t, q, p, energy and the momentum maps."""
+        return self.members * self.rows * (2 + 2 * self.model.dim + len(self.model.momentum_names))
+
+
+def check_sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, chunk_size: int = 1000) -> SweepPlan:
+    """Every check :func:`sweep` makes before it sends anything, without a cluster: the spec, the
+    grid (names, values, ranges) and one step of the first member, run here the way a worker will.
+    Raises ValueError naming the entry (``grid.eps``, ``spec.h`` ...); returns the plan, whose
+    ``members``, ``rows`` and ``values`` tell how big the result will be."""
+    model, q0, p0, options = _base(spec)
+    chunk_size = integer("chunk_size", chunk_size)
+    columns, groups = _plan(model, options, grid)
+    members = groups[-1][2]
+    Q0, P0 = np.tile(q0, (members, 1)), np.tile(p0, (members, 1))
+    parameters = {}
+    for name, values in columns.items():
+        if state := _STATE_COMPONENT.match(name):
+            (Q0 if state.group(1) == "q0" else P0)[:, int(state.group(2))] = values
+        elif name not in RUN_ARGUMENTS:
+            parameters[name] = values.astype(float)
+    plan = SweepPlan(model=model, q0=Q0, p0=P0, options=options, columns=columns, parameters=parameters,
+                     groups=groups, times=[_grid_times(run) for run, _, _ in groups], chunk_size=chunk_size,
+                     grid={k: _axis(k, g).tolist() for k, g in grid.items()})
+    first = _task(plan, describe_model(model), groups[0][0], 0, 1, threads=1)
+    first["run"] = dict(first["run"], n_steps=1, t_end=None)
+    _run_chunk(first)
+    return plan
+
+
+def _task(plan: SweepPlan, model_spec: dict, run: dict, a: int, b: int, threads: int) -> dict[str, Any]:
+    return {"model": model_spec, "run": run, "start": a, "q0": plan.q0[a:b], "p0": plan.p0[a:b],
+            "parameters": {k: v[a:b] for k, v in plan.parameters.items()}, "threads": threads}
+
+
 def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chunk_size: int = 1000,
-          progress: bool | Callable[[int, int], object] | None = None, store=None, threads: int = 1):
+          progress: bool | Callable[[int, int], object] | None = None, store=None, threads: int = 1,
+          cancel=None):
     """Run the Cartesian product of ``grid`` over ``spec`` on a Dask client; one Dataset back.
 
     Parameters
@@ -203,6 +349,10 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
     store : a path ending in .zarr: each chunk is written there as it arrives (the sweep need
         not fit in memory) and the returned Dataset reads from it lazily.
     threads : threads per task (1: the workers' processes give the parallelism).
+    cancel : a :class:`raydamp.CancelToken`; once cancelled, no further chunk is waited for (chunks
+        still queued on the cluster are cancelled there) and the Dataset of the chunks finished so
+        far comes back, the other members with status "cancelled" and no rows, ``attrs["cancelled"]``
+        true. A chunk already running on a worker finishes there but is not waited for.
 
     Returns an xarray.Dataset laid out as ``EnsembleSolution.to_xarray()``'s, with a member
     coordinate per grid name; when the groups' save grids differ (a grid over h with t_end),
@@ -211,40 +361,23 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
     """
     import xarray as xr
 
-    model, q0, p0, options = _base(spec)
-    chunk_size = integer("chunk_size", chunk_size)
     threads = integer("threads", threads, maximum=4096)
-    columns, groups = _plan(model, options, grid)
-    members = groups[-1][2]
     if progress is not None and progress is not True and progress is not False and not callable(progress):
         raise ValueError(f"progress must be True, a callable or None, got {progress!r}")
     if store is not None and not str(store).endswith(".zarr"):
         raise ValueError(f"store: expected a path ending in .zarr, got {store!r}")
-
-    # Per-member initial states and model parameters.
-    Q0, P0 = np.tile(q0, (members, 1)), np.tile(p0, (members, 1))
-    parameters = {}
-    for name, values in columns.items():
-        if state := _STATE_COMPONENT.match(name):
-            (Q0 if state.group(1) == "q0" else P0)[:, int(state.group(2))] = values
-        elif name not in RUN_ARGUMENTS:
-            parameters[name] = values.astype(float)
+    if cancel is not None and not hasattr(cancel, "cancelled"):
+        raise ValueError(f"cancel must be a raydamp.CancelToken, got {cancel!r}")
+    # The driver checks everything, the first member included, before anything is sent: a bad
+    # argument is reported here, naming it, rather than from a worker.
+    plan = check_sweep(spec, grid, chunk_size=chunk_size)
+    model, options, columns, groups, times = plan.model, plan.options, plan.columns, plan.groups, plan.times
+    members, chunk_size, Q0, P0 = plan.members, plan.chunk_size, plan.q0, plan.p0
     model_spec = describe_model(model)
-    times = [_grid_times(run) for run, _, _ in groups]
-    R = max(t.size for t in times)
+    R = plan.rows
     shared_times = all(t.shape == times[0].shape and np.array_equal(t, times[0]) for t in times)
-
-    tasks = []
-    for run, start, stop in groups:
-        for a in range(start, stop, chunk_size):
-            b = min(stop, a + chunk_size)
-            tasks.append({"model": model_spec, "run": run, "start": a, "q0": Q0[a:b], "p0": P0[a:b],
-                          "parameters": {k: v[a:b] for k, v in parameters.items()}, "threads": threads})
-    # The driver checks the first member before anything is sent: a bad argument is reported
-    # here, naming it, rather than from a worker.
-    first = dict(tasks[0], q0=Q0[:1], p0=P0[:1], parameters={k: v[:1] for k, v in parameters.items()})
-    first["run"] = dict(first["run"], n_steps=1, t_end=None)
-    _run_chunk(first)
+    tasks = [_task(plan, model_spec, run, a, min(stop, a + chunk_size), threads)
+             for run, start, stop in groups for a in range(start, stop, chunk_size)]
 
     n, m = model.dim, len(model.momentum_names)
     sizes = {"time": R, "dof": n, "momentum_map": m}
@@ -261,8 +394,7 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
         coords[name] = (("member",), values.astype(str) if values.dtype == object else values)
     provenance = {**model_spec, **{k: v for k, v in options.items() if k != "h"}, "step_size": options.get("h"),
                   "coordinates": list(model.coordinates), "momentum_names": list(model.momentum_names),
-                  "grid": {k: (v.tolist() if isinstance(v, np.ndarray) else list(v)) for k, v in
-                           ((k, _axis(k, g)) for k, g in grid.items())}, "chunk_size": chunk_size}
+                  "grid": plan.grid, "chunk_size": chunk_size}
     from . import __version__
 
     provenance["raydamp_version"] = __version__
@@ -286,6 +418,8 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
         # q0, p0 and the coordinates now; the per-member results as their chunks arrive.
         xr.Dataset(statics).to_zarr(store, region={"member": slice(0, members)})
     messages: dict[str, str] = {}
+    finished = np.zeros(members, dtype=bool)
+    done = 0
 
     close = []
     if client is None:
@@ -300,11 +434,8 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
 
         bar = tqdm(total=members, unit="member", desc="sweep")
     try:
-        from dask.distributed import as_completed
-
         futures = client.map(_run_chunk, tasks, pure=False)
-        done = 0
-        for future in as_completed(futures):
+        for future in _finished(client, futures, cancel):
             out = future.result()
             a = out["start"]
             b = a + out["q"].shape[0]
@@ -329,6 +460,7 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
                 # Written from this thread only, one chunk after another: no two writes share a Zarr chunk at once.
                 xr.Dataset(part).to_zarr(store, region={"member": slice(a, b)}, safe_chunks=False)
             done += b - a
+            finished[a:b] = True
             future.release()
             if bar is not None:
                 bar.update(b - a)
@@ -340,12 +472,21 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
         for thing in close:
             thing.close()
 
+    cancelled = not finished.all()  # only a cancel leaves members unfinished (a failed chunk raises)
+    attrs["cancelled"] = int(cancelled)  # NetCDF attributes hold no booleans
+    if cancelled:
+        unfinished = STATUSES.index("cancelled")
+        if store is None:
+            arrays["status"][~finished] = unfinished
+        else:
+            _write_unfinished(store, finished, unfinished)
     attrs["messages"] = json.dumps(messages)
     if store is not None:
         import zarr
 
         group = zarr.open_group(str(store), mode="a")
         group.attrs["messages"] = attrs["messages"]
+        group.attrs["cancelled"] = attrs["cancelled"]
         zarr.consolidate_metadata(str(store))  # open_zarr reads the consolidated copy of the attributes
         return xr.open_zarr(store)
     data = {k: (("member", *dims), arrays[k]) for k, (dims, _, _) in _PER_MEMBER.items()}
