@@ -19,6 +19,18 @@ def main(argv: list[str] | None = None) -> int:
     run.add_argument("--out", help="write the solution: .nc (NetCDF), .npz or .csv")
     run.add_argument("--plot", help="draw the energy (and H - H0 + W when recorded) to this PNG")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
+    swp = commands.add_parser("sweep", help="run a grid of jobs over a spec file through Dask; write NetCDF or Zarr")
+    swp.add_argument("spec", help="a job JSON file (as for run): the grid's base point")
+    swp.add_argument("--grid", action="append", default=[], metavar="NAME=VALUES",
+                     help="an axis: name=start:stop:num (ends included; add :log for a geometric range) or "
+                          "name=v1,v2,...; name is a model parameter (eps, k, ...), h, method, composition, "
+                          "tableau or q0[i]/p0[i]; repeat for more axes (every combination runs)")
+    swp.add_argument("--out", help="write the Dataset: .nc (NetCDF) or .zarr (written chunk by chunk)")
+    swp.add_argument("--chunk-size", type=int, default=1000, help="members per task (default 1000)")
+    swp.add_argument("--scheduler", help="a Dask scheduler's address (default: RAYDAMP_DASK_SCHEDULER, else a "
+                                         "LocalCluster on this machine)")
+    swp.add_argument("--workers", type=int, default=2, help="worker processes of the LocalCluster (default 2)")
+    swp.add_argument("--no-progress", action="store_true", help="no progress bar")
     commands.add_parser("methods", help="list the methods and their tableaux")
     commands.add_parser("models", help="list the built-in models and their parameters")
     serve = commands.add_parser("serve", help="run the job service (same as python -m raydamp_service)")
@@ -29,6 +41,14 @@ def main(argv: list[str] | None = None) -> int:
         from .run_command import run_file
 
         return run_file(args.spec, out=args.out, plot=args.plot, progress=not args.no_progress)
+    if args.command == "sweep":
+        try:
+            from .sweep_command import sweep_file
+        except ImportError as exc:  # dask, xarray or zarr missing
+            print(f"raydamp sweep needs the sweep extra (pip install 'raydamp[sweep]'): {exc}", file=sys.stderr)
+            return 2
+        return sweep_file(args.spec, args.grid, out=args.out, chunk_size=args.chunk_size, scheduler=args.scheduler,
+                          workers=args.workers, progress=not args.no_progress)
     if args.command == "methods":
         from .methods import methods
 

@@ -113,7 +113,8 @@ def save(sol: Solution, path) -> None:
 
 def load(path) -> Solution | EnsembleSolution:
     """Read a solution written by ``Solution.save`` (.nc, .npz) or an ensemble written by
-    ``EnsembleSolution.save`` (.nc, .zarr), with its provenance."""
+    ``EnsembleSolution.save`` (.nc, .zarr), with its provenance; a sweep's file (.nc, .zarr)
+    comes back as its xarray.Dataset."""
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix in (".nc", ".zarr"):
@@ -140,7 +141,22 @@ def load(path) -> Solution | EnsembleSolution:
 
 
 def _from_dataset(ds):
-    return ensemble_from_xarray(ds) if ds.attrs.get("kind") == "ensemble" else from_xarray(ds)
+    kind = ds.attrs.get("kind")
+    if kind == "sweep":  # a sweep's result is its Dataset (raydamp.sweep's layout)
+        return ds
+    return ensemble_from_xarray(ds) if kind == "ensemble" else from_xarray(ds)
+
+
+def save_sweep(ds, path) -> None:
+    """Write a :func:`raydamp.sweep` Dataset to ``path``: .nc (NetCDF via h5netcdf) or .zarr."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix == ".nc":
+        ds.to_netcdf(path, engine="h5netcdf")
+    elif suffix == ".zarr":
+        ds.to_zarr(path, mode="w", zarr_format=2)
+    else:
+        raise ValueError(f"path: unknown format {path.suffix!r} for a sweep (known: {', '.join(ENSEMBLE_FORMATS)})")
 
 
 # -- ensembles ---------------------------------------------------------------------------------

@@ -1,0 +1,110 @@
+"""``raydamp sweep spec.json --grid eps=0.001:0.1:20 ...``: a grid of runs through
+:func:`raydamp.sweep` on Dask (a LocalCluster here, or a scheduler's address), with a progress
+bar per chunk, a summary of the members' outcomes, and the Dataset written as NetCDF or Zarr.
+Exit codes: 0 every member completed, 1 some member did not (blow-up: the summary names them),
+2 a bad file, spec or grid."""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .ensemble_solution import STATUSES
+from .results import ENSEMBLE_FORMATS, save_sweep
+from .sweep import parse_grid_item, sweep
+
+__all__ = ["sweep_file"]
+
+_SHOWN_FAILURES = 10
+
+
+def _fail(message: str) -> int:
+    print(f"raydamp sweep: {message}", file=sys.stderr)
+    return 2
+
+
+def _client(scheduler: str | None, workers: int):
+    from dask.distributed import Client, LocalCluster
+
+    if scheduler:
+        return Client(scheduler, timeout=30), []
+    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+    client = Client(cluster)
+    return client, [client, cluster]
+
+
+def _summary(ds, seconds: float) -> str:
+    status = ds["status"].values
+    grid = json.loads(ds.attrs["grid"])
+    lines = [f"{'members':<12} {status.size}", f"{'grid':<12} " + " x ".join(
+        f"{name} ({np.unique(ds[name].values).size})" for name in grid), f"{'wall time':<12} {seconds:.3g} s"]
+    for code, name in enumerate(STATUSES):
+        count = int((status == code).sum())
+        if count:
+            lines.append(f"{name:<12} {count}")
+    return "\n".join(lines)
+
+
+def sweep_file(spec_path: str, grid_items: list[str], *, out: str | None = None, chunk_size: int = 1000,
+               scheduler: str | None = None, workers: int = 2, progress: bool = True) -> int:
+    if out is not None and Path(out).suffix.lower() not in ENSEMBLE_FORMATS:
+        return _fail(f"--out: unknown format {Path(out).suffix!r} (known: {', '.join(ENSEMBLE_FORMATS)})")
+    if not grid_items:
+        return _fail("--grid: give at least one, e.g. --grid eps=0.001:0.1:20")
+    if workers < 1:
+        return _fail(f"--workers must be >= 1, got {workers}")
+    try:
+        spec = json.loads(Path(spec_path).read_text())
+    except OSError as error:
+        return _fail(f"{spec_path}: {error.strerror}")
+    except (json.JSONDecodeError, UnicodeDecodeError) as error:
+        return _fail(f"{spec_path}: not JSON ({error})")
+    try:
+        grid = dict(parse_grid_item(item) for item in grid_items)
+    except ValueError as error:
+        return _fail(str(error))
+    if isinstance(spec, dict) and spec.get("work"):
+        # The same file serves `raydamp run`, where W is recorded; members of a sweep do not record it.
+        print("raydamp sweep: note: the spec's \"work\": true is ignored (sweeps do not record the damping work)",
+              file=sys.stderr)
+        spec = {k: v for k, v in spec.items() if k != "work"}
+    scheduler = scheduler or os.environ.get("RAYDAMP_DASK_SCHEDULER") or None
+    zarr_out = out is not None and Path(out).suffix.lower() == ".zarr"
+    try:
+        from .sweep import check_sweep
+
+        check_sweep(spec, grid, chunk_size=chunk_size)  # bad input is reported before a cluster starts
+    except ValueError as error:
+        return _fail(f"{spec_path}: {error}")
+    try:
+        client, close = _client(scheduler, workers)
+    except (OSError, TimeoutError) as error:
+        return _fail(f"--scheduler {scheduler}: cannot connect ({error})")
+    start = time.perf_counter()
+    try:
+        ds = sweep(spec, grid, client=client, chunk_size=chunk_size, progress=True if progress else None,
+                   store=out if zarr_out else None)
+    except ValueError as error:
+        return _fail(f"{spec_path}: {error}")
+    finally:
+        for thing in close:
+            thing.close()
+    print(_summary(ds, time.perf_counter() - start))
+    if out is not None:
+        if not zarr_out:
+            save_sweep(ds, out)
+        print(f"wrote {out}")
+    messages = json.loads(ds.attrs.get("messages", "{}"))
+    if messages:
+        for member, message in list(messages.items())[:_SHOWN_FAILURES]:
+            values = ", ".join(f"{name}={ds[name].values[int(member)]}" for name in json.loads(ds.attrs["grid"]))
+            print(f"raydamp sweep: member {member} ({values}): {message}", file=sys.stderr)
+        if len(messages) > _SHOWN_FAILURES:
+            print(f"raydamp sweep: ... and {len(messages) - _SHOWN_FAILURES} more", file=sys.stderr)
+        return 1
+    return 0
