@@ -183,7 +183,7 @@ def _plan(model: Model, options: dict[str, Any], grid: Mapping[str, Any]):
             run[name] = (value or None) if name in ("tableau", "composition") else value
         if run["method"] not in names_catalogue:
             raise ValueError(f"method: unknown method {run['method']!r} (known: {', '.join(names_catalogue)})")
-        run["h"] = real("h", float(run["h"]), positive=True)
+        run["h"] = real("grid.h" if "h" in run_names else "h", float(run["h"]), positive=True)
         groups.append((run, start, start + counts[key]))
         start += counts[key]
     return columns, groups

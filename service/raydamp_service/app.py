@@ -14,9 +14,11 @@ from fastapi.exceptions import RequestValidationError
 from .config import Settings
 from .errors import validation_error_handler
 from .guard import RequestGuard, needs_token
-from .routes import catalogue, health, jobs, page
+from .routes import catalogue, health, jobs, page, sweeps
 from .runner import Runner
 from .store import JobStore
+from .sweep_runner import SweepRunner
+from .sweep_store import SweepStore
 
 __all__ = ["create_app"]
 
@@ -29,11 +31,17 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         store = JobStore(settings.db)
         store.open()
         runner = Runner(store, settings)
+        sweeps = SweepStore(store)
+        sweeps.open()
+        sweep_runner = SweepRunner(sweeps, settings)
         app.state.store, app.state.runner = store, runner
+        app.state.sweeps, app.state.sweep_runner = sweeps, sweep_runner
         runner.start()
+        sweep_runner.start()
         try:
             yield
         finally:
+            sweep_runner.stop()
             runner.stop()
             store.close()
 
@@ -44,7 +52,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.large_fetches = threading.Semaphore(settings.max_large_fetches)
     app.add_middleware(RequestGuard, settings=settings)
     app.add_exception_handler(RequestValidationError, validation_error_handler)
-    for router in (jobs.router, catalogue.router, health.router, page.router):
+    for router in (jobs.router, sweeps.router, catalogue.router, health.router, page.router):
         app.include_router(router)
     page.mount_assets(app)
     _document_limits(app, settings)

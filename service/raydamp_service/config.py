@@ -64,6 +64,16 @@ class Settings(BaseSettings):
     retain_bytes: int = Field(4 * 2**30, ge=0, description="trajectory bytes kept at most")
     retention_interval_seconds: float = Field(60.0, gt=0, description="how often the retention pass runs")
 
+    # Sweeps (POST /v1/sweeps) run through raydamp.sweep on a Dask client: a scheduler's address, or
+    # by default a LocalCluster inside this process (threads; the compiled runs release the GIL).
+    dask_scheduler: str | None = Field(None, description="a Dask scheduler's address (tcp://host:8786) for "
+                                                         "sweeps; unset: an in-process LocalCluster")
+    sweep_threads: int = Field(2, ge=1, le=64, description="threads of the in-process LocalCluster")
+    max_sweep_members: int = Field(100_000, ge=1, description="grid points of one sweep at most")
+    max_sweep_steps: int = Field(10**10, ge=1, description="members x steps of one sweep at most")
+    max_sweep_bytes: int = Field(256 * 2**20, ge=1, le=900_000_000, description="a sweep's result size at most")
+    max_queued_sweeps: int = Field(20, ge=1, description="queued sweeps beyond this get 429 with Retry-After")
+
     # How often a run's progress is also written to the database (GET reads memory first).
     progress_save_seconds: float = Field(1.0, gt=0)
     # How long shutdown waits for interrupted runs to hand their jobs back to the queue.

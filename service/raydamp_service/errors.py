@@ -17,6 +17,7 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 
 from .schemas import UNION_TAGS
+from .sweep_schemas import GRID_TAGS
 
 __all__ = ["validation_error_handler"]
 
@@ -45,10 +46,16 @@ def _json_safe(value: Any) -> Any:
 
 
 def _path(loc: list[Any]) -> list[Any]:
-    """The JSON path the client wrote: without the tag pydantic adds for the form of a field."""
-    if len(loc) >= 3 and loc[0] == "body" and loc[2] in UNION_TAGS.get(loc[1], ()):
-        return [*loc[:2], *loc[3:]]
-    return loc
+    """The JSON path the client wrote: without the tags pydantic adds for the form of a field (after
+    "system" or "initial_state" wherever the job sits, and after a sweep's axis name)."""
+    out: list[Any] = []
+    for i, key in enumerate(loc):
+        before = loc[i - 1] if i >= 1 else None
+        if isinstance(key, str) and i >= 2 and (key in UNION_TAGS.get(before, ()) or (
+                key in GRID_TAGS and loc[i - 2] == "grid" and loc[i - 3:i - 2] == ["body"])):
+            continue
+        out.append(key)
+    return out
 
 
 def _error(item: dict[str, Any]) -> dict[str, Any]:

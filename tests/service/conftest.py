@@ -142,6 +142,16 @@ class Server:
     def wait_finished(self, job_id: str, timeout: float = JOB_TIMEOUT) -> dict:
         return self.wait_for(job_id, lambda job: job["status"] in {"completed", "failed", "cancelled"}, timeout)
 
+    def wait_for_sweep(self, sweep_id: str, timeout: float = JOB_TIMEOUT) -> dict:
+        deadline = time.monotonic() + timeout
+        while True:
+            view = self.client.get(f"/v1/sweeps/{sweep_id}").json()
+            if view["status"] in {"completed", "failed", "cancelled"}:
+                return view
+            if time.monotonic() > deadline:
+                raise AssertionError(f"sweep {sweep_id} did not finish in {timeout} s; last seen: {view}")
+            time.sleep(POLL)
+
 
 @pytest.fixture
 def start_server(tmp_path: Path) -> Iterator:
@@ -174,3 +184,19 @@ def module_server(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempP
     server = Server(tmp / "raydamp.sqlite3", tmp / "server.log", dict(getattr(request.module, "SERVER_ENV", {})))
     yield server.start()
     server.stop()
+
+
+@pytest.fixture(scope="module")
+def start_module_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator:
+    """start_server for a module's shared process whose settings are known only at run time (an address)."""
+    tmp = tmp_path_factory.mktemp("service")
+    servers: list[Server] = []
+
+    def start(**env: str) -> Server:
+        server = Server(tmp / f"raydamp{len(servers)}.sqlite3", tmp / f"server{len(servers)}.log", env)
+        servers.append(server)
+        return server.start()
+
+    yield start
+    for server in servers:
+        server.stop()

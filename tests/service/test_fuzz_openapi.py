@@ -25,7 +25,8 @@ EXAMPLES = {schemathesis.GenerationMode.POSITIVE: 40, schemathesis.GenerationMod
 
 # One worker, kept busy by a long run for the whole module: fuzzed jobs queue behind it (and are
 # cancelled at shutdown) instead of loading the machine.
-SERVER_ENV = {"RAYDAMP_WORKERS": "1", "RAYDAMP_MAX_STEPS": str(10**10)}
+# Fuzzed sweeps run on the service's in-process cluster: held to 10^6 member-steps, so they are quick.
+SERVER_ENV = {"RAYDAMP_WORKERS": "1", "RAYDAMP_MAX_STEPS": str(10**10), "RAYDAMP_MAX_SWEEP_STEPS": str(10**6)}
 SMALL = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "step_size": 0.1,
          "n_steps": 200, "initial_state": {"q": [0.9 * math.pi], "p": [0.0]}}
 LONG_RUN = {**SMALL, "step_size": 0.001, "n_steps": 4 * 10**9, "save_every": 10**6}
@@ -39,8 +40,16 @@ def jobs(module_server) -> dict[str, list[str]]:
     running = module_server.submit(LONG_RUN)
     module_server.wait_for(running, lambda job: job["status"] == "running")
     queued = [module_server.submit(SMALL) for _ in range(6)]
+    sweeps = []
+    for _ in range(4):
+        response = module_server.client.post("/v1/sweeps", json={"job": SMALL, "grid": {"eps": [0.0, 0.1]}})
+        assert response.status_code == 202, response.text
+        sweeps.append(response.json()["id"])
+    for sweep_id in sweeps:
+        module_server.wait_for_sweep(sweep_id)
     # DELETE removes finished jobs: it gets its own pool, so the others keep their trajectories.
-    return {"kept": [done[0], done[1], running, *queued[:3]], "disposable": [*done[2:], *queued[3:]]}
+    return {"kept": [done[0], done[1], running, *queued[:3]], "disposable": [*done[2:], *queued[3:]],
+            "sweeps kept": sweeps[:2], "sweeps disposable": sweeps[2:]}
 
 
 def test_fuzz_every_operation(module_server, jobs):
@@ -56,6 +65,11 @@ def test_fuzz_every_operation(module_server, jobs):
             if pick % 6:  # one case in six keeps its made-up id (a 404)
                 pool = jobs["disposable" if case.method.upper() == "DELETE" else "kept"]
                 case.path_parameters["job_id"] = pool[pick % len(pool)]
+        if case.path_parameters and "sweep_id" in case.path_parameters:
+            pick = zlib.crc32(str(case.path_parameters["sweep_id"]).encode())
+            if pick % 4:
+                pool = jobs["sweeps disposable" if case.method.upper() == "DELETE" else "sweeps kept"]
+                case.path_parameters["sweep_id"] = pool[pick % len(pool)]
         try:
             response = case.call_and_validate(base_url=base_url, checks=CHECKS)
         except Exception as error:  # collect, so one run reports every distinct failure
@@ -86,7 +100,9 @@ def test_fuzz_every_operation(module_server, jobs):
     # The job paths were reached with real jobs, not only answered 404.
     for expected in [("GET", "/v1/jobs/{job_id}", 200), ("GET", "/v1/jobs/{job_id}/trajectory", 200),
                      ("POST", "/v1/jobs/{job_id}/cancel", 202), ("DELETE", "/v1/jobs/{job_id}", 204),
-                     ("POST", "/v1/jobs", 202), ("POST", "/v1/jobs", 422), ("GET", "/v1/jobs", 200)]:
+                     ("POST", "/v1/jobs", 202), ("POST", "/v1/jobs", 422), ("GET", "/v1/jobs", 200),
+                     ("GET", "/v1/sweeps/{sweep_id}", 200), ("GET", "/v1/sweeps/{sweep_id}/result", 200),
+                     ("POST", "/v1/sweeps", 422)]:
         assert expected in reached, (expected, sorted(reached))
     assert not any(status >= 500 for _, _, status in seen)
     print(f"schemathesis: {sum(seen.values())} requests, answers by operation and status: {dict(sorted(seen.items()))}")

@@ -1,0 +1,155 @@
+"""/v1/sweeps: a job spec plus a grid, run through raydamp.sweep on Dask; progress per chunk,
+the result as NetCDF, cancel and delete like jobs."""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from fastapi import APIRouter, HTTPException, Query, Request, Response
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import StreamingResponse
+
+from ..deps import SettingsDep
+from ..problems import SpecError
+from ..store import FINAL_STATUSES
+from ..sweep_problems import check_sweep_spec
+from ..sweep_runner import SweepRunner
+from ..sweep_schemas import SweepCreated, SweepList, SweepListItem, SweepSpec, SweepView
+from ..sweep_store import SweepRecord, SweepStore
+from ..schemas import JobStatus
+
+router = APIRouter(prefix="/v1/sweeps", tags=["sweeps"])
+
+_NOT_FOUND = {404: {"description": "no sweep with this id"}}
+_PIECE = 1 << 20  # bytes per piece of a streamed result
+
+
+def _sweeps(request: Request) -> SweepStore:
+    return request.app.state.sweeps
+
+
+def _runner(request: Request) -> SweepRunner:
+    return request.app.state.sweep_runner
+
+
+def _url(sweep_id: str) -> str:
+    return f"/v1/sweeps/{sweep_id}"
+
+
+def _existing(request: Request, sweep_id: str) -> SweepRecord:
+    record = _sweeps(request).get(sweep_id)
+    if record is None:
+        raise HTTPException(404, detail=f"no sweep with id {sweep_id!r}")
+    return record
+
+
+def _done(record: SweepRecord, request: Request) -> int:
+    live = _runner(request).members_done(record.id) if record.status == "running" else None
+    return live if live is not None else record.members_done
+
+
+def _view(record: SweepRecord, request: Request) -> SweepView:
+    done = _done(record, request)
+    return SweepView(id=record.id, status=record.status, members=record.members, members_done=done,
+                     progress=1.0 if record.status == "completed" else done / record.members,
+                     cancel_requested=record.cancel_requested, attempts=record.attempts, error=record.error,
+                     outcomes=record.outcomes, result=_url(record.id) + "/result" if record.result_bytes else None,
+                     result_bytes=record.result_bytes, spec=SweepSpec.model_validate(record.spec),
+                     created_at=record.created_at, started_at=record.started_at, finished_at=record.finished_at)
+
+
+@router.post("", status_code=202, response_model=SweepCreated,
+             responses={422: {"description": "the spec or grid is invalid; detail[].loc names the field"},
+                        429: {"description": "max_queued_sweeps sweeps are waiting; retry after Retry-After seconds"}})
+def submit_sweep(spec: SweepSpec, request: Request, response: Response, settings: SettingsDep) -> SweepCreated:
+    """Queue a sweep: every combination of the grid's axes, each member the job with that point's values.
+    Poll the Location for progress; the result is a NetCDF file (raydamp.load reads it)."""
+    try:
+        plan = check_sweep_spec(spec, settings)
+    except SpecError as error:
+        raise RequestValidationError([{"type": "value_error", "loc": ("body", *error.loc), "msg": error.message,
+                                       "input": None}]) from None
+    record = _sweeps(request).create(spec.model_dump(mode="json"), plan.members, settings.max_queued_sweeps)
+    if record is None:
+        raise HTTPException(429, detail=f"{settings.max_queued_sweeps} sweeps are already queued "
+                            "(max_queued_sweeps); retry later", headers={"Retry-After": str(settings.retry_after_seconds)})
+    _runner(request).submit(record.id)
+    response.headers["Location"] = request.scope.get("root_path", "") + _url(record.id)
+    return SweepCreated(id=record.id, status=record.status, members=record.members)
+
+
+@router.get("", response_model=SweepList)
+def list_sweeps(request: Request, settings: SettingsDep,
+                limit: Annotated[int, Query(ge=1, description="at most this many sweeps, newest first")] = 50,
+                status: Annotated[JobStatus | None, Query(description="only sweeps in this state")] = None
+                ) -> SweepList:
+    if limit > settings.max_list_limit:
+        raise RequestValidationError([{"type": "less_than_equal", "loc": ("query", "limit"), "input": limit,
+                                       "msg": f"limit must be <= {settings.max_list_limit}"}])
+    return SweepList(sweeps=[
+        SweepListItem(id=r.id, status=r.status, members=r.members,
+                      progress=1.0 if r.status == "completed" else _done(r, request) / r.members,
+                      created_at=r.created_at, finished_at=r.finished_at, url=_url(r.id))
+        for r in _sweeps(request).recent(limit, status)])
+
+
+@router.get("/{sweep_id}", response_model=SweepView, responses=_NOT_FOUND)
+def get_sweep(sweep_id: str, request: Request) -> SweepView:
+    """Status, members done (per finished chunk), and once finished the members per outcome."""
+    return _view(_existing(request, sweep_id), request)
+
+
+def _pieces(connection, rowid: int, size: int):
+    try:
+        with connection.blobopen("sweeps", "result", rowid, readonly=True) as blob:
+            for offset in range(0, size, _PIECE):
+                yield blob.read(_PIECE)
+    finally:
+        connection.close()
+
+
+@router.get("/{sweep_id}/result", response_class=Response,
+            responses={**_NOT_FOUND, 200: {"content": {"application/x-netcdf": {}}, "description": "NetCDF"},
+                       409: {"description": "the sweep has no result (yet)"}})
+def get_result(sweep_id: str, request: Request,
+               format: Annotated[Literal["netcdf"], Query(  # noqa: A002 - the API's name
+                   description="netcdf: the sweep's xarray Dataset (raydamp.load or xarray.open_dataset)")] = "netcdf"
+               ) -> Response:
+    """The members' trajectories and outcomes as one NetCDF file (raydamp.sweep's Dataset; a cancelled
+    sweep's file holds the chunks finished before the cancel)."""
+    record = _existing(request, sweep_id)
+    handle = _sweeps(request).result_handle(sweep_id)
+    if handle is None:
+        reason = f": {record.error}" if record.error else ""
+        raise HTTPException(409, detail=f"sweep {sweep_id} is {record.status} and has no result{reason}")
+    connection, rowid, size = handle
+    return StreamingResponse(_pieces(connection, rowid, size), media_type="application/x-netcdf",
+                             headers={"Content-Disposition": f'attachment; filename="sweep-{sweep_id}.nc"',
+                                      "Content-Length": str(size)})
+
+
+@router.post("/{sweep_id}/cancel", status_code=202, response_model=SweepView,
+             responses={**_NOT_FOUND, 409: {"description": "the sweep has already finished"}})
+def cancel_sweep(sweep_id: str, request: Request) -> SweepView:
+    """Cancel a queued sweep at once, or stop a running one after its current chunks: it ends
+    "cancelled" with the finished chunks as its result."""
+    record = _existing(request, sweep_id)
+    if record.status in FINAL_STATUSES:
+        raise HTTPException(409, detail=f"sweep {sweep_id} is already {record.status}; there is nothing to cancel")
+    record = _sweeps(request).request_cancel(sweep_id)
+    _runner(request).cancel(sweep_id)
+    return _view(record, request)
+
+
+@router.delete("/{sweep_id}", status_code=202, response_model=SweepView,
+               responses={**_NOT_FOUND, 204: {"description": "the finished sweep and its result were removed"}})
+def delete_sweep(sweep_id: str, request: Request) -> SweepView | Response:
+    """A finished sweep is removed with its result (204); a queued or running one is cancelled (202)."""
+    record = _existing(request, sweep_id)
+    if record.status in FINAL_STATUSES and _sweeps(request).delete_finished(sweep_id):
+        return Response(status_code=204)
+    if record.status in FINAL_STATUSES:
+        raise HTTPException(404, detail=f"no sweep with id {sweep_id!r}")
+    record = _sweeps(request).request_cancel(sweep_id)
+    _runner(request).cancel(sweep_id)
+    return _view(record, request)
