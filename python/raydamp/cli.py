@@ -31,6 +31,9 @@ def main(argv: list[str] | None = None) -> int:
                                          "LocalCluster on this machine)")
     swp.add_argument("--workers", type=int, default=2, help="worker processes of the LocalCluster (default 2)")
     swp.add_argument("--no-progress", action="store_true", help="no progress bar")
+    from .service_client import add_client_commands
+
+    add_client_commands(commands)
     commands.add_parser("methods", help="list the methods and their tableaux")
     commands.add_parser("models", help="list the built-in models and their parameters")
     serve = commands.add_parser("serve", help="run the job service (same as python -m raydamp_service)")
@@ -49,6 +52,10 @@ def main(argv: list[str] | None = None) -> int:
             return 2
         return sweep_file(args.spec, args.grid, out=args.out, chunk_size=args.chunk_size, scheduler=args.scheduler,
                           workers=args.workers, progress=not args.no_progress)
+    if args.command in ("jobs", "sweeps"):
+        from .service_client import client_command
+
+        return client_command(args)
     if args.command == "methods":
         from .methods import methods
 

@@ -60,10 +60,16 @@ def _view(record: SweepRecord, request: Request) -> SweepView:
 
 @router.post("", status_code=202, response_model=SweepCreated,
              responses={422: {"description": "the spec or grid is invalid; detail[].loc names the field"},
+                        503: {"description": "this installation has no Dask (the sweep extra)"},
                         429: {"description": "max_queued_sweeps sweeps are waiting; retry after Retry-After seconds"}})
 def submit_sweep(spec: SweepSpec, request: Request, response: Response, settings: SettingsDep) -> SweepCreated:
     """Queue a sweep: every combination of the grid's axes, each member the job with that point's values.
     Poll the Location for progress; the result is a NetCDF file (raydamp.load reads it)."""
+    try:
+        import dask.distributed  # noqa: F401 - present only with raydamp's sweep extra
+    except ImportError:
+        raise HTTPException(503, detail="sweeps need dask[distributed] and xarray: install raydamp with the "
+                                        "sweep extra (pip install 'raydamp[sweep]')") from None
     try:
         plan = check_sweep_spec(spec, settings)
     except SpecError as error:
