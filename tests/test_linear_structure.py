@@ -274,3 +274,38 @@ def test_plain_form_is_size_limited(monkeypatch):
     data = raydamp.LinearStructure(np.eye(4), np.eye(4)).to_dict()
     with pytest.raises(ValueError, match="M.diagonal: 4 entries, more than the limit 3"):
         raydamp.LinearStructure.from_dict(data)
+
+
+def test_plain_form_takes_matrix_market_files(tmp_path):
+    """{"file": ref}: a path by default, or whatever a files(ref) resolver gives (the service's uploads)."""
+    import io
+
+    import scipy.io
+    import scipy.sparse
+
+    K = scipy.sparse.csc_matrix(2 * np.eye(4) - np.eye(4, k=1) - np.eye(4, k=-1))
+    scipy.io.mmwrite(tmp_path / "K.mtx", K)
+    plain = {"kind": "linear_structure", "M": {"diagonal": [1.0] * 4}, "K": {"file": str(tmp_path / "K.mtx")},
+             "alpha": 0.1}
+    s = raydamp.LinearStructure.from_dict(plain)
+    assert (s.K != K).nnz == 0 and s.mass_kind == "lumped"
+    stored = (tmp_path / "K.mtx").read_bytes()
+
+    def files(ref):
+        if ref != "abc":
+            raise ValueError(f"no uploaded file with id {ref!r}")
+        return io.BytesIO(stored)
+
+    s = raydamp.LinearStructure.from_dict({**plain, "K": {"file": "abc"}}, files=files)
+    assert (s.K != K).nnz == 0
+    with pytest.raises(ValueError, match="K.file: no uploaded file with id 'zzz'"):
+        raydamp.LinearStructure.from_dict({**plain, "K": {"file": "zzz"}}, files=files)
+    with pytest.raises(ValueError, match=r"K.file: the matrix is 4 x 4; it must be 3 x 3"):
+        raydamp.LinearStructure.from_dict({**plain, "M": {"diagonal": [1.0] * 3}, "K": {"file": "abc"}}, files=files)
+    with pytest.raises(ValueError, match="K.file: cannot read it as Matrix Market"):
+        raydamp.LinearStructure.from_dict({**plain, "K": {"file": "abc"}}, files=lambda ref: io.BytesIO(b"hello\n"))
+    scipy.io.mmwrite(tmp_path / "C.mtx", scipy.sparse.csc_matrix(np.eye(4) * (1 + 1j)))
+    with pytest.raises(ValueError, match="K.file: must be a real matrix"):
+        raydamp.LinearStructure.from_dict({**plain, "K": {"file": str(tmp_path / "C.mtx")}})
+    with pytest.raises(ValueError, match="K.file: no Matrix Market file at"):
+        raydamp.LinearStructure.from_dict({**plain, "K": {"file": str(tmp_path / "none.mtx")}})
