@@ -45,10 +45,12 @@ def _json_safe(value: Any) -> Any:
 
 
 def _path(loc: list[Any]) -> list[Any]:
-    """The JSON path the client wrote: without the tag pydantic adds for the form of a field."""
-    if len(loc) >= 3 and loc[0] == "body" and loc[2] in UNION_TAGS.get(loc[1], ()):
-        return [*loc[:2], *loc[3:]]
-    return loc
+    """The JSON path the client wrote: without the tags pydantic adds for the form of a field (at any
+    depth: system's kind, then a structure's matrix form)."""
+    if not loc or loc[0] != "body":
+        return loc
+    return [part for i, part in enumerate(loc)
+            if not (i >= 2 and isinstance(loc[i - 1], str) and part in UNION_TAGS.get(loc[i - 1], ()))]
 
 
 def _error(item: dict[str, Any]) -> dict[str, Any]:
