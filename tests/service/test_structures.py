@@ -106,6 +106,15 @@ def test_bar_as_coo_triplets_matches_python(module_server):
     balance = energy - energy[0] + np.array(trajectory["work"])
     assert np.abs(balance).max() < 1e-3 * abs(energy[0])
     assert module_server.client.get("/v1/jobs", params={"limit": 5}).json()["jobs"][0]["model"] == "linear_structure"
+    # Its files and plots, whose coordinate names come from the structure's size (not from "coordinates").
+    for fmt in ("csv", "npz"):
+        response = module_server.client.get(f"/v1/jobs/{done['id']}/trajectory", params={"format": fmt})
+        assert response.status_code == 200, response.text
+    npz = np.load(io.BytesIO(response.content))
+    np.testing.assert_allclose(npz["energy"], local.energy, rtol=1e-12, atol=0)
+    for kind in ("energy", "phase"):
+        response = module_server.client.get(f"/v1/jobs/{done['id']}/plots/{kind}.png")
+        assert response.status_code == 200 and response.content[:4] == b"\x89PNG", response.text
 
 
 def test_lumped_mass_as_a_diagonal_and_save_dofs(module_server):
