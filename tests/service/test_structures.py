@@ -281,3 +281,48 @@ def test_openapi_documents_files_and_structures(module_server):
     components = schema["components"]["schemas"]
     assert components["CooMatrix"]["properties"]["rows"]["maxItems"] == 1_000_000
     assert "LinearStructureInput" in components
+
+
+def test_files_need_the_token_persist_across_restarts_and_have_a_quota(start_server):
+    M, K = bar()
+    content = mtx_bytes(K)
+    server = start_server(RAYDAMP_TOKEN="s3cret", RAYDAMP_MAX_STORED_FILE_BYTES=str(2 * len(content) + 10))
+    base = server.client.base_url
+    import httpx
+
+    assert httpx.post(f"{base}/v1/files", files={"file": ("K.mtx", content)}).status_code == 401
+    assert httpx.get(f"{base}/v1/files").status_code == 401
+    first = upload(server, "K.mtx", content).json()["id"]
+    assert upload(server, "K2.mtx", content).status_code == 201
+    response = upload(server, "K3.mtx", content)  # a third would pass max_stored_file_bytes
+    assert response.status_code == 507, response.text
+    assert "max_stored_file_bytes" in response.json()["detail"]
+    assert len(server.client.get("/v1/files").json()["files"]) == 2
+    server.restart()
+    assert server.client.get(f"/v1/files/{first}").json()["nnz"] == K.nnz
+    assert server.client.delete(f"/v1/files/{first}").status_code == 204
+    assert upload(server, "K3.mtx", content).status_code == 201  # room again
+
+
+def test_an_older_database_gains_the_files_table(tmp_path):
+    import sqlite3
+
+    from raydamp_service.store import JobStore
+
+    db = tmp_path / "old.sqlite3"
+    with sqlite3.connect(db) as connection:  # the tables of a database from before uploads
+        connection.execute("CREATE TABLE jobs (seq INTEGER PRIMARY KEY AUTOINCREMENT, id TEXT NOT NULL UNIQUE, "
+                           "status TEXT NOT NULL, spec TEXT NOT NULL, progress REAL NOT NULL DEFAULT 0, "
+                           "attempts INTEGER NOT NULL DEFAULT 0, cancel_requested INTEGER NOT NULL DEFAULT 0, "
+                           "summary TEXT, error TEXT, failed_step INTEGER, created_at TEXT NOT NULL, "
+                           "started_at TEXT, finished_at TEXT)")
+    connection.close()
+    store = JobStore(db)
+    store.open()
+    try:
+        record = store.add_file("K.mtx", b"%%MatrixMarket ...", (3, 3), 7)
+        assert store.file(record.id).shape == (3, 3)
+        assert store.file_content(record.id) == b"%%MatrixMarket ..."
+        assert store.delete_file(record.id) == "deleted" and store.delete_file(record.id) == "missing"
+    finally:
+        store.close()
