@@ -309,3 +309,21 @@ def test_plain_form_takes_matrix_market_files(tmp_path):
         raydamp.LinearStructure.from_dict({**plain, "K": {"file": str(tmp_path / "C.mtx")}})
     with pytest.raises(ValueError, match="K.file: no Matrix Market file at"):
         raydamp.LinearStructure.from_dict({**plain, "K": {"file": str(tmp_path / "none.mtx")}})
+
+
+def test_a_job_may_start_at_rest():
+    """{"rest": true} in a job spec: q = p = 0 of the model's size (a structure's response to its load)."""
+    from raydamp.job import job_arguments
+
+    K = 2 * np.eye(4) - np.eye(4, k=1) - np.eye(4, k=-1)
+    s = raydamp.LinearStructure(np.eye(4), K, alpha=0.1, f=[0, 0, 0, 1.0])
+    spec = {**raydamp.job.describe_model(s), "method": "3s", "step_size": 0.1, "n_steps": 20,
+            "initial_state": {"rest": True}}
+    model, q0, p0, options = job_arguments(spec)
+    np.testing.assert_array_equal(q0, np.zeros(4))
+    np.testing.assert_array_equal(p0, np.zeros(4))
+    sol = raydamp.integrate(model, q0, p0, **options)
+    assert sol.q[-1, 3] > 0  # pulled by the load
+    for state in ({"rest": False}, {"rest": True, "q": [0.0] * 4}):
+        with pytest.raises(ValueError, match=r'initial_state: a start at rest is exactly \{"rest": true\}'):
+            job_arguments({**spec, "initial_state": state})

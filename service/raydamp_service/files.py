@@ -47,7 +47,7 @@ def check_matrix_market(content: bytes, *, max_dim: int) -> MatrixFileInfo:
         raise MatrixFileError(f"the matrix is {rows} x {cols}; M and K must be square")
     if rows > max_dim:
         raise MatrixFileError(f"the matrix is {rows} x {cols}; this service runs structures of at most "
-                              f"max_dim = {max_dim} coordinates")
+                              f"max_structure_dim = {max_dim} coordinates")
     announced = entries if layout == "coordinate" else rows * cols
     shortest = _MIN_COORDINATE_LINE if layout == "coordinate" else _MIN_ARRAY_LINE
     if announced > len(content) // shortest:

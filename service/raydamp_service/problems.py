@@ -14,11 +14,12 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
 import raydamp
 from raydamp.models import make_model
 
 from .config import Settings
-from .schemas import ChainInput, CooForm, DiagonalForm, JobSpec, LinearStructureInput, ModeState
+from .schemas import ChainInput, CooForm, DiagonalForm, JobSpec, LinearStructureInput, ModeState, RestState
 
 __all__ = ["SpecError", "RaydampCall", "build_call", "check_spec", "planned_steps"]
 
@@ -136,16 +137,20 @@ def _check_structure_size(system: LinearStructureInput, settings: Settings) -> N
                     raise SpecError(("system", key, "coo", name), f"system.{key}.coo.{name}: {count} entries; this "
                                     f"service accepts at most max_structure_nnz = {settings.max_structure_nnz} per "
                                     "matrix (upload larger ones as Matrix Market files: POST /v1/files)")
-            if form.coo.shape[0] > settings.max_dim:
+            if form.coo.shape[0] > settings.max_structure_dim:
                 raise SpecError(("system", key, "coo", "shape"), f"system.{key}.coo.shape: n = {form.coo.shape[0]}; "
-                                f"this service runs structures of at most max_dim = {settings.max_dim} coordinates")
-        elif isinstance(form, DiagonalForm) and len(form.diagonal) > settings.max_dim:
+                                "this service runs structures of at most max_structure_dim = "
+                                f"{settings.max_structure_dim} coordinates")
+        elif isinstance(form, DiagonalForm) and len(form.diagonal) > settings.max_structure_dim:
             raise SpecError(("system", key, "diagonal"), f"system.{key}.diagonal: {len(form.diagonal)} entries; "
-                            f"this service runs structures of at most max_dim = {settings.max_dim} coordinates")
+                            "this service runs structures of at most max_structure_dim = "
+                            f"{settings.max_structure_dim} coordinates")
 
 
 def _initial_state(spec: JobSpec, model) -> tuple[Any, Any]:
     state = spec.initial_state
+    if isinstance(state, RestState):
+        return np.zeros(model.dim), np.zeros(model.dim)
     if isinstance(state, ModeState):
         if not isinstance(model, raydamp.Chain):
             raise SpecError(("initial_state",), "initial_state: {mode, amplitude} starts a chain; give q and p")

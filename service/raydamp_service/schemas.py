@@ -149,12 +149,13 @@ class ChainInput(_Input):
 # ---- linear structures: raydamp.LinearStructure.to_dict()'s form, and uploaded files ----------------
 
 MAX_COO_ENTRIES = 1_000_000  # raydamp.structure.MAX_PLAIN_ENTRIES; Settings.max_structure_nnz is at most this
+MAX_STRUCTURE_DIM = 10**7  # Settings.max_structure_dim is at most this
 FileId = Annotated[str, Field(pattern=r"^[0-9a-f]{32}$", description="an id from POST /v1/files")]
 
 
 class CooMatrix(_Input):
-    shape: list[Annotated[int, Field(ge=1, le=MAX_VECTOR)]] = Field(min_length=2, max_length=2,
-                                                                    description="[n, n]")
+    shape: list[Annotated[int, Field(ge=1, le=MAX_STRUCTURE_DIM)]] = Field(min_length=2, max_length=2,
+                                                                           description="[n, n]")
     rows: list[Annotated[int, Field(ge=0)]] = Field(max_length=MAX_COO_ENTRIES, description="row of each entry")
     cols: list[Annotated[int, Field(ge=0)]] = Field(max_length=MAX_COO_ENTRIES, description="column of each entry")
     values: list[FiniteFloat] = Field(max_length=MAX_COO_ENTRIES, description="the entries (repeated "
@@ -166,8 +167,8 @@ class CooForm(_Input):
 
 
 class DiagonalForm(_Input):
-    diagonal: list[FiniteFloat] = Field(min_length=1, max_length=MAX_VECTOR, description="a diagonal matrix "
-                                                                                         "(lumped mass)")
+    diagonal: list[FiniteFloat] = Field(min_length=1, max_length=MAX_STRUCTURE_DIM,
+                                        description="a diagonal matrix (lumped mass)")
 
 
 class FileForm(_Input):
@@ -206,7 +207,8 @@ class LinearStructureInput(_Input):
     K: MatrixInput = Field(description="the stiffness matrix, in the same forms as M")
     alpha: FiniteFloat = Field(0.0, ge=0, description="Rayleigh damping C = alpha M + beta K")
     beta: FiniteFloat = Field(0.0, ge=0)
-    f: Vector | None = Field(None, description="constant load (length n); null for none")
+    f: Annotated[list[FiniteFloat], Field(max_length=MAX_STRUCTURE_DIM)] | None = Field(
+        None, description="constant load (length n); null for none")
 
 
 class ModeState(_Input):
@@ -217,13 +219,20 @@ class ModeState(_Input):
     amplitude: FiniteFloat = 1.0
 
 
+class RestState(_Input):
+    """Start at rest at q = 0, p = 0: a structure's response to its load f, without sending 2 n zeros
+    (so a structure may be larger than max_dim, up to max_structure_dim)."""
+
+    rest: Literal[True]
+
+
 # Forms a field may take, told apart by their content rather than tried in turn: a bad input then gets
 # the errors of the form it meant, not those of every form. Pydantic puts the form's tag into an
 # error's loc after the field; the 422 handler drops it (UNION_TAGS), so a loc is the path the client wrote.
 def _state_form(value: object) -> str:
     if isinstance(value, dict):
-        return "mode" if "mode" in value else "state"
-    return "mode" if isinstance(value, ModeState) else "state"
+        return "mode" if "mode" in value else "rest" if "rest" in value else "state"
+    return "mode" if isinstance(value, ModeState) else "rest" if isinstance(value, RestState) else "state"
 
 
 def _system_form(value: object) -> str:
@@ -232,10 +241,10 @@ def _system_form(value: object) -> str:
 
 
 _MATRIX_TAGS = frozenset({"coo form", "diagonal form", "file form"})
-UNION_TAGS = {"initial_state": frozenset({"state", "mode"}),
+UNION_TAGS = {"initial_state": frozenset({"state", "mode", "rest"}),
               "system": frozenset({"expressions", "chain", "linear_structure"}), "M": _MATRIX_TAGS, "K": _MATRIX_TAGS}
-StateInput = Annotated[Annotated[InitialState, Tag("state")] | Annotated[ModeState, Tag("mode")],
-                       Discriminator(_state_form)]
+StateInput = Annotated[Annotated[InitialState, Tag("state")] | Annotated[ModeState, Tag("mode")]
+                       | Annotated[RestState, Tag("rest")], Discriminator(_state_form)]
 AnySystemInput = Annotated[Annotated[SystemInput, Tag("expressions")] | Annotated[ChainInput, Tag("chain")]
                            | Annotated[LinearStructureInput, Tag("linear_structure")], Discriminator(_system_form)]
 

@@ -326,3 +326,35 @@ def test_an_older_database_gains_the_files_table(tmp_path):
         assert store.delete_file(record.id) == "deleted" and store.delete_file(record.id) == "missing"
     finally:
         store.close()
+
+
+def test_a_large_structure_started_at_rest_under_its_load(start_server):
+    """n = 20,000 (past max_dim = 1000, which bounds the vectors a job carries): K uploaded as a file, the
+    lumped M inline, {"rest": true} as the start, a pull at the free end, two coordinates saved."""
+    n = 20_000
+    M, K = bar(n)
+    lumped = np.asarray(M.sum(axis=1)).ravel()
+    server = start_server()
+    response = upload(server, "K.mtx", mtx_bytes(K, symmetry="symmetric"))
+    assert response.status_code == 201, response.text
+    f = np.zeros(n)
+    f[-1] = 1.0
+    h, steps = 2.5e-5, 400  # h omega_max = 2.5e-5 * 2n = 1: inside Stormer-Verlet's interval
+    system = {"kind": "linear_structure", "M": {"diagonal": lumped.tolist()}, "K": {"file": response.json()["id"]},
+              "alpha": 0.5, "beta": 1e-7, "f": f.tolist()}
+    spec = {"system": system, "method": "3s", "step_size": h, "n_steps": steps, "save_every": 100,
+            "initial_state": {"rest": True}, "save_dofs": [n - 2, n - 1]}
+    done = server.wait_finished(server.submit(spec), timeout=300)
+    assert done["status"] == "completed", done
+    trajectory = server.client.get(f"/v1/jobs/{done['id']}/trajectory").json()
+    s = raydamp.LinearStructure(sparse.diags(lumped), K, alpha=0.5, beta=1e-7, f=f)
+    local = raydamp.integrate(s, np.zeros(n), np.zeros(n), method="3s", h=h, n_steps=steps, save_every=100,
+                              save_dofs=[n - 2, n - 1], work=True)
+    np.testing.assert_allclose(trajectory["energy"], local.energy, rtol=1e-12, atol=0)
+    np.testing.assert_allclose(np.array(trajectory["q"]), local.q, rtol=1e-12, atol=1e-300)
+    assert trajectory["q"][-1][1] > trajectory["q"][-1][0] > 0  # the pulled end moved first and most
+    assert trajectory["energy"][-1] < 0  # V = 1/2 q^T K q - f^T q: the load did work on the bar
+    # A start at rest with a q of its own, or with anything else, is refused.
+    for state in ({"rest": False}, {"rest": True, "q": [0.0]}):
+        response = server.client.post("/v1/jobs", json={**spec, "initial_state": state})
+        assert any(l[:2] == ["body", "initial_state"] for l in locs(response)), state

@@ -42,7 +42,8 @@ def too_large_detail(limit: int) -> str:
 @router.post("", status_code=201, response_model=FileInfo,
              responses={413: {"description": "the file is over max_file_bytes"},
                         422: {"description": "no file part, or not a Matrix Market file this service can use (a "
-                                             "real square matrix of at most max_dim rows); detail[].msg says why"},
+                                             "real square matrix of at most max_structure_dim rows); detail[].msg "
+                                             "says why"},
                         507: {"description": "the stored files would exceed max_stored_file_bytes; delete some"}})
 def upload_file(file: Annotated[UploadFile, File(description="a Matrix Market (.mtx) file: a real square matrix")],
                 request: Request, response: Response, store: StoreDep, settings: SettingsDep) -> FileInfo:
@@ -54,7 +55,7 @@ def upload_file(file: Annotated[UploadFile, File(description="a Matrix Market (.
     if len(content) > limit:
         raise HTTPException(413, detail=too_large_detail(limit))
     try:
-        info = check_matrix_market(content, max_dim=settings.max_dim)
+        info = check_matrix_market(content, max_dim=settings.max_structure_dim)
     except MatrixFileError as error:
         raise RequestValidationError([{"type": "value_error", "loc": ("body", "file"), "msg": str(error),
                                        "input": _name(file.filename)}]) from None
