@@ -6,6 +6,7 @@ with raydamp in this process; bad structures and uploads refused with a 422 nami
 from __future__ import annotations
 
 import io
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -74,6 +75,13 @@ def local_run(M, K) -> raydamp.Solution:
     s = raydamp.LinearStructure(M, K, alpha=0.2, beta=1e-4, f=f)
     q0, p0 = initial_state()
     return raydamp.integrate(s, q0, p0, method="3s", h=H, n_steps=STEPS, save_every=100, work=True)
+
+
+def _peak_rss_mib(pid: int) -> float:
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmHWM:"):
+            return int(line.split()[1]) / 1024
+    raise AssertionError("no VmHWM in /proc status")
 
 
 def upload(server, name: str, content: bytes):
@@ -335,6 +343,7 @@ def test_a_large_structure_started_at_rest_under_its_load(start_server):
     M, K = bar(n)
     lumped = np.asarray(M.sum(axis=1)).ravel()
     server = start_server()
+    before = _peak_rss_mib(server.process.pid)
     response = upload(server, "K.mtx", mtx_bytes(K, symmetry="symmetric"))
     assert response.status_code == 201, response.text
     f = np.zeros(n)
@@ -354,6 +363,10 @@ def test_a_large_structure_started_at_rest_under_its_load(start_server):
     np.testing.assert_allclose(np.array(trajectory["q"]), local.q, rtol=1e-12, atol=1e-300)
     assert trajectory["q"][-1][1] > trajectory["q"][-1][0] > 0  # the pulled end moved first and most
     assert trajectory["energy"][-1] < 0  # V = 1/2 q^T K q - f^T q: the load did work on the bar
+    # The upload (1.2 MB), its parse, the structure (M, K, a few n-vectors) and the run: a few MB of data.
+    peak = _peak_rss_mib(server.process.pid)
+    print(f"\nservice process peak RSS: {before:.0f} MiB before the upload, {peak:.0f} MiB after the n = {n} run")
+    assert peak - before < 300, (before, peak)
     # A start at rest with a q of its own, or with anything else, is refused.
     for state in ({"rest": False}, {"rest": True, "q": [0.0]}):
         response = server.client.post("/v1/jobs", json={**spec, "initial_state": state})
