@@ -307,3 +307,56 @@ def test_plain_form_is_size_limited(monkeypatch):
     data = raydamp.LinearStructure(np.eye(4), np.eye(4)).to_dict()
     with pytest.raises(ValueError, match="M.diagonal: 4 entries, more than the limit 3"):
         raydamp.LinearStructure.from_dict(data)
+
+
+def test_plain_form_takes_matrix_market_files(tmp_path):
+    """{"file": ref}: a path by default, or whatever a files(ref) resolver gives (the service's uploads)."""
+    import io
+
+    import scipy.io
+    import scipy.sparse
+
+    K = scipy.sparse.csc_matrix(2 * np.eye(4) - np.eye(4, k=1) - np.eye(4, k=-1))
+    scipy.io.mmwrite(tmp_path / "K.mtx", K)
+    plain = {"kind": "linear_structure", "M": {"diagonal": [1.0] * 4}, "K": {"file": str(tmp_path / "K.mtx")},
+             "alpha": 0.1}
+    s = raydamp.LinearStructure.from_dict(plain)
+    assert (s.K != K).nnz == 0 and s.mass_kind == "lumped"
+    stored = (tmp_path / "K.mtx").read_bytes()
+
+    def files(ref):
+        if ref != "abc":
+            raise ValueError(f"no uploaded file with id {ref!r}")
+        return io.BytesIO(stored)
+
+    s = raydamp.LinearStructure.from_dict({**plain, "K": {"file": "abc"}}, files=files)
+    assert (s.K != K).nnz == 0
+    with pytest.raises(ValueError, match="K.file: no uploaded file with id 'zzz'"):
+        raydamp.LinearStructure.from_dict({**plain, "K": {"file": "zzz"}}, files=files)
+    with pytest.raises(ValueError, match=r"K.file: the matrix is 4 x 4; it must be 3 x 3"):
+        raydamp.LinearStructure.from_dict({**plain, "M": {"diagonal": [1.0] * 3}, "K": {"file": "abc"}}, files=files)
+    with pytest.raises(ValueError, match="K.file: cannot read it as Matrix Market"):
+        raydamp.LinearStructure.from_dict({**plain, "K": {"file": "abc"}}, files=lambda ref: io.BytesIO(b"hello\n"))
+    scipy.io.mmwrite(tmp_path / "C.mtx", scipy.sparse.csc_matrix(np.eye(4) * (1 + 1j)))
+    with pytest.raises(ValueError, match="K.file: must be a real matrix"):
+        raydamp.LinearStructure.from_dict({**plain, "K": {"file": str(tmp_path / "C.mtx")}})
+    with pytest.raises(ValueError, match="K.file: no Matrix Market file at"):
+        raydamp.LinearStructure.from_dict({**plain, "K": {"file": str(tmp_path / "none.mtx")}})
+
+
+def test_a_job_may_start_at_rest():
+    """{"rest": true} in a job spec: q = p = 0 of the model's size (a structure's response to its load)."""
+    from raydamp.job import job_arguments
+
+    K = 2 * np.eye(4) - np.eye(4, k=1) - np.eye(4, k=-1)
+    s = raydamp.LinearStructure(np.eye(4), K, alpha=0.1, f=[0, 0, 0, 1.0])
+    spec = {**raydamp.job.describe_model(s), "method": "3s", "step_size": 0.1, "n_steps": 20,
+            "initial_state": {"rest": True}}
+    model, q0, p0, options = job_arguments(spec)
+    np.testing.assert_array_equal(q0, np.zeros(4))
+    np.testing.assert_array_equal(p0, np.zeros(4))
+    sol = raydamp.integrate(model, q0, p0, **options)
+    assert sol.q[-1, 3] > 0  # pulled by the load
+    for state in ({"rest": False}, {"rest": True, "q": [0.0] * 4}):
+        with pytest.raises(ValueError, match=r'initial_state: a start at rest is exactly \{"rest": true\}'):
+            job_arguments({**spec, "initial_state": state})

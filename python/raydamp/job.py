@@ -101,8 +101,10 @@ def job_arguments(spec: Mapping[str, Any]) -> tuple[Model, Any, Any, dict[str, A
     state = spec.get("initial_state")
     if isinstance(model, Chain) and isinstance(state, Mapping) and "mode" in state:
         state = _chain_mode_state(model, state)
+    if isinstance(state, Mapping) and "rest" in state:
+        state = rest_state(model, state)
     if not isinstance(state, Mapping) or "q" not in state or "p" not in state:
-        raise ValueError('initial_state: must be {"q": [...], "p": [...]}'
+        raise ValueError('initial_state: must be {"q": [...], "p": [...]}, {"rest": true}'
                          + (' or {"mode": k, "amplitude": a} for a chain' if isinstance(model, Chain) else ""))
     for key in ("method", "step_size"):
         if key not in spec:
@@ -113,6 +115,14 @@ def job_arguments(spec: Mapping[str, Any]) -> tuple[Model, Any, Any, dict[str, A
         if spec.get(key) is not None:
             options[key] = spec[key]
     return model, state["q"], state["p"], options
+
+
+def rest_state(model: Model, state: Mapping[str, Any]) -> dict[str, Any]:
+    """{"rest": true}: q = 0, p = 0, so that a job for a large structure (its response to the load f)
+    need not carry 2 n zeros."""
+    if dict(state) != {"rest": True}:
+        raise ValueError('initial_state: a start at rest is exactly {"rest": true}')
+    return {"q": np.zeros(model.dim), "p": np.zeros(model.dim)}
 
 
 def _chain_mode_state(chain: Chain, state: Mapping[str, Any]) -> dict[str, Any]:

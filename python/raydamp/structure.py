@@ -60,9 +60,17 @@ def _scipy_sparse():
 
 
 def _read_matrix(name: str, value):
-    """A scipy.sparse CSC matrix from a dense array, a scipy.sparse matrix or a Matrix Market path."""
+    """A scipy.sparse CSC matrix from a dense array, a scipy.sparse matrix, or a Matrix Market path or
+    binary file object."""
     sparse = _scipy_sparse()
-    if isinstance(value, (str, os.PathLike)):
+    if hasattr(value, "read"):  # an open Matrix Market file (the service hands over uploaded bytes)
+        import scipy.io
+
+        try:
+            value = scipy.io.mmread(value)
+        except Exception as error:  # noqa: BLE001 - say what the reader said
+            raise ValueError(f"{name}: cannot read it as Matrix Market: {error}") from None
+    elif isinstance(value, (str, os.PathLike)):
         import scipy.io
 
         path = os.fspath(value)
@@ -73,6 +81,8 @@ def _read_matrix(name: str, value):
         except Exception as error:  # noqa: BLE001 - say what the reader said
             raise ValueError(f"{name}: cannot read {path!r} as Matrix Market: {error}") from None
     if sparse.issparse(value):
+        if value.dtype.kind not in "biuf":  # a complex file: its imaginary part would be dropped silently
+            raise ValueError(f"{name} must be a real matrix, got entries of type {value.dtype}")
         matrix = sparse.csc_matrix(value, dtype=float)
     else:
         try:
@@ -207,8 +217,12 @@ class LinearStructure(Model):
                 "f": self._load.tolist() if self._load.any() else None}
 
     @classmethod
-    def from_dict(cls, data) -> LinearStructure:
-        """Build from ``to_dict()``'s form; a bad field raises ValueError starting with its path (``K.coo.rows``)."""
+    def from_dict(cls, data, *, files=None) -> LinearStructure:
+        """Build from ``to_dict()``'s form; a bad field raises ValueError starting with its path (``K.coo.rows``).
+
+        A matrix may also be ``{"file": ref}``: by default ref is the path of a Matrix Market file;
+        ``files(ref)`` (the service's uploaded files) may instead return anything ``M``/``K`` take,
+        or an open binary Matrix Market file, and raises ValueError for an unknown ref."""
         if not isinstance(data, dict):
             raise ValueError("a linear structure must be an object with the keys " + ", ".join(PLAIN_KEYS))
         unknown = [k for k in data if k not in PLAIN_KEYS]
@@ -222,7 +236,7 @@ class LinearStructure(Model):
         n = None
         matrices = {}
         for key in ("M", "K"):
-            matrices[key] = _matrix_from_plain(key, data[key], n)
+            matrices[key] = _matrix_from_plain(key, data[key], n, files)
             n = matrices[key].shape[0]
         f = data.get("f")
         if f is not None and (not isinstance(f, list) or len(f) != n
@@ -264,10 +278,30 @@ def _numbers(path: str, value, *, integer: bool = False) -> np.ndarray:
     return array
 
 
-def _matrix_from_plain(key: str, value, n: int | None):
+def _matrix_from_file(key: str, ref, n: int | None, files):
+    if not isinstance(ref, str) or not ref:
+        raise ValueError(f"{key}.file: must be a non-empty string")
+    try:
+        source = ref if files is None else files(ref)
+    except ValueError as error:
+        raise ValueError(f"{key}.file: {error}") from None
+    try:
+        matrix = _read_matrix(key, source)
+    except ValueError as error:  # "K must be square ..." or "K: cannot read ..."
+        raise ValueError(f"{key}.file: {str(error).removeprefix(key).lstrip(': ')}") from None
+    if n is not None and matrix.shape[0] != n:
+        raise ValueError(f"{key}.file: the matrix is {matrix.shape[0]} x {matrix.shape[1]}; it must be {n} x {n} "
+                         "(the size of M)")
+    return matrix
+
+
+def _matrix_from_plain(key: str, value, n: int | None, files=None):
     sparse = _scipy_sparse()
-    if not isinstance(value, dict) or len(value) != 1 or next(iter(value)) not in ("coo", "diagonal"):
-        raise ValueError(f'{key}: must be {{"coo": {{"shape", "rows", "cols", "values"}}}} or {{"diagonal": [...]}}')
+    if not isinstance(value, dict) or len(value) != 1 or next(iter(value)) not in ("coo", "diagonal", "file"):
+        raise ValueError(f'{key}: must be {{"coo": {{"shape", "rows", "cols", "values"}}}}, {{"diagonal": [...]}} '
+                         'or {"file": "<Matrix Market file>"}')
+    if "file" in value:
+        return _matrix_from_file(key, value["file"], n, files)
     if "diagonal" in value:
         diagonal = _numbers(f"{key}.diagonal", value["diagonal"])
         if diagonal.size == 0 or (n is not None and diagonal.size != n):

@@ -14,7 +14,7 @@ from fastapi.exceptions import RequestValidationError
 from .config import Settings
 from .errors import validation_error_handler
 from .guard import RequestGuard, needs_token
-from .routes import catalogue, health, jobs, page, sweeps
+from .routes import catalogue, files, health, jobs, page, sweeps
 from .runner import Runner
 from .store import JobStore
 from .sweep_runner import SweepRunner
@@ -52,7 +52,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.large_fetches = threading.Semaphore(settings.max_large_fetches)
     app.add_middleware(RequestGuard, settings=settings)
     app.add_exception_handler(RequestValidationError, validation_error_handler)
-    for router in (jobs.router, sweeps.router, catalogue.router, health.router, page.router):
+    for router in (jobs.router, sweeps.router, files.router, catalogue.router, health.router, page.router):
         app.include_router(router)
     page.mount_assets(app)
     _document_limits(app, settings)
@@ -68,9 +68,10 @@ def _document_limits(app: FastAPI, settings: Settings) -> None:
         if app.openapi_schema is not None:
             return app.openapi_schema
         schema = generate()
-        for parameter in schema["paths"]["/v1/jobs"]["get"]["parameters"]:
-            if parameter["name"] == "limit":
-                parameter["schema"]["maximum"] = settings.max_list_limit
+        for listing in ("/v1/jobs", "/v1/files"):
+            for parameter in schema["paths"][listing]["get"]["parameters"]:
+                if parameter["name"] == "limit":
+                    parameter["schema"]["maximum"] = settings.max_list_limit
         schema["paths"]["/v1/jobs"]["post"]["responses"]["400"] = {
             "description": "the body is not UTF-8 text, or the Host is not one of trusted_hosts"}
         if settings.token is not None:
@@ -79,7 +80,9 @@ def _document_limits(app: FastAPI, settings: Settings) -> None:
             for operation in operations.values():
                 responses = operation["responses"]
                 responses.setdefault("400", {"description": "the Host is not one of trusted_hosts"})
-                if operation.get("requestBody"):
+                if path == "/v1/files" and operation.get("requestBody"):
+                    responses["413"] = {"description": f"the file is over max_file_bytes = {settings.max_file_bytes}"}
+                elif operation.get("requestBody"):
                     responses["413"] = {"description": f"the body is over max_body_bytes = {settings.max_body_bytes}"}
                 if settings.token is not None and needs_token(path):
                     operation["security"] = [{"bearer": []}]

@@ -54,6 +54,18 @@ class Settings(BaseSettings):
     max_trajectory_bytes: int = Field(512 * 2**20, ge=1, le=900_000_000)
     max_list_limit: int = Field(1000, ge=1)
 
+    # Linear structures: matrices inline as COO triplets up to max_structure_nnz entries each (the schema
+    # caps them at 10^6, raydamp's own limit); larger ones are uploaded Matrix Market files (POST /v1/files).
+    max_structure_nnz: int = Field(100_000, ge=1, le=1_000_000,  # schemas.MAX_COO_ENTRIES
+                                   description="stored entries of one COO matrix in a job at most")
+    max_structure_dim: int = Field(100_000, ge=1, le=10**7,  # schemas.MAX_STRUCTURE_DIM
+                                   description="coordinates of a linear structure at most (one started at rest "
+                                               "may exceed max_dim; its M factorisation is the worker's memory)")
+    max_file_bytes: int = Field(64 * 2**20, ge=1024, description="an upload larger than this gets 413, counted as it "
+                                                                 "arrives")
+    max_stored_file_bytes: int = Field(2**30, ge=0, description="uploaded files kept at most, in all; past it an "
+                                                                "upload gets 507 (delete files first); 0: no bound")
+
     # Trajectory fetches stream; those above large_fetch_points points are held to a few at once.
     large_fetch_points: int = Field(100_000, ge=1)
     max_large_fetches: int = Field(2, ge=1, description="large trajectory fetches served at once; more get 429")

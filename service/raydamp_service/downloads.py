@@ -28,8 +28,9 @@ SUFFIXES = {"csv": ".csv", "npz": ".npz", "netcdf": ".nc"}
 
 def _names(spec: dict[str, Any], dim: int, momenta: int) -> tuple[list[str], list[str]]:
     system = spec.get("system")
-    if system is not None and system.get("kind") == "chain":
-        # The saved sites (save_dofs) or all of them; sum p is the one momentum map a chain may have.
+    if system is not None and system.get("kind") in ("chain", "linear_structure"):
+        # The saved sites or degrees of freedom (save_dofs) or all of them; sum p is the one momentum
+        # map a chain may have, and a structure has none.
         dofs = spec.get("save_dofs")
         return [f"q{i}" for i in (dofs if dofs is not None else range(dim))], ["P"] * momenta
     if system is not None:

@@ -46,16 +46,13 @@ def _json_safe(value: Any) -> Any:
 
 
 def _path(loc: list[Any]) -> list[Any]:
-    """The JSON path the client wrote: without the tags pydantic adds for the form of a field (after
-    "system" or "initial_state" wherever the job sits, and after a sweep's axis name)."""
-    out: list[Any] = []
-    for i, key in enumerate(loc):
-        before = loc[i - 1] if i >= 1 else None
-        if isinstance(key, str) and i >= 2 and (key in UNION_TAGS.get(before, ()) or (
-                key in GRID_TAGS and loc[i - 2] == "grid" and loc[i - 3:i - 2] == ["body"])):
-            continue
-        out.append(key)
-    return out
+    """The JSON path the client wrote: without the tags pydantic adds for the form of a field (at any
+    depth: system's kind, then a structure's matrix form; a sweep's axis form after its name)."""
+    if not loc or loc[0] != "body":
+        return loc
+    return [part for i, part in enumerate(loc)
+            if not (i >= 2 and isinstance(loc[i - 1], str) and part in UNION_TAGS.get(loc[i - 1], ()))
+            and not (i == 3 and loc[1] == "grid" and part in GRID_TAGS)]
 
 
 def _error(item: dict[str, Any]) -> dict[str, Any]:

@@ -21,6 +21,8 @@ __all__ = ["RequestGuard", "UNGUARDED_PATHS", "needs_token"]
 # then asks for the token and sends it with every /v1 request; Swagger UI's Authorize does the same.
 UNGUARDED_PATHS = frozenset({"/healthz", "/", "/docs", "/openapi.json"})
 UNGUARDED_PREFIXES = ("/static/", "/vendor/")
+UPLOAD_PATH = "/v1/files"  # POST: a Matrix Market upload, limited by max_file_bytes rather than max_body_bytes
+MULTIPART_ALLOWANCE = 64 * 1024
 
 
 def needs_token(path: str) -> bool:
@@ -45,6 +47,7 @@ class RequestGuard:
         self.trusted = {name.strip("[]").lower() for name in settings.trusted_hosts}
         self.token = settings.token.get_secret_value().encode() if settings.token else None
         self.max_body = settings.max_body_bytes
+        self.max_file = settings.max_file_bytes
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http":
@@ -68,11 +71,22 @@ class RequestGuard:
                 return JSONResponse({"detail": "this service needs Authorization: Bearer <RAYDAMP_TOKEN>"},
                                     status_code=401, headers={"WWW-Authenticate": "Bearer"})
         length = headers.get("content-length")
-        if length is not None and (not length.isdigit() or int(length) > self.max_body):
-            return self._too_large()
+        if length is not None and (not length.isdigit() or int(length) > self._limit(scope)):
+            return self._too_large(scope)
         return None
 
-    def _too_large(self) -> JSONResponse:
+    def _is_upload(self, scope: Scope) -> bool:
+        return scope["path"] == UPLOAD_PATH and scope.get("method") == "POST"
+
+    def _limit(self, scope: Scope) -> int:
+        # An upload's limit is its file's, with room for the multipart framing around it (the route
+        # checks the file part itself exactly).
+        return self.max_file + MULTIPART_ALLOWANCE if self._is_upload(scope) else self.max_body
+
+    def _too_large(self, scope: Scope) -> JSONResponse:
+        if self._is_upload(scope):
+            return JSONResponse({"detail": f"the file is larger than max_file_bytes = {self.max_file} bytes "
+                                           "(RAYDAMP_MAX_FILE_BYTES)"}, status_code=413)
         return JSONResponse({"detail": f"the request body is larger than max_body_bytes = {self.max_body} bytes "
                                        "(RAYDAMP_MAX_BODY_BYTES)"}, status_code=413)
 
@@ -80,13 +94,14 @@ class RequestGuard:
         """A body without Content-Length (chunked) is counted as it arrives."""
         received = 0
         too_large = False
+        limit = self._limit(scope)
 
         async def counting_receive() -> Message:
             nonlocal received, too_large
             message = await receive()
             if message["type"] == "http.request":
                 received += len(message.get("body", b""))
-                if received > self.max_body:
+                if received > limit:
                     too_large = True
                     raise _BodyTooLarge
             return message
@@ -100,5 +115,5 @@ class RequestGuard:
         except _BodyTooLarge:
             pass
         if too_large:
-            await self._too_large()(scope, receive, send)
+            await self._too_large(scope)(scope, receive, send)
 

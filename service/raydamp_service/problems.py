@@ -10,14 +10,16 @@ from __future__ import annotations
 import functools
 import json
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
 import raydamp
 from raydamp.models import make_model
 
 from .config import Settings
-from .schemas import ChainInput, JobSpec, ModeState
+from .schemas import ChainInput, CooForm, DiagonalForm, JobSpec, LinearStructureInput, ModeState, RestState
 
 __all__ = ["SpecError", "RaydampCall", "build_call", "check_spec", "planned_steps"]
 
@@ -87,22 +89,68 @@ def _system_error(error: raydamp.SpecError) -> SpecError:
     return SpecError(("system", *error.path), f"system.{error}")
 
 
+def _system_path_error(error: ValueError, schema: type) -> SpecError:
+    """raydamp's message starts with the path inside "system": "dampers.bonds[3]: ...", "K.coo.rows[2]: ..."
+    or "n must be ..."."""
+    message = str(error)
+    path = message.split(" ", 1)[0].rstrip(":").replace("]", "").replace("[", ".").split(".")
+    loc = tuple(int(part) if part.isdigit() else part for part in path if part)
+    if not loc or loc[0] not in schema.model_fields:
+        loc = ()
+    return SpecError(("system", *loc), f"system.{message}")
+
+
 def _chain(system: ChainInput) -> raydamp.Chain:
     """raydamp builds and checks the chain; its messages name the key inside "system"."""
     try:
         return raydamp.Chain.from_dict(system.model_dump(exclude_none=True))
     except ValueError as error:
-        # raydamp's message starts with the path: "dampers.bonds[3]: ..." or "n must be ...".
-        message = str(error)
-        path = message.split(" ", 1)[0].rstrip(":").replace("]", "").replace("[", ".").split(".")
-        loc = tuple(int(part) if part.isdigit() else part for part in path if part)
-        if not loc or loc[0] not in ChainInput.model_fields:
-            loc = ()
-        raise SpecError(("system", *loc), f"system.{message}") from None
+        raise _system_path_error(error, ChainInput) from None
+
+
+FileResolver = Callable[[str], Any]
+
+
+def _no_files(file_id: str) -> Any:
+    # Never a path on the server: without the store, a {"file": ...} reference resolves to nothing.
+    raise ValueError(f"no uploaded file with id {file_id!r}")
+
+
+def _linear_structure(system: LinearStructureInput, files: FileResolver | None) -> raydamp.LinearStructure:
+    """raydamp builds and checks the structure (indices, shapes, symmetry and definiteness); uploaded
+    files come from the store through files(id)."""
+    try:
+        return raydamp.LinearStructure.from_dict(system.model_dump(exclude_none=True), files=files or _no_files)
+    except ValueError as error:
+        raise _system_path_error(error, LinearStructureInput) from None
+
+
+def _check_structure_size(system: LinearStructureInput, settings: Settings) -> None:
+    """The operator's bounds, before raydamp allocates anything: entries per matrix, and n (a COO shape
+    of [10^9, 10^9] with three entries would still cost 8 GB of column pointers)."""
+    for key in ("M", "K"):
+        form = getattr(system, key)
+        if isinstance(form, CooForm):
+            for name in ("rows", "cols", "values"):
+                count = len(getattr(form.coo, name))
+                if count > settings.max_structure_nnz:
+                    raise SpecError(("system", key, "coo", name), f"system.{key}.coo.{name}: {count} entries; this "
+                                    f"service accepts at most max_structure_nnz = {settings.max_structure_nnz} per "
+                                    "matrix (upload larger ones as Matrix Market files: POST /v1/files)")
+            if form.coo.shape[0] > settings.max_structure_dim:
+                raise SpecError(("system", key, "coo", "shape"), f"system.{key}.coo.shape: n = {form.coo.shape[0]}; "
+                                "this service runs structures of at most max_structure_dim = "
+                                f"{settings.max_structure_dim} coordinates")
+        elif isinstance(form, DiagonalForm) and len(form.diagonal) > settings.max_structure_dim:
+            raise SpecError(("system", key, "diagonal"), f"system.{key}.diagonal: {len(form.diagonal)} entries; "
+                            "this service runs structures of at most max_structure_dim = "
+                            f"{settings.max_structure_dim} coordinates")
 
 
 def _initial_state(spec: JobSpec, model) -> tuple[Any, Any]:
     state = spec.initial_state
+    if isinstance(state, RestState):
+        return np.zeros(model.dim), np.zeros(model.dim)
     if isinstance(state, ModeState):
         if not isinstance(model, raydamp.Chain):
             raise SpecError(("initial_state",), "initial_state: {mode, amplitude} starts a chain; give q and p")
@@ -113,7 +161,7 @@ def _initial_state(spec: JobSpec, model) -> tuple[Any, Any]:
     return list(state.q), list(state.p)
 
 
-def _model(spec: JobSpec) -> raydamp.models.Model:
+def _model(spec: JobSpec, files: FileResolver | None = None) -> raydamp.models.Model:
     if (spec.model is None) == (spec.system is None):
         raise SpecError(("model",) if spec.model is None else ("system",),
                         "give exactly one of model (a name from GET /v1/models, with parameters) and system "
@@ -123,6 +171,8 @@ def _model(spec: JobSpec) -> raydamp.models.Model:
             raise SpecError(("parameters",), "parameters: a system carries its parameters inside system.parameters")
         if isinstance(spec.system, ChainInput):
             return _chain(spec.system)
+        if isinstance(spec.system, LinearStructureInput):
+            return _linear_structure(spec.system, files)
         return _system(spec)
     try:
         return make_model(spec.model, spec.parameters)
@@ -133,9 +183,10 @@ def _model(spec: JobSpec) -> raydamp.models.Model:
         raise _translate(error, fields) from None
 
 
-def build_call(spec: JobSpec) -> RaydampCall:
-    """The model and arguments for raydamp.integrate; raises SpecError for a bad model, system or parameter."""
-    model = _model(spec)
+def build_call(spec: JobSpec, files: FileResolver | None = None) -> RaydampCall:
+    """The model and arguments for raydamp.integrate; raises SpecError for a bad model, system or parameter.
+    files(id) opens an uploaded file (files.file_resolver); without it a {"file": id} matrix is refused."""
+    model = _model(spec, files)
     options: dict[str, Any] = {"method": spec.method, "h": spec.step_size, "save_every": spec.save_every,
                                "work": spec.work}
     if spec.tableau is not None:
@@ -163,7 +214,7 @@ def planned_steps(spec: JobSpec) -> int:
         raise _translate(error, _FIELD_OF_ARGUMENT) from None
 
 
-def check_spec(spec: JobSpec, settings: Settings) -> RaydampCall:
+def check_spec(spec: JobSpec, settings: Settings, files: FileResolver | None = None) -> RaydampCall:
     """Every check a spec must pass before it is queued; raises SpecError naming the field."""
     if (spec.t_end is None) == (spec.n_steps is None):
         both = spec.t_end is not None
@@ -192,7 +243,9 @@ def check_spec(spec: JobSpec, settings: Settings) -> RaydampCall:
         raise SpecError(("save_every",), f"save_every: {saved_points} saved points (n_steps // save_every + 2) "
                         f"exceed max_saved_points = {settings.max_saved_points}; raise save_every")
 
-    call = build_call(spec)
+    if isinstance(spec.system, LinearStructureInput):
+        _check_structure_size(spec.system, settings)
+    call = build_call(spec, files)
     # The largest stored array is q or p: saved_points x dim float64.
     saved = call.model.dim if spec.save_dofs is None else len(spec.save_dofs)
     largest = saved_points * max(saved, len(call.model.momentum_names)) * 8

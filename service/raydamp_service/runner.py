@@ -18,7 +18,8 @@ from dataclasses import dataclass, field
 import raydamp
 
 from .config import Settings
-from .problems import build_call
+from .files import file_resolver
+from .problems import SpecError, build_call
 from .schemas import JobSpec
 from .store import JobStore, TrajectoryArrays
 
@@ -157,7 +158,10 @@ class Runner:
                     log.warning("job %s: could not save progress", job_id, exc_info=True)
 
         try:
-            solution = build_call(spec).run(progress=on_progress, cancel=run.token)
+            solution = build_call(spec, files=file_resolver(self._store)).run(progress=on_progress, cancel=run.token)
+        except SpecError as error:  # passed at submission; an uploaded file it names has gone since
+            self._store.finish(job_id, "failed", error=error.message)
+            return
         except ValueError as error:  # the spec passed the checks at submission; report, do not crash
             self._store.finish(job_id, "failed", error=str(error))
             return

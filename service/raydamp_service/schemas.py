@@ -11,6 +11,7 @@ from raydamp.models import describe_models
 
 __all__ = [
     "FiniteFloat", "InitialState", "JobSpec", "SystemInput", "TableauInput",
+    "ChainInput", "LinearStructureInput", "FileInfo", "FileList",
     "JobStatus", "JobCreated", "JobSummary", "JobView", "JobListItem", "JobList", "Trajectory",
     "ParameterInfo", "ModelInfo", "MethodInfo", "Health",
 ]
@@ -145,6 +146,71 @@ class ChainInput(_Input):
     eps: FiniteFloat = Field(1.0, ge=0, description="damping strength (D is scaled by it)")
 
 
+# ---- linear structures: raydamp.LinearStructure.to_dict()'s form, and uploaded files ----------------
+
+MAX_COO_ENTRIES = 1_000_000  # raydamp.structure.MAX_PLAIN_ENTRIES; Settings.max_structure_nnz is at most this
+MAX_STRUCTURE_DIM = 10**7  # Settings.max_structure_dim is at most this
+FileId = Annotated[str, Field(pattern=r"^[0-9a-f]{32}$", description="an id from POST /v1/files")]
+
+
+class CooMatrix(_Input):
+    shape: list[Annotated[int, Field(ge=1, le=MAX_STRUCTURE_DIM)]] = Field(min_length=2, max_length=2,
+                                                                           description="[n, n]")
+    rows: list[Annotated[int, Field(ge=0)]] = Field(max_length=MAX_COO_ENTRIES, description="row of each entry")
+    cols: list[Annotated[int, Field(ge=0)]] = Field(max_length=MAX_COO_ENTRIES, description="column of each entry")
+    values: list[FiniteFloat] = Field(max_length=MAX_COO_ENTRIES, description="the entries (repeated "
+                                                                              "positions add up)")
+
+
+class CooForm(_Input):
+    coo: CooMatrix
+
+
+class DiagonalForm(_Input):
+    diagonal: list[FiniteFloat] = Field(min_length=1, max_length=MAX_STRUCTURE_DIM,
+                                        description="a diagonal matrix (lumped mass)")
+
+
+class FileForm(_Input):
+    file: FileId
+
+
+# The tags are not key names: "K" followed by "coo" in a loc is then always the client's key (our own
+# checks' locs carry no tags), and "K" followed by "coo form" is pydantic's tag, dropped from a 422.
+def _matrix_form(value: object) -> str | None:
+    if isinstance(value, dict):
+        for key in ("coo", "file", "diagonal"):
+            if key in value:
+                return f"{key} form"
+        return None  # none of the forms: one error saying which there are
+    for form, name in ((CooForm, "coo"), (FileForm, "file"), (DiagonalForm, "diagonal")):
+        if isinstance(value, form):
+            return f"{name} form"
+    return None
+
+
+MatrixInput = Annotated[Annotated[CooForm, Tag("coo form")] | Annotated[DiagonalForm, Tag("diagonal form")]
+                        | Annotated[FileForm, Tag("file form")],
+                        Discriminator(_matrix_form, custom_error_type="matrix_form",
+                                      custom_error_message='a matrix is {"coo": {"shape", "rows", "cols", "values"}}, '
+                                                           '{"diagonal": [...]} or {"file": "<id from POST '
+                                                           '/v1/files>"}')]
+
+
+class LinearStructureInput(_Input):
+    """A linear structure M q'' + (alpha M + beta K) q' + K q = f: raydamp.LinearStructure.to_dict()'s
+    form, with a matrix also given as {"file": id} of an uploaded Matrix Market file. M symmetric
+    positive definite (a diagonal M is a lumped mass), K symmetric positive semi-definite."""
+
+    kind: Literal["linear_structure"]
+    M: MatrixInput = Field(description='{"coo": {shape, rows, cols, values}}, {"diagonal": [...]} or {"file": id}')
+    K: MatrixInput = Field(description="the stiffness matrix, in the same forms as M")
+    alpha: FiniteFloat = Field(0.0, ge=0, description="Rayleigh damping C = alpha M + beta K")
+    beta: FiniteFloat = Field(0.0, ge=0)
+    f: Annotated[list[FiniteFloat], Field(max_length=MAX_STRUCTURE_DIM)] | None = Field(
+        None, description="constant load (length n); null for none")
+
+
 class ModeState(_Input):
     """A chain started at rest with all its energy in one normal mode (raydamp.Chain.normal_mode):
     a job for a million sites need not carry two million numbers."""
@@ -153,25 +219,34 @@ class ModeState(_Input):
     amplitude: FiniteFloat = 1.0
 
 
+class RestState(_Input):
+    """Start at rest at q = 0, p = 0: a structure's response to its load f, without sending 2 n zeros
+    (so a structure may be larger than max_dim, up to max_structure_dim)."""
+
+    rest: Literal[True]
+
+
 # Forms a field may take, told apart by their content rather than tried in turn: a bad input then gets
 # the errors of the form it meant, not those of every form. Pydantic puts the form's tag into an
 # error's loc after the field; the 422 handler drops it (UNION_TAGS), so a loc is the path the client wrote.
 def _state_form(value: object) -> str:
     if isinstance(value, dict):
-        return "mode" if "mode" in value else "state"
-    return "mode" if isinstance(value, ModeState) else "state"
+        return "mode" if "mode" in value else "rest" if "rest" in value else "state"
+    return "mode" if isinstance(value, ModeState) else "rest" if isinstance(value, RestState) else "state"
 
 
 def _system_form(value: object) -> str:
     kind = value.get("kind") if isinstance(value, dict) else getattr(value, "kind", None)
-    return "chain" if kind == "chain" else "expressions"
+    return kind if kind in ("chain", "linear_structure") else "expressions"
 
 
-UNION_TAGS = {"initial_state": frozenset({"state", "mode"}), "system": frozenset({"expressions", "chain"})}
-StateInput = Annotated[Annotated[InitialState, Tag("state")] | Annotated[ModeState, Tag("mode")],
-                       Discriminator(_state_form)]
-AnySystemInput = Annotated[Annotated[SystemInput, Tag("expressions")] | Annotated[ChainInput, Tag("chain")],
-                           Discriminator(_system_form)]
+_MATRIX_TAGS = frozenset({"coo form", "diagonal form", "file form"})
+UNION_TAGS = {"initial_state": frozenset({"state", "mode", "rest"}),
+              "system": frozenset({"expressions", "chain", "linear_structure"}), "M": _MATRIX_TAGS, "K": _MATRIX_TAGS}
+StateInput = Annotated[Annotated[InitialState, Tag("state")] | Annotated[ModeState, Tag("mode")]
+                       | Annotated[RestState, Tag("rest")], Discriminator(_state_form)]
+AnySystemInput = Annotated[Annotated[SystemInput, Tag("expressions")] | Annotated[ChainInput, Tag("chain")]
+                           | Annotated[LinearStructureInput, Tag("linear_structure")], Discriminator(_system_form)]
 
 
 def _exactly_one(first: str, second: str, first_type: str, second_type: str) -> dict:
@@ -189,8 +264,8 @@ class JobSpec(_Input):
 
     model: ModelName | None = Field(None, description="a name from GET /v1/models")
     system: AnySystemInput | None = Field(
-        None, description="a user-defined system or a lattice ({\"kind\": \"chain\", ...}), in place of "
-                          "model/parameters")
+        None, description="a user-defined system, a lattice ({\"kind\": \"chain\", ...}) or a linear structure "
+                          "({\"kind\": \"linear_structure\", ...}), in place of model/parameters")
     parameters: dict[str, ParameterValue] = Field(
         default_factory=dict, max_length=64, description="model parameters by name; the rest take their defaults")
     method: MethodName = Field(description="a name from GET /v1/methods")
@@ -283,6 +358,21 @@ class Trajectory(BaseModel):
                                             "H(t) - H(0) + W(t) is the energy balance residual (zero for the exact "
                                             "flow, O(h^2) for the order-2 methods); null for jobs stored before "
                                             "it was kept")
+
+
+class FileInfo(BaseModel):
+    """An uploaded Matrix Market file, for {"file": id} in place of a structure's M or K."""
+
+    id: str
+    name: str = Field(description="the file name the client sent")
+    bytes: int
+    shape: list[int] = Field(description="[rows, cols] of the matrix")
+    nnz: int = Field(description="stored entries (a symmetric file's mirrored entries counted)")
+    created_at: datetime
+
+
+class FileList(BaseModel):
+    files: list[FileInfo]
 
 
 class ParameterInfo(BaseModel):

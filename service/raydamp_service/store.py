@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["JobStore", "JobRecord", "TrajectoryArrays", "StoredTrajectory", "FINAL_STATUSES", "StoreUnavailable"]
+__all__ = ["JobStore", "JobRecord", "FileRecord", "TrajectoryArrays", "StoredTrajectory", "FINAL_STATUSES", "StoreUnavailable"]
 
 FINAL_STATUSES = frozenset({"completed", "failed", "cancelled"})
 _FINAL_SQL = "('completed', 'failed', 'cancelled')"
@@ -52,7 +52,17 @@ CREATE TABLE IF NOT EXISTS trajectories (
 );
 CREATE INDEX IF NOT EXISTS jobs_by_status ON jobs (status, finished_at);
 CREATE TABLE IF NOT EXISTS service (key TEXT PRIMARY KEY, value TEXT);
+CREATE TABLE IF NOT EXISTS files (          -- uploaded Matrix Market files, for a structure's {"file": id}
+    seq INTEGER PRIMARY KEY AUTOINCREMENT,
+    id TEXT NOT NULL UNIQUE,
+    name TEXT NOT NULL,
+    bytes INTEGER NOT NULL,
+    rows INTEGER NOT NULL, cols INTEGER NOT NULL, nnz INTEGER NOT NULL,
+    created_at TEXT NOT NULL,
+    content BLOB NOT NULL                   -- the file as uploaded
+);
 """
+_UNFINISHED_SQL = "('queued', 'running')"
 _INCREMENTAL = 2  # PRAGMA auto_vacuum value
 # Stored bytes of a trajectory row: t, energy, work (N), q, p (N x dim), momentum (N x m), float64.
 _TRAJECTORY_BYTES = "(t.points * (2 + (t.work IS NOT NULL) + 2 * t.dim + t.momenta) * 8)"
@@ -102,6 +112,24 @@ class JobRecord:
                    summary=json.loads(row["summary"]) if row["summary"] else None, error=row["error"],
                    failed_step=row["failed_step"], created_at=row["created_at"], started_at=row["started_at"],
                    finished_at=row["finished_at"], has_trajectory=bool(row["has_trajectory"]))
+
+
+@dataclass(frozen=True)
+class FileRecord:
+    id: str
+    name: str
+    bytes: int
+    shape: tuple[int, int]
+    nnz: int
+    created_at: str
+
+
+_FILE_COLUMNS = "id, name, bytes, rows, cols, nnz, created_at"
+
+
+def _file_record(row: sqlite3.Row) -> FileRecord:
+    return FileRecord(id=row["id"], name=row["name"], bytes=row["bytes"], shape=(row["rows"], row["cols"]),
+                      nnz=row["nnz"], created_at=row["created_at"])
 
 
 @dataclass(frozen=True)
@@ -361,6 +389,60 @@ class JobStore:
         with self._transaction() as db:
             db.execute("UPDATE jobs SET status = 'queued', started_at = NULL, progress = 0 "
                        "WHERE id = ? AND status = 'running'", (job_id,))
+
+    # ---- uploaded files ----
+
+    def add_file(self, name: str, content: bytes, shape: tuple[int, int], nnz: int,
+                 max_total_bytes: int = 0) -> FileRecord | None:
+        """Store an upload; None (nothing written) when it would take the files past max_total_bytes (0: no bound)."""
+        file_id, created_at = uuid.uuid4().hex, _now()
+        with self._transaction() as db:
+            # Checked and inserted in one statement, under the write lock, as create() does for the queue.
+            inserted = db.execute(
+                "INSERT INTO files (id, name, bytes, rows, cols, nnz, created_at, content) "
+                "SELECT ?, ?, ?, ?, ?, ?, ?, ? WHERE ? = 0 OR (SELECT COALESCE(SUM(bytes), 0) FROM files) + ? <= ?",
+                (file_id, name, len(content), *shape, nnz, created_at, content, max_total_bytes, len(content),
+                 max_total_bytes)).rowcount
+        if not inserted:
+            return None
+        return FileRecord(id=file_id, name=name, bytes=len(content), shape=tuple(shape), nnz=nnz,
+                          created_at=created_at)
+
+    def file(self, file_id: str) -> FileRecord | None:
+        row = self._connection().execute(f"SELECT {_FILE_COLUMNS} FROM files WHERE id = ?", (file_id,)).fetchone()
+        return _file_record(row) if row else None
+
+    def files(self, limit: int) -> list[FileRecord]:
+        """Newest first."""
+        rows = self._connection().execute(f"SELECT {_FILE_COLUMNS} FROM files ORDER BY seq DESC LIMIT ?",
+                                          (limit,)).fetchall()
+        return [_file_record(row) for row in rows]
+
+    def file_content(self, file_id: str) -> bytes | None:
+        row = self._connection().execute("SELECT content FROM files WHERE id = ?", (file_id,)).fetchone()
+        return bytes(row[0]) if row else None
+
+    def delete_file(self, file_id: str) -> str:
+        """"deleted", "missing", or "in_use" when a queued or running job refers to it (then nothing changes).
+
+        One statement: a job that names the file and is still to run keeps it, so a run never loses its
+        matrix. Specs are stored as JSON, where the id appears as the string "<id>"."""
+        with self._transaction() as db:
+            deleted = db.execute(
+                f"DELETE FROM files WHERE id = ? AND NOT EXISTS (SELECT 1 FROM jobs WHERE status IN "
+                f"{_UNFINISHED_SQL} AND instr(spec, ?) > 0)", (file_id, f'"{file_id}"')).rowcount
+            exists = not deleted and db.execute("SELECT 1 FROM files WHERE id = ?", (file_id,)).fetchone()
+        if deleted:
+            self._give_back_space()
+            return "deleted"
+        return "in_use" if exists else "missing"
+
+    def jobs_using_file(self, file_id: str, limit: int = 10) -> list[str]:
+        """Ids of queued or running jobs whose spec names the file."""
+        rows = self._connection().execute(
+            f"SELECT id FROM jobs WHERE status IN {_UNFINISHED_SQL} AND instr(spec, ?) > 0 ORDER BY seq LIMIT ?",
+            (f'"{file_id}"', limit)).fetchall()
+        return [row["id"] for row in rows]
 
     def recover(self) -> list[str]:
         """At startup: runs a previous process left behind are queued again. Returns the queue, oldest first."""

@@ -14,6 +14,7 @@ from fastapi.responses import StreamingResponse
 from starlette.background import BackgroundTask
 
 from ..deps import RunnerDep, SettingsDep, StoreDep
+from ..files import file_resolver
 from ..problems import SpecError, check_spec
 from ..runner import Runner
 from ..schemas import JobCreated, JobList, JobListItem, JobSpec, JobStatus, JobView, Trajectory
@@ -79,7 +80,7 @@ def submit_job(spec: JobSpec, request: Request, response: Response, store: Store
                settings: SettingsDep) -> JobCreated:
     """Queue an integration; poll the Location for its status."""
     try:
-        check_spec(spec, settings)
+        check_spec(spec, settings, files=file_resolver(store))
     except SpecError as error:
         # The same shape as pydantic's own 422s, so a client reads one format.
         raise RequestValidationError([{"type": "value_error", "loc": ("body", *error.loc), "msg": error.message,

@@ -1,0 +1,101 @@
+"""/v1/files: upload, list and remove Matrix Market files, which a linear structure's M or K names
+as {"file": id}.
+
+An upload is multipart form data with one part named "file" (`curl -F file=@K.mtx`). Its size is
+counted as it arrives (RequestGuard, max_file_bytes): a larger one gets 413 before it is read whole,
+and the parts go to a temporary file, not to memory. A file that a queued or running job names
+cannot be removed (409) until that job has finished or been cancelled.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import APIRouter, File, HTTPException, Query, Request, Response, UploadFile
+from fastapi.exceptions import RequestValidationError
+
+from ..deps import SettingsDep, StoreDep
+from ..files import MatrixFileError, check_matrix_market
+from ..schemas import FileInfo, FileList
+from ..store import FileRecord
+
+router = APIRouter(prefix="/v1/files", tags=["files"])
+
+_NOT_FOUND = {404: {"description": "no file with this id"}}
+_MAX_NAME = 200
+
+
+def _info(record: FileRecord) -> FileInfo:
+    return FileInfo(id=record.id, name=record.name, bytes=record.bytes, shape=list(record.shape), nnz=record.nnz,
+                    created_at=record.created_at)
+
+
+def _name(filename: str | None) -> str:
+    name = (filename or "upload.mtx").encode("utf-8", "replace").decode("utf-8")  # lone surrogates -> ?
+    return name[:_MAX_NAME]
+
+
+def too_large_detail(limit: int) -> str:
+    return f"the file is larger than max_file_bytes = {limit} bytes (RAYDAMP_MAX_FILE_BYTES)"
+
+
+@router.post("", status_code=201, response_model=FileInfo,
+             responses={413: {"description": "the file is over max_file_bytes"},
+                        422: {"description": "no file part, or not a Matrix Market file this service can use (a "
+                                             "real square matrix of at most max_structure_dim rows); detail[].msg "
+                                             "says why"},
+                        507: {"description": "the stored files would exceed max_stored_file_bytes; delete some"}})
+def upload_file(file: Annotated[UploadFile, File(description="a Matrix Market (.mtx) file: a real square matrix")],
+                request: Request, response: Response, store: StoreDep, settings: SettingsDep) -> FileInfo:
+    """Store a Matrix Market file; use its id as {"file": id} for a linear structure's M or K."""
+    limit = settings.max_file_bytes
+    if file.size is not None and file.size > limit:
+        raise HTTPException(413, detail=too_large_detail(limit))
+    content = file.file.read(limit + 1)
+    if len(content) > limit:
+        raise HTTPException(413, detail=too_large_detail(limit))
+    try:
+        info = check_matrix_market(content, max_dim=settings.max_structure_dim)
+    except MatrixFileError as error:
+        raise RequestValidationError([{"type": "value_error", "loc": ("body", "file"), "msg": str(error),
+                                       "input": _name(file.filename)}]) from None
+    record = store.add_file(_name(file.filename), content, info.shape, info.nnz,
+                            max_total_bytes=settings.max_stored_file_bytes)
+    if record is None:
+        raise HTTPException(507, detail=f"the stored files would exceed max_stored_file_bytes = "
+                            f"{settings.max_stored_file_bytes} bytes; delete files no longer needed")
+    response.headers["Location"] = request.scope.get("root_path", "") + f"/v1/files/{record.id}"
+    return _info(record)
+
+
+@router.get("", response_model=FileList)
+def list_files(store: StoreDep, settings: SettingsDep,
+               limit: Annotated[int, Query(ge=1, description="at most this many files, newest first")] = 100
+               ) -> FileList:
+    if limit > settings.max_list_limit:
+        raise RequestValidationError([{"type": "less_than_equal", "loc": ("query", "limit"), "input": limit,
+                                       "msg": f"limit must be <= {settings.max_list_limit}"}])
+    return FileList(files=[_info(record) for record in store.files(limit)])
+
+
+@router.get("/{file_id}", response_model=FileInfo, responses=_NOT_FOUND)
+def get_file(file_id: str, store: StoreDep) -> FileInfo:
+    record = store.file(file_id)
+    if record is None:
+        raise HTTPException(404, detail=f"no file with id {file_id!r}")
+    return _info(record)
+
+
+@router.delete("/{file_id}", status_code=204, response_class=Response,
+               responses={**_NOT_FOUND, 409: {"description": "a queued or running job uses the file"}})
+def delete_file(file_id: str, store: StoreDep) -> Response:
+    """Remove the file. Finished jobs that used it keep their results; a queued or running job that names
+    it keeps it (409, naming the jobs): cancel them, or wait for them to finish."""
+    outcome = store.delete_file(file_id)
+    if outcome == "missing":
+        raise HTTPException(404, detail=f"no file with id {file_id!r}")
+    if outcome == "in_use":
+        jobs = store.jobs_using_file(file_id)
+        raise HTTPException(409, detail=f"file {file_id} is used by queued or running jobs ({', '.join(jobs)}); "
+                            "cancel them or wait for them to finish")
+    return Response(status_code=204)
