@@ -328,7 +328,8 @@ function momentumNames(spec, count) {
 
 function label(job) {
   const spec = job.spec;
-  const system = spec.model || (spec.system && spec.system.name) || "system";
+  // A built-in model's name; a system's own name, else its kind (chain, linear_structure).
+  const system = spec.model || (spec.system && (spec.system.name || spec.system.kind)) || "system";
   const composed = spec.composition ? ` ∘ ${spec.composition}` : "";
   const tableau = spec.tableau ? "/" + (typeof spec.tableau === "string" ? spec.tableau : "own tableau") : "";
   return `${system} ${spec.method}${tableau}${composed} h=${spec.step_size}`;
