@@ -218,7 +218,65 @@ def test_json_round_trip_and_mode_start():
     ({"n": 10, "bond": "fput", "parameters": {"gamma": 1}}, "parameters.gamma: the fput bond has no parameter"),
     ({"n": 10, "bond": "expression", "parameters": {"potential": "r^2 + s"}}, "parameters.potential"),
     ({"n": 400, "dampers": {"bonds": list(range(300)), "c": 0.1}}, "coupled by damped bonds"),
+    ({"n": 10, "on_site": {"kind": "quartic"}}, "on_site.kind: unknown on-site potential 'quartic'"),
+    ({"n": 10, "on_site": {"kind": "harmonic", "k": -1}}, "on_site.k must be >= 0"),
+    ({"n": 10, "on_site": {"kind": "sine", "k": 1}}, "on_site.k: the sine on-site potential has no parameter"),
+    ({"n": 10, "on_site": "sine"}, "on_site: expected"),
 ])
 def test_bad_input_names_its_path(kwargs, message):
     with pytest.raises(ValueError, match=message):
         Chain(**kwargs)
+
+
+# -- on-site potentials (Klein-Gordon, phi^4, Frenkel-Kontorova) ---------------------------------------
+
+def test_klein_gordon_normal_mode_is_exact_with_the_shifted_frequency():
+    # Harmonic bonds and harmonic pinning: the linear chain's mode 3 stays a mode, oscillating at
+    # omega_3^2 = (k lambda_3 + k_site) / m; 3s at h = 0.005 is second order: 4.4e-6 over 2 periods.
+    chain = Chain(24, bond="harmonic", parameters={"k": 1.3}, mass=0.7, on_site={"kind": "harmonic", "k": 0.5},
+                  eps=0.0)
+    q0, p0 = chain.normal_mode(3, amplitude=0.4)
+    omega = chain.frequencies()[2]
+    t_end = 4 * math.pi / omega
+    sol = raydamp.integrate(chain, q0, p0, method="3s", h=0.005, t_end=t_end, save_every=100)
+    expected = np.cos(omega * sol.t)[:, None] * q0[None, :]
+    assert np.abs(sol.q - expected).max() <= 1e-5
+    # the mode energies hold the whole energy, on-site part included, in mode 3 alone
+    energies = chain_mode_energies(sol)
+    np.testing.assert_allclose(energies.sum(axis=1), sol.energy, rtol=1e-12)
+    assert np.abs(np.delete(energies, 2, axis=1)).max() <= 1e-10 * energies[0, 2]
+    assert chain.momentum_names == () and Chain(8, boundary="periodic").momentum_names == ("P",)
+
+
+def test_phi4_double_well_and_sine_chains_keep_energy_and_balance():
+    # eps = 0: energy error O(h^2) and bounded; damped (dashpots on bonds): H - H0 + W = O(h^2).
+    for on_site in ({"kind": "phi4", "k2": -0.5, "k4": 1.0}, {"kind": "sine", "g": 0.8}):
+        chain = Chain(32, bond="fput", parameters={"alpha": 0.25}, on_site=on_site, eps=0.0)
+        q0 = 0.6 * np.sin(np.linspace(0, 3 * math.pi, 32)) + (0.7 if on_site["kind"] == "phi4" else 0.0)
+        p0 = 0.3 * np.cos(np.arange(32.0))
+        errors = []
+        for h in (0.04, 0.02):
+            sol = raydamp.integrate(chain, q0, p0, method="3s", h=h, t_end=200.0, save_every=10)
+            errors.append(np.abs(sol.energy - sol.energy[0]).max())
+        assert 3.5 < errors[0] / errors[1] < 4.5, (on_site, errors)
+        assert errors[1] < 1e-3 * abs(sol.energy[0])
+        damped = Chain(**{**chain.parameters, "eps": 1.0, "dampers": {"bonds": [4, 12, 20], "c": 0.3}})
+        balance = []
+        for h in (0.04, 0.02):
+            sol = raydamp.integrate(damped, q0, p0, method="3s", h=h, t_end=40.0, save_every=5, work=True)
+            balance.append(np.abs(sol.energy_balance).max())
+        assert sol.work[-1] > 0.05 * sol.energy[0]  # the dashpots took energy
+        assert 3.5 < balance[0] / balance[1] < 4.5, (on_site, balance)
+
+
+def test_on_site_json_round_trip():
+    chain = Chain(16, bond="toda", on_site={"kind": "phi4", "k2": -1.0}, eps=0.0)
+    spec = chain.to_dict()
+    assert spec["on_site"] == {"kind": "phi4", "k2": -1.0, "k4": 1.0}  # k4 took its default
+    again = Chain.from_dict(spec)
+    q = np.linspace(-1, 1, 16)
+    assert again.energy(q, q) == chain.energy(q, q)
+    # U = k2 q^2/2 + k4 q^4/4 on every site, beside the bonds' energy
+    plain = Chain(16, bond="toda", eps=0.0)
+    assert chain.energy(q, q) - plain.energy(q, q) == pytest.approx(np.sum(-0.5 * q**2 + 0.25 * q**4), rel=1e-13)
+    assert "on_site" not in plain.to_dict()

@@ -61,6 +61,23 @@ ChainBonds make_bonds(const std::string& bond, const std::map<std::string, doubl
   return b;
 }
 
+// The on-site potential: "none", "polynomial" (k2, k4) or "sine" (g); Python maps its
+// named forms (harmonic, phi4, sine) onto these and checks the values.
+ChainOnSite make_on_site(const std::string& kind, const std::map<std::string, double>& p) {
+  ChainOnSite u;
+  if (kind == "none") return u;
+  if (kind == "polynomial") {
+    u.kind = OnSiteKind::polynomial;
+    u.polynomial = {parameter(p, "k2"), parameter(p, "k4")};
+  } else if (kind == "sine") {
+    u.kind = OnSiteKind::sine;
+    u.sine.g = parameter(p, "g");
+  } else {
+    throw std::invalid_argument("on_site: unknown on-site kind '" + kind + "'");
+  }
+  return u;
+}
+
 }  // namespace
 
 void bind_chain(py::module_& m) {
@@ -69,15 +86,18 @@ void bind_chain(py::module_& m) {
                       const std::map<std::string, double>& parameters, double mass, double eps,
                       const std::vector<int>& bonds, const std::vector<double>& bond_c, const std::vector<int>& sites,
                       const std::vector<double>& site_c, const std::vector<std::uintptr_t>& functions,
-                      py::object /*keep_alive*/) {
+                      py::object /*keep_alive*/, const std::string& on_site,
+                      const std::map<std::string, double>& on_site_parameters) {
             const ChainBoundary b = boundary_of(boundary);
             if (n < 2) throw std::invalid_argument("n must be >= 2 (sites of the chain), got " + std::to_string(n));
             return Chain(n, b, make_bonds(bond, parameters, functions), mass, eps,
-                         ChainDamping(b, n, mass, eps, bonds, bond_c, sites, site_c), !sites.empty());
+                         ChainDamping(b, n, mass, eps, bonds, bond_c, sites, site_c), !sites.empty(),
+                         make_on_site(on_site, on_site_parameters));
           }),
           py::arg("n"), py::arg("boundary"), py::arg("bond"), py::arg("parameters"), py::arg("mass"), py::arg("eps"),
           py::arg("bonds"), py::arg("bond_c"), py::arg("sites"), py::arg("site_c"), py::arg("functions"),
-          py::arg("keep_alive"),
+          py::arg("keep_alive"), py::arg("on_site") = "none",
+          py::arg("on_site_parameters") = std::map<std::string, double>{},
           // An expression bond's compiled code lives as long as the Python object owning it.
           py::keep_alive<1, 13>())
       .def_property_readonly("damping_blocks", [](const Chain& c) { return c.damping.blocks(); })

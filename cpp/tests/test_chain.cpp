@@ -1,6 +1,7 @@
 // The chain model (models/chain.hpp) against dense references:
 // - every bond family's gradient is the central difference of its potential, its
-//   Hessian product the difference of its gradient, on every boundary;
+//   Hessian product the difference of its gradient, on every boundary, with and
+//   without each on-site potential;
 // - the one-pass kick and drift equal p - t grad V and q + t p/m;
 // - the block damping flows (disjoint dashpots, adjacent ones forming a tridiagonal
 //   block, a dashpot on a wall bond, on-site friction) equal the dense constant-D
@@ -65,9 +66,16 @@ int main() {
   const BondKind kinds[] = {BondKind::harmonic, BondKind::fput, BondKind::toda, BondKind::morse,
                             BondKind::lennard_jones};
   const int n = 7;
+  ChainOnSite on_sites[3];
+  on_sites[1].kind = OnSiteKind::polynomial;
+  on_sites[1].polynomial = {0.7, 0.4};
+  on_sites[2].kind = OnSiteKind::sine;
+  on_sites[2].sine.g = 0.9;
   for (ChainBoundary boundary : boundaries)
-    for (BondKind kind : kinds) {
-      const Chain c = make_chain(n, boundary, kind, 0.0, {}, {});
+    for (BondKind kind : kinds)
+      for (const ChainOnSite& u : on_sites) {
+      Chain c = make_chain(n, boundary, kind, 0.0, {}, {});
+      c.on_site = u;
       const Vec q = wave(n, 0.2, 0.15), v = wave(n, 1.1, 1.0), p = wave(n, 2.0, 0.7);
       Vec g(n), hv(n);
       c.gradient(q, g);
@@ -91,6 +99,13 @@ int main() {
       CHECK((qd - (q + (0.3 / 1.5) * p)).norm() <= 1e-15);
       CHECK_NEAR(c.potential(Vec::Zero(n)), 0.0, 1e-15);
     }
+  // An on-site potential ties sites to their rest positions: sum p is no longer conserved.
+  {
+    const Chain pinned(n, ChainBoundary::periodic, family(BondKind::fput), 1.5, 0.0,
+                       ChainDamping(ChainBoundary::periodic, n, 1.5, 0.0, {}, {}, {}, {}), false, on_sites[2]);
+    CHECK(pinned.momentum_count() == 0);
+    CHECK(make_chain(n, ChainBoundary::periodic, BondKind::fput, 0.0, {}, {}).momentum_count() == 1);
+  }
 
   // Damping blocks against the dense kind.
   struct Case {

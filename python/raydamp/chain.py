@@ -26,6 +26,12 @@ Bond families and their parameters (defaults):
     morse           V = depth (1 - e^{-a r})^2                           depth=1, a=1
     lennard_jones   V = depth((s/d)^12 - 2 (s/d)^6 + 1), d = s + r       depth=1, spacing s=1
     expression      V given as text in r: {"potential": "r^2/2 + g*r^6", "g": 0.1}
+
+On-site potentials U(q_i) (``on_site=``; each site held to its rest position, which breaks
+the conservation of sum p):
+    {"kind": "harmonic", "k": 1}            U = k q^2/2 (a Klein-Gordon chain with harmonic pinning)
+    {"kind": "phi4", "k2": 1, "k4": 1}      U = k2 q^2/2 + k4 q^4/4 (k2 < 0: a double well)
+    {"kind": "sine", "g": 1}                U = g (1 - cos q) (Frenkel-Kontorova, discrete sine-Gordon)
 """
 
 from __future__ import annotations
@@ -56,6 +62,8 @@ BOND_FAMILIES: dict[str, dict[str, float]] = {
 _POSITIVE = {("harmonic", "k"), ("toda", "a"), ("toda", "b"), ("morse", "depth"), ("morse", "a"),
              ("lennard_jones", "depth"), ("lennard_jones", "spacing")}
 BOUNDARIES = ("fixed", "periodic", "free")
+# On-site forms with their parameters' defaults; each maps onto the core's polynomial or sine kind.
+ON_SITE: dict[str, dict[str, float]] = {"harmonic": {"k": 1.0}, "phi4": {"k2": 1.0, "k4": 1.0}, "sine": {"g": 1.0}}
 
 
 def _bond_range(boundary: str, n: int) -> range:
@@ -74,7 +82,8 @@ class Chain(Model):
     name = "chain"
 
     def __init__(self, n: int, bond: str = "fput", parameters: Mapping[str, Any] | None = None, mass: float = 1.0,
-                 boundary: str = "fixed", dampers: Mapping[str, Any] | None = None, eps: float = 1.0):
+                 boundary: str = "fixed", dampers: Mapping[str, Any] | None = None, eps: float = 1.0,
+                 on_site: Mapping[str, Any] | None = None):
         n = integer("n", n, minimum=2, maximum=MAX_SITES)
         if not isinstance(bond, str) or bond not in BOND_FAMILIES:
             raise ValueError(f"bond: unknown bond family {_short(bond)} (known: {', '.join(BOND_FAMILIES)})")
@@ -87,6 +96,7 @@ class Chain(Model):
         self.eps = real("eps", eps, nonnegative=True)
         self.bond_parameters, self._expression = _bond_parameters(bond, parameters)
         self.dampers = _dampers(dampers, boundary, n)
+        self.on_site = _on_site(on_site)
         functions: list[int] = []
         keep: Any = None
         numeric = {k: v for k, v in self.bond_parameters.items() if k != "potential"}
@@ -100,8 +110,10 @@ class Chain(Model):
         sites = d.get("sites", [])
         c = d.get("c", 0.0)
         c_list = list(c) if isinstance(c, list) else [c] * (len(bonds) + len(sites))
+        core_on_site, core_on_site_parameters = _core_on_site(self.on_site)
         self._core_model = _core.Chain(n, boundary, bond, numeric, self.mass, self.eps, bonds, c_list[:len(bonds)],
-                                       sites, c_list[len(bonds):], functions, keep)
+                                       sites, c_list[len(bonds):], functions, keep, core_on_site,
+                                       core_on_site_parameters)
         self.momentum_names = ("P",) if self._core_model.n_momenta else ()
         self._freeze()
 
@@ -111,18 +123,22 @@ class Chain(Model):
         """The constructor's arguments, by name (``replace`` and the JSON form use them)."""
         return {"n": self.n, "bond": self.bond, "parameters": dict(self.bond_parameters), "mass": self.mass,
                 "boundary": self.boundary, "dampers": {k: (list(v) if isinstance(v, list) else v)
-                                                       for k, v in self.dampers.items()}, "eps": self.eps}
+                                                       for k, v in self.dampers.items()}, "eps": self.eps,
+                "on_site": dict(self.on_site) if self.on_site else None}
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON form: ``{"kind": "chain", "n": ..., "bond": ..., ...}`` (the service's ``system``)."""
-        return {"kind": "chain", **self.parameters}
+        spec = {"kind": "chain", **self.parameters}
+        if spec["on_site"] is None:
+            del spec["on_site"]  # the form of chains without one stays as it was
+        return spec
 
     @classmethod
     def from_dict(cls, spec: Mapping[str, Any]) -> Chain:
         """Build from ``to_dict()``'s form; errors name the key (``n must be ...``, ``dampers.bonds[2]: ...``)."""
         if not isinstance(spec, Mapping):
             raise ValueError("system: a chain must be an object with kind \"chain\"")
-        known = ("kind", "n", "bond", "parameters", "mass", "boundary", "dampers", "eps")
+        known = ("kind", "n", "bond", "parameters", "mass", "boundary", "dampers", "eps", "on_site")
         for key in spec:
             if key not in known:
                 raise ValueError(f"{key}: unknown key of a chain (known: {', '.join(known)})")
@@ -134,7 +150,8 @@ class Chain(Model):
 
     def __repr__(self) -> str:
         return (f"Chain(n={self.n}, bond={self.bond!r}, parameters={self.bond_parameters!r}, mass={self.mass!r}, "
-                f"boundary={self.boundary!r}, dampers={self.dampers!r}, eps={self.eps!r})")
+                f"boundary={self.boundary!r}, dampers={self.dampers!r}, eps={self.eps!r}"
+                + (f", on_site={self.on_site!r})" if self.on_site else ")"))
 
     @property
     def coordinates(self) -> tuple[str, ...]:
@@ -156,9 +173,20 @@ class Chain(Model):
         from .system.compile import evaluate
         return float(evaluate(self._compiled_bond[0][2], np.zeros(1))[0])
 
+    @property
+    def on_site_stiffness(self) -> float:
+        """U''(0) of the on-site potential (0 without one): it shifts every omega_k^2 by U''(0)/m."""
+        u = self.on_site
+        if not u:
+            return 0.0
+        return {"harmonic": lambda: u["k"], "phi4": lambda: u["k2"], "sine": lambda: u["g"]}[u["kind"]]()
+
     def frequencies(self) -> np.ndarray:
-        """omega_k of the linearised chain, one per mode in ``mode_energies``' order."""
-        return np.sqrt(self.harmonic_stiffness / self.mass * _eigenvalues(self.boundary, self.n))
+        """omega_k of the linearised chain, one per mode in ``mode_energies``' order: omega_k^2 =
+        (V''(0) lambda_k + U''(0)) / m. Imaginary (NaN here) for an unstable mode (phi4 with k2 < 0)."""
+        with np.errstate(invalid="ignore"):
+            return np.sqrt((self.harmonic_stiffness * _eigenvalues(self.boundary, self.n) + self.on_site_stiffness)
+                           / self.mass)
 
     def normal_mode(self, mode: int = 1, amplitude: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
         """(q0, p0): all energy in one normal mode of the linearised chain, at rest (the FPUT start).
@@ -182,7 +210,8 @@ class Chain(Model):
         """Energy in each normal mode of the linearised chain, for rows of (q, p) (shape (rows, n)
         or (n,)): E_k = P_k^2/(2m) + m omega_k^2 Q_k^2/2 with (Q, P) the orthonormal transform
         (fixed: DST-I, modes k = 1..n; free: DCT-II, k = 0..n-1; periodic: real Fourier, each
-        wavenumber k = 0..n//2 with its pair). They sum to the harmonic part of H."""
+        wavenumber k = 0..n//2 with its pair). They sum to the harmonic part of H (with an on-site
+        potential, its quadratic part U''(0) q^2/2 included: E_k = P_k^2/(2m) + m omega_k^2 Q_k^2/2)."""
         q = np.asarray(q, dtype=float)
         p = np.asarray(p, dtype=float)
         if q.shape != p.shape or q.shape[-1] != self.n:
@@ -190,7 +219,7 @@ class Chain(Model):
         Q = _transform(self.boundary, q)
         P = _transform(self.boundary, p)
         lam = _eigenvalues(self.boundary, self.n)
-        return 0.5 * P**2 / self.mass + 0.5 * self.harmonic_stiffness * lam * Q**2
+        return 0.5 * P**2 / self.mass + 0.5 * (self.harmonic_stiffness * lam + self.on_site_stiffness) * Q**2
 
     @property
     def damping_blocks(self) -> int:
@@ -264,6 +293,37 @@ def _transform(boundary: str, x: np.ndarray) -> np.ndarray:
     if n % 2 == 0:
         weight[-1] = 1.0
     return y * weight
+
+
+def _on_site(on_site: Mapping[str, Any] | None) -> dict[str, Any] | None:
+    """The on-site potential with its defaults filled in, checked; None for none."""
+    if on_site is None:
+        return None
+    if not isinstance(on_site, Mapping):
+        raise ValueError(f"on_site: expected {{\"kind\": ...}} or None, got {_short(on_site)}")
+    kind = on_site.get("kind")
+    if not isinstance(kind, str) or kind not in ON_SITE:
+        raise ValueError(f"on_site.kind: unknown on-site potential {_short(kind)} (known: {', '.join(ON_SITE)})")
+    out: dict[str, Any] = {"kind": kind}
+    for key, value in on_site.items():
+        if key != "kind" and key not in ON_SITE[kind]:
+            raise ValueError(f"on_site.{key}: the {kind} on-site potential has no parameter {key!r} "
+                             f"(known: {', '.join(ON_SITE[kind])})")
+    for key, default in ON_SITE[kind].items():
+        # k2 may be negative (a double well); the pinning k and the others are >= 0.
+        out[key] = real(f"on_site.{key}", on_site.get(key, default), nonnegative=key != "k2")
+    return out
+
+
+def _core_on_site(on_site: dict[str, Any] | None) -> tuple[str, dict[str, float]]:
+    """The core's form: ("none" | "polynomial" | "sine", parameters)."""
+    if not on_site:
+        return "none", {}
+    if on_site["kind"] == "harmonic":
+        return "polynomial", {"k2": on_site["k"], "k4": 0.0}
+    if on_site["kind"] == "phi4":
+        return "polynomial", {"k2": on_site["k2"], "k4": on_site["k4"]}
+    return "sine", {"g": on_site["g"]}
 
 
 def _bond_parameters(bond: str, parameters: Mapping[str, Any] | None) -> tuple[dict[str, Any], Any]:

@@ -129,6 +129,17 @@ class ChainDampers(_Input):
         description="the dashpot coefficient, or one per damper (bonds, then sites)")
 
 
+class ChainOnSiteInput(_Input):
+    """An on-site potential U(q_i) on every site: harmonic (k), phi4 (k2, k4) or sine (g); the
+    parameters not given take raydamp's defaults (raydamp.chain documents them)."""
+
+    kind: Literal["harmonic", "phi4", "sine"]
+    k: FiniteFloat | None = Field(None, ge=0, description="harmonic: U = k q^2/2")
+    k2: FiniteFloat | None = Field(None, description="phi4: U = k2 q^2/2 + k4 q^4/4 (k2 < 0: a double well)")
+    k4: FiniteFloat | None = Field(None, ge=0)
+    g: FiniteFloat | None = Field(None, ge=0, description="sine: U = g (1 - cos q)")
+
+
 class ChainInput(_Input):
     """A lattice: raydamp.Chain.to_dict()'s form. n sites of mass m, neighbours joined by bonds of one
     family, dashpots on chosen bonds or friction on chosen sites (raydamp.chain documents it)."""
@@ -144,6 +155,8 @@ class ChainInput(_Input):
     boundary: Literal["fixed", "periodic", "free"] = "fixed"
     dampers: ChainDampers | None = None
     eps: FiniteFloat = Field(1.0, ge=0, description="damping strength (D is scaled by it)")
+    on_site: ChainOnSiteInput | None = Field(None, description="an on-site potential on every site (Klein-Gordon, "
+                                                               "Frenkel-Kontorova); none by default")
 
 
 # ---- linear structures: raydamp.LinearStructure.to_dict()'s form, and uploaded files ----------------

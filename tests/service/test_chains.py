@@ -22,13 +22,15 @@ def _peak_rss_mib(pid: int) -> float:
     raise AssertionError("no VmHWM in /proc status")
 
 
-def test_chain_job_matches_python(server):
-    job = {"system": SMALL, "method": "3s", "step_size": 0.1, "n_steps": 500, "save_every": 100,
+@pytest.mark.parametrize("on_site", [None, {"kind": "phi4", "k2": -0.5}])
+def test_chain_job_matches_python(server, on_site):
+    system = SMALL if on_site is None else {**SMALL, "on_site": on_site}
+    job = {"system": system, "method": "3s", "step_size": 0.1, "n_steps": 500, "save_every": 100,
            "initial_state": {"mode": 1, "amplitude": 0.5}, "save_dofs": [0, 31, 63]}
     done = server.wait_finished(server.submit(job))
     assert done["status"] == "completed", done
     trajectory = server.client.get(f"/v1/jobs/{done['id']}/trajectory").json()
-    chain = raydamp.Chain.from_dict(SMALL)
+    chain = raydamp.Chain.from_dict(system)
     q0, p0 = chain.normal_mode(1, 0.5)
     # A job records the damping work (work defaults to true), which runs 3s's steps unmerged.
     local = raydamp.integrate(chain, q0, p0, method="3s", h=0.1, n_steps=500, save_every=100, save_dofs=[0, 31, 63],
@@ -68,6 +70,9 @@ def test_million_site_chain_through_the_service(start_server):
     ({**SMALL, "dampers": {"bonds": [65], "c": 0.1}}, ["body", "system", "dampers", "bonds", 0]),
     ({**SMALL, "parameters": {"gamma": 1.0}}, ["body", "system", "parameters", "gamma"]),
     ({**SMALL, "bond": "toda", "parameters": {"b": -1.0}}, ["body", "system", "parameters", "b"]),
+    ({**SMALL, "on_site": {"kind": "quartic"}}, ["body", "system", "on_site", "kind"]),
+    ({**SMALL, "on_site": {"kind": "sine", "g": -1.0}}, ["body", "system", "on_site", "g"]),
+    ({**SMALL, "on_site": {"kind": "sine", "k": 1.0}}, ["body", "system", "on_site", "k"]),
 ])
 def test_bad_chains_are_422_naming_the_path(server, system, loc):
     job = {"system": system, "method": "3s", "step_size": 0.1, "n_steps": 10,

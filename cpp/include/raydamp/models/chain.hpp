@@ -1,5 +1,6 @@
 // A one-dimensional lattice: n sites of mass m on a line, neighbours joined by
-// bonds of one family (chain_bonds.hpp), H = sum p_i^2 / 2m + sum_b V(r_b) with r_b
+// bonds of one family (chain_bonds.hpp), optionally each site held by an on-site
+// potential U (chain_on_site.hpp), H = sum p_i^2 / 2m + sum_b V(r_b) + sum_i U(q_i) with r_b
 // the stretch of bond b (the difference of its sites' displacements, see
 // chain_bond_sites for the numbering and the boundaries), damped by dashpots on
 // chosen bonds and friction on chosen sites (damping/chain_damping.hpp).
@@ -14,12 +15,14 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "raydamp/concepts.hpp"
 #include "raydamp/damping/chain_damping.hpp"
 #include "raydamp/mass/scalar_mass.hpp"
 #include "raydamp/models/chain_bonds.hpp"
+#include "raydamp/models/chain_on_site.hpp"
 #include "raydamp/state.hpp"
 
 namespace raydamp {
@@ -56,14 +59,19 @@ struct Chain {
   ScalarMass mass;
   ChainDamping damping;
   ChainBonds bonds;
+  ChainOnSite on_site;
   ChainBoundary boundary;
   int n;
-  bool conserves_momentum;  // periodic or free with no on-site friction: sum p is a momentum map
+  // Periodic or free, with no on-site friction and no on-site potential (both tie sites to
+  // their rest positions): sum p is a momentum map.
+  bool conserves_momentum;
 
   Chain(int n_, ChainBoundary boundary_, ChainBonds bonds_, double m, double eps_, ChainDamping damping_,
-        bool site_friction)
-      : eps(eps_), mass(m, "mass"), damping(std::move(damping_)), bonds(bonds_), boundary(boundary_), n(n_),
-        conserves_momentum(boundary_ != ChainBoundary::fixed && !site_friction) {
+        bool site_friction, ChainOnSite on_site_ = {})
+      : eps(eps_), mass(m, "mass"), damping(std::move(damping_)), bonds(bonds_), on_site(on_site_),
+        boundary(boundary_), n(n_),
+        conserves_momentum(boundary_ != ChainBoundary::fixed && !site_friction &&
+                           on_site_.kind == OnSiteKind::none) {
     if (n < 2) throw std::invalid_argument("n must be >= 2 (sites of the chain), got " + std::to_string(n));
     if (!(std::isfinite(eps) && eps >= 0.0)) throw std::invalid_argument("eps must be a finite number >= 0");
     if (bonds.kind == BondKind::expression && !(bonds.expression.v && bonds.expression.dv && bonds.expression.d2v))
@@ -77,20 +85,37 @@ struct Chain {
   }
 
   double potential(const Vec& q) const {
-    return bonds.visit([&](const auto& bond) {
+    const double bonded = bonds.visit([&](const auto& bond) {
       double sum = 0.0;
       for (int i = 1; i < n; ++i) sum += bond.energy(q[i] - q[i - 1]);
       if (boundary == ChainBoundary::fixed) sum += bond.energy(q[0]) + bond.energy(-q[n - 1]);
       if (boundary == ChainBoundary::periodic) sum += bond.energy(q[0] - q[n - 1]);
       return sum;
     });
+    return bonded + on_site.visit([&](const auto& u) {
+      double sum = 0.0;
+      if constexpr (!std::decay_t<decltype(u)>::none)
+        for (int i = 0; i < n; ++i) sum += u.energy(q[i]);
+      return sum;
+    });
   }
 
   // op(i, dV/dq_i) for every site, in order. dV/dq_i = V'(r of the bond to its left)
-  // - V'(r of the bond to its right).
+  // - V'(r of the bond to its right) + U'(q_i).
   template <class Op>
   void for_each_gradient(const Vec& q, Op&& op) const {
-    bonds.visit([&](const auto& bond) { sweep(bond, q.data(), op); });
+    bonds.visit([&](const auto& bond) {
+      on_site.visit([&](const auto& u) {
+        using U = std::decay_t<decltype(u)>;
+        if constexpr (U::none) {
+          sweep(bond, q.data(), op);
+        } else {
+          const double* __restrict x = q.data();
+          auto with_site = [&op, &u, x](int i, double gi) { op(i, gi + u.force(x[i])); };
+          sweep(bond, x, with_site);
+        }
+      });
+    });
   }
 
   void gradient(const Vec& q, Vec& g) const {
@@ -130,6 +155,10 @@ struct Chain {
         const auto s = chain_bond_sites(boundary, n, b);
         add_bond(s[0], s[1]);
       }
+    });
+    on_site.visit([&](const auto& u) {
+      if constexpr (!std::decay_t<decltype(u)>::none)
+        for (int i = 0; i < n; ++i) out[i] += u.stiffness(q[i]) * v[i];
     });
   }
 
