@@ -175,7 +175,8 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
       };
       if constexpr (std::is_same_v<Model, DampedPendulum> && !uses_tableau<Method>()) {
         // Runs of members sharing eps go as the lanes of one run (run_lanes.hpp).
-        const std::vector<LaneBatch> batches = lane_batches(member_model);
+        const std::vector<LaneBatch> batches =
+            lane_batches(member_model, batch_lanes(members, ensemble_threads(threads, members)));
         std::atomic<long> finished{0};
         EnsembleControl batch_control;
         if (control.progress) batch_control.progress = [&](long, long) { control.progress(finished.load(), members); };
