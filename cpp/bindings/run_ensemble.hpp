@@ -168,7 +168,7 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
       using Method = decltype(method_tag);
       auto run_member = [&](long i) {
         try {
-          store(i, integrate<Method>(*member_model[i], tab, comp, initial(i), spec, member_control));
+          store(i, integrate_model<Method>(*member_model[i], tab, comp, initial(i), spec, member_control));
         } catch (const std::invalid_argument& e) {
           throw std::invalid_argument("member " + std::to_string(i) + ": " + e.what());
         }
