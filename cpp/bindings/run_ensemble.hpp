@@ -168,14 +168,15 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
       using Method = decltype(method_tag);
       auto run_member = [&](long i) {
         try {
-          store(i, integrate<Method>(*member_model[i], tab, comp, initial(i), spec, member_control));
+          store(i, integrate_model<Method>(*member_model[i], tab, comp, initial(i), spec, member_control));
         } catch (const std::invalid_argument& e) {
           throw std::invalid_argument("member " + std::to_string(i) + ": " + e.what());
         }
       };
       if constexpr (std::is_same_v<Model, DampedPendulum> && !uses_tableau<Method>()) {
         // Runs of members sharing eps go as the lanes of one run (run_lanes.hpp).
-        const std::vector<LaneBatch> batches = lane_batches(member_model);
+        const std::vector<LaneBatch> batches =
+            lane_batches(member_model, batch_lanes(members, ensemble_threads(threads, members)));
         std::atomic<long> finished{0};
         EnsembleControl batch_control;
         if (control.progress) batch_control.progress = [&](long, long) { control.progress(finished.load(), members); };

@@ -4,6 +4,7 @@
 // their single runs bit for bit.
 #pragma once
 
+#include <algorithm>
 #include <utility>
 #include <vector>
 
@@ -15,18 +16,33 @@ namespace raydamp::bindings {
 struct LaneBatch {
   long begin, end;  // members [begin, end)
 };
-// Lanes per run: 256 pendulums are 4 KiB of state, which stays in L1 cache.
+// Lanes per run: at most 256 pendulums (4 KiB of state, which stays in L1 cache).
 inline constexpr long kLanes = 256;
+// At least this many (below it the per-pass loop overhead starts to show; 32 lanes
+// cost the same per member-step as 256 here).
+inline constexpr long kMinBatchLanes = 32;
 // Fewer members sharing eps than this run one by one (the fixed-size loop is faster there).
 inline constexpr long kMinLanes = 4;
+// Batches per thread the lanes are cut into: threads take batches from one counter,
+// so with several per thread a thread that was slowed (another process on its core,
+// a batch whose members swing wider and spend longer in sin's slower range) hands
+// the rest to the others. With 4 batches of 256 for 1000 members on 2 threads, the
+// thread that finished first idled for up to a whole batch (a quarter of the run).
+inline constexpr long kBatchesPerThread = 8;
 
-// Consecutive members with the same eps, cut every kLanes members.
-inline std::vector<LaneBatch> lane_batches(const std::vector<const DampedPendulum*>& models) {
+// Lanes per batch for `members` members on `threads` threads.
+inline long batch_lanes(long members, int threads) {
+  const long per = (members + kBatchesPerThread * threads - 1) / (kBatchesPerThread * threads);
+  return std::clamp(per, kMinBatchLanes, kLanes);
+}
+
+// Consecutive members with the same eps, cut every `lanes` members.
+inline std::vector<LaneBatch> lane_batches(const std::vector<const DampedPendulum*>& models, long lanes = kLanes) {
   std::vector<LaneBatch> out;
   const long members = static_cast<long>(models.size());
   long begin = 0;
   for (long i = 1; i <= members; ++i)
-    if (i == members || models[i]->eps != models[begin]->eps || i - begin == kLanes) {
+    if (i == members || models[i]->eps != models[begin]->eps || i - begin == lanes) {
       out.push_back({begin, i});
       begin = i;
     }
@@ -59,14 +75,17 @@ void run_lanes(const DampedPendulum& member, const LaneBatch& batch, const Butch
   }
   const Trajectory& tr = r.trajectory;
   const long rows = tr.rows();
+  // One member's result, refilled for each lane: the buffers are allocated once per
+  // batch, not once per member (store() copies what it keeps; what it takes, the
+  // refill gives back).
+  RunResult one;
+  Trajectory& out = one.trajectory;
   for (int lane = 0; lane < lanes; ++lane) {
-    RunResult one;
     one.status = r.status;
     one.steps = r.steps;
     one.failed_step = r.failed_step;
     one.message = r.message;
     one.max_momentum_drift = r.max_momentum_drift;
-    Trajectory& out = one.trajectory;
     out.n = 1;
     out.t = tr.t;
     out.q.resize(rows);

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "../bindings/run_lanes.hpp"
 #include "check.hpp"
 #include "raydamp/ensemble.hpp"
 #include "raydamp/models/pendulum_lanes.hpp"
@@ -88,6 +89,24 @@ int main() {
     compare(ThreeTermSplitting{}, builtin_composition("none"));
     compare(TwoTermSplitting{}, builtin_composition("none"));
     compare(ThreeTermSplitting{}, yoshida);
+  }
+  // Lane batches: about kBatchesPerThread per thread, between 32 and 256 lanes, and a
+  // change of eps always starts a new batch (members sharing a run share eps).
+  CHECK(bindings::batch_lanes(1000, 2) == 63);  // 16 batches for 2 threads
+  CHECK(bindings::batch_lanes(1000, 1) == 125);
+  CHECK(bindings::batch_lanes(100, 2) == 32);
+  CHECK(bindings::batch_lanes(1000000, 2) == 256);
+  {
+    const DampedPendulum a(0.1), b(0.2);
+    std::vector<const DampedPendulum*> run(100, &a);
+    for (int i = 40; i < 50; ++i) run[i] = &b;
+    const std::vector<bindings::LaneBatch> batches = bindings::lane_batches(run, 32);
+    const std::vector<long> begins{0, 32, 40, 50, 82};
+    CHECK(batches.size() == begins.size());
+    for (std::size_t k = 0; k < batches.size() && k < begins.size(); ++k) {
+      CHECK(batches[k].begin == begins[k]);
+      CHECK(batches[k].end == (k + 1 < begins.size() ? begins[k + 1] : 100));
+    }
   }
   CHECK(ensemble_threads(0, 5) >= 1);
   CHECK(ensemble_threads(4, 2) == 2);

@@ -4,11 +4,14 @@
 // - dashpots on linear functions give a constant D, so their exact flows must equal
 //   the constant-matrix kind's, and both must equal exp(-tA) where it is known in
 //   closed form (diagonal A);
-// - one dashpot's cached phi1, phi2 (kept while x = -t eps c w.grad g repeats) are
-//   refreshed when x changes: each flow equals its closed form at every new q;
+// - one dashpot's factors, carried from q to q in one workspace as a run carries
+//   them, follow q: each flow equals its closed form at every new q;
+// - a system with n fixed at compile time (CompiledSystem::fixed) runs the same
+//   steps as the run-time-sized one, and fixed<N> refuses a system of another n;
 // - phi2 is continuous across its series/direct switch.
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
 
 #include "check.hpp"
 #include "raydamp/raydamp.hpp"
@@ -86,6 +89,35 @@ void elastic_pendulum_as_system() {
     CHECK(ta.n_momenta == 1);
     CHECK_NEAR(ta.momentum.back(), tb.momentum.back(), 1e-12);
   }
+  // n fixed at compile time: the same trajectories to rounding (in practice the same
+  // bits; Eigen may order a reduction differently for a fixed size), for the methods
+  // the bindings run that way and a composition.
+  const auto sys3 = sys.fixed<3>();
+  for (const char* name : {"sv", "3s", "2s"}) {
+    const ButcherTableau& tab = resolve_tableau(method_entry(name), "");
+    for (const char* composition : {"none", "yoshida4"}) {
+      const Composition& comp = builtin_composition(composition);
+      const RunSpec spec{0.05, 2000, 0.03, 100, false};
+      const Sys& s = sys;
+      const auto dyn = with_method(name, [&](auto m) { return integrate<decltype(m)>(s, tab, comp, y0, spec); });
+      const auto fix = with_method(name, [&](auto m) { return integrate<decltype(m)>(sys3, tab, comp, z0, spec); });
+      CHECK(dyn.trajectory.rows() == fix.trajectory.rows());
+      double worst = 0.0;
+      for (std::size_t i = 0; i < dyn.trajectory.q.size() && i < fix.trajectory.q.size(); ++i)
+        worst = std::max({worst, std::abs(dyn.trajectory.q[i] - fix.trajectory.q[i]),
+                          std::abs(dyn.trajectory.p[i] - fix.trajectory.p[i])});
+      if (!(worst <= 1e-13)) std::printf("fixed size, %s/%s: differs by %.3g\n", name, composition, worst);
+      CHECK(worst <= 1e-13);
+      CHECK_NEAR(dyn.trajectory.momentum.back(), fix.trajectory.momentum.back(), 1e-13);
+    }
+  }
+  bool refused = false;
+  try {
+    (void)sys.fixed<2>();
+  } catch (const std::invalid_argument&) {
+    refused = true;
+  }
+  CHECK(refused);
   // The single sub-flows agree too, including at a = 0 (eps = 0).
   for (double e : {0.0, 0.1, 50.0}) {
     const Sys s(3, e, ScalarMass(1.0), DamperDamping(mass, e, {1.0}, fn(radial_gradient)),
@@ -148,11 +180,11 @@ void diagonal_constant_damping_is_exponential() {
   CHECK_NEAR(p[1], -std::exp(-t * eps * 3.0 / 0.5), 1e-15);
 }
 
-// One Factors object carried from q to q, as a run does: q1 -> q2 keeps x (q2 = -q1,
-// same |grad g|), q2 -> q3 changes it. With M = m I and A = eps c g g^T / m,
+// One Factors object carried from q to q, as a run does: q1 -> q2 keeps x = -t eps c
+// w.grad g (q2 = -q1, same |grad g|), q2 -> q3 changes it. With M = m I and A = eps c g g^T / m,
 //   exp(-tA) p = p + expm1(-t a) (g.p / |g|^2) g,  a = eps c |g|^2 / m,
 //   t phi1(-tA) v = t v + (t phi1(-t a) - t) (g.v / |g|^2) g.
-void rank_one_cache_follows_x() {
+void rank_one_factors_follow_q() {
   const double m = 2.0, eps = 0.3, c = 1.5, t = 0.8;
   const Eigen::MatrixXd mass = m * Eigen::MatrixXd::Identity(2, 2);
   const DamperDamping damping(mass, eps, {c}, fn(planar_gradient));
@@ -196,7 +228,7 @@ int main() {
   elastic_pendulum_as_system();
   linear_dampers_equal_constant_damping();
   diagonal_constant_damping_is_exponential();
-  rank_one_cache_follows_x();
+  rank_one_factors_follow_q();
   phi2_is_continuous();
   TEST_MAIN_RETURN();
 }

@@ -23,9 +23,12 @@ struct SystemFunctions {
   CompiledFunction momenta;          // (q, p) -> J(q, p)              (m outputs; unset when m = 0)
 };
 
-template <class Mass, class Damping>
+// Dim: Dynamic as bound (one struct for every n); fixed<N>() gives the same system
+// with n fixed at compile time, for the step loop of a small system (the bindings
+// choose it once per run, outside the loop).
+template <class Mass, class Damping, int Dim = Eigen::Dynamic>
 struct CompiledSystem {
-  static constexpr int dim = Eigen::Dynamic;
+  static constexpr int dim = Dim;
   static constexpr int n_momenta = kDynamicMomenta;
   using Vec = Vector<dim>;
 
@@ -42,6 +45,14 @@ struct CompiledSystem {
     if (!functions.potential || !functions.gradient || !functions.hessian_product)
       throw std::invalid_argument("potential: not compiled");
     if (m > 0 && !functions.momenta) throw std::invalid_argument("momenta: not compiled");
+  }
+
+  // The same system (the same compiled functions, mass and damping) with n == N
+  // fixed at compile time: Eigen then unrolls every vector operation of a step.
+  template <int N>
+  CompiledSystem<Mass, Damping, N> fixed() const {
+    if (n != N) throw std::invalid_argument("fixed: this system has " + std::to_string(n) + " coordinates");
+    return CompiledSystem<Mass, Damping, N>(n, eps, mass, damping, functions, m);
   }
 
   int size() const { return n; }
@@ -70,8 +81,8 @@ struct CompiledSystem {
     if (2 * n <= kStack) {
       std::array<double, kStack> in;
       // Eigen copies: std::copy of a run-time length becomes two calls to memmove.
-      Eigen::Map<Eigen::VectorXd>(in.data(), n) = q;
-      Eigen::Map<Eigen::VectorXd>(in.data() + n, n) = p;
+      Eigen::Map<Vec>(in.data(), n) = q;
+      Eigen::Map<Vec>(in.data() + n, n) = p;
       functions.momenta(out, in.data());
     } else {
       std::vector<double> in(2 * n);

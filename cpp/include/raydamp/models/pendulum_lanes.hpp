@@ -40,6 +40,12 @@ struct PendulumLanes {
   void gradient(const Vec& q, Vec& g) const {
     for (int i = 0; i < lanes; ++i) g[i] = std::sin(q[i]);
   }
+  // The drift and the kick in one pass each (flows/exact.hpp's has_drift/has_kick),
+  // with the single run's operations: q + t p (M = I, so v = p) and p - t sin q.
+  void drift(Vec& q, const Vec& p, double t) const { q += t * p; }
+  void kick(const Vec& q, Vec& p, double t) const {
+    for (int i = 0; i < lanes; ++i) p[i] -= t * std::sin(q[i]);
+  }
   void hessian_product(const Vec& q, const Vec& v, Vec& out) const { out = q.array().cos() * v.array(); }
   void momenta(const Vec&, const Vec&, double*) const {}
 };
