@@ -14,7 +14,7 @@ from .integrate import integrate
 from .job import job_arguments
 from .results import FORMATS
 
-__all__ = ["run_file"]
+__all__ = ["run_file", "read_spec"]
 
 
 def _fail(message: str) -> int:
@@ -49,17 +49,25 @@ def _summary_table(summary: dict) -> str:
     return "\n".join(f"{key:<{width}}  {value}" for key, value in rows)
 
 
+def read_spec(spec_path: str):
+    """The JSON a job file holds; ValueError naming the file when it cannot be read or parsed."""
+    try:
+        return json.loads(Path(spec_path).read_text())
+    except OSError as error:
+        raise ValueError(f"{spec_path}: {error.strerror}") from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as error:
+        raise ValueError(f"{spec_path}: not JSON ({error})") from None
+
+
 def run_file(spec_path: str, *, out: str | None = None, plot: str | None = None, progress: bool = True) -> int:
     if out is not None and Path(out).suffix.lower() not in FORMATS:
         return _fail(f"--out: unknown format {Path(out).suffix!r} (known: {', '.join(FORMATS)})")
     if plot is not None and Path(plot).suffix.lower() != ".png":
         return _fail("--plot: give a .png path")
     try:
-        spec = json.loads(Path(spec_path).read_text())
-    except OSError as error:
-        return _fail(f"{spec_path}: {error.strerror}")
-    except (json.JSONDecodeError, UnicodeDecodeError) as error:
-        return _fail(f"{spec_path}: not JSON ({error})")
+        spec = read_spec(spec_path)
+    except ValueError as error:
+        return _fail(str(error))
     callback, close = _progress_bar(progress)
     try:
         model, q0, p0, options = job_arguments(spec)

@@ -16,7 +16,8 @@ import numpy as np
 
 from .ensemble_solution import STATUSES
 from .results import ENSEMBLE_FORMATS, save_sweep
-from .sweep import parse_grid_item, sweep
+from .run_command import read_spec
+from .sweep import check_sweep, parse_grid_item, sweep
 
 __all__ = ["sweep_file"]
 
@@ -59,12 +60,7 @@ def sweep_file(spec_path: str, grid_items: list[str], *, out: str | None = None,
     if workers < 1:
         return _fail(f"--workers must be >= 1, got {workers}")
     try:
-        spec = json.loads(Path(spec_path).read_text())
-    except OSError as error:
-        return _fail(f"{spec_path}: {error.strerror}")
-    except (json.JSONDecodeError, UnicodeDecodeError) as error:
-        return _fail(f"{spec_path}: not JSON ({error})")
-    try:
+        spec = read_spec(spec_path)
         grid = dict(parse_grid_item(item) for item in grid_items)
     except ValueError as error:
         return _fail(str(error))
@@ -76,8 +72,6 @@ def sweep_file(spec_path: str, grid_items: list[str], *, out: str | None = None,
     scheduler = scheduler or os.environ.get("RAYDAMP_DASK_SCHEDULER") or None
     zarr_out = out is not None and Path(out).suffix.lower() == ".zarr"
     try:
-        from .sweep import check_sweep
-
         check_sweep(spec, grid, chunk_size=chunk_size)  # bad input is reported before a cluster starts
     except ValueError as error:
         return _fail(f"{spec_path}: {error}")
