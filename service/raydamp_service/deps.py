@@ -1,4 +1,8 @@
-"""Request dependencies: the objects the lifespan put on app.state, overridable in tests."""
+"""Request dependencies: the objects the lifespan put on app.state, overridable in tests.
+
+They are coroutines on purpose: FastAPI runs a plain-function dependency in its thread pool,
+and a hop there and back for each of them (three per submission) cost more than the
+submission's own work under load."""
 
 from __future__ import annotations
 
@@ -13,15 +17,15 @@ from .store import JobStore
 __all__ = ["SettingsDep", "StoreDep", "RunnerDep", "get_settings", "get_store", "get_runner"]
 
 
-def get_settings(request: Request) -> Settings:
+async def get_settings(request: Request) -> Settings:
     return request.app.state.settings
 
 
-def get_store(request: Request) -> JobStore:
+async def get_store(request: Request) -> JobStore:
     return request.app.state.store
 
 
-def get_runner(request: Request) -> Runner:
+async def get_runner(request: Request) -> Runner:
     return request.app.state.runner
 
 
