@@ -153,3 +153,22 @@ def test_cancel_keeps_the_finished_chunks(client, tmp_path):
         ref = raydamp.integrate(DampedPendulum(float(ds["eps"].values[i])), SPEC["q0"], [0.0], h=0.1, n_steps=20000,
                                 save_every=10000)
         assert np.array_equal(ds["q"].values[i], ref.q)
+
+
+def test_sweep_over_a_chains_initial_state_equals_the_ensemble(client):
+    # the large-system kinds sweep too (over initial states and run arguments)
+    chain = raydamp.Chain(n=32, bond="fput", parameters={"alpha": 0.25, "beta": 1.0}, boundary="fixed",
+                          dampers={"bonds": [9, 10, 19], "c": 0.1})
+    q0 = np.zeros(32)
+    spec = {"model": chain, "q0": q0, "p0": np.zeros(32), "method": "3s", "h": 0.05, "n_steps": 100,
+            "save_every": 25}
+    amplitudes = np.array([0.1, 0.5, 1.0])
+    ds = raydamp.sweep(spec, grid={"q0[5]": amplitudes, "method": ["3s", "2s"]}, client=client, chunk_size=2)
+    for method in ("3s", "2s"):
+        starts = np.tile(q0, (3, 1))
+        starts[:, 5] = amplitudes
+        ens = raydamp.integrate_ensemble(chain, starts, np.zeros(32), method=method, h=0.05, n_steps=100,
+                                         save_every=25)
+        picked = ds.sel(member=(ds["method"] == method).values)
+        np.testing.assert_array_equal(picked["q"].values, ens.q)
+        np.testing.assert_array_equal(picked["energy"].values, ens.energy)

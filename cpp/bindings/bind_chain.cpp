@@ -7,6 +7,7 @@
 
 #include "model_functions.hpp"
 #include "run.hpp"
+#include "run_ensemble.hpp"
 
 namespace py = pybind11;
 
@@ -105,6 +106,7 @@ void bind_chain(py::module_& m) {
       .def_property_readonly("damping_spectral_radius", [](const Chain& c) { return c.damping.spectral_radius(); });
   add_model_functions<Chain>(cls);
   def_integrate<Chain>(m);
+  def_integrate_ensemble<Chain>(m);
 }
 
 }  // namespace raydamp::bindings

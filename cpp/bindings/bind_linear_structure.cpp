@@ -8,6 +8,7 @@
 #include "model_functions.hpp"
 #include "raydamp/models/linear_structure.hpp"
 #include "run.hpp"
+#include "run_ensemble.hpp"
 
 namespace raydamp::bindings {
 
@@ -37,6 +38,7 @@ void bind_structure_kind(py::module_& m, const char* name) {
       });
   add_model_functions<Model>(cls);
   def_integrate<Model>(m);
+  def_integrate_ensemble<Model>(m);
 }
 
 }  // namespace

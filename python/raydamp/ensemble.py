@@ -27,7 +27,9 @@ def member_parameters(system: Model) -> tuple[str, ...]:
     """The names ``integrate_ensemble``'s ``parameters`` may vary for ``system``."""
     if isinstance(system, System):
         return (*(("eps",) if system._spec.damping_form is not None else ()), *system.parameters)
-    return _CORE_PARAMETERS[type(system)]
+    # A Chain or a LinearStructure: members differ by their initial states only (its
+    # parameters shape matrices and damping blocks built once; sweep rebuilds per member).
+    return _CORE_PARAMETERS.get(type(system), ())
 
 
 def _states(name: str, value, members: int | None, n: int) -> np.ndarray:
@@ -121,7 +123,8 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
 
     Parameters
     ----------
-    system : a built-in model or a :class:`raydamp.System` (one built from expressions).
+    system : a built-in model, a :class:`raydamp.System` (one built from expressions), a
+        :class:`raydamp.Chain` or a :class:`raydamp.LinearStructure`.
     q0, p0 : (members, n) initial states; a single state of length n is used for every member.
     parameters : {name: per-member values} of the system's parameters: ``eps`` for every
         damped model; ``m``, ``k``, ``l`` and ``g`` ((members, 3)) for the elastic pendulum; the
@@ -166,7 +169,7 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
     q0 = _states("q0", q0, members, n)
     members = q0.shape[0]
     p0 = _states("p0", p0, members, n)
-    _check_configurations(system, q0)
+    system.check_configurations("q0", q0)
     params = _parameter_arrays(system, parameters, members)
     save_every = integer("save_every", save_every, maximum=MAX_STEPS)
     n_steps, h_last = span(h, t_end, n_steps)
@@ -202,18 +205,3 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
         q0=q0, p0=p0, parameters=params, method=method,
         tableau=resolved_tableau if method in with_tableau else None, composition=composition_name, h=h,
         wall_time=wall, threads=out["threads"], origin=(system, options))
-
-
-def _check_configurations(system: Model, q0: np.ndarray) -> None:
-    """The model's configuration check on every member's q0 (vectorised for the built-in models)."""
-    if isinstance(system, DampedPendulum):
-        return
-    if isinstance(system, ElasticPendulum):
-        origin = ~q0.any(axis=1)
-        if origin.any():
-            i = int(np.argmax(origin))
-            raise ValueError(f"q0[{i}] must not be the origin: the elastic pendulum's grad V and damping "
-                             "D(q) = q q^T/|q|^2 are undefined at q = 0")
-        return
-    for i, q in enumerate(q0):
-        system.check_configuration(f"q0[{i}]", q)

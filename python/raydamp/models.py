@@ -74,6 +74,14 @@ class Model:
         """Refuse a configuration outside the model's configuration space; returns q."""
         return q
 
+    def check_configurations(self, name: str, qs: np.ndarray) -> None:
+        """check_configuration on every row of qs (members, n), naming the first bad one
+        ``name[i]``. Kinds whose check is not the identity vectorise it where they can."""
+        if type(self).check_configuration is Model.check_configuration:
+            return
+        for i, q in enumerate(qs):
+            self.check_configuration(f"{name}[{i}]", q)
+
     def energy(self, q, p) -> float:
         """H(q, p)."""
         return self._core_model.energy(vector("q", q, self.dim), vector("p", p, self.dim))
@@ -162,6 +170,12 @@ class ElasticPendulum(Model):
             raise ValueError(f"{name} must not be the origin: the elastic pendulum's grad V and damping "
                              "D(q) = q q^T/|q|^2 are undefined at q = 0")
         return q
+
+    def check_configurations(self, name: str, qs: np.ndarray) -> None:
+        origin = ~qs.any(axis=1)
+        if origin.any():
+            i = int(np.argmax(origin))
+            self.check_configuration(f"{name}[{i}]", qs[i])
 
 
 MODELS: dict[str, type[Model]] = {cls.name: cls for cls in (DampedPendulum, ElasticPendulum)}
