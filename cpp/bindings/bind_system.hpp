@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -29,7 +30,7 @@ Mass make_mass(const Eigen::MatrixXd& mass) {
 
 template <class Damping>
 Damping make_damping(const Eigen::MatrixXd& mass, double eps, double scalar, const Eigen::MatrixXd& matrix,
-                     const std::vector<double>& coefficients, CompiledFunction damper_gradients) {
+                     const std::vector<double>& coefficients, CompiledFunction damper_gradients, double damper_norm) {
   if constexpr (std::is_same_v<Damping, IsotropicDamping>) {
     IsotropicDamping d;
     d.a = eps * scalar;  // D = c M: A = eps c I
@@ -37,7 +38,7 @@ Damping make_damping(const Eigen::MatrixXd& mass, double eps, double scalar, con
   } else if constexpr (std::is_same_v<Damping, ConstantDamping>) {
     return ConstantDamping(mass, matrix, eps);
   } else {
-    return DamperDamping(mass, eps, coefficients, damper_gradients);
+    return DamperDamping(mass, eps, coefficients, damper_gradients, damper_norm);
   }
 }
 
@@ -47,18 +48,21 @@ void bind_system_kind(py::module_& m, const char* name) {
   py::class_<Model> cls(m, name);
   cls.def(py::init([](int n, double eps, const Eigen::MatrixXd& mass, double damping_scalar,
                       const Eigen::MatrixXd& damping_matrix, const std::vector<double>& damper_coefficients,
-                      const FunctionAddresses& functions, int n_momenta, py::object /*keep_alive*/) {
+                      const FunctionAddresses& functions, int n_momenta, py::object /*keep_alive*/,
+                      double damper_norm) {
             if (mass.rows() != n || mass.cols() != n) throw std::invalid_argument("mass: expected an n x n matrix");
             if (functions.size() != 10) throw std::invalid_argument("functions: expected 5 (function, data) pairs");
             const SystemFunctions f{compiled(functions, 0), compiled(functions, 1), compiled(functions, 2),
                                     compiled(functions, 4)};
             return Model(n, eps, make_mass<Mass>(mass),
                          make_damping<Damping>(mass, eps, damping_scalar, damping_matrix, damper_coefficients,
-                                               compiled(functions, 3)),
+                                               compiled(functions, 3), damper_norm),
                          f, n_momenta);
           }),
           py::arg("n"), py::arg("eps"), py::arg("mass"), py::arg("damping_scalar"), py::arg("damping_matrix"),
           py::arg("damper_coefficients"), py::arg("functions"), py::arg("n_momenta"), py::arg("keep_alive"),
+          // a = grad g^T M^{-1} grad g of a single dashpot when constant (NaN: it varies).
+          py::arg("damper_norm") = std::numeric_limits<double>::quiet_NaN(),
           // The compiled code lives as long as the Python object that owns it.
           py::keep_alive<1, 10>());
   add_model_functions<Model>(cls);

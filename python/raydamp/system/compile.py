@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 import symengine as se
 
+from .dashpot_norm import constant_dashpot_norm
 from .spec import SystemSpec
 
 __all__ = ["CompiledSystemFunctions", "compile_system", "number"]
@@ -32,7 +33,9 @@ class CompiledSystemFunctions:
     """The compiled functions; ``addresses`` are (function, data) pairs in the order
     the C++ SystemFunctions expects (potential, gradient, hessian_product,
     damper_gradients, momenta; 0 where absent). The Lambdify objects own the machine
-    code: whoever holds a model holds this."""
+    code: whoever holds a model holds this. ``damper_norm`` is a = grad g^T M^{-1}
+    grad g of a single dashpot when it is the same number at every q (dashpot_norm.py),
+    else None."""
 
     addresses: tuple[int, ...]
     potential: Any
@@ -40,6 +43,7 @@ class CompiledSystemFunctions:
     hessian_product: Any
     damper_gradients: Any | None
     momenta: Any | None
+    damper_norm: float | None = None
 
 
 _HALF = se.Rational(1, 2)
@@ -107,7 +111,7 @@ def compile_system(spec: SystemSpec) -> CompiledSystemFunctions:
     hv_fn, hv_f, hv_d = _jit(q + v, hessian_product)
     addresses = [pot_f, pot_d, grad_f, grad_d, hv_f, hv_d]
 
-    damper_fn = None
+    damper_fn = damper_norm = None
     if spec.dampers:
         # k rows of n: the gradient of each dashpot's function, row-major.
         rows = []
@@ -116,6 +120,8 @@ def compile_system(spec: SystemSpec) -> CompiledSystemFunctions:
             rows.extend(se.diff(g, qi) for qi in q)
         damper_fn, f, d = _jit(q, rows)
         addresses += [f, d]
+        if len(spec.dampers) == 1:
+            damper_norm = constant_dashpot_norm(rows, np.linalg.inv(spec.mass), lambda x: evaluate(damper_fn, x))
     else:
         addresses += [0, 0]
 
@@ -128,7 +134,7 @@ def compile_system(spec: SystemSpec) -> CompiledSystemFunctions:
         addresses += [f, d]
     else:
         addresses += [0, 0]
-    return CompiledSystemFunctions(tuple(addresses), pot_fn, grad_fn, hv_fn, damper_fn, momenta_fn)
+    return CompiledSystemFunctions(tuple(addresses), pot_fn, grad_fn, hv_fn, damper_fn, momenta_fn, damper_norm)
 
 
 def evaluate(fn: Any, x: np.ndarray) -> np.ndarray:

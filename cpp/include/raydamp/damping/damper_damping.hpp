@@ -2,15 +2,24 @@
 // change of a function g_i(q) (a spring's length, an angle, a coordinate). PSD by
 // construction. The gradients come from one compiled function writing k rows of n.
 // - One dashpot: A = eps D M^{-1} = u w^T with u = eps c grad g, w = M^{-1} grad g has
-//   rank one and the single nonzero eigenvalue a = w.u, so
-//     exp(-tA) = I - t phi1(-ta) u w^T,   t phi1(-tA) = t I - t^2 phi2(-ta) u w^T
+//   rank one and the single nonzero eigenvalue eps c a, a = grad g^T M^{-1} grad g, so
+//     exp(-tA) = I - t phi1(-t eps c a) u w^T,
+//     t phi1(-tA) = t I - t^2 phi2(-t eps c a) u w^T
 //   (closed form, exact for a = 0 too). The elastic pendulum is one dashpot on |q|.
+//   A dashpot on a distance (|q|, |q_i - q_j|) has a constant a (1/m, 1/m_i + 1/m_j):
+//   python/raydamp/system/dashpot_norm.py proves that symbolically and passes a, and
+//   then phi1 and phi2 are taken once per sub-step length in factors(t), as the
+//   built-in radial damping does, so a flow at a new q costs the gradient call and
+//   two dot products (3s on the elastic pendulum: the dot w.grad g, the phi1 series
+//   or expm1 and its division were a fifth of a step). Otherwise (norm NaN) they are
+//   taken at every new q.
 // - Several dashpots need not commute: the exact flow of their sum from the
 //   eigendecomposition of S = eps L^{-1} D(q) L^{-T} at the frozen q (n <= kMaxDenseDim).
 #pragma once
 
 #include <Eigen/Eigenvalues>
 #include <array>
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -29,12 +38,14 @@ class DamperDamping {
   struct AtConfiguration {
     std::array<double, kMaxDenseDim> q;  // where they were evaluated (the cache key)
     bool valid = false;
-    // One dashpot: A = u w^T with u = eps c grad g, w = M^{-1} grad g; x = -t w.u and
-    // the scalars t phi1(x), t^2 phi2(x) (the second only for kick+damp, so computed
-    // when first needed). Plain arrays and Maps: no temporaries in the step loop.
+    // One dashpot: A = u w^T with u = eps c grad g, w = M^{-1} grad g; x = -t eps c a
+    // and the scalars k1 = eps c t phi1(x), k2 = eps c t^2 phi2(x) (the second only
+    // for kick+damp, so computed when first needed), both times 1/m when M = m I
+    // (then w = grad g / m is never formed). Constant a: all set once in factors(t).
+    // Plain arrays and Maps: no temporaries in the step loop.
     std::array<double, kMaxDenseDim> grad, w;
-    double x = std::numeric_limits<double>::quiet_NaN(), t_phi1 = 0.0, t2_phi2 = 0.0;
-    bool has_phi2 = false;
+    double x = std::numeric_limits<double>::quiet_NaN(), k1 = 0.0, k2 = 0.0;
+    bool has_k2 = false;
     // Several: exp(-tA) = L V diag(decay) V^T L^{-1}; t phi1(-tA) likewise with t_phi1s.
     SmallMatrix vectors;
     SmallVector decay, t_phi1s;
@@ -51,8 +62,11 @@ class DamperDamping {
     mutable AtConfiguration at;
   };
 
-  DamperDamping(const Eigen::MatrixXd& mass, double eps, std::vector<double> coefficients, CompiledFunction gradients)
-      : eps_(eps), c_(std::move(coefficients)), gradients_(gradients), n_(static_cast<int>(mass.rows())) {
+  // norm: a = grad g^T M^{-1} grad g of the one dashpot when it is the same at every
+  // q (NaN: it varies, or several dashpots).
+  DamperDamping(const Eigen::MatrixXd& mass, double eps, std::vector<double> coefficients, CompiledFunction gradients,
+                double norm = std::numeric_limits<double>::quiet_NaN())
+      : eps_(eps), c_(std::move(coefficients)), gradients_(gradients), n_(static_cast<int>(mass.rows())), norm_(norm) {
     const int k = static_cast<int>(c_.size());
     if (k < 1 || k > kMaxDampers)
       throw std::invalid_argument("damping.dampers: between 1 and " + std::to_string(kMaxDampers) +
@@ -70,20 +84,34 @@ class DamperDamping {
     const double m = mass(0, 0);
     scalar_inverse_ = mass.isApprox(m * Eigen::MatrixXd::Identity(n_, n_), 0.0) ? 1.0 / m : 0.0;
     eps_c_ = eps_ * c_[0];
+    if (!std::isnan(norm_) && (k != 1 || !(norm_ >= 0.0) || !std::isfinite(norm_)))
+      throw std::invalid_argument("damping.dampers: a constant norm needs one dashpot and a finite a >= 0, got " +
+                                  std::to_string(norm_));
   }
 
+  // The flows of length t. With a constant a, the scalars of every q are known now.
   Factors factors(double t) const {
     Factors f;
     f.t = t;
+    if (constant_norm()) {
+      f.at.x = -t * eps_c_ * norm_;
+      f.at.k1 = scaled(t * phi1(f.at.x));
+      f.at.k2 = scaled(t * t * phi2(f.at.x));
+      f.at.has_k2 = true;
+    }
     return f;
   }
+
+  bool constant_norm() const { return !std::isnan(norm_); }
 
   template <class Q, class P>
   void decay(const Q& q, const Factors& f, P& p) const {
     constexpr int N = P::RowsAtCompileTime;
     const AtConfiguration& at = evaluate(q, f);
     if (c_.size() == 1) {
-      p -= (at.t_phi1 * eps_c_ * map<N>(at.w).dot(p)) * map<N>(at.grad);
+      const auto grad = map<N>(at.grad);
+      if (scalar_inverse_ != 0.0) p -= (at.k1 * grad.dot(p)) * grad;
+      else p -= (at.k1 * map<N>(at.w).dot(p)) * grad;
       return;
     }
     modal_apply(at, p, static_cast<const P*>(nullptr), p);
@@ -94,12 +122,13 @@ class DamperDamping {
     constexpr int N = P::RowsAtCompileTime;
     AtConfiguration& at = evaluate(q, f);
     if (c_.size() == 1) {
-      if (!at.has_phi2) {
-        at.t2_phi2 = f.t * f.t * phi2(at.x);
-        at.has_phi2 = true;
+      if (!at.has_k2) {
+        at.k2 = scaled(f.t * f.t * phi2(at.x));
+        at.has_k2 = true;
       }
-      const auto w = map<N>(at.w);
-      p += (eps_c_ * (at.t2_phi2 * w.dot(grad_v) - at.t_phi1 * w.dot(p))) * map<N>(at.grad) - f.t * grad_v;
+      const auto grad = map<N>(at.grad);
+      if (scalar_inverse_ != 0.0) p += (at.k2 * grad.dot(grad_v) - at.k1 * grad.dot(p)) * grad - f.t * grad_v;
+      else p += (at.k2 * map<N>(at.w).dot(grad_v) - at.k1 * map<N>(at.w).dot(p)) * grad - f.t * grad_v;
       return;
     }
     modal_apply(at, p, &grad_v, p);
@@ -162,6 +191,9 @@ class DamperDamping {
     return Eigen::Map<const Eigen::Matrix<double, N, 1>>(a.data(), n_);
   }
 
+  // eps c s, times 1/m when M = m I (the k1, k2 of AtConfiguration).
+  double scaled(double s) const { return eps_c_ * s * (scalar_inverse_ != 0.0 ? scalar_inverse_ : 1.0); }
+
   template <class P, class V>
   void mass_inverse(const P& p, V& v) const {
     if (scalar_inverse_ != 0.0) v = scalar_inverse_ * p;
@@ -203,15 +235,15 @@ class DamperDamping {
       gradients_(at.grad.data(), q.data());
       const auto grad = map<N>(at.grad);
       auto w = Eigen::Map<Vec>(at.w.data(), n_);
-      if (scalar_inverse_ != 0.0) w = scalar_inverse_ * grad;
-      else w.noalias() = inverse_ * grad;
-      // phi1 at every new q, uncached: keeping it while x repeated (a dashpot on a
-      // spring's length has |grad g| = 1, so x takes a handful of values) cost more
-      // in the compare's mispredicted branch than the 5-term series it saved (3s on
-      // the elastic pendulum: 71 ns/step with the cache, 67 without).
-      at.x = -t * eps_c_ * w.dot(grad);
-      at.t_phi1 = t * phi1(at.x);
-      at.has_phi2 = false;
+      if (scalar_inverse_ == 0.0) w.noalias() = inverse_ * grad;
+      if (constant_norm()) return at;  // x, k1, k2 set by factors(t)
+      // phi1 at every new q, uncached: keeping it while x repeated cost more in the
+      // compare's mispredicted branch than the 5-term series it saved (3s on the
+      // elastic pendulum: 71 ns/step with the cache, 67 without).
+      const double a = scalar_inverse_ != 0.0 ? scalar_inverse_ * grad.squaredNorm() : w.dot(grad);
+      at.x = -t * eps_c_ * a;
+      at.k1 = scaled(t * phi1(at.x));
+      at.has_k2 = false;
       return at;
     }
     Buffer g;
@@ -246,6 +278,7 @@ class DamperDamping {
   std::vector<double> c_;
   CompiledFunction gradients_;
   int n_;
+  double norm_;                  // a of the one dashpot when constant, else NaN
   double scalar_inverse_ = 0.0;  // 1/m when M = m I, else 0
   double eps_c_ = 0.0;           // eps c of the first dashpot (the rank-one case)
   SmallMatrix lower_, lower_inverse_, inverse_;  // L, L^{-1}, M^{-1} (M = L L^T)
