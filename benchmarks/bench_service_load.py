@@ -25,9 +25,9 @@ It prints figures and exits 0 whatever they are (a benchmark, not a test).
 from __future__ import annotations
 
 import argparse
+import asyncio
 import contextlib
 import io
-import asyncio
 import json
 import math
 import os
@@ -107,27 +107,48 @@ async def _raw_posts(host: str, port: int, jobs: int, concurrency: int, ids: lis
                f"Content-Length: {len(body)}\r\n\r\n").encode() + body
     left, refused, errors = [jobs], [0], [0]
 
+    async def read_body(reader: asyncio.StreamReader, head: bytes) -> bytes:
+        headers = {name.strip().lower(): value.strip() for name, _, value in
+                   (line.partition(b":") for line in head.split(b"\r\n")[1:] if line)}
+        if b"content-length" in headers:
+            return await reader.readexactly(int(headers[b"content-length"]))
+        body = b""  # Transfer-Encoding: chunked
+        while size := int((await reader.readuntil(b"\r\n")).strip().split(b";")[0], 16):
+            body += (await reader.readexactly(size + 2))[:-2]
+        await reader.readuntil(b"\r\n")
+        return body
+
     async def connection() -> None:
-        reader, writer = await asyncio.open_connection(host, port)
-        try:
-            while left[0] > 0:
-                left[0] -= 1
+        reader = writer = None
+        while left[0] > 0:
+            left[0] -= 1
+            try:
+                if writer is None:
+                    reader, writer = await asyncio.open_connection(host, port)
                 start = time.perf_counter()
                 writer.write(request)
                 head = await reader.readuntil(b"\r\n\r\n")
-                length = next(int(line.split(b":", 1)[1]) for line in head.split(b"\r\n")
-                              if line.lower().startswith(b"content-length:"))
-                answer = await reader.readexactly(length)
+                answer = await read_body(reader, head)
                 latencies.append(time.perf_counter() - start)
-                status = int(head.split(b" ", 2)[1])
-                if status == 202:
-                    ids.append(json.loads(answer)["id"])
-                elif status == 429:
-                    refused[0] += 1
-                else:
-                    errors[0] += 1
-        finally:
+            except (OSError, asyncio.IncompleteReadError, asyncio.LimitOverrunError, ValueError):
+                errors[0] += 1  # counted, and the next job goes on a new connection
+                if writer is not None:
+                    writer.close()
+                reader = writer = None
+                continue
+            status = int(head.split(b" ", 2)[1])
+            if status == 202:
+                ids.append(json.loads(answer)["id"])
+            elif status == 429:
+                refused[0] += 1
+            else:
+                errors[0] += 1
+            if b"connection: close" in head.lower():
+                writer.close()
+                reader = writer = None
+        if writer is not None:
             writer.close()
+            await writer.wait_closed()
 
     await asyncio.gather(*(connection() for _ in range(concurrency)))
     return refused[0], errors[0]

@@ -102,6 +102,12 @@ def test_bad_grid_names_the_entry():
         raydamp.sweep({**SPEC, "x0": 1}, grid={"eps": [0.1]})
     with pytest.raises(ValueError, match=r"method: unknown method 'rk9'"):
         raydamp.sweep(SPEC, grid={"method": ["3s", "rk9"]})
+    # the job form's save_dofs would be silently ignored (a sweep saves every coordinate): refused,
+    # as the service refuses it
+    job = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "step_size": 0.1,
+           "n_steps": 10, "initial_state": {"q": [1.0], "p": [0.0]}, "save_dofs": [0]}
+    with pytest.raises(ValueError, match=r"save_dofs: a sweep saves every coordinate"):
+        raydamp.check_sweep(job, {"eps": [0.1]})
 
 
 def test_ranges_and_command_line_items():

@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 import pytest
+import symengine as se
 from scipy.linalg import expm
 
 import raydamp
@@ -126,3 +127,31 @@ def test_single_dashpot_flows_match_expm(damper, mass):
         _, p_kd = s.flow("kick_damp", q, p, t)
         expected = (expm(t * aug) @ np.append(p, 1.0))[:4]
         np.testing.assert_allclose(p_kd, expected, rtol=0, atol=1e-14 * max(1.0, np.abs(expected).max()))
+
+
+def _cable(segments: int) -> str:
+    """The total length of a planar cable through segments + 1 points: a realistic dashpot
+    whose a(q) is not constant and holds one square root per segment."""
+    return " + ".join(f"sqrt((x{i + 1}-x{i})^2 + (y{i + 1}-y{i})^2)" for i in range(segments))
+
+
+def test_detection_never_expands_a_dashpot_with_many_radicals(monkeypatch):
+    # Putting a(q) over one common denominator multiplies out the product of its radicals:
+    # measured 109 s for 8 segments, x8 per segment. The numeric check (a varies) and the
+    # radical count must keep the symbolic proof from ever starting on such a dashpot.
+    from raydamp.system import dashpot_norm
+
+    def refuse(_):
+        raise AssertionError("the symbolic proof ran")
+
+    monkeypatch.setattr(dashpot_norm, "_symbolic_constant", refuse)
+    coordinates = [f"{axis}{i}" for i in range(11) for axis in "xy"]
+    cable = raydamp.System(coordinates, "0", eps=0.1, damping={"dampers": [{"on": _cable(10), "c": 1.0}]})
+    assert cable._compiled.damper_norm is None
+    # and the radical budget alone would stop it too: a(q) of the cable keeps the products of
+    # neighbouring segments' square roots
+    symbols = [se.Symbol(name) for name in coordinates]
+    g = sum((se.sqrt((symbols[2 * i + 2] - symbols[2 * i]) ** 2 + (symbols[2 * i + 3] - symbols[2 * i + 1]) ** 2)
+             for i in range(10)), se.Integer(0))
+    form = dashpot_norm._quadratic_form([se.diff(g, s) for s in symbols], np.eye(22))
+    assert dashpot_norm._radicals(form) > dashpot_norm._MAX_RADICALS

@@ -27,8 +27,8 @@ def member_parameters(system: Model) -> tuple[str, ...]:
     """The names ``integrate_ensemble``'s ``parameters`` may vary for ``system``."""
     if isinstance(system, System):
         return (*(("eps",) if system._spec.damping_form is not None else ()), *system.parameters)
-    # A Chain or a LinearStructure: members differ by their initial states only (its
-    # parameters shape matrices and damping blocks built once; sweep rebuilds per member).
+    # A Chain or a LinearStructure: members differ by initial state only (and, in a sweep,
+    # by run arguments); for another eps or stiffness build another model.
     return _CORE_PARAMETERS.get(type(system), ())
 
 
@@ -65,7 +65,8 @@ def _parameter_arrays(system: Model, parameters, members: int) -> dict[str, np.n
     for name, values in parameters.items():
         if name not in known:
             raise ValueError(f"parameters.{name}: not a parameter of this model that can vary per member "
-                             f"(known: {', '.join(known) or 'none'})")
+                             f"(known: {', '.join(known) or 'none'}"
+                             f"{'' if known else '; its members differ by initial state: build one model per value'})")
         shape = (members, 3) if name == "g" else (members,)
         try:
             array = np.asarray(values, dtype=float)
@@ -126,9 +127,10 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
     system : a built-in model, a :class:`raydamp.System` (one built from expressions), a
         :class:`raydamp.Chain` or a :class:`raydamp.LinearStructure`.
     q0, p0 : (members, n) initial states; a single state of length n is used for every member.
-    parameters : {name: per-member values} of the system's parameters: ``eps`` for every
-        damped model; ``m``, ``k``, ``l`` and ``g`` ((members, 3)) for the elastic pendulum; the
-        expression parameters of a System. Built-in models are rebuilt per member in C++; a
+    parameters : {name: per-member values} of the system's parameters: ``eps`` for the
+        built-in models and a damped System; ``m``, ``k``, ``l`` and ``g`` ((members, 3)) for the
+        elastic pendulum; the expression parameters of a System. A Chain or a LinearStructure
+        takes none (its members differ by initial state; build one model per eps). Built-in models are rebuilt per member in C++; a
         System is rebuilt once per distinct parameter set before the run (a change of eps alone
         reuses its compiled functions; other parameters recompile it).
     method, h, t_end, n_steps, save_every, tableau, composition : as :func:`raydamp.integrate`,

@@ -43,6 +43,8 @@ def _base(spec: Mapping[str, Any]) -> tuple[Model, np.ndarray, np.ndarray, dict[
         model, q0, p0, options = job_arguments(spec)
         if options.pop("work", False):
             raise ValueError("work: a sweep does not record the damping work")
+        if options.get("save_dofs") is not None:
+            raise ValueError("save_dofs: a sweep saves every coordinate; leave save_dofs out")
     else:
         unknown = [k for k in spec if k not in SPEC_KEYS]
         if unknown:

@@ -21,7 +21,10 @@ from .store import JobStore
 from .sweep_runner import SweepRunner
 from .sweep_store import SweepStore
 
-__all__ = ["create_app"]
+__all__ = ["ROUTERS", "create_app"]
+
+# Every router the application serves, in the order they are included.
+ROUTERS = (jobs.router, sweeps.router, files.router, catalogue.router, health.router, page.router)
 
 
 def create_app(settings: Settings | None = None) -> FastAPI:
@@ -57,7 +60,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.large_fetches = threading.Semaphore(settings.max_large_fetches)
     app.add_middleware(RequestGuard, settings=settings)
     app.add_exception_handler(RequestValidationError, validation_error_handler)
-    for router in (jobs.router, sweeps.router, files.router, catalogue.router, health.router, page.router):
+    for router in ROUTERS:
         app.include_router(router)
     page.mount_assets(app)
     _document_limits(app, settings)

@@ -2,7 +2,9 @@
 
 They are coroutines on purpose: FastAPI runs a plain-function dependency in its thread pool,
 and a hop there and back for each of them (three per submission) cost more than the
-submission's own work under load."""
+submission's own work under load. That is right only for dependencies that do no blocking
+work, as these (they read app.state): one that queried SQLite would have to stay a plain
+function, and tests/service/test_dependencies.py would have to name it as the exception."""
 
 from __future__ import annotations
 

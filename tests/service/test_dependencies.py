@@ -11,7 +11,7 @@ from __future__ import annotations
 import inspect
 
 from fastapi.routing import APIRoute
-from raydamp_service.routes import catalogue, files, health, jobs, page, sweeps
+from raydamp_service.app import ROUTERS
 
 
 def _dependency_calls(dependant):
@@ -22,10 +22,9 @@ def _dependency_calls(dependant):
 
 
 def test_every_route_dependency_runs_on_the_event_loop():
-    # The routers the application includes (app.py), read directly: how FastAPI wraps included
-    # routers in app.routes is its own business.
-    routes = [route for module in (jobs, sweeps, files, catalogue, health, page)
-              for route in module.router.routes if isinstance(route, APIRoute)]
+    # The routers the application includes (app.ROUTERS), read directly: how FastAPI wraps
+    # included routers in app.routes is its own business.
+    routes = [route for router in ROUTERS for route in router.routes if isinstance(route, APIRoute)]
     checked = 0
     for route in routes:
         for call in _dependency_calls(route.dependant):

@@ -24,6 +24,7 @@ __all__ = ["constant_dashpot_norm", "NORM_TOLERANCE"]
 NORM_TOLERANCE = 1e-12  # relative; the numeric check of the symbolic constant
 _RATIO_TOLERANCE = 1e-14  # relative; coefficient ratios with double (not exact) coefficients
 _CHECK_POINTS = 4
+_MAX_RADICALS = 2  # distinct radicals in a(q) up to which the symbolic proof is tried
 
 
 def _exact_or_double(value: float) -> se.Basic:
@@ -68,28 +69,54 @@ def _symbolic_constant(a: se.Basic) -> float | None:
     return first
 
 
+def _numeric_values(inverse_mass: np.ndarray, compiled_gradient: Callable[[np.ndarray], Any]) -> list[float]:
+    """a at a few seeded points, through the compiled gradient (points outside g's domain skipped)."""
+    points = np.random.default_rng(20261123).normal(size=(_CHECK_POINTS, inverse_mass.shape[0]))
+    values = []
+    for q in points:
+        g = np.asarray(compiled_gradient(q), dtype=float).reshape(-1)
+        if np.isfinite(g).all():
+            values.append(float(g @ inverse_mass @ g))
+    return values
+
+
+def _radicals(expr: se.Basic) -> int:
+    """How many distinct non-integer powers (square roots and the like) expr holds."""
+    seen: set[se.Basic] = set()
+    stack, radicals = [expr], set()
+    while stack:
+        node = stack.pop()
+        if node in seen:
+            continue
+        seen.add(node)
+        if isinstance(node, se.Pow) and not isinstance(node.args[1], se.Integer):
+            radicals.add(node.args[0])
+        stack.extend(node.args)
+    return len(radicals)
+
+
 def constant_dashpot_norm(gradient: list[se.Basic], inverse_mass: np.ndarray,
                           compiled_gradient: Callable[[np.ndarray], Any]) -> float | None:
     """a = grad g^T M^{-1} grad g when it is the same number at every q, else None.
 
     ``gradient`` is grad g as SymEngine expressions, ``inverse_mass`` M^{-1}, and
-    ``compiled_gradient(q)`` the compiled grad g: the constant must also be what the
-    compiled code gives at a few points (to NORM_TOLERANCE), or the general path is
-    kept. Points where g is outside its domain are skipped; none left: None.
+    ``compiled_gradient(q)`` the compiled grad g. Cheap tests first, so that building a
+    System stays fast whatever g is: a must take one value at a few points (to
+    NORM_TOLERANCE, through the compiled code); and the symbolic proof is tried only when
+    a holds at most _MAX_RADICALS distinct radicals, since putting a over one common
+    denominator multiplies out their product (a dashpot on the sum of 8 segment lengths
+    took 109 s there). Points where g is outside its domain are skipped; none left: None.
     """
     free = set().union(*(e.free_symbols for e in gradient))
-    a = _symbolic_constant(_quadratic_form(gradient, inverse_mass))
+    values = _numeric_values(inverse_mass, compiled_gradient) if free else []
+    if free and (not values or max(values) - min(values) > NORM_TOLERANCE * max(1.0, abs(values[0]))):
+        return None
+    form = _quadratic_form(gradient, inverse_mass)
+    if _radicals(form) > _MAX_RADICALS:
+        return None
+    a = _symbolic_constant(form)
     if a is None or not math.isfinite(a):
         return None
-    if not free:
-        return a
-    points = np.random.default_rng(20261123).normal(size=(_CHECK_POINTS, inverse_mass.shape[0]))
-    checked = 0
-    for q in points:
-        g = np.asarray(compiled_gradient(q), dtype=float).reshape(-1)
-        if not np.isfinite(g).all():
-            continue
-        if abs(float(g @ inverse_mass @ g) - a) > NORM_TOLERANCE * max(1.0, abs(a)):
-            return None
-        checked += 1
-    return a if checked else None
+    if any(abs(v - a) > NORM_TOLERANCE * max(1.0, abs(a)) for v in values):
+        return None
+    return a

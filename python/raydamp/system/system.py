@@ -51,8 +51,8 @@ class System(Model):
         several the exact flow of their sum (they need not commute). The constant
         and dashpot forms are dense n x n computations meant for n <= 32. A single
         dashpot on a distance (``sqrt(x^2+y^2)``, the length of a spring between two
-        particles, a coordinate difference) with a scalar or diagonal mass has a
-        constant rate a = grad g^T M^{-1} grad g; raydamp proves that symbolically
+        particles, a coordinate difference) with the same mass on every coordinate
+        of a particle has a constant rate a = grad g^T M^{-1} grad g; raydamp proves that symbolically
         when the System is built and then takes the flow's phi functions once per
         sub-step length instead of at every step, as the built-in models do.
     eps : damping strength, >= 0.
@@ -221,13 +221,15 @@ class System(Model):
             return
         c = self._compiled
         functions = [c.potential, c.gradient] + ([c.damper_gradients] if c.damper_gradients is not None else [])
-        finite = np.ones(len(qs), dtype=bool)
-        for fn in functions:
-            values = np.asarray(fn(np.ascontiguousarray(qs, dtype=float)), dtype=float).reshape(len(qs), -1)
-            finite &= np.isfinite(values).all(axis=1)
-        if not finite.all():
-            i = int(np.argmin(finite))
-            self.check_configuration(f"{name}[{i}]", qs[i])
+        block = 4096  # rows per call: bounded temporaries (dampers x n values per row)
+        for start in range(0, len(qs), block):
+            rows = np.ascontiguousarray(qs[start:start + block], dtype=float)
+            finite = np.ones(len(rows), dtype=bool)
+            for fn in functions:
+                finite &= np.isfinite(np.asarray(fn(rows), dtype=float).reshape(len(rows), -1)).all(axis=1)
+            if not finite.all():
+                i = start + int(np.argmin(finite))
+                self.check_configuration(f"{name}[{i}]", qs[i])
 
     def _check_functions(self, name: str, q: np.ndarray) -> np.ndarray:
         _, direct = self._python
