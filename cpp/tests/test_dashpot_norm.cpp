@@ -10,6 +10,7 @@
 #include <limits>
 
 #include "check.hpp"
+#include "elastic_functions.hpp"
 #include "raydamp/raydamp.hpp"
 
 using namespace raydamp;
@@ -20,21 +21,6 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 CompiledFunction fn(CompiledFunction::Fn f) { return {f, nullptr}; }
-
-// The elastic pendulum (k = l = m = 1, g = (0, 0, -1)).
-void pendulum_potential(double* out, const double* q, void*) {
-  const double r = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
-  out[0] = 0.5 * (r - 1.0) * (r - 1.0) + q[2];
-}
-void pendulum_gradient(double* out, const double* q, void*) {
-  const double r = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
-  for (int i = 0; i < 3; ++i) out[i] = (1.0 - 1.0 / r) * q[i];
-  out[2] += 1.0;
-}
-void radial_gradient(double* out, const double* q, void*) {
-  const double r = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
-  for (int i = 0; i < 3; ++i) out[i] = q[i] / r;
-}
 
 // Two particles in the plane, q = (x1, y1, x2, y2), joined by a spring (k = 2, l = 1)
 // with a dashpot on its length r = |q1 - q2|.
@@ -102,7 +88,8 @@ void pendulum_constant_norm_is_the_general_path() {
   Vec q0(3), p0(3);
   q0 << 0.0, 1.55884573, -0.6;
   p0 << 1.34164079, 0.0, 0.0;
-  CHECK(worst_difference<ScalarMass>(mass, 1.0, fn(pendulum_potential), fn(pendulum_gradient), fn(radial_gradient), q0,
+  CHECK(worst_difference<ScalarMass>(mass, 1.0, fn(test::elastic::potential), fn(test::elastic::gradient),
+                                     fn(test::elastic::radial_gradient), q0,
                                      p0) <= 1e-13);
 }
 

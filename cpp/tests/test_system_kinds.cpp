@@ -14,6 +14,7 @@
 #include <stdexcept>
 
 #include "check.hpp"
+#include "elastic_functions.hpp"
 #include "raydamp/raydamp.hpp"
 
 using namespace raydamp;
@@ -21,28 +22,7 @@ using Vec = Eigen::VectorXd;
 
 namespace {
 
-// The elastic pendulum's functions (k = l = m = 1, g = (0, 0, -1)), written as the JIT would.
-void potential(double* out, const double* q, void*) {
-  const double r = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
-  out[0] = 0.5 * (r - 1.0) * (r - 1.0) + q[2];
-}
-void gradient(double* out, const double* q, void*) {
-  const double r = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
-  for (int i = 0; i < 3; ++i) out[i] = (1.0 - 1.0 / r) * q[i];
-  out[2] += 1.0;
-}
-void hessian_product(double* out, const double* in, void*) {
-  const double* q = in;
-  const double* v = in + 3;
-  const double r = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
-  const double qv = q[0] * v[0] + q[1] * v[1] + q[2] * v[2];
-  for (int i = 0; i < 3; ++i) out[i] = (1.0 - 1.0 / r) * v[i] + qv / (r * r * r) * q[i];
-}
-void radial_gradient(double* out, const double* q, void*) {
-  const double r = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
-  for (int i = 0; i < 3; ++i) out[i] = q[i] / r;
-}
-void j3(double* out, const double* in, void*) { out[0] = in[0] * in[4] - in[1] * in[3]; }
+using namespace raydamp::test::elastic;
 // Two dashpots on x2 - x1 and x3 - x2: constant gradient rows.
 void chain_gradients(double* out, const double*, void*) {
   const double rows[6] = {-1.0, 1.0, 0.0, 0.0, -1.0, 1.0};

@@ -41,7 +41,8 @@ class DamperDamping {
     // One dashpot: A = u w^T with u = eps c grad g, w = M^{-1} grad g; x = -t eps c a
     // and the scalars k1 = eps c t phi1(x), k2 = eps c t^2 phi2(x) (the second only
     // for kick+damp, so computed when first needed), both times 1/m when M = m I
-    // (then w = grad g / m is never formed). Constant a: all set once in factors(t).
+    // (then w = grad g / m is never formed). Constant a: x, k1 set once in factors(t),
+    // k2 once when first needed; neither changes with q.
     // Plain arrays and Maps: no temporaries in the step loop.
     std::array<double, kMaxDenseDim> grad, w;
     double x = std::numeric_limits<double>::quiet_NaN(), k1 = 0.0, k2 = 0.0;
@@ -89,15 +90,15 @@ class DamperDamping {
                                   std::to_string(norm_));
   }
 
-  // The flows of length t. With a constant a, the scalars of every q are known now.
+  // The flows of length t. With a constant a, x and k1 of every q are known now; k2
+  // only kick+damp needs, so decay_affine takes it when first asked (a composed 3s
+  // changes t at every damping sub-flow, and then factors(t) runs each time).
   Factors factors(double t) const {
     Factors f;
     f.t = t;
     if (constant_norm()) {
       f.at.x = -t * eps_c_ * norm_;
       f.at.k1 = scaled(t * phi1(f.at.x));
-      f.at.k2 = scaled(t * t * phi2(f.at.x));
-      f.at.has_k2 = true;
     }
     return f;
   }
@@ -236,7 +237,7 @@ class DamperDamping {
       const auto grad = map<N>(at.grad);
       auto w = Eigen::Map<Vec>(at.w.data(), n_);
       if (scalar_inverse_ == 0.0) w.noalias() = inverse_ * grad;
-      if (constant_norm()) return at;  // x, k1, k2 set by factors(t)
+      if (constant_norm()) return at;  // x, k1 set by factors(t); k2 by decay_affine, once
       // phi1 at every new q, uncached: keeping it while x repeated cost more in the
       // compare's mispredicted branch than the 5-term series it saved (3s on the
       // elastic pendulum: 71 ns/step with the cache, 67 without).
