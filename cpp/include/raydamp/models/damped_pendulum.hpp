@@ -1,13 +1,10 @@
 // The damped pendulum of paper section 4.3: n = 1, M = 1, V = 1 - cos q, D = 1,
 //   q' = p,  p' = -sin q - eps p.
-// sin is raydamp's (math/sine.hpp), the one its ensemble lanes run as SIMD, so an
-// ensemble member equals this single run bit for bit.
 #pragma once
 
 #include <cmath>
 
 #include "raydamp/damping/isotropic_damping.hpp"
-#include "raydamp/math/sine.hpp"
 #include "raydamp/mass/unit_mass.hpp"
 #include "raydamp/models/check.hpp"
 #include "raydamp/state.hpp"
@@ -30,7 +27,7 @@ struct DampedPendulum {
 
   int size() const { return dim; }
   double potential(const Vec& q) const { return 1.0 - std::cos(q[0]); }
-  void gradient(const Vec& q, Vec& g) const { g[0] = math::sin(q[0]); }
+  void gradient(const Vec& q, Vec& g) const { g[0] = std::sin(q[0]); }
   void hessian_product(const Vec& q, const Vec& v, Vec& out) const { out[0] = std::cos(q[0]) * v[0]; }
   void momenta(const Vec&, const Vec&, double*) const {}
 };
