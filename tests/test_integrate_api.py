@@ -198,3 +198,21 @@ def test_shortened_last_step_uses_its_own_damping_factors(method):
     last = raydamp.integrate(model, three.q[-1], three.p[-1], method=method, h=1.0 - 3 * 0.3, n_steps=1)
     np.testing.assert_array_equal(full.q[-1], last.q[-1])
     np.testing.assert_array_equal(full.p[-1], last.p[-1])
+
+
+def test_each_model_kind_binds_its_own_integrate():
+    # A regression test: integrate and integrate_ensemble were overloads of one _core
+    # function, and pybind11 3 raises and clears an AttributeError for every kind a call
+    # does not match; that was 20 of the 25 us of a 10-step call (bench_steps.py shows
+    # the time). Each kind's class now has one function of each, with no overloads.
+    from raydamp import _core
+
+    assert not hasattr(_core, "integrate") and not hasattr(_core, "integrate_ensemble")
+    kinds = [c for c in vars(_core).values() if isinstance(c, type) and hasattr(c, "integrate")]
+    assert len(kinds) >= 10, [k.__name__ for k in kinds]
+    for kind in kinds:
+        for name in ("integrate", "integrate_ensemble"):
+            doc = getattr(kind, name).__doc__
+            assert doc.count(f"{name}(") == 1, f"{kind.__name__}.{name} is overloaded:\n{doc}"
+    for model in (DampedPendulum(), ElasticPendulum()):
+        assert type(model._core_model) in kinds

@@ -1,4 +1,4 @@
-// _core.integrate and _core.integrate_ensemble for the built-in models, and the CancelToken every run takes.
+// The built-in models' integrate and integrate_ensemble (methods of their classes), and the CancelToken every run takes.
 #include "run.hpp"
 #include "run_ensemble.hpp"
 

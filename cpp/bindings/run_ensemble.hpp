@@ -218,13 +218,16 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
   return out;
 }
 
-// Registers run_ensemble<Model> as one overload of _core.integrate_ensemble.
+// Registers run_ensemble<Model> as the static method `integrate_ensemble` of
+// Model's class (one function per kind; see def_integrate in run.hpp for why not
+// overloads of one module function).
 template <class Model>
-void def_integrate_ensemble(py::module_& m) {
-  m.def("integrate_ensemble", &run_ensemble<Model>, py::arg("models"), py::arg("model_index"), py::arg("names"),
-        py::arg("values"), py::arg("method"), py::arg("tableau"), py::arg("composition"), py::arg("q0"),
-        py::arg("p0"), py::arg("h"), py::arg("n_steps"), py::arg("h_last"), py::arg("save_every"),
-        py::arg("threads"), py::arg("progress"), py::arg("cancel").none(true));
+void def_integrate_ensemble(py::module_&) {
+  auto cls = py::reinterpret_borrow<py::class_<Model>>(py::type::of<Model>());
+  cls.def_static("integrate_ensemble", &run_ensemble<Model>, py::arg("models"), py::arg("model_index"),
+                 py::arg("names"), py::arg("values"), py::arg("method"), py::arg("tableau"), py::arg("composition"),
+                 py::arg("q0"), py::arg("p0"), py::arg("h"), py::arg("n_steps"), py::arg("h_last"),
+                 py::arg("save_every"), py::arg("threads"), py::arg("progress"), py::arg("cancel").none(true));
 }
 
 }  // namespace raydamp::bindings

@@ -192,9 +192,10 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
 
     models, index, core_names, core_values = _member_models(system, params, members)
     start = time.perf_counter()
-    out = _core.integrate_ensemble([m._core_model for m in models], index, core_names, core_values, method,
-                                   tableau or "", composition or "", q0, p0, h, n_steps, h_last, save_every,
-                                   threads, progress, cancel)
+    cores = [m._core_model for m in models]
+    out = type(cores[0]).integrate_ensemble(cores, index, core_names, core_values, method, tableau or "",
+                                            composition or "", q0, p0, h, n_steps, h_last, save_every, threads,
+                                            progress, cancel)
     wall = time.perf_counter() - start
     composition_name = None if resolved_composition == "none" else resolved_composition
     options = {"method": method, "tableau": tableau, "composition": composition_name, "h": h, "t_end": t_end,

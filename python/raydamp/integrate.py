@@ -133,8 +133,8 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
                          f"(limit {MAX_SAVED_BYTES / 2**30:.0f} GiB); raise save_every")
 
     start = time.perf_counter()
-    out = _core.integrate(model._core_model, method, tableau_name, composition or "", q0, p0, h, n_steps, h_last,
-                          save_every, work, progress, cancel, save_dofs=[] if dofs is None else dofs)
+    out = model._core_model.integrate(method, tableau_name, composition or "", q0, p0, h, n_steps, h_last,
+                                      save_every, work, progress, cancel, save_dofs=[] if dofs is None else dofs)
     wall = time.perf_counter() - start
     message = out["message"]
     explain = getattr(model, "_explain_failure", None)
