@@ -1,4 +1,4 @@
-// The run_ensemble() every model kind binds as _core.integrate_ensemble: members x
+// The run_ensemble() every model kind binds as its class's integrate_ensemble: members x
 // dof initial states, per-member models, one call, the members spread over threads
 // with the GIL released (raydamp/ensemble.hpp). Saved points land in arrays
 // (member, row, ...) on the run's save grid; each worker copies its member's rows
@@ -58,7 +58,7 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
                       const std::vector<std::string>& names, Rows values, const std::string& method,
                       const std::string& tableau, const std::string& composition, Rows q0, Rows p0, double h,
                       long n_steps, double h_last, long save_every, int threads, py::object progress,
-                      CancelToken* cancel) {
+                      CancelToken* cancel, bool vector_sine) {
   if (q0.ndim() != 2 || q0.shape(0) < 1) throw std::invalid_argument("q0: expected an array of shape (members, n), members >= 1");
   const long members = static_cast<long>(q0.shape(0));
   if (models.empty()) throw std::invalid_argument("models: empty");
@@ -173,7 +173,11 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
           throw std::invalid_argument("member " + std::to_string(i) + ": " + e.what());
         }
       };
-      if constexpr (std::is_same_v<Model, DampedPendulum> && !uses_tableau<Method>()) {
+      constexpr bool lanes = std::is_same_v<Model, DampedPendulum> && !uses_tableau<Method>();
+      if (vector_sine && !lanes)
+        throw std::invalid_argument("vector_sine: only the damped pendulum's 3s, 2s and sv ensembles run their "
+                                    "sines as SIMD lanes");
+      if constexpr (lanes) {
         // Runs of members sharing eps go as the lanes of one run (run_lanes.hpp).
         const std::vector<LaneBatch> batches =
             lane_batches(member_model, batch_lanes(members, ensemble_threads(threads, members)));
@@ -182,11 +186,12 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
         if (control.progress) batch_control.progress = [&](long, long) { control.progress(finished.load(), members); };
         for_each_member(static_cast<long>(batches.size()), threads, [&](long b) {
           const LaneBatch& batch = batches[b];
-          if (batch.end - batch.begin < kMinLanes) {
+          // With vector_sine every member runs as a lane, so that its sines are math::sin's.
+          if (batch.end - batch.begin < kMinLanes && !vector_sine) {
             for (long i = batch.begin; i < batch.end; ++i) run_member(i);
           } else {
-            run_lanes<Method>(*member_model[batch.begin], batch, tab, comp, q0d, p0d, spec, member_control, store,
-                              run_member);
+            run_lanes<Method>(*member_model[batch.begin], batch, tab, comp, q0d, p0d, spec, member_control,
+                              vector_sine, store, run_member);
           }
           finished.fetch_add(batch.end - batch.begin);
         }, batch_control);
@@ -227,7 +232,8 @@ void def_integrate_ensemble(py::module_&) {
   cls.def_static("integrate_ensemble", &run_ensemble<Model>, py::arg("models"), py::arg("model_index"),
                  py::arg("names"), py::arg("values"), py::arg("method"), py::arg("tableau"), py::arg("composition"),
                  py::arg("q0"), py::arg("p0"), py::arg("h"), py::arg("n_steps"), py::arg("h_last"),
-                 py::arg("save_every"), py::arg("threads"), py::arg("progress"), py::arg("cancel").none(true));
+                 py::arg("save_every"), py::arg("threads"), py::arg("progress"), py::arg("cancel").none(true),
+                 py::arg("vector_sine") = false);
 }
 
 }  // namespace raydamp::bindings

@@ -51,11 +51,12 @@ inline std::vector<LaneBatch> lane_batches(const std::vector<const DampedPendulu
 
 // Runs batch's members as lanes and hands each to store(i, RunResult) as its own
 // run; a lane run that does not complete (a blow-up, a cancellation) is run again
-// member by member with run_member(i), so every member gets its own status and rows.
+// member by member, so every member gets its own status and rows: with run_member(i),
+// its single run, or with vector_sine as a run of one lane (the sines it had here).
 template <class Method, class Store, class RunMember>
 void run_lanes(const DampedPendulum& member, const LaneBatch& batch, const ButcherTableau& tab,
                const Composition& comp, const double* q0, const double* p0, const RunSpec& spec,
-               const Control& control, Store& store, RunMember& run_member) {
+               const Control& control, bool vector_sine, Store& store, RunMember& run_member) {
   const int lanes = static_cast<int>(batch.end - batch.begin);
   // integrate's own check, per member, as a single run makes it.
   for (long i = batch.begin; i < batch.end; ++i) {
@@ -65,12 +66,17 @@ void run_lanes(const DampedPendulum& member, const LaneBatch& batch, const Butch
       throw std::invalid_argument("member " + std::to_string(i) + ": " + e.what());
     }
   }
-  const PendulumLanes model(member, lanes);
+  const PendulumLanes model(member, lanes, vector_sine);
   State<Eigen::Dynamic> z{Eigen::Map<const Eigen::VectorXd>(q0 + batch.begin, lanes),
                           Eigen::Map<const Eigen::VectorXd>(p0 + batch.begin, lanes)};
   RunResult r = detail::run_steps<Method>(model, tab, comp, std::move(z), spec, control);
-  if (r.status != Status::completed) {
+  if (r.status != Status::completed && !vector_sine) {
     for (long i = batch.begin; i < batch.end; ++i) run_member(i);
+    return;
+  }
+  if (r.status != Status::completed && lanes > 1) {
+    for (long i = batch.begin; i < batch.end; ++i)
+      run_lanes<Method>(member, LaneBatch{i, i + 1}, tab, comp, q0, p0, spec, control, true, store, run_member);
     return;
   }
   const Trajectory& tr = r.trajectory;

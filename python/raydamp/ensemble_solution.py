@@ -40,7 +40,7 @@ class EnsembleSolution:
         parameter names and member count, and ``raydamp_version``.
 
     ``member(i)`` is member i as a :class:`raydamp.Solution`, equal bit for bit to a single
-    ``raydamp.integrate`` run of it. ``to_xarray()`` gives a Dataset with dims (member, time,
+    ``raydamp.integrate`` run of it (to rounding when the ensemble ran with ``vector_sine``). ``to_xarray()`` gives a Dataset with dims (member, time,
     dof); ``save(path)`` writes NetCDF (.nc) or Zarr (.zarr); ``raydamp.load`` reads both back.
     """
 
@@ -88,12 +88,23 @@ class EnsembleSolution:
         from .job import job_spec
 
         system, options = self.origin
+        options = dict(options)
+        vector_sine = options.pop("vector_sine", False)
         spec = job_spec(system, self.q0[0], self.p0[0], **options)
         del spec["initial_state"]  # per member: the q0, p0 arrays
         spec["coordinates"] = list(system.coordinates)
         spec["momentum_names"] = list(system.momentum_names)
         spec["ensemble"] = {"members": self.members, "parameters": list(self.parameters)}
+        if vector_sine:
+            spec["ensemble"]["vector_sine"] = True
         return spec
+
+    @property
+    def vector_sine(self) -> bool:
+        """Whether the run used raydamp's SIMD sine (``integrate_ensemble(vector_sine=True)``)."""
+        if isinstance(self.origin, tuple):
+            return bool(self.origin[1].get("vector_sine", False))
+        return bool(((self.origin or {}).get("ensemble") or {}).get("vector_sine", False))
 
     @property
     def coordinates(self) -> tuple[str, ...]:
