@@ -5,7 +5,6 @@
 #pragma once
 
 #include "raydamp/damping/decay_factors.hpp"
-#include "raydamp/scalar_barrier.hpp"
 
 namespace raydamp {
 
@@ -14,20 +13,10 @@ struct RadialDamping {
 
   DecayFactors factors(double t) const { return decay_factors(a, t); }
 
-  // p <- exp(-t A) p: only the radial component decays. A 3-vector (the elastic
-  // pendulum's) component by component, with Eigen's operations in its order (see
-  // scalar_barrier.hpp).
+  // p <- exp(-t A) p: only the radial component decays.
   template <class Q, class P>
   void decay(const Q& q, const DecayFactors& f, P& p) const {
-    if constexpr (Q::SizeAtCompileTime == 3 && P::SizeAtCompileTime == 3) {
-      const double qp = (q[0] * p[0] + q[1] * p[1]) + q[2] * p[2], qq = (q[0] * q[0] + q[1] * q[1]) + q[2] * q[2];
-      const double c = f.expm1 * qp / qq;
-      double x = p[0] + c * q[0], y = p[1] + c * q[1], z = p[2] + c * q[2];
-      detail::keep_scalar(x, y, z);
-      p[0] = x, p[1] = y, p[2] = z;
-    } else {
-      p += (f.expm1 * q.dot(p) / q.squaredNorm()) * q;
-    }
+    p += (f.expm1 * q.dot(p) / q.squaredNorm()) * q;
   }
 
   // p <- exp(-t A) p - t phi1(-t A) g. Tangentially phi1(0) = 1 (a plain kick);

@@ -11,7 +11,6 @@
 #include "raydamp/damping/radial_damping.hpp"
 #include "raydamp/mass/scalar_mass.hpp"
 #include "raydamp/models/check.hpp"
-#include "raydamp/scalar_barrier.hpp"
 #include "raydamp/state.hpp"
 
 namespace raydamp {
@@ -57,24 +56,6 @@ struct ElasticPendulum {
   }
 
   void momenta(const Vec& q, const Vec& p, double* out) const { out[0] = q[0] * p[1] - q[1] * p[0]; }
-
-  // The drift and the kick component by component (flows/exact.hpp's has_drift and
-  // has_kick), with the generic flows' operations in Eigen's order, so the same bits
-  // (a dot product of 3-vectors is (x + y) + z). In scalars the 3s step is about
-  // 8% faster: see scalar_barrier.hpp.
-  void drift(Vec& q, const Vec& p, double t) const {
-    const double w = mass.inverse;
-    double x = q[0] + t * (w * p[0]), y = q[1] + t * (w * p[1]), z = q[2] + t * (w * p[2]);
-    detail::keep_scalar(x, y, z);
-    q[0] = x, q[1] = y, q[2] = z;
-  }
-  void kick(const Vec& q, Vec& p, double t) const {
-    const double spring = k * (1.0 - l / std::sqrt((q[0] * q[0] + q[1] * q[1]) + q[2] * q[2]));
-    double x = p[0] - t * (spring * q[0] - mg[0]), y = p[1] - t * (spring * q[1] - mg[1]),
-           z = p[2] - t * (spring * q[2] - mg[2]);
-    detail::keep_scalar(x, y, z);
-    p[0] = x, p[1] = y, p[2] = z;
-  }
 };
 
 }  // namespace raydamp
