@@ -40,8 +40,9 @@ class EnsembleSolution:
         parameter names and member count, and ``raydamp_version``.
 
     ``member(i)`` is member i as a :class:`raydamp.Solution`, equal bit for bit to a single
-    ``raydamp.integrate`` run of it (to rounding when the ensemble ran with ``vector_sine``). ``to_xarray()`` gives a Dataset with dims (member, time,
-    dof); ``save(path)`` writes NetCDF (.nc) or Zarr (.zarr); ``raydamp.load`` reads both back.
+    ``raydamp.integrate`` run of it (to rounding when the ensemble ran with ``vector_sine``).
+    ``to_xarray()`` gives a Dataset with dims (member, time, dof); ``save(path)`` writes NetCDF
+    (.nc) or Zarr (.zarr); ``raydamp.load`` reads both back.
     """
 
     t: np.ndarray
