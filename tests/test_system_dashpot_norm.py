@@ -1,6 +1,7 @@
 """One dashpot whose rate a = grad g^T M^{-1} grad g is constant (a spring's length,
 a coordinate difference): detected symbolically at construction, its phi1 and phi2
-taken once per sub-step length. The constant path must be the general path's
+taken once per sub-step length, and its flows run through the compiled projection
+P(q, u) = grad g (grad g . M^{-1} u). The constant path must be the general path's
 numbers, and a dashpot with a varying a must keep the general path."""
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from scipy.linalg import expm
 
 import raydamp
 from raydamp.models import ElasticPendulum
+from raydamp.system.compile import _projection, evaluate
 from raydamp.system.system import System, _build_core
 
 from paper import ELASTIC_P0, ELASTIC_Q0
@@ -29,14 +31,20 @@ def _spring(mass, damper=LENGTH, c=1.5, eps=0.1):
                           damping={"dampers": [{"on": damper, "c": c}]})
 
 
-def _general_path(system: System) -> System:
-    """The same System (the same compiled functions) with the constant norm withheld."""
+def _general_path(system: System, keep_projection: bool = False) -> System:
+    """The same System (the same compiled functions) with the fused 3s body withheld,
+    and unless keep_projection the constant norm and the projection too: then the
+    dashpot's gradient and phi1 at every q."""
     other = object.__new__(System)
     for key in ("_spec", "momentum_names", "label", "_compiled", "_python"):
         object.__setattr__(other, key, getattr(system, key))
     spec, compiled = system._spec, system._compiled
-    object.__setattr__(other, "_core_model", _build_core(spec, compiled.addresses, [d.c for d in spec.dampers],
-                                                         len(spec.momenta), compiled, None))
+    if keep_projection:
+        addresses, norm = compiled.addresses[:12] + (0, 0), compiled.damper_norm
+    else:
+        addresses, norm = compiled.addresses[:10] + (0, 0, 0, 0), None
+    object.__setattr__(other, "_core_model", _build_core(spec, addresses, [d.c for d in spec.dampers],
+                                                         len(spec.momenta), compiled, norm))
     other._freeze()
     return other
 
@@ -54,6 +62,75 @@ def test_constant_norm_is_detected(make, expected):
     assert make()._compiled.damper_norm == pytest.approx(expected, rel=1e-15)
 
 
+@pytest.mark.parametrize("mass", [1.0, 2.0, [1.3, 1.3, 2.7, 2.7],
+                                  [[1.0, 0.2, 0.0, 0.0], [0.2, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0],
+                                   [0.0, 0.0, 0.0, 1.0]]], ids=["unit", "scalar", "diagonal", "dense"])
+@pytest.mark.parametrize("damper", [LENGTH, "x1 - x2"])
+def test_projection_is_grad_g_times_its_rate(damper, mass):
+    # P(q, u) = grad g (grad g . M^{-1} u) at random points, from the compiled gradient.
+    s = _spring(mass, damper=damper)
+    compiled = s._compiled
+    if compiled.damper_norm is None:  # the dense mass couples x1 and y1: a varies along LENGTH
+        assert compiled.damper_projection is None and compiled.addresses[10:] == (0, 0, 0, 0)
+        return
+    inverse = np.linalg.inv(np.asarray(s._spec.mass))
+    rng = np.random.default_rng(7)
+    for _ in range(5):
+        q, u = rng.normal(size=4), rng.normal(size=4)
+        grad = evaluate(compiled.damper_gradients, q)
+        expected = grad * (grad @ inverse @ u)
+        got = evaluate(compiled.damper_projection, np.concatenate([q, u]))
+        np.testing.assert_allclose(got, expected, rtol=1e-13, atol=1e-15)
+
+
+@pytest.mark.parametrize("mass", [1.0, 2.0, [1.3, 1.3, 2.7, 2.7]], ids=["unit", "scalar", "diagonal"])
+def test_fused_3s_body_is_its_sub_flows(mass):
+    # damp (p - k P(q, p)), drift t0, kick t1, drift t2, from the separate functions.
+    s = _spring(mass)
+    compiled = s._compiled
+    inverse = np.linalg.inv(np.asarray(s._spec.mass))
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        q, p = rng.normal(size=4), rng.normal(size=4)
+        k, t0, t1, t2 = 0.03, 0.05, 0.1, 0.05
+        u = p - k * evaluate(compiled.damper_projection, np.concatenate([q, p]))
+        q1 = q + t0 * inverse @ u
+        p1 = u - t1 * evaluate(compiled.gradient, q1)
+        q2 = q1 + t2 * inverse @ p1
+        got = evaluate(compiled.damp_then_3s_body, np.concatenate([q, p, [k, t0, t1, t2]]))
+        np.testing.assert_allclose(got, np.concatenate([q2, p1]), rtol=1e-14, atol=1e-15)
+
+
+@pytest.mark.parametrize("system,q0,p0", [
+    (lambda: elastic_pendulum(0.1), ELASTIC_Q0, ELASTIC_P0),
+    (lambda: _spring([1.3, 1.3, 2.7, 2.7]), SPRING_Q0, SPRING_P0),
+], ids=["elastic", "spring-diagonal-mass"])
+def test_fused_3s_runs_equal_the_sub_flows(system, q0, p0):
+    # Merged 3s (nothing saved for 50 steps) with and without the fused body; J3's drift too.
+    fused = system()
+    plain = _general_path(fused, keep_projection=True)
+    kw = dict(method="3s", h=0.05, n_steps=4000, save_every=50)
+    a, b = raydamp.integrate(fused, q0, p0, **kw), raydamp.integrate(plain, q0, p0, **kw)
+    scale = max(1.0, float(np.abs(b.p).max()), float(np.abs(b.q).max()))
+    assert np.abs(a.q - b.q).max() <= 1e-12 * scale
+    assert np.abs(a.p - b.p).max() <= 1e-12 * scale
+
+
+def test_projection_of_a_distance_dashpot_has_no_square_root():
+    # (q.v) q / |q|^2: the sqrt and division of q / |q| stay off the step's serial chain.
+    q = [se.Symbol(f"_q{i}") for i in range(3)]
+    u = [se.Symbol(f"_p{i}") for i in range(3)]
+    g = se.sqrt(q[0] ** 2 + q[1] ** 2 + q[2] ** 2)
+    projection = _projection(g, [se.diff(g, qi) for qi in q], q, u, np.eye(3) / 2.0)
+    for expr in projection:
+        nodes, stack = [], [expr]
+        while stack:
+            nodes.append(stack.pop())
+            stack.extend(nodes[-1].args)
+        powers = [a for a in nodes if isinstance(a, se.Pow)]
+        assert powers and all(isinstance(a.args[1], se.Integer) for a in powers), expr
+
+
 @pytest.mark.parametrize("damper,mass", [
     ("(x1^2 + y1^2)/2", 1.0),                    # |grad g| = |q1|
     ("atan2(y1 - y2, x1 - x2)", 1.0),            # an angle: |grad g| = 1/r
@@ -61,13 +138,14 @@ def test_constant_norm_is_detected(make, expected):
     (LENGTH, [[1.0, 0.2, 0.0, 0.0], [0.2, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]]),
 ])
 def test_varying_norm_keeps_the_general_path(damper, mass):
-    assert _spring(mass, damper=damper)._compiled.damper_norm is None
+    compiled = _spring(mass, damper=damper)._compiled
+    assert compiled.damper_norm is None and compiled.damper_projection is None
 
 
 def test_several_dashpots_keep_the_general_path():
     s = raydamp.System(["x", "y"], "(x^2+y^2)/2", eps=0.1,
                        damping={"dampers": [{"on": "x - y", "c": 1.0}, {"on": "x + y", "c": 1.0}]})
-    assert s._compiled.damper_norm is None
+    assert s._compiled.damper_norm is None and s._compiled.damper_projection is None
 
 
 @pytest.mark.parametrize("method", ["3s", "2s", "rks", "rksb", "heun"])
@@ -79,13 +157,16 @@ def test_several_dashpots_keep_the_general_path():
 def test_constant_norm_path_equals_general_path(method, system, q0, p0):
     constant = system()
     general = _general_path(constant)
-    assert constant._compiled.damper_norm is not None
+    assert constant._compiled.damper_norm is not None and constant._compiled.damper_projection is not None
     kw = dict(method=method, h=0.1, n_steps=2000, save_every=50)
     a = raydamp.integrate(constant, q0, p0, **kw)
     b = raydamp.integrate(general, q0, p0, **kw)
+    # Rounding apart: the projection and the fused 3s body round differently from the
+    # gradient form (the single flows agree to 1e-15, below), and 2000 steps of the
+    # spring, drifting to |q| = 10, grow that to 1e-12.
     scale = max(1.0, float(np.abs(b.p).max()), float(np.abs(b.q).max()))
-    assert np.abs(a.q - b.q).max() <= 1e-13 * scale
-    assert np.abs(a.p - b.p).max() <= 1e-13 * scale
+    assert np.abs(a.q - b.q).max() <= 2e-12 * scale
+    assert np.abs(a.p - b.p).max() <= 2e-12 * scale
 
 
 def test_elastic_constant_norm_matches_builtin_flows():

@@ -14,8 +14,8 @@
 namespace raydamp::bindings {
 
 // Addresses of the compiled functions, as Python passes them: (function, data)
-// pairs for potential, gradient, hessian_product, damper_gradients, momenta
-// (0 where absent).
+// pairs for potential, gradient, hessian_product, damper_gradients, momenta,
+// damper_projection, damp_then_3s_body (0 where absent).
 using FunctionAddresses = std::vector<std::uintptr_t>;
 
 inline CompiledFunction compiled(const FunctionAddresses& a, int i) {
@@ -30,7 +30,8 @@ Mass make_mass(const Eigen::MatrixXd& mass) {
 
 template <class Damping>
 Damping make_damping(const Eigen::MatrixXd& mass, double eps, double scalar, const Eigen::MatrixXd& matrix,
-                     const std::vector<double>& coefficients, CompiledFunction damper_gradients, double damper_norm) {
+                     const std::vector<double>& coefficients, CompiledFunction damper_gradients, double damper_norm,
+                     CompiledFunction damper_projection) {
   if constexpr (std::is_same_v<Damping, IsotropicDamping>) {
     IsotropicDamping d;
     d.a = eps * scalar;  // D = c M: A = eps c I
@@ -38,7 +39,7 @@ Damping make_damping(const Eigen::MatrixXd& mass, double eps, double scalar, con
   } else if constexpr (std::is_same_v<Damping, ConstantDamping>) {
     return ConstantDamping(mass, matrix, eps);
   } else {
-    return DamperDamping(mass, eps, coefficients, damper_gradients, damper_norm);
+    return DamperDamping(mass, eps, coefficients, damper_gradients, damper_norm, damper_projection);
   }
 }
 
@@ -51,12 +52,12 @@ void bind_system_kind(py::module_& m, const char* name) {
                       const FunctionAddresses& functions, int n_momenta, py::object /*keep_alive*/,
                       double damper_norm) {
             if (mass.rows() != n || mass.cols() != n) throw std::invalid_argument("mass: expected an n x n matrix");
-            if (functions.size() != 10) throw std::invalid_argument("functions: expected 5 (function, data) pairs");
+            if (functions.size() != 14) throw std::invalid_argument("functions: expected 7 (function, data) pairs");
             const SystemFunctions f{compiled(functions, 0), compiled(functions, 1), compiled(functions, 2),
-                                    compiled(functions, 4)};
+                                    compiled(functions, 4), compiled(functions, 6)};
             return Model(n, eps, make_mass<Mass>(mass),
                          make_damping<Damping>(mass, eps, damping_scalar, damping_matrix, damper_coefficients,
-                                               compiled(functions, 3), damper_norm),
+                                               compiled(functions, 3), damper_norm, compiled(functions, 5)),
                          f, n_momenta);
           }),
           py::arg("n"), py::arg("eps"), py::arg("mass"), py::arg("damping_scalar"), py::arg("damping_matrix"),

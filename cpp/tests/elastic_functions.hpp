@@ -30,6 +30,13 @@ inline void radial_gradient(double* out, const double* q, void*) {
   const double r = length(q);
   for (int i = 0; i < 3; ++i) out[i] = q[i] / r;
 }
+// The dashpot's projection P(q, u) = grad g (grad g . u) = (q . u) q / |q|^2 (M = I).
+inline void radial_projection(double* out, const double* in, void*) {
+  const double* q = in;
+  const double* u = in + 3;
+  const double s = (q[0] * u[0] + q[1] * u[1] + q[2] * u[2]) / (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
+  for (int i = 0; i < 3; ++i) out[i] = s * q[i];
+}
 // J3 = q_x p_y - q_y p_x from (q, p).
 inline void j3(double* out, const double* in, void*) { out[0] = in[0] * in[4] - in[1] * in[3]; }
 

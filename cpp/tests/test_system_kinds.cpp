@@ -8,6 +8,9 @@
 //   them, follow q: each flow equals its closed form at every new q;
 // - a system with n fixed at compile time (CompiledSystem::fixed) runs the same
 //   steps as the run-time-sized one, and fixed<N> refuses a system of another n;
+// - with the dashpot's projection and a fused 3s body (damp, drift, kick, drift in one
+//   function), merged 3s runs call it for nearly every step, and end
+//   where the sub-flows one by one end, run-time and fixed size;
 // - phi2 is continuous across its series/direct switch.
 #include <cmath>
 #include <cstdio>
@@ -37,6 +40,21 @@ void planar_gradient(double* out, const double* q, void*) {
 
 CompiledFunction fn(CompiledFunction::Fn f) { return {f, nullptr}; }
 
+// The elastic pendulum's damp_then_3s_body (M = I): in = (q, p, k, t0, t1, t2); data
+// counts the calls.
+void elastic_3s_body(double* out, const double* in, void* calls) {
+  ++*static_cast<long*>(calls);
+  double u[6], q[3], p[3], g[3];
+  radial_projection(u, in, nullptr);
+  const double k = in[6], t0 = in[7], t1 = in[8], t2 = in[9];
+  for (int i = 0; i < 3; ++i) p[i] = in[3 + i] - k * u[i];
+  for (int i = 0; i < 3; ++i) q[i] = in[i] + t0 * p[i];
+  gradient(g, q, nullptr);
+  for (int i = 0; i < 3; ++i) p[i] -= t1 * g[i];
+  for (int i = 0; i < 3; ++i) out[i] = q[i] + t2 * p[i];
+  for (int i = 0; i < 3; ++i) out[3 + i] = p[i];
+}
+
 double distance(const State<Eigen::Dynamic>& a, const State<3>& b) {
   double d = 0.0;
   for (int i = 0; i < 3; ++i) d = std::max({d, std::abs(a.q[i] - b.q[i]), std::abs(a.p[i] - b.p[i])});
@@ -48,7 +66,7 @@ void elastic_pendulum_as_system() {
   const double eps = 0.1;
   using Sys = CompiledSystem<ScalarMass, DamperDamping>;
   const Sys sys(3, eps, ScalarMass(1.0), DamperDamping(mass, eps, {1.0}, fn(radial_gradient)),
-                SystemFunctions{fn(potential), fn(gradient), fn(hessian_product), fn(j3)}, 1);
+                SystemFunctions{fn(potential), fn(gradient), fn(hessian_product), fn(j3), {}}, 1);
   const ElasticPendulum builtin(eps);
   const State<3> z0{Vector<3>(0.0, 1.55884573, -0.6), Vector<3>(1.34164079, 0.0, 0.0)};
   const State<Eigen::Dynamic> y0{Vec(z0.q), Vec(z0.p)};
@@ -101,7 +119,7 @@ void elastic_pendulum_as_system() {
   // The single sub-flows agree too, including at a = 0 (eps = 0).
   for (double e : {0.0, 0.1, 50.0}) {
     const Sys s(3, e, ScalarMass(1.0), DamperDamping(mass, e, {1.0}, fn(radial_gradient)),
-                SystemFunctions{fn(potential), fn(gradient), fn(hessian_product), fn(j3)}, 1);
+                SystemFunctions{fn(potential), fn(gradient), fn(hessian_product), fn(j3), {}}, 1);
     const ElasticPendulum p(e);
     State<Eigen::Dynamic> y = y0;
     State<3> z = z0;
@@ -113,6 +131,51 @@ void elastic_pendulum_as_system() {
     flows::damp(p, z, 0.7, wz);
     CHECK(distance(y, z) <= 1e-14);
   }
+}
+
+void fused_3s_body_is_the_sub_flows() {
+  const Eigen::MatrixXd mass = Eigen::MatrixXd::Identity(3, 3);
+  const double eps = 0.1;
+  long calls = 0;
+  using Sys = CompiledSystem<ScalarMass, DamperDamping>;
+  const SystemFunctions plain{fn(potential), fn(gradient), fn(hessian_product), fn(j3), {}};
+  SystemFunctions fused = plain;
+  fused.damp_then_3s_body = {elastic_3s_body, &calls};
+  const Sys one_by_one(3, eps, ScalarMass(1.0), DamperDamping(mass, eps, {1.0}, fn(radial_gradient), 1.0), plain, 1);
+  const Sys in_one_call(3, eps, ScalarMass(1.0),
+                        DamperDamping(mass, eps, {1.0}, fn(radial_gradient), 1.0, fn(radial_projection)), fused, 1);
+  CHECK(in_one_call.fuses_3s() && !one_by_one.fuses_3s());
+  const ButcherTableau& tab = resolve_tableau(method_entry("3s"), "");
+  const long steps = 5000;
+  RunSpec spec{0.01, steps, 0.01, steps, false};  // no work integral: the steps merge
+  const State<Eigen::Dynamic> y0{Vec(Vector<3>(0.0, 1.55884573, -0.6)), Vec(Vector<3>(1.34164079, 0.0, 0.0))};
+  const RunResult a = integrate<ThreeTermSplitting>(one_by_one, tab, y0, spec);
+  const RunResult b = integrate<ThreeTermSplitting>(in_one_call, tab, y0, spec);
+  // join(i) + body(i + 1) in one call for nearly every step: not the first of each
+  // block between saves, progress and cancel checks (its damp is the block's lead),
+  // nor the last (it has h_last).
+  auto mostly_fused = [&] {
+    if (!(calls >= steps - steps / 20 && calls < steps)) std::printf("fused calls: %ld of %ld\n", calls, steps);
+    return calls >= steps - steps / 20 && calls < steps;
+  };
+  CHECK(mostly_fused());
+  const State<3> z0{Vector<3>(y0.q), Vector<3>(y0.p)};
+  calls = 0;
+  const RunResult c = integrate<ThreeTermSplitting>(in_one_call.fixed<3>(), tab, z0, spec);
+  CHECK(mostly_fused());
+  for (const RunResult* r : {&b, &c}) {
+    double worst = 0.0;
+    for (std::size_t i = 0; i < a.trajectory.q.size(); ++i)
+      worst = std::max({worst, std::abs(a.trajectory.q[i] - r->trajectory.q[i]),
+                        std::abs(a.trajectory.p[i] - r->trajectory.p[i])});
+    if (!(worst <= 1e-12)) std::printf("fused 3s body and sub-flows differ by %.3g\n", worst);
+    CHECK(worst <= 1e-12);
+    CHECK_NEAR(r->max_momentum_drift, a.max_momentum_drift, 1e-14);
+  }
+  // A fused body needs the projection (its k is the projection's).
+  CHECK(test::throws([&] {
+    Sys(3, eps, ScalarMass(1.0), DamperDamping(mass, eps, {1.0}, fn(radial_gradient), 1.0), fused, 1);
+  }));
 }
 
 void linear_dampers_equal_constant_damping() {
@@ -205,6 +268,7 @@ void phi2_is_continuous() {
 }  // namespace
 
 int main() {
+  fused_3s_body_is_the_sub_flows();
   elastic_pendulum_as_system();
   linear_dampers_equal_constant_damping();
   diagonal_constant_damping_is_exponential();

@@ -15,6 +15,7 @@
 #include <array>
 #include <cstddef>
 #include <stdexcept>
+#include <type_traits>
 #include <utility>
 
 #include "raydamp/methods/composition.hpp"
@@ -55,6 +56,13 @@ struct StepDurations {
     f(Method::stages[S - 1].flow, trail);
   }
 };
+
+// A model that runs 3s's join and the next step's body as one call of its own
+// (a System's compiled damp_then_3s_body, models/compiled_system.hpp).
+template <class M, class = void>
+struct fuses_3s : std::false_type {};
+template <class M>
+struct fuses_3s<M, std::void_t<decltype(std::declval<const M&>().fuses_3s())>> : std::true_type {};
 
 namespace detail {
 
@@ -112,6 +120,20 @@ class ComposedStepper {
   void join(const Model& model, const Tab& tab, State<Dim>& z, long i, Workspace<Dim, DF>& ws) const {
     const double t = i + 1 == last_step_ ? regular_.trail + last_.lead : join_regular_;
     apply_flow<Method::stages[0].flow>(model, tab, z, t, ws);
+  }
+  // join(i) then body(i + 1); one call of the model where it fuses them (3s between
+  // two regular steps of the uncomposed method), the same sub-flows otherwise.
+  template <class Model, class Tab, int Dim, class DF>
+  void join_then_body(const Model& model, const Tab& tab, State<Dim>& z, long i, Workspace<Dim, DF>& ws) const {
+    if constexpr (std::is_same_v<Method, ThreeTermSplitting> && fuses_3s<Model>::value) {
+      if (single_ && i + 1 != last_step_ && model.fuses_3s()) {
+        if (ws.damp_factors.t != join_regular_) ws.damp_factors = model.damping.factors(join_regular_);
+        model.damp_then_3s_body(z.q, z.p, ws.damp_factors, inner_regular_.data());
+        return;
+      }
+    }
+    join(model, tab, z, i, ws);
+    body(model, tab, z, i + 1, ws);
   }
   template <class Model, class Tab, int Dim, class DF>
   void trail(const Model& model, const Tab& tab, State<Dim>& z, long i, Workspace<Dim, DF>& ws) const {

@@ -190,7 +190,22 @@ RAYDAMP_FLATTEN double run_block(const Model& model, const Tab& shared_tab, cons
   using LocalTab = std::conditional_t<std::is_trivially_copyable_v<Tab>, const Tab, const Tab&>;
   LocalTab tab = shared_tab;
   double block_drift = 0.0;
-  if constexpr (Mergeable) {
+  if constexpr (Mergeable && fuses_3s<Model>::value) {
+    // The same sub-flows in the same order as below, grouped as join(i) + body(i + 1)
+    // so that a model can run the pair as one call.
+    if (merge) {
+      local.lead(model, tab, y, k, ws);
+      local.body(model, tab, y, k, ws);
+      for (long i = k; i + 1 < end; ++i) {
+        if (track_momenta) block_drift = std::max(block_drift, step_drift(y));
+        local.join_then_body(model, tab, y, i, ws);
+      }
+      local.trail(model, tab, y, end - 1, ws);
+      if (track_momenta) block_drift = std::max(block_drift, step_drift(y));
+      if constexpr (!in_place) state = y;
+      return block_drift;
+    }
+  } else if constexpr (Mergeable) {
     if (merge) {
       local.lead(model, tab, y, k, ws);
       for (long i = k; i + 1 < end; ++i) {

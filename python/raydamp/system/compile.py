@@ -31,11 +31,14 @@ def number(value: float) -> se.Basic:
 @dataclass(frozen=True)
 class CompiledSystemFunctions:
     """The compiled functions; ``addresses`` are (function, data) pairs in the order
-    the C++ SystemFunctions expects (potential, gradient, hessian_product,
-    damper_gradients, momenta; 0 where absent). The Lambdify objects own the machine
+    the C++ bindings expect (potential, gradient, hessian_product, damper_gradients,
+    momenta, damper_projection; 0 where absent). The Lambdify objects own the machine
     code: whoever holds a model holds this. ``damper_norm`` is a = grad g^T M^{-1}
     grad g of a single dashpot when it is the same number at every q (dashpot_norm.py),
-    else None."""
+    else None; then ``damper_projection`` is (q, u) -> grad g (grad g^T M^{-1} u), which
+    the dashpot's decay exp(-t eps D M^{-1}) p takes (damper_damping.hpp), and
+    ``damp_then_3s_body`` that decay followed by 3s's drift, kick, drift, in one
+    function (compiled_system.hpp)."""
 
     addresses: tuple[int, ...]
     potential: Any
@@ -44,6 +47,8 @@ class CompiledSystemFunctions:
     damper_gradients: Any | None
     momenta: Any | None
     damper_norm: float | None = None
+    damper_projection: Any | None = None
+    damp_then_3s_body: Any | None = None
 
 
 _HALF = se.Rational(1, 2)
@@ -111,17 +116,25 @@ def compile_system(spec: SystemSpec) -> CompiledSystemFunctions:
     hv_fn, hv_f, hv_d = _jit(q + v, hessian_product)
     addresses = [pot_f, pot_d, grad_f, grad_d, hv_f, hv_d]
 
-    damper_fn = damper_norm = None
+    damper_fn = damper_norm = projection_fn = fused_fn = None
+    projection_address = [0, 0, 0, 0]
     if spec.dampers:
         # k rows of n: the gradient of each dashpot's function, row-major.
         rows = []
-        for damper in spec.dampers:
-            g = damper.on.to_symengine(symbols)
+        functions = [damper.on.to_symengine(symbols) for damper in spec.dampers]
+        for g in functions:
             rows.extend(se.diff(g, qi) for qi in q)
         damper_fn, f, d = _jit(q, rows)
         addresses += [f, d]
         if len(spec.dampers) == 1:
-            damper_norm = constant_dashpot_norm(rows, np.linalg.inv(spec.mass), lambda x: evaluate(damper_fn, x))
+            inverse = np.linalg.inv(spec.mass)
+            damper_norm = constant_dashpot_norm(rows, inverse, lambda x: evaluate(damper_fn, x))
+            if damper_norm is not None:
+                projection = _projection(functions[0], rows, q, p, inverse)
+                projection_fn, f, d = _jit(q + p, projection)
+                fused = _damp_then_3s_body(projection, gradient, q, p, inverse)
+                fused_fn, f2, d2 = _jit(q + p + list(_FUSED_SCALARS), fused)
+                projection_address = [f, d, f2, d2]
     else:
         addresses += [0, 0]
 
@@ -134,7 +147,52 @@ def compile_system(spec: SystemSpec) -> CompiledSystemFunctions:
         addresses += [f, d]
     else:
         addresses += [0, 0]
-    return CompiledSystemFunctions(tuple(addresses), pot_fn, grad_fn, hv_fn, damper_fn, momenta_fn, damper_norm)
+    addresses += projection_address
+    return CompiledSystemFunctions(tuple(addresses), pot_fn, grad_fn, hv_fn, damper_fn, momenta_fn, damper_norm,
+                                   projection_fn, fused_fn)
+
+
+# The fused body's scalar inputs after (q, p): the decay's k = eps c t phi1(x) and the
+# durations of drift, kick, drift.
+_FUSED_SCALARS = tuple(se.Symbol(name) for name in ("_k", "_t0", "_t1", "_t2"))
+
+
+def _damp_then_3s_body(projection: list[se.Basic], gradient: list[se.Basic], q: list[se.Symbol],
+                       p: list[se.Symbol], inverse: np.ndarray) -> list[se.Basic]:
+    """(q, p) after p <- p - k P(q, p), q <- q + t0 M^{-1} p, p <- p - t1 grad V(q),
+    q <- q + t2 M^{-1} p: the join and body of 3s's merged steps as 2n expressions in
+    (q, p, k, t0, t1, t2). Built by substitution; Lambdify's CSE shares the repeats."""
+    k, t0, t1, t2 = _FUSED_SCALARS
+    n = len(q)
+
+    def velocity(momentum: list[se.Basic]) -> list[se.Basic]:
+        return [sum((number(inverse[j, i]) * momentum[i] for i in range(n) if inverse[j, i] != 0.0), se.Integer(0))
+                for j in range(n)]
+
+    damped = [pi - k * e for pi, e in zip(p, projection)]
+    q1 = [qi + t0 * vi for qi, vi in zip(q, velocity(damped))]
+    at_q1 = dict(zip(q, q1))
+    p1 = [pi - t1 * g.subs(at_q1) for pi, g in zip(damped, gradient)]
+    q2 = [qi + t2 * vi for qi, vi in zip(q1, velocity(p1))]
+    return q2 + p1
+
+
+def _projection(g: se.Basic, gradient: list[se.Basic], q: list[se.Symbol], u: list[se.Symbol],
+                inverse: np.ndarray) -> list[se.Basic]:
+    """P(q, u) = grad g (grad g . v), v = M^{-1} u, as n expressions in (q, u).
+
+    grad g . v is taken as the derivative of g(q + lam v) at lam = 0 rather than as a
+    sum of products: for g built on a root, g = sqrt(s), the chain rule makes it one
+    product (s' . v) s^(-1/2)/2, and times grad g_i = s_i' s^(-1/2)/2 SymEngine adds
+    the exponents, so P of a distance dashpot, (q.v) q / |q|^2, has no square root.
+    """
+    n = len(q)
+    v = [sum((number(inverse[j, k]) * u[k] for k in range(n) if inverse[j, k] != 0.0), se.Integer(0))
+         for j in range(n)]
+    lam = se.Symbol("_lam")
+    along = g.subs({qi: qi + lam * vi for qi, vi in zip(q, v)})
+    directional = se.diff(along, lam).subs({lam: se.Integer(0)})
+    return [directional * gi for gi in gradient]
 
 
 def evaluate(fn: Any, x: np.ndarray) -> np.ndarray:

@@ -148,6 +148,7 @@ def build_from_functions(n, *, potential, gradient, mass=1.0, damping=None, eps=
         addresses += functions.wrap("momenta", lambda q, p: [float(f(q, p)) for f in fns], 2 * n, len(fns), split=n)
     else:
         addresses += [0, 0]
+    addresses += [0, 0, 0, 0]  # no damper projection, no fused 3s body: the sub-flows one by one
     spec = SystemSpec(coords, coordinates is None, None, {}, m, mass_form, d_form, d_scalar, d_matrix, (), eps, {},
                       name)
     direct = {"potential": potential, "gradient": gradient, "dampers": dampers}

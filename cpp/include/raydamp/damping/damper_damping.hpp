@@ -13,6 +13,14 @@
 //   two dot products (3s on the elastic pendulum: the dot w.grad g, the phi1 series
 //   or expm1 and its division were a fifth of a step). Otherwise (norm NaN) they are
 //   taken at every new q.
+//   With a constant a, exp(-tA) p may also take a compiled projection P(q, u) =
+//   grad g (grad g^T M^{-1} u) instead of the gradient: p - eps c t phi1(x) P(q, p).
+//   Built symbolically (compile.py), P of a distance dashpot has no square root,
+//   (q.u) q / |q|^2 as the built-in radial damping writes it, where the gradient
+//   q / |q| puts a sqrt and a division on the step's serial chain (3s's damp on the
+//   elastic pendulum as a System: benchmarks/bench_system.py). The affine flow keeps
+//   the gradient: there the dashpot's call runs beside grad V's, where P(q, .) of a
+//   combination with grad V would have to wait for it.
 // - Several dashpots need not commute: the exact flow of their sum from the
 //   eigendecomposition of S = eps L^{-1} D(q) L^{-T} at the frozen q (n <= kMaxDenseDim).
 #pragma once
@@ -46,6 +54,7 @@ class DamperDamping {
     // Plain arrays and Maps: no temporaries in the step loop.
     std::array<double, kMaxDenseDim> grad, w;
     double x = std::numeric_limits<double>::quiet_NaN(), k1 = 0.0, k2 = 0.0;
+    double k1_projected = 0.0;  // eps c t phi1(x), for P (which has M^{-1} in it)
     bool has_k2 = false;
     // Several: exp(-tA) = L V diag(decay) V^T L^{-1}; t phi1(-tA) likewise with t_phi1s.
     SmallMatrix vectors;
@@ -65,9 +74,11 @@ class DamperDamping {
 
   // norm: a = grad g^T M^{-1} grad g of the one dashpot when it is the same at every
   // q (NaN: it varies, or several dashpots).
+  // projection: P(q, u) of the one dashpot, (q, u) in, n out; used only with a constant norm.
   DamperDamping(const Eigen::MatrixXd& mass, double eps, std::vector<double> coefficients, CompiledFunction gradients,
-                double norm = std::numeric_limits<double>::quiet_NaN())
-      : eps_(eps), c_(std::move(coefficients)), gradients_(gradients), n_(static_cast<int>(mass.rows())), norm_(norm) {
+                double norm = std::numeric_limits<double>::quiet_NaN(), CompiledFunction projection = {})
+      : eps_(eps), c_(std::move(coefficients)), gradients_(gradients), n_(static_cast<int>(mass.rows())), norm_(norm),
+        projection_(projection) {
     const int k = static_cast<int>(c_.size());
     if (k < 1 || k > kMaxDampers)
       throw std::invalid_argument("damping.dampers: between 1 and " + std::to_string(kMaxDampers) +
@@ -88,6 +99,8 @@ class DamperDamping {
     if (!std::isnan(norm_) && (k != 1 || !(norm_ >= 0.0) || !std::isfinite(norm_)))
       throw std::invalid_argument("damping.dampers: a constant norm needs one dashpot and a finite a >= 0, got " +
                                   std::to_string(norm_));
+    if (projection_ && !constant_norm())
+      throw std::invalid_argument("damping.dampers: a compiled projection needs one dashpot with a constant norm");
   }
 
   // The flows of length t. With a constant a, x and k1 of every q are known now; k2
@@ -98,16 +111,25 @@ class DamperDamping {
     f.t = t;
     if (constant_norm()) {
       f.at.x = -t * eps_c_ * norm_;
-      f.at.k1 = scaled(t * phi1(f.at.x));
+      const double t_phi1 = t * phi1(f.at.x);
+      f.at.k1 = scaled(t_phi1);
+      f.at.k1_projected = eps_c_ * t_phi1;
     }
     return f;
   }
 
   bool constant_norm() const { return !std::isnan(norm_); }
+  bool projects() const { return static_cast<bool>(projection_); }
 
   template <class Q, class P>
   void decay(const Q& q, const Factors& f, P& p) const {
     constexpr int N = P::RowsAtCompileTime;
+    if (projection_) {
+      std::array<double, kMaxDenseDim> pu;
+      project<N>(q, p, pu);
+      p -= f.at.k1_projected * map<N>(pu);
+      return;
+    }
     const AtConfiguration& at = evaluate(q, f);
     if (c_.size() == 1) {
       const auto grad = map<N>(at.grad);
@@ -195,6 +217,16 @@ class DamperDamping {
   // eps c s, times 1/m when M = m I (the k1, k2 of AtConfiguration).
   double scaled(double s) const { return eps_c_ * s * (scalar_inverse_ != 0.0 ? scalar_inverse_ : 1.0); }
 
+  // out = P(q, u), through stack buffers (the model is shared by the threads of an ensemble).
+  template <int N, class Q, class U>
+  void project(const Q& q, const U& u, std::array<double, kMaxDenseDim>& out) const {
+    using Vec = Eigen::Matrix<double, N, 1>;
+    std::array<double, 2 * kMaxDenseDim> in;
+    Eigen::Map<Vec>(in.data(), n_) = q;  // Eigen copies: no calls to memmove
+    Eigen::Map<Vec>(in.data() + n_, n_) = u;
+    projection_(out.data(), in.data());
+  }
+
   template <class P, class V>
   void mass_inverse(const P& p, V& v) const {
     if (scalar_inverse_ != 0.0) v = scalar_inverse_ * p;
@@ -280,6 +312,7 @@ class DamperDamping {
   CompiledFunction gradients_;
   int n_;
   double norm_;                  // a of the one dashpot when constant, else NaN
+  CompiledFunction projection_;  // P(q, u) of the one dashpot with a constant norm, or unset
   double scalar_inverse_ = 0.0;  // 1/m when M = m I, else 0
   double eps_c_ = 0.0;           // eps c of the first dashpot (the rank-one case)
   SmallMatrix lower_, lower_inverse_, inverse_;  // L, L^{-1}, M^{-1} (M = L L^T)

@@ -8,9 +8,11 @@
 #include <array>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "raydamp/concepts.hpp"
+#include "raydamp/damping/damper_damping.hpp"
 #include "raydamp/state.hpp"
 #include "raydamp/system/compiled_function.hpp"
 
@@ -21,6 +23,12 @@ struct SystemFunctions {
   CompiledFunction gradient;         // q -> grad V(q)                 (n outputs)
   CompiledFunction hessian_product;  // (q, v) -> Hess V(q) v          (n outputs)
   CompiledFunction momenta;          // (q, p) -> J(q, p)              (m outputs; unset when m = 0)
+  // (q, p, k, t0, t1, t2) -> (q, p) after 3s's damp exp(-t eps D M^{-1}) p = p - k P(q, p)
+  // of the one dashpot with a constant norm, then its body: drift t0, kick t1, drift t2.
+  // Optional: the merged 3s loop then makes one call per step where it made two in
+  // series (projection, then gradient), so the step's serial chain crosses one call
+  // (the momenta's call depends on nothing later and overlaps).
+  CompiledFunction damp_then_3s_body;  // (2n + 4 in, 2n out; unset: the sub-flows one by one)
 };
 
 // Dim: Dynamic as bound (one struct for every n); fixed<N>() gives the same system
@@ -45,6 +53,12 @@ struct CompiledSystem {
     if (!functions.potential || !functions.gradient || !functions.hessian_product)
       throw std::invalid_argument("potential: not compiled");
     if (m > 0 && !functions.momenta) throw std::invalid_argument("momenta: not compiled");
+    if (functions.damp_then_3s_body) {
+      bool projects = false;
+      if constexpr (std::is_same_v<Damping, DamperDamping>) projects = damping.projects();
+      if (!projects)
+        throw std::invalid_argument("damping.dampers: a fused 3s body needs one dashpot with a compiled projection");
+    }
   }
 
   // The same system (the same compiled functions, mass and damping) with n == N
@@ -72,6 +86,26 @@ struct CompiledSystem {
     std::copy(q.data(), q.data() + n, in.begin());
     std::copy(v.data(), v.data() + n, in.begin() + n);
     functions.hessian_product(out.data(), in.data());
+  }
+
+  // 3s's merged steps (composed_step.hpp, join_then_body): the damp of the factors f
+  // (a dashpot's k for this length), then drift t[0], kick t[1], drift t[2], in one call.
+  bool fuses_3s() const { return static_cast<bool>(functions.damp_then_3s_body); }
+  template <class Factors>
+  void damp_then_3s_body(Vec& q, Vec& p, const Factors& f, const double* t) const {
+    constexpr int kStack = 2 * kMaxDenseDim + 4;
+    std::array<double, kStack> in;
+    std::array<double, 2 * kMaxDenseDim> out;
+    Eigen::Map<Vec>(in.data(), n) = q;  // Eigen copies: no calls to memmove
+    Eigen::Map<Vec>(in.data() + n, n) = p;
+    if constexpr (std::is_same_v<Damping, DamperDamping>) in[2 * n] = f.at.k1_projected;
+    else in[2 * n] = 0.0;  // never called: only a dashpot's system compiles a fused body
+    in[2 * n + 1] = t[0];
+    in[2 * n + 2] = t[1];
+    in[2 * n + 3] = t[2];
+    functions.damp_then_3s_body(out.data(), in.data());
+    q = Eigen::Map<const Vec>(out.data(), n);
+    p = Eigen::Map<const Vec>(out.data() + n, n);
   }
 
   // Called every step when momenta are tracked: (q, p) go into a stack buffer.
