@@ -32,7 +32,7 @@ def number(value: float) -> se.Basic:
 class CompiledSystemFunctions:
     """The compiled functions; ``addresses`` are (function, data) pairs in the order
     the C++ bindings expect (potential, gradient, hessian_product, damper_gradients,
-    momenta, damper_projection; 0 where absent). The Lambdify objects own the machine
+    momenta, damper_projection, damp_then_3s_body; 0 where absent). The Lambdify objects own the machine
     code: whoever holds a model holds this. ``damper_norm`` is a = grad g^T M^{-1}
     grad g of a single dashpot when it is the same number at every q (dashpot_norm.py),
     else None; then ``damper_projection`` is (q, u) -> grad g (grad g^T M^{-1} u), which
