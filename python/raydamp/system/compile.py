@@ -163,18 +163,19 @@ def _damp_then_3s_body(projection: list[se.Basic], gradient: list[se.Basic], q: 
     q <- q + t2 M^{-1} p: the join and body of 3s's merged steps as 2n expressions in
     (q, p, k, t0, t1, t2). Built by substitution; Lambdify's CSE shares the repeats."""
     k, t0, t1, t2 = _FUSED_SCALARS
-    n = len(q)
-
-    def velocity(momentum: list[se.Basic]) -> list[se.Basic]:
-        return [sum((number(inverse[j, i]) * momentum[i] for i in range(n) if inverse[j, i] != 0.0), se.Integer(0))
-                for j in range(n)]
-
     damped = [pi - k * e for pi, e in zip(p, projection)]
-    q1 = [qi + t0 * vi for qi, vi in zip(q, velocity(damped))]
+    q1 = [qi + t0 * vi for qi, vi in zip(q, _times_inverse(inverse, damped))]
     at_q1 = dict(zip(q, q1))
     p1 = [pi - t1 * g.subs(at_q1) for pi, g in zip(damped, gradient)]
-    q2 = [qi + t2 * vi for qi, vi in zip(q1, velocity(p1))]
+    q2 = [qi + t2 * vi for qi, vi in zip(q1, _times_inverse(inverse, p1))]
     return q2 + p1
+
+
+def _times_inverse(inverse: np.ndarray, vector: list[se.Basic]) -> list[se.Basic]:
+    """M^{-1} vector as expressions, M^{-1}'s zeros left out."""
+    n = len(vector)
+    return [sum((number(inverse[j, i]) * vector[i] for i in range(n) if inverse[j, i] != 0.0), se.Integer(0))
+            for j in range(n)]
 
 
 def _projection(g: se.Basic, gradient: list[se.Basic], q: list[se.Symbol], u: list[se.Symbol],
@@ -186,9 +187,7 @@ def _projection(g: se.Basic, gradient: list[se.Basic], q: list[se.Symbol], u: li
     product (s' . v) s^(-1/2)/2, and times grad g_i = s_i' s^(-1/2)/2 SymEngine adds
     the exponents, so P of a distance dashpot, (q.v) q / |q|^2, has no square root.
     """
-    n = len(q)
-    v = [sum((number(inverse[j, k]) * u[k] for k in range(n) if inverse[j, k] != 0.0), se.Integer(0))
-         for j in range(n)]
+    v = _times_inverse(inverse, u)
     lam = se.Symbol("_lam")
     along = g.subs({qi: qi + lam * vi for qi, vi in zip(q, v)})
     directional = se.diff(along, lam).subs({lam: se.Integer(0)})
