@@ -5,6 +5,14 @@
 #include "check.hpp"
 #include "raydamp/raydamp.hpp"
 
+// The build's Eigen configuration (CMakeLists.txt): a fixed 3-vector runs in scalars,
+// a dynamic one in SIMD packets. Without the first, the elastic pendulum's step pays
+// for packet shuffles on its serial chain (benchmarks/bench_steps.py).
+static_assert(!(Eigen::internal::evaluator<Eigen::Vector3d>::Flags & Eigen::PacketAccessBit),
+              "the raydamp target sets EIGEN_UNALIGNED_VECTORIZE=0");
+static_assert(Eigen::internal::evaluator<Eigen::VectorXd>::Flags & Eigen::PacketAccessBit,
+              "dynamic-size vectors keep their SIMD packets");
+
 using namespace raydamp;
 
 int main() {
