@@ -122,10 +122,13 @@ int main() {
     compare_vector_sine(ThreeTermSplitting{});
     compare_vector_sine(TwoTermSplitting{});
   }
-  // Lane batches: about kBatchesPerThread per thread, between 32 and 256 lanes, and a
-  // change of eps always starts a new batch (members sharing a run share eps).
-  CHECK(bindings::batch_lanes(1000, 2) == 63);  // 16 batches for 2 threads
-  CHECK(bindings::batch_lanes(1000, 1) == 125);
+  // Lane batches: about kBatchesPerThread per thread, between 32 and 256 lanes, a
+  // multiple of four, and a change of eps always starts a new batch (members sharing
+  // a run share eps).
+  CHECK(bindings::batch_lanes(1000, 2) == 64);  // 16 batches for 2 threads
+  CHECK(bindings::batch_lanes(1000, 1) == 128);
+  CHECK(bindings::batch_lanes(90, 1) == 32);
+  CHECK(bindings::batch_lanes(1000, 3) == 44);  // 42 rounded up
   CHECK(bindings::batch_lanes(100, 2) == 32);
   CHECK(bindings::batch_lanes(1000000, 2) == 256);
   {
