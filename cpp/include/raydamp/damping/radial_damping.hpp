@@ -13,17 +13,19 @@ struct RadialDamping {
 
   DecayFactors factors(double t) const { return decay_factors(a, t); }
 
-  // p <- exp(-t A) p: only the radial component decays.
+  // p <- exp(-t A) p: only the radial component decays. Times 1/|q|^2, not divided
+  // by it: the division then runs beside q.p, off the step's serial chain (the
+  // elastic pendulum's 3s step, about 1% faster; the result differs by rounding).
   template <class Q, class P>
   void decay(const Q& q, const DecayFactors& f, P& p) const {
-    p += (f.expm1 * q.dot(p) / q.squaredNorm()) * q;
+    p += (f.expm1 * q.dot(p) * (1.0 / q.squaredNorm())) * q;
   }
 
   // p <- exp(-t A) p - t phi1(-t A) g. Tangentially phi1(0) = 1 (a plain kick);
   // radially the exact affine decay.
   template <class Q, class G, class P>
   void decay_affine(const Q& q, const DecayFactors& f, const G& g, P& p) const {
-    const double radial = (f.expm1 * q.dot(p) - f.t_phi1_m1 * q.dot(g)) / q.squaredNorm();
+    const double radial = (f.expm1 * q.dot(p) - f.t_phi1_m1 * q.dot(g)) * (1.0 / q.squaredNorm());
     p += radial * q - f.t * g;
   }
 
