@@ -45,12 +45,7 @@ EPS = 0.01
 
 
 def best(fn, rounds: int) -> float:
-    times = []
-    for _ in range(rounds):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return min(times)
+    return best_interleaved([fn], rounds)[0]
 
 
 def best_interleaved(fns, rounds: int) -> list[float]:
