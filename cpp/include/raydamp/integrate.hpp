@@ -29,6 +29,20 @@
 
 namespace raydamp {
 
+// Whether the step loop of Model is flattened (run_block_flat). Flattening pays where
+// a step is a few dozen nanoseconds of register work that a call would interrupt: a
+// built-in model of fixed size, or one that says so (the ensemble's pendulum lanes).
+// A model of run-time size (a System, a lattice, a sparse structure) spends its step
+// in loops over n, sparse products and compiled functions, where a call costs nothing
+// measurable; flattened, every inlined copy of those loops costs compile time (the
+// two linear-structure kinds: 193 s of compiler to 41 s). A model may say no
+// (flatten_step_loop = false; compiled systems of fixed n do).
+template <class Model, class = void>
+struct flattens_step_loop : std::bool_constant<Model::dim != Eigen::Dynamic> {};
+template <class Model>
+struct flattens_step_loop<Model, std::void_t<decltype(Model::flatten_step_loop)>>
+    : std::bool_constant<Model::flatten_step_loop> {};
+
 enum class Status { completed, non_finite, cancelled, out_of_memory };
 
 inline const char* status_name(Status s) {
@@ -170,14 +184,11 @@ auto make_stepper(const Composition& composition, const RunSpec& spec) {
 }
 
 // Steps k .. end-1 of y, with nothing saved in between; returns the largest
-// momentum-map drift seen. Flattened: every call in it (sub-flows, the model,
-// Eigen) is inlined, whatever the compiler's budget in a translation unit that
-// instantiates every method for every model (the bindings' does; without it the
-// elastic pendulum's 3s took 43 ns/step instead of 30).
+// momentum-map drift seen. (run_block below decides whether it is flattened.)
 template <bool Mergeable, class Model, class Tab, class Stepper, int Dim, class DF, class Advance, class Drift>
-RAYDAMP_FLATTEN double run_block(const Model& model, const Tab& shared_tab, const Stepper& stepper, Workspace<Dim, DF>& ws,
-                                 State<Dim>& state, long k, long end, bool merge, bool track_momenta,
-                                 const Advance& advance, const Drift& step_drift) {
+inline double run_block_body(const Model& model, const Tab& shared_tab, const Stepper& stepper, Workspace<Dim, DF>& ws,
+                             State<Dim>& state, long k, long end, bool merge, bool track_momenta,
+                             const Advance& advance, const Drift& step_drift) {
   // Stepped on local copies (state and durations) that no opaque call (sin, exp)
   // can be assumed to touch, so the compiler keeps them in registers. A state on the
   // heap (Dynamic size: a lattice of 10^6 sites) stays out of registers anyway, and
@@ -228,6 +239,27 @@ RAYDAMP_FLATTEN double run_block(const Model& model, const Tab& shared_tab, cons
   }
   if constexpr (!in_place) state = y;
   return block_drift;
+}
+
+// The same, flattened: every call in it (sub-flows, the model, Eigen) is inlined,
+// whatever the compiler's budget in a translation unit that instantiates every
+// method for every model (without it the elastic pendulum's 3s took 43 ns/step
+// instead of 30).
+template <bool Mergeable, class Model, class Tab, class Stepper, int Dim, class DF, class Advance, class Drift>
+RAYDAMP_FLATTEN double run_block_flat(const Model& model, const Tab& tab, const Stepper& stepper, Workspace<Dim, DF>& ws,
+                                      State<Dim>& state, long k, long end, bool merge, bool track_momenta,
+                                      const Advance& advance, const Drift& step_drift) {
+  return run_block_body<Mergeable>(model, tab, stepper, ws, state, k, end, merge, track_momenta, advance, step_drift);
+}
+
+template <bool Mergeable, class Model, class Tab, class Stepper, int Dim, class DF, class Advance, class Drift>
+inline double run_block(const Model& model, const Tab& tab, const Stepper& stepper, Workspace<Dim, DF>& ws,
+                        State<Dim>& state, long k, long end, bool merge, bool track_momenta, const Advance& advance,
+                        const Drift& step_drift) {
+  if constexpr (flattens_step_loop<Model>::value)
+    return run_block_flat<Mergeable>(model, tab, stepper, ws, state, k, end, merge, track_momenta, advance, step_drift);
+  else
+    return run_block_body<Mergeable>(model, tab, stepper, ws, state, k, end, merge, track_momenta, advance, step_drift);
 }
 
 template <class Method, class Model, class Tab, int Dim>
@@ -394,8 +426,10 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
 }  // namespace detail
 
 // Integrates spec.n_steps steps of Method from z. The built-in tableaux have 1, 2 or
-// 4 stages; for those the loop is instantiated with the stage count fixed, so
-// Runge-Kutta stages unroll. Any other tableau runs from the run-time table.
+// 4 stages; for those, on a model of fixed size, the loop is instantiated with the
+// stage count fixed, so Runge-Kutta stages unroll and stay in registers. Any other
+// tableau, and every tableau on a model of run-time size (whose stages are vectors
+// on the heap either way), runs from the run-time table: one instantiation, not four.
 // `composition` composes a symmetric Method (builtin_composition("none") is Method
 // itself); a composed run past the amplification guard (amplification.hpp) is
 // refused with std::invalid_argument.
@@ -403,7 +437,7 @@ template <class Method, class Model, int Dim = Model::dim>
 RunResult integrate(const Model& model, const ButcherTableau& tab, const Composition& composition, State<Dim> z,
                     const RunSpec& spec, const Control& control = {}) {
   check_amplification<Method>(model, z.q, tab, composition, spec.h);
-  if constexpr (uses_tableau<Method>()) {
+  if constexpr (uses_tableau<Method>() && Dim != Eigen::Dynamic) {
     switch (tab.stages()) {
       case 1: return detail::run_steps<Method>(model, FixedTableau<1>(tab), composition, std::move(z), spec, control);
       case 2: return detail::run_steps<Method>(model, FixedTableau<2>(tab), composition, std::move(z), spec, control);

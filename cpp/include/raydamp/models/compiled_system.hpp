@@ -38,6 +38,11 @@ template <class Mass, class Damping, int Dim = Eigen::Dynamic>
 struct CompiledSystem {
   static constexpr int dim = Dim;
   static constexpr int n_momenta = kDynamicMomenta;
+  // Not flattened even at a fixed n (integrate.hpp, flattens_step_loop): a step crosses
+  // the compiled functions' opaque calls either way, and flattening measured no gain
+  // (benchmarks/bench_system.py, elastic pendulum: 3s 36 ns/step both ways, 2s 31 -> 30)
+  // for three times the compile time of each kind (dashpots: 130 s -> 42 s).
+  static constexpr bool flatten_step_loop = false;
   using Vec = Vector<dim>;
 
   double eps;

@@ -29,6 +29,9 @@ namespace raydamp {
 
 struct PendulumLanes {
   static constexpr int dim = Eigen::Dynamic;
+  // A lane's step is a few multiplications and a sine: flattened like a fixed-size
+  // model's (integrate.hpp, flattens_step_loop).
+  static constexpr bool flatten_step_loop = true;
   static constexpr int n_momenta = 0;
   using Vec = Vector<dim>;
 
