@@ -35,7 +35,7 @@ namespace raydamp {
 // A model of run-time size (a System, a lattice, a sparse structure) spends its step
 // in loops over n, sparse products and compiled functions, where a call costs nothing
 // measurable; flattened, every inlined copy of those loops costs compile time (the
-// two linear-structure kinds: 193 s of compiler to 41 s). A model may say no
+// two linear-structure kinds: 193 s of compiler to 43 s). A model may say no
 // (flatten_step_loop = false; compiled systems of fixed n do).
 template <class Model, class = void>
 struct flattens_step_loop : std::bool_constant<Model::dim != Eigen::Dynamic> {};
