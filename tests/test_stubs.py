@@ -35,7 +35,7 @@ def test_committed_stub_is_the_modules(tmp_path):
     assert difference == "", "python/raydamp/_core.pyi is out of date; run `make stubs`:\n" + difference
 
 
-def test_a_binding_without_its_stub_shows_in_the_difference(tmp_path):
+def test_a_binding_without_its_stub_shows_in_the_difference():
     # The committed stub as it would be had a module function been bound without `make stubs`.
     committed = COMMITTED.read_text()
     assert "def resolve_composition(" in committed
