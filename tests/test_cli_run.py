@@ -76,7 +76,7 @@ def test_blow_up_exits_non_zero_naming_the_step_and_keeps_the_points(tmp_path):
 @pytest.mark.parametrize(("content", "message"), [
     ("{not json", "not JSON"),
     (json.dumps({"model": "damped_pendulum", "method": "3s", "step_size": -1, "n_steps": 10,
-                 "initial_state": {"q": [1.0], "p": [0.0]}}), "h must be > 0"),
+                 "initial_state": {"q": [1.0], "p": [0.0]}}), "step_size: Input should be greater than 0"),
     (json.dumps({"system": {"coordinates": ["x"], "potential": "__import__('os')"}, "method": "3s",
                  "step_size": 0.1, "n_steps": 10, "initial_state": {"q": [1.0], "p": [0.0]}}), "system.potential: "),
 ])

@@ -14,7 +14,7 @@ def main(argv: list[str] | None = None) -> int:
     rep.add_argument("--quick", action="store_true", help="reduced time spans (for CI)")
     rep.add_argument("--no-progress", action="store_true", help="no progress bar")
     run = commands.add_parser("run", help="run a job file (the service's job JSON); print a summary")
-    run.add_argument("spec", help="a JSON file: model or system, method, step_size, t_end or n_steps, "
+    run.add_argument("spec", help="a JSON file: model or system, method, h, t_end or n_steps, "
                                   "initial_state, save_every")
     run.add_argument("--out", help="write the solution: .nc (NetCDF), .npz or .csv")
     run.add_argument("--plot", help="draw the energy (and H - H0 + W when recorded) to this PNG")

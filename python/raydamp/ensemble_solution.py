@@ -86,7 +86,7 @@ class EnsembleSolution:
     def provenance(self) -> dict[str, Any] | None:
         if self.origin is None or isinstance(self.origin, dict):
             return None if self.origin is None else copy.deepcopy(self.origin)
-        from .job import job_spec
+        from .jobs import job_spec
 
         system, options = self.origin
         options = dict(options)

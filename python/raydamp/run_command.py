@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 
 from .integrate import integrate
-from .job import job_arguments
+from .jobs import job_arguments
 from .results import FORMATS
 
 __all__ = ["run_file", "read_spec"]

@@ -69,7 +69,7 @@ class Solution:
     def provenance(self) -> dict[str, Any] | None:
         if self.origin is None or isinstance(self.origin, dict):
             return None if self.origin is None else dict(self.origin)
-        from .job import job_spec
+        from .jobs import job_spec
 
         model, q0, p0, options = self.origin
         return job_spec(model, q0, p0, **options)
@@ -153,7 +153,8 @@ class Solution:
             "method": self.method,
             "tableau": self.tableau,
             "composition": self.composition,
-            "step_size": self.h,
+            "h": self.h,
+            "step_size": self.h,  # h's former name, kept for one release
             "steps": self.steps,
             "failed_step": self.failed_step,
             "t_final": float(self.t[-1]),

@@ -20,7 +20,7 @@ from ._validation import integer, real, vector
 from .ensemble import integrate_ensemble, member_parameters
 from .ensemble_solution import STATUSES
 from .integrate import _catalogue, steps_for
-from .job import JOB_KEYS, describe_model, job_arguments, model_from_spec
+from .jobs import STEP_SIZE_ALIAS, JobSpec, describe_model, job_arguments, model_from_spec
 from .models import MODELS, Model
 from .system import System
 
@@ -39,17 +39,18 @@ def _base(spec: Mapping[str, Any]) -> tuple[Model, np.ndarray, np.ndarray, dict[
     if not isinstance(spec, Mapping):
         raise ValueError("spec must be a dict of integrate's arguments (model, q0, p0, method, h, t_end ...) "
                          "or a job JSON object")
-    if "initial_state" in spec or "step_size" in spec:  # the service's job form
-        model, q0, p0, options = job_arguments(spec)
-        if options.pop("work", False):
+    if "initial_state" in spec:  # the job form (raydamp.jobs)
+        if spec.get("work"):
             raise ValueError("work: a sweep does not record the damping work")
+        model, q0, p0, options = job_arguments(spec)
+        del options["work"]
         if options.get("save_dofs") is not None:
             raise ValueError("save_dofs: a sweep saves every coordinate; leave save_dofs out")
     else:
         unknown = [k for k in spec if k not in SPEC_KEYS]
         if unknown:
             raise ValueError(f"spec.{unknown[0]}: unknown key (known: {', '.join(SPEC_KEYS)}; or give the job "
-                             f"JSON form: {', '.join(JOB_KEYS)})")
+                             f"JSON form: {', '.join(JobSpec.model_fields)})")
         model = spec.get("system", spec.get("model"))
         if isinstance(model, str):
             model = model_from_spec({"model": model, "parameters": spec.get("parameters")})
@@ -154,7 +155,12 @@ def _plan(model: Model, options: dict[str, Any], grid: Mapping[str, Any]):
         raise ValueError("grid must be a non-empty dict of name: values")
     known = member_parameters(model)
     axes = {}
+    h_label = "h"
     for name, values in grid.items():
+        if name == STEP_SIZE_ALIAS:  # h's former name, accepted for one release; errors say what the client wrote
+            if "h" in grid:
+                raise ValueError(f"grid.{name}: give the step size's axis once, as h")
+            h_label, name = name, "h"
         state = _STATE_COMPONENT.match(name) if isinstance(name, str) else None
         if state and int(state.group(2)) >= model.dim:
             raise ValueError(f"grid.{name}: the model has {model.dim} coordinates")
@@ -163,7 +169,7 @@ def _plan(model: Model, options: dict[str, Any], grid: Mapping[str, Any]):
                              f"argument ({', '.join(RUN_ARGUMENTS)}) or an initial-state component (q0[i], p0[i])")
         if name == "g":
             raise ValueError("grid.g: sweep the components of g through a model per value instead")
-        axes[name] = _axis(name, values)
+        axes[name] = _axis(h_label if name == "h" else name, values)
     names = list(axes)
     index = np.stack(np.meshgrid(*[np.arange(a.size) for a in axes.values()], indexing="ij"), axis=-1)
     index = index.reshape(-1, len(names))
@@ -185,7 +191,7 @@ def _plan(model: Model, options: dict[str, Any], grid: Mapping[str, Any]):
             run[name] = (value or None) if name in ("tableau", "composition") else value
         if run["method"] not in names_catalogue:
             raise ValueError(f"method: unknown method {run['method']!r} (known: {', '.join(names_catalogue)})")
-        run["h"] = real("grid.h" if "h" in run_names else "h", float(run["h"]), positive=True)
+        run["h"] = real(f"grid.{h_label}" if "h" in run_names else "h", float(run["h"]), positive=True)
         groups.append((run, start, start + counts[key]))
         start += counts[key]
     return columns, groups
@@ -335,7 +341,7 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
     spec : integrate's arguments as a dict: ``model`` (a built-in model's name with
         ``parameters``, a model object or a System) or ``system``, ``q0``, ``p0``, ``method``,
         ``h``, ``t_end`` or ``n_steps``, ``save_every``, ``tableau``, ``composition``; or the
-        service's job JSON (``model``/``system``, ``initial_state``, ``step_size`` ...).
+        service's job JSON (``model``/``system``, ``initial_state``, ``h`` ...).
     grid : {name: values}. A name is a model parameter (``eps``, ``k``, ... or a System's
         parameter: the model is rebuilt per member), a run argument (``h``, ``method``,
         ``composition``, ``tableau``) or an initial-state component (``"q0[1]"``, ``"p0[0]"``).
@@ -394,7 +400,7 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
         coords["t"] = (("member", "time"), t)
     for name, values in columns.items():
         coords[name] = (("member",), values.astype(str) if values.dtype == object else values)
-    provenance = {**model_spec, **{k: v for k, v in options.items() if k != "h"}, "step_size": options.get("h"),
+    provenance = {**model_spec, **options,
                   "coordinates": list(model.coordinates), "momentum_names": list(model.momentum_names),
                   "grid": plan.grid, "chunk_size": chunk_size}
     from . import __version__

@@ -55,7 +55,7 @@ def stored_solution(record: JobRecord, arrays: TrajectoryArrays) -> raydamp.Solu
         status=summary.get("status", record.status), steps=int(summary.get("steps", 0)),
         failed_step=record.failed_step, message=summary.get("message") or record.error or "",
         method=record.spec["method"], tableau=summary.get("tableau"), composition=summary.get("composition"),
-        h=float(record.spec["step_size"]),
+        h=float(record.spec.get("h", record.spec.get("step_size"))),  # step_size: stored before 0.2
         max_momentum_drift=float(drift) if drift is not None else 0.0,
         wall_time=float(summary.get("wall_time", 0.0)), origin=provenance)
 

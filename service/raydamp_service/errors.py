@@ -16,8 +16,7 @@ from fastapi.encoders import jsonable_encoder
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 
-from .schemas import UNION_TAGS
-from .sweep_schemas import GRID_TAGS
+from raydamp.jobs import client_path
 
 __all__ = ["validation_error_handler"]
 
@@ -46,13 +45,8 @@ def _json_safe(value: Any) -> Any:
 
 
 def _path(loc: list[Any]) -> list[Any]:
-    """The JSON path the client wrote: without the tags pydantic adds for the form of a field (at any
-    depth: system's kind, then a structure's matrix form; a sweep's axis form after its name)."""
-    if not loc or loc[0] != "body":
-        return loc
-    return [part for i, part in enumerate(loc)
-            if not (i >= 2 and isinstance(loc[i - 1], str) and part in UNION_TAGS.get(loc[i - 1], ()))
-            and not (i == 3 and loc[1] == "grid" and part in GRID_TAGS)]
+    """The JSON path the client wrote (raydamp.jobs.client_path: without the tags of a field's form)."""
+    return ["body", *client_path(loc[1:])] if loc and loc[0] == "body" else loc
 
 
 def _error(item: dict[str, Any]) -> dict[str, Any]:

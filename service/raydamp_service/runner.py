@@ -19,7 +19,7 @@ import raydamp
 
 from .config import Settings
 from .files import file_resolver
-from .problems import SpecError, build_call
+from .problems import JobError, build_call
 from .schemas import JobSpec
 from .store import JobStore, TrajectoryArrays
 
@@ -159,7 +159,7 @@ class Runner:
 
         try:
             solution = build_call(spec, files=file_resolver(self._store)).run(progress=on_progress, cancel=run.token)
-        except SpecError as error:  # passed at submission; an uploaded file it names has gone since
+        except JobError as error:  # passed at submission; an uploaded file it names has gone since
             self._store.finish(job_id, "failed", error=error.message)
             return
         except ValueError as error:  # the spec passed the checks at submission; report, do not crash

@@ -23,8 +23,8 @@ from raydamp.ensemble_solution import STATUSES
 from raydamp.results import save_sweep
 
 from .config import Settings
-from .sweep_problems import sweep_arguments
-from .sweep_schemas import SweepSpec
+from .problems import sweep_arguments
+from .schemas import SweepSpec
 from .sweep_store import SweepStore
 
 __all__ = ["SweepRunner"]

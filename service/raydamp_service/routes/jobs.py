@@ -15,7 +15,7 @@ from starlette.background import BackgroundTask
 
 from ..deps import RunnerDep, SettingsDep, StoreDep
 from ..files import file_resolver
-from ..problems import SpecError, check_spec
+from ..problems import JobError, check_spec
 from ..runner import Runner
 from ..schemas import JobCreated, JobList, JobListItem, JobSpec, JobStatus, JobView, Trajectory
 from ..downloads import file_bytes, plot_png, stored_solution
@@ -81,7 +81,7 @@ def submit_job(spec: JobSpec, request: Request, response: Response, store: Store
     """Queue an integration; poll the Location for its status."""
     try:
         check_spec(spec, settings, files=file_resolver(store))
-    except SpecError as error:
+    except JobError as error:
         # The same shape as pydantic's own 422s, so a client reads one format.
         raise RequestValidationError([{"type": "value_error", "loc": ("body", *error.loc), "msg": error.message,
                                        "input": _value_at(spec.model_dump(), error.loc)}]) from None

@@ -10,13 +10,11 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import StreamingResponse
 
 from ..deps import SettingsDep
-from ..problems import SpecError
+from ..problems import JobError, check_sweep_spec
+from ..schemas import JobStatus, SweepCreated, SweepList, SweepListItem, SweepSpec, SweepView
 from ..store import FINAL_STATUSES
-from ..sweep_problems import check_sweep_spec
 from ..sweep_runner import SweepRunner
-from ..sweep_schemas import SweepCreated, SweepList, SweepListItem, SweepSpec, SweepView
 from ..sweep_store import SweepRecord, SweepStore
-from ..schemas import JobStatus
 
 router = APIRouter(prefix="/v1/sweeps", tags=["sweeps"])
 
@@ -72,7 +70,7 @@ def submit_sweep(spec: SweepSpec, request: Request, response: Response, settings
                                         "sweep extra (pip install 'raydamp[sweep]')") from None
     try:
         plan = check_sweep_spec(spec, settings)
-    except SpecError as error:
+    except JobError as error:
         raise RequestValidationError([{"type": "value_error", "loc": ("body", *error.loc), "msg": error.message,
                                        "input": None}]) from None
     record = _sweeps(request).create(spec.model_dump(mode="json"), plan.members, settings.max_queued_sweeps)

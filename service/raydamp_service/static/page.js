@@ -332,7 +332,7 @@ function label(job) {
   const system = spec.model || (spec.system && (spec.system.name || spec.system.kind)) || "system";
   const composed = spec.composition ? ` ∘ ${spec.composition}` : "";
   const tableau = spec.tableau ? "/" + (typeof spec.tableau === "string" ? spec.tableau : "own tableau") : "";
-  return `${system} ${spec.method}${tableau}${composed} h=${spec.step_size}`;
+  return `${system} ${spec.method}${tableau}${composed} h=${spec.h ?? spec.step_size}`;
 }
 
 const column = (rows, k) => rows.map((row) => row[k]);

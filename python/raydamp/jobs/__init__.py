@@ -1,0 +1,22 @@
+"""The job: one JSON form of a run for the service, ``raydamp run``, sweeps and every Solution's
+provenance. Pydantic models validate it (errors name the JSON path), and ``build_job`` turns it
+into raydamp.integrate's arguments.
+
+    {"model": "elastic_pendulum", "parameters": {"eps": 0.1}}   or   {"system": System.to_dict()}
+    + {"method": "3s", "tableau": null, "composition": null, "h": 0.1, "t_end": 100 | "n_steps": 1000,
+       "save_every": 1, "initial_state": {"q": [...], "p": [...]}, "work": true}
+"""
+
+from .build import PROVENANCE_KEYS, JobCall, build_job, error_at, job_arguments, parse_job, validation_error
+from .errors import JobError
+from .forms import InitialState, ModeState, RestState, TableauInput
+from .provenance import describe_model, job_spec, model_from_spec
+from .spec import STEP_SIZE_ALIAS, UNION_TAGS, JobSpec, ModelSpec, client_path
+from .sweep_spec import GridRange, SweepSpec
+from .system_forms import ChainInput, CooForm, DiagonalForm, FileForm, LinearStructureInput, SystemInput
+
+__all__ = ["JobSpec", "ModelSpec", "SweepSpec", "GridRange", "JobError", "JobCall", "parse_job", "build_job",
+           "error_at", "job_arguments", "validation_error", "client_path", "describe_model", "model_from_spec",
+           "job_spec", "PROVENANCE_KEYS", "STEP_SIZE_ALIAS", "UNION_TAGS", "InitialState", "ModeState", "RestState",
+           "TableauInput", "SystemInput", "ChainInput", "LinearStructureInput", "CooForm", "DiagonalForm",
+           "FileForm"]

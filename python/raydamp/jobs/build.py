@@ -1,0 +1,148 @@
+"""From a job's JSON to a raydamp call: parsing (pydantic, errors named by JSON path) and building
+(the model, the initial state and integrate's keyword arguments).
+
+The library owns the rules (which methods take which tableau, each model's parameters and
+dimension); a service adds only its own limits. Names are the same in JSON and Python (h, method,
+tableau, ...), so an error from raydamp.integrate names its JSON field by its first word; the
+initial state is the one structured field (integrate's q0 and p0 are initial_state.q and .p).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from pydantic import ValidationError
+
+from .errors import JobError, head_path
+from .forms import ModeState, RestState
+from .spec import JobSpec, client_path
+from .system_forms import FileResolver
+
+__all__ = ["JobCall", "parse_job", "build_job", "job_arguments", "error_at", "validation_error"]
+
+# What a Solution's provenance adds to the job (a saved result's provenance runs as a job).
+PROVENANCE_KEYS = ("raydamp_version", "job_id", "coordinates", "momentum_names")
+_STATE_ARGUMENTS = {"q0": ("initial_state", "q"), "p0": ("initial_state", "p")}
+
+
+@dataclass(frozen=True)
+class JobCall:
+    """raydamp.integrate(model, q0, p0, **options): what a job runs."""
+
+    model: Any
+    q0: Any
+    p0: Any
+    options: dict[str, Any] = field(default_factory=dict)
+
+
+def _path_text(loc: tuple) -> str:
+    text = ""
+    for part in loc:
+        text += f"[{part}]" if isinstance(part, int) else (f".{part}" if text else str(part))
+    return text
+
+
+def validation_error(error: ValidationError) -> JobError:
+    """pydantic's first error as a JobError: its loc the path the client wrote, its message in our words."""
+    # The deepest error: of a union's tries (tableau: a name or a table), the one about the value's own form.
+    item = max(error.errors(), key=lambda e: len(client_path(e["loc"])))
+    loc = client_path(item["loc"])
+    message = item["msg"].removeprefix("Value error, ")
+    if item["type"] == "missing":
+        message = "missing"
+    elif item["type"] == "extra_forbidden":
+        message = "unknown key"
+    return JobError(loc, f"{_path_text(loc) or 'job'}: {message}")
+
+
+def parse_job(data: Any) -> JobSpec:
+    """The validated job; raises JobError (a ValueError) naming the JSON path of the first bad field.
+    A Solution's provenance parses too: its own keys (raydamp_version, coordinates ...) are set aside."""
+    if isinstance(data, Mapping):
+        data = {k: v for k, v in data.items() if k not in PROVENANCE_KEYS}
+    try:
+        return JobSpec.model_validate(_plain(data))
+    except ValidationError as error:
+        raise validation_error(error) from None
+
+
+def _plain(value: Any) -> Any:
+    """JSON's types (lists, floats, ints) for what Python callers pass: tuples, NumPy arrays and scalars."""
+    if isinstance(value, Mapping):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def _initial_state(spec: JobSpec, model) -> tuple[Any, Any]:
+    state = spec.initial_state
+    if isinstance(state, RestState):
+        return np.zeros(model.dim), np.zeros(model.dim)
+    if isinstance(state, ModeState):
+        if not hasattr(model, "normal_mode"):
+            raise JobError(("initial_state",), "initial_state: {mode, amplitude} starts a chain; give q and p")
+        try:
+            return model.normal_mode(state.mode, state.amplitude)
+        except ValueError as error:
+            raise JobError(("initial_state", "mode"), f"initial_state.{error}") from None
+    for name in ("q", "p"):
+        values = getattr(state, name)
+        if len(values) != model.dim:
+            raise JobError(("initial_state", name), f"initial_state.{name} has length {len(values)}, but the model "
+                           f"has {model.dim} coordinates ({', '.join(model.coordinates)})")
+    return list(state.q), list(state.p)
+
+
+def build_job(spec: JobSpec, files: FileResolver | None = None) -> JobCall:
+    """The model and arguments of raydamp.integrate; raises JobError for a bad model, system, parameter
+    or span. files(id) opens an uploaded matrix file; without it a {"file": id} matrix is refused."""
+    if (spec.t_end is None) == (spec.n_steps is None):
+        both = spec.t_end is not None
+        raise JobError(("n_steps",) if both else ("t_end",),
+                       ("n_steps" if both else "t_end") + ": give exactly one of t_end and n_steps"
+                       + (", not both" if both else ""))
+    model = spec.build_model(files)
+    options: dict[str, Any] = {"method": spec.method, "h": spec.h, "save_every": spec.save_every, "work": spec.work}
+    if spec.tableau is not None:
+        options["tableau"] = spec.tableau if isinstance(spec.tableau, str) else spec.tableau.model_dump(
+            exclude_none=True)
+    for key in ("composition", "n_steps", "t_end"):
+        if getattr(spec, key) is not None:
+            options[key] = getattr(spec, key)
+    if spec.save_dofs is not None:
+        options["save_dofs"] = list(spec.save_dofs)
+    q0, p0 = _initial_state(spec, model)
+    return JobCall(model, q0, p0, options)
+
+
+def error_at(spec: JobSpec, error: ValueError) -> JobError:
+    """A ValueError of raydamp.integrate for this job's call, at the JSON path of the field it is about."""
+    from ..system import SpecError
+
+    if isinstance(error, JobError):
+        return error
+    if isinstance(error, SpecError):  # a system's function is not finite at q0
+        return JobError(("system", *error.path), f"system.{error}")
+    message = str(error)
+    loc = head_path(message) or ("",)
+    head, rest = loc[0], message[len(str(loc[0])):]
+    if head in _STATE_ARGUMENTS:
+        return JobError((*_STATE_ARGUMENTS[head], *loc[1:]), ".".join(_STATE_ARGUMENTS[head]) + rest)
+    if head == "h":
+        return JobError((spec.h_key,), spec.h_key + rest)
+    return JobError(loc if head in JobSpec.model_fields else (), message)
+
+
+def job_arguments(data: Any, files: FileResolver | None = None) -> tuple[Any, Any, Any, dict[str, Any]]:
+    """(model, q0, p0, keyword arguments of raydamp.integrate) for a job's JSON (or a Solution's
+    provenance); raises a ValueError whose message starts with the JSON path of the bad field."""
+    call = build_job(parse_job(data), files)
+    return call.model, call.q0, call.p0, call.options

@@ -1,0 +1,76 @@
+"""The small forms a job is made of: numbers, vectors, initial states and a user's tableau.
+
+Inputs are strict and closed: extra="forbid" names a misspelt field rather than ignoring it, and
+strict mode refuses "0.2" as a number and true as 1. Bounds sit in the schema so that an oversized
+list fails at parsing, before any work.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+__all__ = ["Input", "FiniteFloat", "Vector", "InitialState", "ModeState", "RestState", "TableauInput",
+           "MAX_VECTOR", "MAX_CHAIN_SITES", "MAX_EXPRESSION", "Expression", "Name"]
+
+# JSON parsing accepts NaN and Infinity (and 1e999 overflows to inf); no run may start from them.
+FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
+# The longest vector any job may carry (a service's max_dim is at most this, and usually lower). In the
+# schema, so that a list of 200,000 bad items is one error found at once, not 200,000 found one by one.
+MAX_VECTOR = 10_000
+MAX_CHAIN_SITES = 10**7  # a chain's state is built from its description, not sent
+MAX_EXPRESSION = 10_000
+Vector = Annotated[list[FiniteFloat], Field(max_length=MAX_VECTOR)]
+Expression = Annotated[str, Field(min_length=1, max_length=MAX_EXPRESSION)]
+Name = Annotated[str, Field(min_length=1, max_length=100, pattern=r"^[A-Za-z_][A-Za-z0-9_]*$")]
+
+
+class Input(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=True)
+
+
+class InitialState(Input):
+    q: list[FiniteFloat] = Field(min_length=1, max_length=MAX_VECTOR,
+                                 description="initial positions, length = the model's dim")
+    p: list[FiniteFloat] = Field(min_length=1, max_length=MAX_VECTOR,
+                                 description="initial momenta, length = the model's dim")
+
+
+class ModeState(Input):
+    """A chain started at rest with all its energy in one normal mode (raydamp.Chain.normal_mode):
+    a job for a million sites need not carry two million numbers."""
+
+    mode: int = Field(ge=0, description="the mode number (fixed ends: 1..n)")
+    amplitude: FiniteFloat = 1.0
+
+
+class RestState(Input):
+    """Start at rest at q = 0, p = 0: a structure's response to its load f, without sending 2 n zeros
+    (so a structure may be larger than a service's max_dim)."""
+
+    rest: Literal[True]
+
+    @model_validator(mode="before")
+    @classmethod
+    def _exactly(cls, data: Any) -> Any:
+        if data != {"rest": True} and not isinstance(data, RestState):
+            raise ValueError('a start at rest is exactly {"rest": true}')
+        return data
+
+
+_MAX_STAGES = 16  # raydamp.user_tableau.MAX_STAGES
+_Coefficients = Annotated[list[FiniteFloat], Field(min_length=1, max_length=_MAX_STAGES)]
+
+
+class TableauInput(Input):
+    """Your own Butcher tableau: each row of A sums to c; the order is computed from the order
+    conditions (up to 4) and a claimed order must hold. rks takes diagonally implicit tableaux,
+    rksb and rk explicit ones."""
+
+    A: list[_Coefficients] = Field(min_length=1, max_length=_MAX_STAGES, description="s rows of s coefficients")
+    b: _Coefficients = Field(description="the s weights")
+    c: _Coefficients = Field(description="the s nodes")
+    order: int | None = Field(None, ge=1, description="the order you claim; checked against the order conditions")
+
+

@@ -1,0 +1,153 @@
+"""The job: one definition of the JSON that the service takes, ``raydamp run`` reads and every
+Solution's provenance holds. A model (by name, with parameters) or a system, a method, a step
+size h, a span and an initial state.
+
+The step size is ``h`` here as in Python and the CLI. ``step_size``, its name before 0.2, is still
+accepted for one release: an error then names ``step_size``, the key the client wrote.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from pydantic import AfterValidator, AliasChoices, ConfigDict, Discriminator, Field, PrivateAttr, Tag, WithJsonSchema, \
+    model_validator
+
+from ..methods import compositions, methods
+from ..models import MODELS, make_model
+from .errors import JobError
+from .forms import FiniteFloat, InitialState, Input, MAX_VECTOR, ModeState, RestState, TableauInput, Vector
+from .system_forms import MATRIX_TAGS, SYSTEM_TAGS, AnySystemInput, FileResolver
+
+__all__ = ["ModelSpec", "JobSpec", "StateInput", "UNION_TAGS", "STEP_SIZE_ALIAS", "client_path"]
+
+STEP_SIZE_ALIAS = "step_size"  # accepted for h for one release (0.2), documented in the README
+
+
+def _one_of(what: str, names: list[str]) -> Any:
+    """A name from one of raydamp's catalogues: an enum in the JSON Schema (a client or a fuzzer sees
+    every valid value), and an error that lists them in our words."""
+    names = list(dict.fromkeys(names))
+
+    def check(value: str) -> str:
+        if value not in names:
+            raise ValueError(f"unknown {what} {value!r} (known: {', '.join(names)})")
+        return value
+
+    return Annotated[str, AfterValidator(check), WithJsonSchema({"type": "string", "enum": names})]
+
+
+ModelName = _one_of("model", list(MODELS))
+MethodName = _one_of("method", [m.name for m in methods()])
+TableauName = _one_of("tableau", [m.tableau for m in methods() if m.tableau is not None])
+CompositionName = _one_of("composition", [c.name for c in compositions()])
+ParameterValue = FiniteFloat | Vector
+
+
+# Forms a field may take, told apart by their content rather than tried in turn: a bad input then gets
+# the errors of the form it meant, not those of every form. Pydantic puts the form's tag into an
+# error's loc after the field; client_path drops it, so a loc is the path the client wrote.
+def _state_form(value: object) -> str:
+    if isinstance(value, dict):
+        return "mode" if "mode" in value else "rest" if "rest" in value else "state"
+    return "mode" if isinstance(value, ModeState) else "rest" if isinstance(value, RestState) else "state"
+
+
+StateInput = Annotated[Annotated[InitialState, Tag("state")] | Annotated[ModeState, Tag("mode")]
+                       | Annotated[RestState, Tag("rest")], Discriminator(_state_form)]
+UNION_TAGS = {"initial_state": frozenset({"state", "mode", "rest"}), "system": SYSTEM_TAGS, "M": MATRIX_TAGS,
+              "K": MATRIX_TAGS}
+GRID_TAGS = frozenset({"range", "values"})  # a sweep's axis forms (sweep_spec.py)
+
+
+def client_path(loc: tuple | list) -> tuple:
+    """A pydantic loc as the JSON path the client wrote: without the tags of a field's form (at any depth:
+    a system's kind, then a structure's matrix form; a sweep's axis form after the axis's name)."""
+    return tuple(part for i, part in enumerate(loc)
+                 if not (i >= 1 and isinstance(loc[i - 1], str) and part in UNION_TAGS.get(loc[i - 1], ()))
+                 and not (i >= 2 and loc[i - 2] == "grid" and part in GRID_TAGS)
+                 # tableau is a name or a table, tried in turn (an enum of names in the JSON Schema): pydantic
+                 # labels each try's errors with the type tried
+                 and not (i >= 1 and loc[i - 1] == "tableau" and isinstance(part, str)
+                          and part not in TableauInput.model_fields))
+
+
+def _exactly_one(first: str, second: str, first_type: str, second_type: str) -> dict:
+    """JSON Schema for "exactly one of first and second is given (not null)"."""
+    return {"oneOf": [{"required": [first], "properties": {first: {"type": first_type}, second: {"type": "null"}}},
+                      {"required": [second], "properties": {second: {"type": second_type}, first: {"type": "null"}}}]}
+
+
+class ModelSpec(Input):
+    """The system a job integrates: a built-in model by name with its parameters, or a system (exactly one)."""
+
+    model: ModelName | None = Field(None, description="a built-in model's name (GET /v1/models, raydamp models)")
+    system: AnySystemInput | None = Field(
+        None, description="a user-defined system, a lattice ({\"kind\": \"chain\", ...}) or a linear structure "
+                          "({\"kind\": \"linear_structure\", ...}), in place of model/parameters")
+    parameters: dict[str, ParameterValue] = Field(
+        default_factory=dict, max_length=64, description="model parameters by name; the rest take their defaults")
+
+    def build_model(self, files: FileResolver | None = None):
+        """The model; raises JobError naming the field (a parameter, or the path inside "system")."""
+        if (self.model is None) == (self.system is None):
+            # loc: the field to remove (a system beside a model) or to add (a model's name)
+            raise JobError(("model",) if self.model is None else ("system",), "model: give exactly one of model (a built-in model's name, with parameters) "
+                                       "and system (a user-defined system)")
+        if self.system is not None:
+            if self.parameters:
+                raise JobError(("parameters",), "parameters: a system carries its parameters inside "
+                                                "system.parameters")
+            return self.system.build(files)
+        try:
+            return make_model(self.model, self.parameters)
+        except ValueError as error:  # "parameters.k: ... has no parameter" or a model's own "eps must be >= 0"
+            message = str(error)
+            head = message.replace(":", " ").split(" ", 1)[0]
+            if head.startswith("parameters."):
+                raise JobError(("parameters", head.split(".", 1)[1]), message) from None
+            if head in self.parameters:
+                raise JobError(("parameters", head), f"parameters.{message}") from None
+            raise JobError(("parameters",), f"parameters: {message}") from None
+
+
+class JobSpec(ModelSpec):
+    """One integration problem: a model (or a system), a method, a step size h and a span.
+    Exactly one of model and system; exactly one of t_end, n_steps."""
+
+    model_config = ConfigDict(json_schema_extra={"allOf": [_exactly_one("model", "system", "string", "object"),
+                                                           _exactly_one("t_end", "n_steps", "number", "integer")]})
+
+    method: MethodName = Field(description="a name from raydamp.methods() (GET /v1/methods)")
+    tableau: TableauName | TableauInput | None = Field(
+        None, description="Runge-Kutta tableau for rks, rksb and rk: a name, or your own {A, b, c}")
+    composition: CompositionName | None = Field(None, description="raises a symmetric method's order: a name from "
+                                                                 "raydamp.compositions() (GET /v1/methods lists the "
+                                                                 "symmetric methods)")
+    h: FiniteFloat = Field(gt=0, validation_alias=AliasChoices(
+        "h", STEP_SIZE_ALIAS), description="the step size; h x the number of steps must be finite. The former "
+                                           "name step_size is accepted for one release")
+    t_end: FiniteFloat | None = Field(None, gt=0, description="the end time; give this or n_steps, not both")
+    n_steps: int | None = Field(None, ge=1, description="the number of steps; give this or t_end, not both")
+    initial_state: StateInput
+    save_every: int = Field(1, ge=1, description="save every this many steps; the final state is always saved")
+    work: bool = Field(True, description="record the damping work W(t), so that H(t) - H(0) + W(t) (the energy "
+                                         "balance) can be plotted; false skips it and lets 3s merge the damping "
+                                         "sub-flows of consecutive steps (a little faster, equal to rounding)")
+    save_dofs: list[Annotated[int, Field(ge=0)]] | None = Field(
+        None, max_length=MAX_VECTOR, description="save q and p of these coordinates only (energy, W and momenta "
+                                                 "still from the whole state); null saves all")
+    _h_key: str = PrivateAttr("h")
+
+    @model_validator(mode="wrap")
+    @classmethod
+    def _remember_h_key(cls, data: Any, handler: Any) -> JobSpec:
+        spec = handler(data)
+        if isinstance(data, dict) and STEP_SIZE_ALIAS in data:
+            spec._h_key = STEP_SIZE_ALIAS
+        return spec
+
+    @property
+    def h_key(self) -> str:
+        """The key the client gave the step size by: "h", or "step_size" (the former name)."""
+        return self._h_key

@@ -1,0 +1,78 @@
+"""A sweep as JSON: a job (the grid's base point), a grid of axes and a chunk size. The grid's rules
+(which names an axis may have, what a range means) are raydamp.sweep's; the schema bounds sizes so
+that an oversized grid fails at parsing."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal
+
+from pydantic import Discriminator, Field, Tag, model_validator
+
+from .errors import JobError
+from .forms import FiniteFloat, Input
+from .spec import JobSpec
+
+__all__ = ["SweepSpec", "GridRange", "MAX_AXIS", "MAX_AXES"]
+
+MAX_AXIS = 10_000  # values of one axis
+MAX_AXES = 8
+
+
+class GridRange(Input):
+    """num values from start to stop, both included: evenly spaced, or geometric with scale "log"."""
+
+    start: FiniteFloat
+    stop: FiniteFloat
+    num: int = Field(ge=1, le=MAX_AXIS)
+    scale: Literal["linear", "log"] = "linear"
+
+
+GridValues = Annotated[list[FiniteFloat | Annotated[str, Field(max_length=100)]],
+                       Field(min_length=1, max_length=MAX_AXIS)]
+
+
+def _axis_form(value: object) -> str:
+    return "range" if isinstance(value, (dict, GridRange)) else "values"
+
+
+GridAxis = Annotated[Annotated[GridRange, Tag("range")] | Annotated[GridValues, Tag("values")],
+                     Discriminator(_axis_form)]
+AxisName = Annotated[str, Field(min_length=1, max_length=64)]
+
+
+class SweepSpec(Input):
+    """Every combination of the grid's axes, each run as the job with that point's values."""
+
+    job: JobSpec = Field(description="the grid's base point: a job spec as for POST /v1/jobs (sweeps do not "
+                                     "record W: leave work out or false; save_dofs is not supported)")
+    grid: dict[AxisName, GridAxis] = Field(
+        min_length=1, max_length=MAX_AXES,
+        description="axis name -> values (a list, or {start, stop, num, scale}). A name is a model or system "
+                    "parameter (eps, k, ...), h (or step_size, its former name), method, composition, tableau, "
+                    "or an initial-state component q0[i] / p0[i]; the first axis varies slowest")
+    chunk_size: int = Field(1000, ge=1, le=100_000, description="members per Dask task (one compiled ensemble "
+                                                               "call each); progress is reported per chunk")
+
+    @model_validator(mode="after")
+    def _no_work_by_default(self) -> SweepSpec:
+        # A sweep does not record W: its job's work is false unless asked for (job_form refuses that).
+        if "work" not in self.job.model_fields_set:
+            self.job.work = False
+        return self
+
+    def grid_arguments(self) -> dict[str, Any]:
+        """The grid as raydamp.sweep takes it: ranges as {start, stop, num, scale}, lists as lists."""
+        return {name: axis.model_dump() if isinstance(axis, GridRange) else list(axis)
+                for name, axis in self.grid.items()}
+
+    def job_form(self) -> dict[str, Any]:
+        """The base point as raydamp.sweep takes a job: without work, which a sweep does not record."""
+        if self.job.work:
+            raise JobError(("job", "work"), "job.work: sweeps do not record the damping work W; leave work out or "
+                                            "set it false")
+        if self.job.save_dofs is not None:
+            raise JobError(("job", "save_dofs"), "job.save_dofs: a sweep saves every coordinate; leave save_dofs out")
+        job = self.job.model_dump(mode="json", exclude_none=True, exclude={"work"})
+        if self.job.system is not None:  # as the client wrote it: the compile cache's key
+            job["system"] = self.job.system.model_dump(mode="json", exclude_unset=True)
+        return job

@@ -1,0 +1,231 @@
+"""The three kinds of user-defined system as JSON: expressions (raydamp.System), a lattice
+(raydamp.Chain) and a linear structure (raydamp.LinearStructure), each the to_dict() form of its
+class. Each form builds its model (``build``): the one place a kind's JSON meets its class, with
+errors naming the path inside "system"."""
+
+from __future__ import annotations
+
+import functools
+import json
+from collections.abc import Callable
+from typing import Annotated, Any, Literal
+
+from pydantic import Discriminator, Field, Tag
+
+from .errors import JobError, path_error
+from .forms import MAX_CHAIN_SITES, MAX_EXPRESSION, MAX_VECTOR, Expression, FiniteFloat, Input, Name
+
+__all__ = ["SystemInput", "ChainInput", "LinearStructureInput", "CooForm", "DiagonalForm", "FileForm",
+           "AnySystemInput", "FileResolver", "MAX_COO_ENTRIES", "MAX_STRUCTURE_DIM", "SYSTEM_TAGS", "MATRIX_TAGS"]
+
+# Bounds of an expression system: raydamp.system.spec's own limits, stated in the schema.
+_MAX_COORDINATES = 256
+_MAX_DENSE = 32
+FileResolver = Callable[[str], Any]
+
+
+class ScalarDamping(Input):
+    scalar: FiniteFloat = Field(ge=0, description="D = c M: every momentum decays at rate eps c")
+
+
+class DiagonalDamping(Input):
+    diagonal: list[FiniteFloat] = Field(min_length=1, max_length=_MAX_DENSE, description="a constant diagonal D")
+
+
+class MatrixDamping(Input):
+    matrix: list[Annotated[list[FiniteFloat], Field(max_length=_MAX_DENSE)]] = Field(
+        min_length=1, max_length=_MAX_DENSE, description="a constant symmetric positive semi-definite D (rows)")
+
+
+class Damper(Input):
+    on: Expression = Field(description="g(q): the dashpot resists its rate of change")
+    c: FiniteFloat = Field(1.0, ge=0, description="the dashpot's coefficient")
+
+
+class DamperDamping(Input):
+    dampers: list[Damper] = Field(min_length=1, max_length=32,
+                                  description="D(q) = sum_i c_i grad g_i grad g_i^T")
+
+
+class SystemInput(Input):
+    """A user-defined system: raydamp.System.to_dict()'s form. H = 1/2 p^T M^{-1} p + V(q) with
+    damping -eps D(q) M^{-1} p; M constant SPD, D(q) symmetric PSD."""
+
+    coordinates: Annotated[list[Name], Field(min_length=1, max_length=_MAX_COORDINATES)] | Annotated[
+            int, Field(ge=1, le=_MAX_COORDINATES)] = Field(
+        description="coordinate names, or their number n (names q0..q{n-1})")
+    potential: Expression = Field(description="V(q): numbers, names, + - * / ^, parentheses, pi, and "
+                                              "sin cos tan asin acos atan atan2 sinh cosh tanh asinh acosh "
+                                              "atanh exp log sqrt cbrt")
+    parameters: dict[Name, FiniteFloat] = Field(default_factory=dict, max_length=256)
+    mass: FiniteFloat | Annotated[list[FiniteFloat], Field(max_length=_MAX_COORDINATES)] | Annotated[
+            list[Annotated[list[FiniteFloat], Field(max_length=_MAX_COORDINATES)]],
+            Field(max_length=_MAX_COORDINATES)] = Field(
+        1.0, description="a number m (M = m I), a diagonal (n numbers) or an n x n SPD matrix")
+    damping: ScalarDamping | DiagonalDamping | MatrixDamping | DamperDamping | None = Field(
+        None, description="null (undamped) or exactly one form")
+    eps: FiniteFloat = Field(0.0, ge=0, description="damping strength")
+    momenta: dict[Name, Expression] = Field(default_factory=dict, max_length=16,
+                                            description="quantities tracked at every step; momenta are p_<coordinate>")
+    name: str | None = Field(None, max_length=200)
+
+
+
+    def build(self, files: FileResolver | None = None):
+        from ..system import SpecError
+
+        try:
+            return _compiled_system(json.dumps(self.model_dump(exclude_unset=True), sort_keys=True))
+        except SpecError as error:
+            raise JobError(("system", *error.path), f"system.{error}") from None
+
+
+@functools.lru_cache(maxsize=32)
+def _compiled_system(text: str):
+    # Keyed by the canonical JSON: a system checked at submission is not compiled again by the
+    # worker, and a sweep over initial states compiles its system once.
+    from ..system import System
+
+    return System.from_dict(json.loads(text))
+
+
+class ChainDampers(Input):
+    bonds: list[Annotated[int, Field(ge=0)]] = Field(default_factory=list, max_length=MAX_VECTOR,
+                                                     description="damped bonds (bond b joins sites b-1 and b)")
+    sites: list[Annotated[int, Field(ge=0)]] = Field(default_factory=list, max_length=MAX_VECTOR,
+                                                     description="sites with on-site friction")
+    c: FiniteFloat | Annotated[list[FiniteFloat], Field(max_length=2 * MAX_VECTOR)] = Field(
+        description="the dashpot coefficient, or one per damper (bonds, then sites)")
+
+
+class ChainOnSiteInput(Input):
+    """An on-site potential U(q_i) on every site: harmonic (k), phi4 (k2, k4) or sine (g); the
+    parameters not given take raydamp's defaults (raydamp.chain documents them)."""
+
+    kind: Literal["harmonic", "phi4", "sine"]
+    k: FiniteFloat | None = Field(None, ge=0, description="harmonic: U = k q^2/2")
+    k2: FiniteFloat | None = Field(None, description="phi4: U = k2 q^2/2 + k4 q^4/4 (k2 < 0: a double well)")
+    k4: FiniteFloat | None = Field(None, ge=0)
+    g: FiniteFloat | None = Field(None, ge=0, description="sine: U = g (1 - cos q)")
+
+
+class ChainInput(Input):
+    """A lattice: raydamp.Chain.to_dict()'s form. n sites of mass m, neighbours joined by bonds of one
+    family, dashpots on chosen bonds or friction on chosen sites (raydamp.chain documents it)."""
+
+    kind: Literal["chain"]
+    n: int = Field(ge=2, le=MAX_CHAIN_SITES, description="number of sites")
+    bond: Literal["harmonic", "fput", "toda", "morse", "lennard_jones", "expression"] = "fput"
+    parameters: dict[Name, FiniteFloat | Expression] = Field(
+        default_factory=dict, max_length=64,
+        description="the family's parameters (fput: k, alpha, beta; ...); an expression bond gives "
+                    "potential: V(r) as text, and its named parameters")
+    mass: FiniteFloat = Field(1.0, gt=0)
+    boundary: Literal["fixed", "periodic", "free"] = "fixed"
+    dampers: ChainDampers | None = None
+    eps: FiniteFloat = Field(1.0, ge=0, description="damping strength (D is scaled by it)")
+    on_site: ChainOnSiteInput | None = Field(None, description="an on-site potential on every site (Klein-Gordon, "
+                                                               "Frenkel-Kontorova); none by default")
+
+
+
+    def build(self, files: FileResolver | None = None):
+        from ..chain import Chain
+
+        try:
+            return Chain.from_dict(self.model_dump(exclude_none=True))
+        except ValueError as error:
+            raise path_error(error, type(self)) from None
+
+
+# ---- linear structures: raydamp.LinearStructure.to_dict()'s form, with uploaded files -------------
+
+MAX_COO_ENTRIES = 1_000_000  # raydamp.structure.MAX_PLAIN_ENTRIES; a service's max_structure_nnz is at most this
+MAX_STRUCTURE_DIM = 10**7  # a service's max_structure_dim is at most this
+FileId = Annotated[str, Field(pattern=r"^[0-9a-f]{32}$", description="an id from POST /v1/files")]
+
+
+class CooMatrix(Input):
+    shape: list[Annotated[int, Field(ge=1, le=MAX_STRUCTURE_DIM)]] = Field(min_length=2, max_length=2,
+                                                                           description="[n, n]")
+    rows: list[Annotated[int, Field(ge=0)]] = Field(max_length=MAX_COO_ENTRIES, description="row of each entry")
+    cols: list[Annotated[int, Field(ge=0)]] = Field(max_length=MAX_COO_ENTRIES, description="column of each entry")
+    values: list[FiniteFloat] = Field(max_length=MAX_COO_ENTRIES, description="the entries (repeated "
+                                                                              "positions add up)")
+
+
+class CooForm(Input):
+    coo: CooMatrix
+
+
+class DiagonalForm(Input):
+    diagonal: list[FiniteFloat] = Field(min_length=1, max_length=MAX_STRUCTURE_DIM,
+                                        description="a diagonal matrix (lumped mass)")
+
+
+class FileForm(Input):
+    file: FileId
+
+
+# The tags are not key names: "K" followed by "coo" in a loc is then always the client's key (our own
+# checks' locs carry no tags), and "K" followed by "coo form" is pydantic's tag, dropped from a 422.
+def _matrix_form(value: object) -> str | None:
+    if isinstance(value, dict):
+        for key in ("coo", "file", "diagonal"):
+            if key in value:
+                return f"{key} form"
+        return None  # none of the forms: one error saying which there are
+    for form, name in ((CooForm, "coo"), (FileForm, "file"), (DiagonalForm, "diagonal")):
+        if isinstance(value, form):
+            return f"{name} form"
+    return None
+
+
+MatrixInput = Annotated[Annotated[CooForm, Tag("coo form")] | Annotated[DiagonalForm, Tag("diagonal form")]
+                        | Annotated[FileForm, Tag("file form")],
+                        Discriminator(_matrix_form, custom_error_type="matrix_form",
+                                      custom_error_message='a matrix is {"coo": {"shape", "rows", "cols", "values"}}, '
+                                                           '{"diagonal": [...]} or {"file": "<id from POST '
+                                                           '/v1/files>"}')]
+
+
+class LinearStructureInput(Input):
+    """A linear structure M q'' + (alpha M + beta K) q' + K q = f: raydamp.LinearStructure.to_dict()'s
+    form, with a matrix also given as {"file": id} of an uploaded Matrix Market file. M symmetric
+    positive definite (a diagonal M is a lumped mass), K symmetric positive semi-definite."""
+
+    kind: Literal["linear_structure"]
+    M: MatrixInput = Field(description='{"coo": {shape, rows, cols, values}}, {"diagonal": [...]} or {"file": id}')
+    K: MatrixInput = Field(description="the stiffness matrix, in the same forms as M")
+    alpha: FiniteFloat = Field(0.0, ge=0, description="Rayleigh damping C = alpha M + beta K")
+    beta: FiniteFloat = Field(0.0, ge=0)
+    f: Annotated[list[FiniteFloat], Field(max_length=MAX_STRUCTURE_DIM)] | None = Field(
+        None, description="constant load (length n); null for none")
+
+
+
+    def build(self, files: FileResolver | None = None):
+        """raydamp builds and checks the structure (indices, shapes, symmetry and definiteness);
+        files(id) opens an uploaded file (a service's store); without it a {"file": id} is refused."""
+        from ..structure import LinearStructure
+
+        try:
+            return LinearStructure.from_dict(self.model_dump(exclude_none=True), files=files or _no_files)
+        except ValueError as error:
+            raise path_error(error, type(self)) from None
+
+
+def _no_files(file_id: str) -> Any:
+    # Never a path on the server: without a store, a {"file": ...} reference resolves to nothing.
+    raise ValueError(f"no uploaded file with id {file_id!r}")
+
+
+def _system_form(value: object) -> str:
+    kind = value.get("kind") if isinstance(value, dict) else getattr(value, "kind", None)
+    return kind if kind in ("chain", "linear_structure") else "expressions"
+
+
+MATRIX_TAGS = frozenset({"coo form", "diagonal form", "file form"})
+SYSTEM_TAGS = frozenset({"expressions", "chain", "linear_structure"})
+AnySystemInput = Annotated[Annotated[SystemInput, Tag("expressions")] | Annotated[ChainInput, Tag("chain")]
+                           | Annotated[LinearStructureInput, Tag("linear_structure")], Discriminator(_system_form)]

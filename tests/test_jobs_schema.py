@@ -1,0 +1,70 @@
+"""raydamp.jobs: one definition of the job JSON, with h its step size (step_size accepted for one
+release), errors at the JSON path the client wrote, and a provenance that runs again."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import raydamp
+from raydamp.jobs import JobError, JobSpec, SweepSpec, client_path, job_arguments, parse_job
+from raydamp.models import DampedPendulum
+
+JOB = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "h": 0.1, "n_steps": 20,
+       "initial_state": {"q": [1.0], "p": [0.0]}}
+
+
+def test_h_and_its_former_name_give_the_same_run():
+    by_h = job_arguments(JOB)
+    old = {**{k: v for k, v in JOB.items() if k != "h"}, "step_size": 0.1}
+    assert job_arguments(old)[3] == by_h[3] and by_h[3]["h"] == 0.1
+    assert parse_job(old).h_key == "step_size" and parse_job(JOB).h_key == "h"
+
+
+@pytest.mark.parametrize(("change", "loc", "message"), [
+    ({"h": -1.0}, ("h",), "h: Input should be greater than 0"),
+    ({"h": None, "step_size": -1.0}, ("step_size",), "step_size: Input should be greater than 0"),
+    ({"step_size": 0.1}, ("step_size",), "step_size: unknown key"),  # both names: the second is extra
+    ({"h": None}, ("h",), "h: missing"),
+    ({"method": "leapfrog"}, ("method",), "method: unknown method 'leapfrog'"),
+    ({"method": "rk", "tableau": {"A": [[0, 0], ["1", 0]], "b": [0.5, 0.5], "c": [0, 1]}}, ("tableau", "A", 1, 0),
+     "tableau.A[1][0]: Input should be a valid number"),
+    ({"initial_state": {"q": [1.0, 2.0], "p": [0.0]}}, ("initial_state", "q"), "initial_state.q has length 2"),
+    ({"parameters": {"eps": -1.0}}, ("parameters", "eps"), "parameters.eps must be >= 0"),
+    ({"n_steps": None}, ("t_end",), "t_end: give exactly one of t_end and n_steps"),
+])
+def test_errors_name_the_path_the_client_wrote(change, loc, message):
+    job = {k: v for k, v in {**JOB, **change}.items() if v is not None}
+    with pytest.raises(JobError) as caught:
+        job_arguments(job)
+    assert caught.value.loc == loc and str(caught.value).startswith(message), str(caught.value)
+
+
+def test_a_solutions_provenance_is_a_job_and_runs_again():
+    sol = raydamp.integrate(DampedPendulum(eps=0.01), [1.0], [0.0], method="3s", h=0.1, n_steps=20)
+    assert sol.provenance["h"] == 0.1 and "step_size" not in sol.provenance
+    model, q0, p0, options = job_arguments(sol.provenance)
+    again = raydamp.integrate(model, q0, p0, **options)
+    np.testing.assert_array_equal(again.q, sol.q)
+    assert sol.summary()["h"] == sol.summary()["step_size"] == 0.1
+
+
+def test_form_tags_are_not_in_a_path():
+    assert client_path(("system", "linear_structure", "K", "coo form", "coo", "rows", 2)) == (
+        "system", "K", "coo", "rows", 2)
+    assert client_path(("grid", "eps", "range", "num")) == ("grid", "eps", "num")
+    assert client_path(("initial_state", "state", "q", 0)) == ("initial_state", "q", 0)
+
+
+def test_a_sweeps_job_does_not_record_work_unless_asked_and_then_refuses():
+    sweep = SweepSpec.model_validate({"job": JOB, "grid": {"step_size": [0.1, 0.2]}})
+    assert "work" not in sweep.job_form() and sweep.job.work is False
+    assert SweepSpec.model_validate(sweep.model_dump(mode="json")).job_form() == sweep.job_form()
+    asked = SweepSpec.model_validate({"job": {**JOB, "work": True}, "grid": {"eps": [0.1]}})
+    with pytest.raises(JobError, match="^job.work: sweeps do not record") as caught:
+        asked.job_form()
+    assert caught.value.loc == ("job", "work")
+
+
+def test_the_service_takes_the_librarys_schema():
+    schemas = pytest.importorskip("raydamp_service.schemas")
+    assert schemas.JobSpec is JobSpec and schemas.SweepSpec is SweepSpec
