@@ -17,6 +17,18 @@ static const char* kind_name(TableauKind k) {
   }
 }
 
+static const char* flow_name(Flow f) {
+  switch (f) {
+    case Flow::drift: return "drift";
+    case Flow::kick: return "kick";
+    case Flow::damp: return "damp";
+    case Flow::kick_damp: return "kick_damp";
+    case Flow::kick_damp_rk: return "kick_damp_rk";
+    case Flow::drift_damp_rk: return "drift_damp_rk";
+    default: return "full_rk";
+  }
+}
+
 void bind_catalogue(py::module_& m) {
   m.def("methods", [] {
     py::list rows;
@@ -70,6 +82,16 @@ void bind_catalogue(py::module_& m) {
       rows.append(row);
     }
     return rows;
+  });
+  // A method's stage table, in the order applied: [(sub-flow, fraction of h), ...].
+  // Python derives from it what it builds of a method (the fused 3s body of a
+  // compiled system, system/compile.py) instead of writing the table again.
+  m.def("splitting", [](const std::string& method) {
+    return with_method(method, [](auto table) {
+      py::list stages;
+      for (const Stage& s : decltype(table)::stages) stages.append(py::make_tuple(flow_name(s.flow), s.fraction));
+      return stages;
+    });
   });
   m.attr("MAX_AMPLIFICATION") = kMaxAmplification;
   m.def("compositions", [] {

@@ -7,7 +7,7 @@ import numpy
 import numpy.typing
 import scipy.sparse
 import typing
-__all__: list[str] = ['CancelToken', 'Chain', 'DampedPendulum', 'ElasticPendulum', 'LinearStructure_consistent', 'LinearStructure_lumped', 'MAX_AMPLIFICATION', 'System_dense_constant', 'System_dense_dampers', 'System_dense_isotropic', 'System_scalar_constant', 'System_scalar_dampers', 'System_scalar_isotropic', 'compositions', 'define_tableau', 'methods', 'resolve', 'resolve_composition', 'tableaux']
+__all__: list[str] = ['CancelToken', 'Chain', 'DampedPendulum', 'ElasticPendulum', 'LinearStructure_consistent', 'LinearStructure_lumped', 'MAX_AMPLIFICATION', 'System_dense_constant', 'System_dense_dampers', 'System_dense_isotropic', 'System_scalar_constant', 'System_scalar_dampers', 'System_scalar_isotropic', 'compositions', 'define_tableau', 'methods', 'resolve', 'resolve_composition', 'splitting', 'tableaux']
 class DampedPendulum:
     @staticmethod
     def integrate_ensemble(models: collections.abc.Sequence[DampedPendulum], model_index: typing.Annotated[numpy.typing.ArrayLike, numpy.int64], names: collections.abc.Sequence[str], values: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], method: str, tableau: str, composition: str, q0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], p0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], h: typing.SupportsFloat | typing.SupportsIndex, n_steps: typing.SupportsInt | typing.SupportsIndex, h_last: typing.SupportsFloat | typing.SupportsIndex, save_every: typing.SupportsInt | typing.SupportsIndex, threads: typing.SupportsInt | typing.SupportsIndex, progress: typing.Any, cancel: CancelToken, vector_sine: bool = False) -> dict:
@@ -511,6 +511,8 @@ def methods() -> list:
 def resolve(arg0: str, arg1: str) -> str:
     ...
 def resolve_composition(arg0: str, arg1: str, arg2: str) -> tuple[str, int]:
+    ...
+def splitting(arg0: str) -> list:
     ...
 def tableaux() -> list:
     ...

@@ -14,10 +14,11 @@ from typing import Any
 import numpy as np
 import symengine as se
 
+from .. import _core
 from .dashpot_norm import constant_dashpot_norm
 from .spec import SystemSpec
 
-__all__ = ["CompiledSystemFunctions", "compile_system", "number"]
+__all__ = ["CompiledSystemFunctions", "compile_system", "fused_body", "number"]
 
 
 def number(value: float) -> se.Basic:
@@ -38,7 +39,7 @@ class CompiledSystemFunctions:
     else None; then ``damper_projection`` is (q, u) -> grad g (grad g^T M^{-1} u), which
     the dashpot's decay exp(-t eps D M^{-1}) p takes (damper_damping.hpp), and
     ``damp_then_3s_body`` that decay followed by 3s's drift, kick, drift, in one
-    function (compiled_system.hpp)."""
+    function (compiled_system.hpp), derived from the 3s table (fused_body)."""
 
     addresses: tuple[int, ...]
     potential: Any
@@ -132,8 +133,8 @@ def compile_system(spec: SystemSpec) -> CompiledSystemFunctions:
             if damper_norm is not None:
                 projection = _projection(functions[0], rows, q, p, inverse)
                 projection_fn, f, d = _jit(q + p, projection)
-                fused = _damp_then_3s_body(projection, gradient, q, p, inverse)
-                fused_fn, f2, d2 = _jit(q + p + list(_FUSED_SCALARS), fused)
+                scalars, fused = fused_body(_fused_table(), projection, gradient, q, p, inverse)
+                fused_fn, f2, d2 = _jit(q + p + scalars, fused)
                 projection_address = [f, d, f2, d2]
     else:
         addresses += [0, 0]
@@ -152,23 +153,72 @@ def compile_system(spec: SystemSpec) -> CompiledSystemFunctions:
                                    projection_fn, fused_fn)
 
 
-# The fused body's scalar inputs after (q, p): the decay's k = eps c t phi1(x) and the
-# durations of drift, kick, drift.
-_FUSED_SCALARS = tuple(se.Symbol(name) for name in ("_k", "_t0", "_t1", "_t2"))
+# The method whose merged steps a System with one constant-norm dashpot runs in one
+# call: compiled_system.hpp's damp_then_3s_body, called from composed_step.hpp's
+# join_then_body for this table only.
+FUSED_METHOD = "3s"
+
+# What each sub-flow does to (q, p), as expressions: damp (p <- p - k P(q, p), the
+# decay exp(-t eps D M^{-1}) p of the dashpot, whose factor k the C++ computes once
+# per duration), drift (q <- q + t M^{-1} p) and kick (p <- p - t grad V(q)). The
+# scalar's name prefix: a damp takes its factor k, the others their duration t.
+_SCALAR_OF_FLOW = {"damp": "_k", "drift": "_t", "kick": "_t"}
 
 
-def _damp_then_3s_body(projection: list[se.Basic], gradient: list[se.Basic], q: list[se.Symbol],
-                       p: list[se.Symbol], inverse: np.ndarray) -> list[se.Basic]:
-    """(q, p) after p <- p - k P(q, p), q <- q + t0 M^{-1} p, p <- p - t1 grad V(q),
-    q <- q + t2 M^{-1} p: the join and body of 3s's merged steps as 2n expressions in
-    (q, p, k, t0, t1, t2). Built by substitution; Lambdify's CSE shares the repeats."""
-    k, t0, t1, t2 = _FUSED_SCALARS
-    damped = [pi - k * e for pi, e in zip(p, projection)]
-    q1 = [qi + t0 * vi for qi, vi in zip(q, _times_inverse(inverse, damped))]
-    at_q1 = dict(zip(q, q1))
-    p1 = [pi - t1 * g.subs(at_q1) for pi, g in zip(damped, gradient)]
-    q2 = [qi + t2 * vi for qi, vi in zip(q1, _times_inverse(inverse, p1))]
-    return q2 + p1
+def _fused_table() -> list[tuple[str, float]]:
+    """FUSED_METHOD's table from the compiled catalogue, checked against what the C++
+    caller fills in: the join's damp factor and three inner durations."""
+    table = [(flow, fraction) for flow, fraction in _core.splitting(FUSED_METHOD)]
+    if table[0][0] != "damp" or len(table) != 5:
+        raise RuntimeError(f"fused body: compiled_system.hpp passes a damp's factor and three durations; "
+                           f"the table of {FUSED_METHOD!r} is {table}")
+    return table
+
+
+def fused_body(table: list[tuple[str, float]], projection: list[se.Basic], gradient: list[se.Basic],
+               q: list[se.Symbol], p: list[se.Symbol],
+               inverse: np.ndarray) -> tuple[list[se.Symbol], list[se.Basic]]:
+    """The join and body of a symmetric splitting's merged steps as one map, read off
+    its table [(sub-flow, fraction of h), ...] in the order applied (``_core.splitting``).
+
+    Between two steps that save nothing, the step loop runs the table's end sub-flow
+    once for the summed time (the trailing one of a step and the leading one of the
+    next: the join) and then the next step's inner sub-flows in table order (the body)
+    (composed_step.hpp, join_then_body). Returns the scalar inputs, one per sub-flow of
+    join then body in that order (a damp its factor k, a drift or kick its duration),
+    and the 2n expressions of (q, p) after them, in (q, p, scalars). For 3s: scalars
+    (k, t0, t1, t2), p <- p - k P(q, p), drift t0, kick t1, drift t2: the positional
+    contract of compiled_system.hpp (in[2n] = the join's k, in[2n + 1 + j] = the
+    duration of inner sub-flow j). Built by substitution; Lambdify's CSE shares repeats.
+    """
+    flows = [flow for flow, _ in table]
+    if len(table) < 3 or table != table[::-1]:
+        raise ValueError(f"fused body: the table {table} is not a symmetric table of three or more sub-flows, "
+                         "so its steps do not merge")
+    unknown = sorted(set(flows) - set(_SCALAR_OF_FLOW))
+    if unknown:
+        raise ValueError(f"fused body: no symbolic form for the sub-flow(s) {unknown}")
+    join_then_body = [flows[0]] + flows[1:-1]
+    scalars = [se.Symbol(_SCALAR_OF_FLOW[flows[0]])] + [se.Symbol(f"{_SCALAR_OF_FLOW[f]}{j}")
+                                                         for j, f in enumerate(flows[1:-1])]
+    qs, ps = list(q), list(p)
+    for flow, s in zip(join_then_body, scalars):
+        if flow == "damp":
+            at = _at(projection, q + p, qs + ps)
+            ps = [pi - s * e for pi, e in zip(ps, at)]
+        elif flow == "drift":
+            qs = [qi + s * vi for qi, vi in zip(qs, _times_inverse(inverse, ps))]
+        else:  # kick
+            ps = [pi - s * g for pi, g in zip(ps, _at(gradient, q, qs))]
+    return scalars, qs + ps
+
+
+def _at(exprs: list[se.Basic], symbols: list[se.Symbol], values: list[se.Basic]) -> list[se.Basic]:
+    """exprs with symbols replaced by values (left alone where values are the symbols)."""
+    if all(s == v for s, v in zip(symbols, values)):
+        return exprs
+    at = dict(zip(symbols, values))
+    return [e.subs(at) for e in exprs]
 
 
 def _times_inverse(inverse: np.ndarray, vector: list[se.Basic]) -> list[se.Basic]:

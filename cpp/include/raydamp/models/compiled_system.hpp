@@ -25,6 +25,8 @@ struct SystemFunctions {
   CompiledFunction momenta;          // (q, p) -> J(q, p)              (m outputs; unset when m = 0)
   // (q, p, k, t0, t1, t2) -> (q, p) after 3s's damp exp(-t eps D M^{-1}) p = p - k P(q, p)
   // of the one dashpot with a constant norm, then its body: drift t0, kick t1, drift t2.
+  // Derived from the 3s table (python/raydamp/system/compile.py, fused_body): the inputs
+  // after (q, p) are the join's damp factor, then the inner sub-flows' durations in table order.
   // Optional: the merged 3s loop then makes one call per step where it made two in
   // series (projection, then gradient), so the step's serial chain crosses one call
   // (the momenta's call depends on nothing later and overlaps).
