@@ -11,10 +11,10 @@ from __future__ import annotations
 import io
 import tempfile
 from pathlib import Path
-from typing import Any, Literal
+from typing import Literal
 
 import raydamp
-from raydamp.models import MODELS
+from raydamp.jobs import JobSpec
 
 from .store import JobRecord, TrajectoryArrays
 
@@ -26,27 +26,11 @@ MEDIA_TYPES = {"csv": "text/csv", "npz": "application/octet-stream", "netcdf": "
 SUFFIXES = {"csv": ".csv", "npz": ".npz", "netcdf": ".nc"}
 
 
-def _names(spec: dict[str, Any], dim: int, momenta: int) -> tuple[list[str], list[str]]:
-    system = spec.get("system")
-    if system is not None and system.get("kind") in ("chain", "linear_structure"):
-        # The saved sites or degrees of freedom (save_dofs) or all of them; sum p is the one momentum
-        # map a chain may have, and a structure has none.
-        dofs = spec.get("save_dofs")
-        return [f"q{i}" for i in (dofs if dofs is not None else range(dim))], ["P"] * momenta
-    if system is not None:
-        coordinates = system["coordinates"]
-        coordinates = [f"q{i}" for i in range(coordinates)] if isinstance(coordinates, int) else list(coordinates)
-        return coordinates, list((system.get("momenta") or {}).keys())
-    model = MODELS.get(spec.get("model") or "")
-    if model is not None and isinstance(model.coordinates, tuple):
-        return list(model.coordinates), list(model.momentum_names)
-    return [f"q{i}" for i in range(dim)], [f"J{i}" for i in range(momenta)]
-
-
 def stored_solution(record: JobRecord, arrays: TrajectoryArrays) -> raydamp.Solution:
     """The stored run as a Solution; its provenance is the job spec as submitted."""
     summary = record.summary or {}
-    coordinates, momentum_names = _names(record.spec, arrays.q.shape[1], arrays.momentum.shape[1])
+    spec = JobSpec.model_validate(record.spec)
+    coordinates, momentum_names = spec.names(arrays.q.shape[1], arrays.momentum.shape[1], spec.save_dofs)
     provenance = {**record.spec, "raydamp_version": raydamp.__version__, "job_id": record.id,
                   "coordinates": coordinates, "momentum_names": momentum_names}
     drift = summary.get("momentum_drift")
@@ -55,7 +39,7 @@ def stored_solution(record: JobRecord, arrays: TrajectoryArrays) -> raydamp.Solu
         status=summary.get("status", record.status), steps=int(summary.get("steps", 0)),
         failed_step=record.failed_step, message=summary.get("message") or record.error or "",
         method=record.spec["method"], tableau=summary.get("tableau"), composition=summary.get("composition"),
-        h=float(record.spec.get("h", record.spec.get("step_size"))),  # step_size: stored before 0.2
+        h=spec.h,
         max_momentum_drift=float(drift) if drift is not None else 0.0,
         wall_time=float(summary.get("wall_time", 0.0)), origin=provenance)
 

@@ -88,6 +88,15 @@ class ModelSpec(Input):
     parameters: dict[str, ParameterValue] = Field(
         default_factory=dict, max_length=64, description="model parameters by name; the rest take their defaults")
 
+    def names(self, dim: int, momenta: int, save_dofs: list[int] | None = None) -> tuple[list[str], list[str]]:
+        """(names of the saved coordinates, momentum map names) of the model of dim coordinates and
+        momenta momentum maps, without building it: a stored run's files and plots are labelled from its spec."""
+        if self.system is not None:
+            return self.system.names(dim, momenta, save_dofs)
+        cls = MODELS[self.model]
+        return [cls.coordinates[i] for i in (save_dofs if save_dofs is not None else range(dim))], \
+            list(cls.momentum_names)
+
     def build_model(self, files: FileResolver | None = None):
         """The model; raises JobError naming the field (a parameter, or the path inside "system")."""
         if (self.model is None) == (self.system is None):

@@ -13,7 +13,7 @@ from typing import Annotated, Any, Literal
 from pydantic import Discriminator, Field, Tag
 
 from .errors import JobError, path_error
-from .forms import MAX_CHAIN_SITES, MAX_EXPRESSION, MAX_VECTOR, Expression, FiniteFloat, Input, Name
+from .forms import MAX_CHAIN_SITES, MAX_VECTOR, Expression, FiniteFloat, Input, Name
 
 __all__ = ["SystemInput", "ChainInput", "LinearStructureInput", "CooForm", "DiagonalForm", "FileForm",
            "AnySystemInput", "FileResolver", "MAX_COO_ENTRIES", "MAX_STRUCTURE_DIM", "SYSTEM_TAGS", "MATRIX_TAGS"]
@@ -70,6 +70,12 @@ class SystemInput(Input):
     name: str | None = Field(None, max_length=200)
 
 
+
+    def names(self, dim: int, momenta: int, save_dofs: list[int] | None) -> tuple[list[str], list[str]]:
+        """(names of the saved coordinates, momentum map names), as the built System has them."""
+        coordinates = self.coordinates
+        names = [f"q{i}" for i in range(coordinates)] if isinstance(coordinates, int) else list(coordinates)
+        return [names[i] for i in save_dofs] if save_dofs is not None else names, list(self.momenta)
 
     def build(self, files: FileResolver | None = None):
         from ..system import SpecError
@@ -128,6 +134,9 @@ class ChainInput(Input):
                                                                "Frenkel-Kontorova); none by default")
 
 
+
+    def names(self, dim: int, momenta: int, save_dofs: list[int] | None) -> tuple[list[str], list[str]]:
+        return _site_names(dim, momenta, save_dofs)
 
     def build(self, files: FileResolver | None = None):
         from ..chain import Chain
@@ -204,6 +213,9 @@ class LinearStructureInput(Input):
 
 
 
+    def names(self, dim: int, momenta: int, save_dofs: list[int] | None) -> tuple[list[str], list[str]]:
+        return _site_names(dim, momenta, save_dofs)
+
     def build(self, files: FileResolver | None = None):
         """raydamp builds and checks the structure (indices, shapes, symmetry and definiteness);
         files(id) opens an uploaded file (a service's store); without it a {"file": id} is refused."""
@@ -213,6 +225,12 @@ class LinearStructureInput(Input):
             return LinearStructure.from_dict(self.model_dump(exclude_none=True), files=files or _no_files)
         except ValueError as error:
             raise path_error(error, type(self)) from None
+
+
+def _site_names(dim: int, momenta: int, save_dofs: list[int] | None) -> tuple[list[str], list[str]]:
+    # Sites or degrees of freedom are numbered; the total momentum P is the one momentum map a chain
+    # may have, and a structure has none.
+    return [f"q{i}" for i in (save_dofs if save_dofs is not None else range(dim))], ["P"] * momenta
 
 
 def _no_files(file_id: str) -> Any:
