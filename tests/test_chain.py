@@ -20,7 +20,7 @@ from scipy.integrate import solve_ivp
 
 import raydamp
 from raydamp import Chain, chain_mode_energies
-from raydamp.job import job_arguments
+from raydamp.run.job import job_arguments
 
 FAMILIES = {
     "harmonic": {"k": 1.3},

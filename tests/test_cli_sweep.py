@@ -43,7 +43,7 @@ def test_readme_pendulum_spec_over_an_eps_range_writes_netcdf(tmp_path):
     ds = raydamp.load(out)
     assert ds.attrs["kind"] == "sweep" and ds.sizes["member"] == 10
     assert np.allclose(np.unique(ds["eps"].values), [0.001, 0.02575, 0.0505, 0.07525, 0.1], rtol=1e-15, atol=0)
-    model, q0, p0, options = raydamp.job.job_arguments(spec)
+    model, q0, p0, options = raydamp.run.job.job_arguments(spec)
     for i in (0, 7):
         member = raydamp.models.DampedPendulum(eps=float(ds["eps"].values[i]))
         ref = raydamp.integrate(member, q0, p0, **{**options, "method": str(ds["method"].values[i]), "work": False})

@@ -10,7 +10,7 @@ import pytest
 
 import raydamp
 import systems
-from raydamp.job import job_arguments
+from raydamp.run.job import job_arguments
 from raydamp.models import DampedPendulum, ElasticPendulum
 
 ELASTIC_Q0 = [0.0, 1.55884573, -0.6]

@@ -264,7 +264,7 @@ def test_sv_refused_when_damped_and_equal_to_3s_when_not(small_plate):
 # -- the plain (JSON) form --------------------------------------------------------------------------
 
 def test_plain_form_round_trips_and_runs_as_a_job(small_plate):
-    from raydamp.job import job_arguments
+    from raydamp.run.job import job_arguments
 
     f = np.zeros(small_plate.n)
     f[small_plate.tip] = -1e-3
@@ -301,9 +301,9 @@ def test_plain_form_errors_name_the_path(change, message):
 
 
 def test_plain_form_is_size_limited(monkeypatch):
-    import raydamp.structure
+    import raydamp.systems.structure
 
-    monkeypatch.setattr(raydamp.structure, "MAX_PLAIN_ENTRIES", 3)
+    monkeypatch.setattr(raydamp.systems.structure, "MAX_PLAIN_ENTRIES", 3)
     data = raydamp.LinearStructure(np.eye(4), np.eye(4)).to_dict()
     with pytest.raises(ValueError, match="M.diagonal: 4 entries, more than the limit 3"):
         raydamp.LinearStructure.from_dict(data)
@@ -346,11 +346,11 @@ def test_plain_form_takes_matrix_market_files(tmp_path):
 
 def test_a_job_may_start_at_rest():
     """{"rest": true} in a job spec: q = p = 0 of the model's size (a structure's response to its load)."""
-    from raydamp.job import job_arguments
+    from raydamp.run.job import job_arguments
 
     K = 2 * np.eye(4) - np.eye(4, k=1) - np.eye(4, k=-1)
     s = raydamp.LinearStructure(np.eye(4), K, alpha=0.1, f=[0, 0, 0, 1.0])
-    spec = {**raydamp.job.describe_model(s), "method": "3s", "step_size": 0.1, "n_steps": 20,
+    spec = {**raydamp.systems.kinds.describe_model(s), "method": "3s", "step_size": 0.1, "n_steps": 20,
             "initial_state": {"rest": True}}
     model, q0, p0, options = job_arguments(spec)
     np.testing.assert_array_equal(q0, np.zeros(4))

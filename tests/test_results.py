@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import raydamp
-from raydamp.job import job_arguments
+from raydamp.run.job import job_arguments
 from raydamp.models import DampedPendulum, ElasticPendulum
 
 from paper import ELASTIC_P0, ELASTIC_Q0

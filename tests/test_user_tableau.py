@@ -98,7 +98,7 @@ def test_the_provenance_reruns_a_user_tableau(tmp_path):
     sol = _final(model, q0, p0, method="rks", tableau=SDIRK3, h=0.05, n_steps=200)
     path = tmp_path / "run.nc"
     sol.save(path)
-    from raydamp.job import job_arguments
+    from raydamp.run.job import job_arguments
     again_model, q, p, options = job_arguments(raydamp.load(path).provenance)
     np.testing.assert_array_equal(raydamp.integrate(again_model, q, p, **options).q, sol.q)
 

@@ -50,7 +50,7 @@ class InitialState(_Input):
                                  description="initial momenta, length = the model's dim")
 
 
-# Bounds of a system: raydamp's own limits (raydamp.system.spec and raydamp.expressions), stated in
+# Bounds of a system: raydamp's own limits (raydamp.systems.system.spec and raydamp.systems.expressions), stated in
 # the schema so that an oversized list fails at parsing, before any work.
 _MAX_COORDINATES = 256
 _MAX_EXPRESSION = 10_000
@@ -59,7 +59,7 @@ Expression = Annotated[str, Field(min_length=1, max_length=_MAX_EXPRESSION)]
 Name = Annotated[str, Field(min_length=1, max_length=100, pattern=r"^[A-Za-z_][A-Za-z0-9_]*$")]
 
 
-_MAX_STAGES = 16  # raydamp.user_tableau.MAX_STAGES
+_MAX_STAGES = 16  # raydamp.methods.user_tableau.MAX_STAGES
 _Coefficients = Annotated[list[FiniteFloat], Field(min_length=1, max_length=_MAX_STAGES)]
 
 
@@ -131,7 +131,7 @@ class ChainDampers(_Input):
 
 class ChainOnSiteInput(_Input):
     """An on-site potential U(q_i) on every site: harmonic (k), phi4 (k2, k4) or sine (g); the
-    parameters not given take raydamp's defaults (raydamp.chain documents them)."""
+    parameters not given take raydamp's defaults (raydamp.systems.chain documents them)."""
 
     kind: Literal["harmonic", "phi4", "sine"]
     k: FiniteFloat | None = Field(None, ge=0, description="harmonic: U = k q^2/2")
@@ -142,7 +142,7 @@ class ChainOnSiteInput(_Input):
 
 class ChainInput(_Input):
     """A lattice: raydamp.Chain.to_dict()'s form. n sites of mass m, neighbours joined by bonds of one
-    family, dashpots on chosen bonds or friction on chosen sites (raydamp.chain documents it)."""
+    family, dashpots on chosen bonds or friction on chosen sites (raydamp.systems.chain documents it)."""
 
     kind: Literal["chain"]
     n: int = Field(ge=2, le=MAX_CHAIN_SITES, description="number of sites")
@@ -161,7 +161,7 @@ class ChainInput(_Input):
 
 # ---- linear structures: raydamp.LinearStructure.to_dict()'s form, and uploaded files ----------------
 
-MAX_COO_ENTRIES = 1_000_000  # raydamp.structure.MAX_PLAIN_ENTRIES; Settings.max_structure_nnz is at most this
+MAX_COO_ENTRIES = 1_000_000  # raydamp.systems.structure.MAX_PLAIN_ENTRIES; Settings.max_structure_nnz is at most this
 MAX_STRUCTURE_DIM = 10**7  # Settings.max_structure_dim is at most this
 FileId = Annotated[str, Field(pattern=r"^[0-9a-f]{32}$", description="an id from POST /v1/files")]
 

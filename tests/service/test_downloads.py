@@ -11,7 +11,7 @@ import pytest
 from PIL import Image
 
 import raydamp
-from raydamp.job import job_arguments
+from raydamp.run.job import job_arguments
 
 PENDULUM = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "step_size": 0.2,
             "t_end": 40, "initial_state": {"q": [2.827433388], "p": [0.0]}, "save_every": 2}

@@ -10,9 +10,9 @@ import shutil
 import sys
 from pathlib import Path
 
-from .integrate import integrate
-from .job import job_arguments
-from .results import FORMATS
+from ..results.io.solution import FORMATS
+from ..run.integrate import integrate
+from ..run.job import job_arguments
 
 __all__ = ["run_file", "read_spec"]
 

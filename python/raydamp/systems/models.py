@@ -13,8 +13,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from . import _core
-from ._validation import real, vector
+from .. import _core
+from .._validation import real, vector
 
 __all__ = ["Model", "DampedPendulum", "ElasticPendulum", "MODELS", "describe_models", "make_model"]
 
