@@ -16,7 +16,7 @@ HOST ?= 127.0.0.1
 PORT ?= 8000
 export RAYDAMP_DB ?= $(CURDIR)/var/raydamp.sqlite3
 
-.PHONY: all setup system-deps serve test ctest pytest bench reproduce wheel stubs clean
+.PHONY: all setup system-deps serve test ctest layers pytest bench reproduce wheel stubs clean
 
 all: test
 
@@ -46,13 +46,17 @@ serve: setup
 	@mkdir -p $(dir $(RAYDAMP_DB))
 	$(PY) -m raydamp_service --host $(HOST) --port $(PORT)
 
-test: setup ctest pytest
+test: setup ctest layers pytest
 
 ctest: setup
 	$(VENV)/bin/cmake -S . -B build/cpp -G Ninja -DCMAKE_BUILD_TYPE=Release -DRAYDAMP_BUILD_TESTS=ON \
 	  -DCMAKE_MAKE_PROGRAM=$(CURDIR)/$(VENV)/bin/ninja
 	$(VENV)/bin/cmake --build build/cpp -j2
 	$(VENV)/bin/ctest --test-dir build/cpp --output-on-failure
+
+# The import contracts of pyproject.toml's [tool.importlinter], read from the source tree.
+layers: setup
+	PYTHONPATH=python:service $(VENV)/bin/lint-imports --no-cache
 
 pytest: setup
 	$(PY) -m pytest

@@ -25,10 +25,10 @@ import time
 import numpy as np
 
 import raydamp
-from raydamp.expressions import parse
+from raydamp.systems.expressions import parse
 from raydamp.models import ElasticPendulum
-from raydamp.system.compile import compile_system
-from raydamp.system.spec import normalise
+from raydamp.systems.system.compile import compile_system
+from raydamp.systems.system.spec import normalise
 
 Q0, P0 = [0.0, 1.55884573, -0.6], [1.34164079, 0.0, 0.0]
 SPEC = dict(

@@ -158,7 +158,7 @@ def test_guard_refuses_a_stiff_structure_at_order_4_and_accepts_order_2():
 
 
 def test_guard_limit_is_the_documented_one():
-    from raydamp.integrate import MAX_AMPLIFICATION
+    from raydamp.run.integrate import MAX_AMPLIFICATION
 
     assert MAX_AMPLIFICATION == 10.0
 

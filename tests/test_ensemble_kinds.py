@@ -73,7 +73,7 @@ def test_large_kinds_take_no_per_member_parameters():
     with pytest.raises(ValueError, match=r"parameters.eps: not a parameter .*\(known: none; .*one model per value\)"):
         raydamp.integrate_ensemble(fput_chain(), np.zeros((2, 32)), np.zeros(32), parameters={"eps": [0.1, 0.2]},
                                    h=0.05, n_steps=3)
-    assert raydamp.ensemble.member_parameters(fput_chain()) == ()
+    assert raydamp.run.ensemble.member_parameters(fput_chain()) == ()
 
 
 def test_system_configurations_checked_in_one_call_naming_the_first_bad_member(monkeypatch):

@@ -10,7 +10,7 @@ import pickle
 import pytest
 import symengine as se
 
-from raydamp.expressions import (FUNCTIONS, MAX_DEPTH, MAX_EXPONENT, MAX_LENGTH, MAX_NODES, Binary, Expression,
+from raydamp.systems.expressions import (FUNCTIONS, MAX_DEPTH, MAX_EXPONENT, MAX_LENGTH, MAX_NODES, Binary, Expression,
                                  Name, Number, Unary, parse)
 
 ELASTIC = {"x": "coordinate", "y": "coordinate", "z": "coordinate",

@@ -12,8 +12,8 @@ import symengine as se
 
 import raydamp
 from raydamp import _core
-from raydamp.system import compile as compile_module
-from raydamp.system.compile import _projection, _times_inverse, evaluate, fused_body, number
+from raydamp.systems.system import compile as compile_module
+from raydamp.systems.system.compile import _projection, _times_inverse, evaluate, fused_body, number
 
 from paper import ELASTIC_P0, ELASTIC_Q0
 from systems import elastic_pendulum

@@ -301,9 +301,9 @@ def test_plain_form_errors_name_the_path(change, message):
 
 
 def test_plain_form_is_size_limited(monkeypatch):
-    import raydamp.structure
+    import raydamp.systems.structure
 
-    monkeypatch.setattr(raydamp.structure, "MAX_PLAIN_ENTRIES", 3)
+    monkeypatch.setattr(raydamp.systems.structure, "MAX_PLAIN_ENTRIES", 3)
     data = raydamp.LinearStructure(np.eye(4), np.eye(4)).to_dict()
     with pytest.raises(ValueError, match="M.diagonal: 4 entries, more than the limit 3"):
         raydamp.LinearStructure.from_dict(data)
@@ -350,7 +350,7 @@ def test_a_job_may_start_at_rest():
 
     K = 2 * np.eye(4) - np.eye(4, k=1) - np.eye(4, k=-1)
     s = raydamp.LinearStructure(np.eye(4), K, alpha=0.1, f=[0, 0, 0, 1.0])
-    spec = {**raydamp.jobs.describe_model(s), "method": "3s", "step_size": 0.1, "n_steps": 20,
+    spec = {**raydamp.systems.kinds.describe_model(s), "method": "3s", "step_size": 0.1, "n_steps": 20,
             "initial_state": {"rest": True}}
     model, q0, p0, options = job_arguments(spec)
     np.testing.assert_array_equal(q0, np.zeros(4))

@@ -153,7 +153,7 @@ def test_cancel_keeps_the_finished_chunks(client, tmp_path):
         status = ds["status"].values
         done = status == 0
         assert len(calls) == 1 and done.sum() == calls[0] == 2, store
-        assert (status[~done] == raydamp.ensemble_solution.STATUSES.index("cancelled")).all()
+        assert (status[~done] == raydamp.results.ensemble_solution.STATUSES.index("cancelled")).all()
         assert ds.attrs["cancelled"] == 1 and (ds["rows"].values[~done] == 0).all()
         i = int(np.flatnonzero(done)[0])
         ref = raydamp.integrate(DampedPendulum(float(ds["eps"].values[i])), SPEC["q0"], [0.0], h=0.1, n_steps=20000,

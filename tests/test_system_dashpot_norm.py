@@ -15,8 +15,8 @@ from scipy.linalg import expm
 
 import raydamp
 from raydamp.models import ElasticPendulum
-from raydamp.system.compile import _projection, evaluate
-from raydamp.system.system import System, _build_core
+from raydamp.systems.system.compile import _projection, evaluate
+from raydamp.systems.system.system import System, _build_core
 
 from paper import ELASTIC_P0, ELASTIC_Q0
 from systems import elastic_pendulum
@@ -220,7 +220,7 @@ def test_detection_never_expands_a_dashpot_with_many_radicals(monkeypatch):
     # Putting a(q) over one common denominator multiplies out the product of its radicals:
     # measured 109 s for 8 segments, x8 per segment. The numeric check (a varies) and the
     # radical count must keep the symbolic proof from ever starting on such a dashpot.
-    from raydamp.system import dashpot_norm
+    from raydamp.systems.system import dashpot_norm
 
     def refuse(_):
         raise AssertionError("the symbolic proof ran")

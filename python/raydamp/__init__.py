@@ -11,18 +11,18 @@ equilibria.
 """
 
 from . import models
-from .chain import Chain, chain_mode_energies
 from ._core import __version__
-from .ensemble import integrate_ensemble
-from .ensemble_solution import EnsembleSolution
-from .integrate import CancelToken, integrate, steps_for
-from .methods import CompositionInfo, MethodInfo, TableauInfo, compositions, methods, tableaux
-from .rayleigh import modal_damping_ratio, rayleigh_coefficients
-from .results import load
-from .solution import Solution
-from .structure import LinearStructure
-from .sweep import SweepPlan, check_sweep, parse_grid_item, sweep
-from .system import SpecError, System
+from .methods.catalogue import CompositionInfo, MethodInfo, TableauInfo, compositions, methods, tableaux
+from .results.ensemble_solution import EnsembleSolution
+from .results.io import load
+from .results.solution import Solution
+from .run.ensemble import integrate_ensemble
+from .run.integrate import CancelToken, integrate, steps_for
+from .run.sweep import SweepPlan, check_sweep, parse_grid_item, sweep
+from .systems.chain import Chain, chain_mode_energies
+from .systems.rayleigh import modal_damping_ratio, rayleigh_coefficients
+from .systems.structure import LinearStructure
+from .systems.system import SpecError, System
 
 __all__ = ["__version__", "models", "System", "Chain", "chain_mode_energies", "LinearStructure", "SpecError",
            "integrate", "steps_for", "CancelToken", "Solution", "integrate_ensemble", "EnsembleSolution", "sweep",

@@ -1,4 +1,8 @@
-"""`python -m raydamp_service [--host H] [--port P]`: serve the job API with uvicorn."""
+"""`python -m raydamp_service [--host H] [--port P]`: serve the job API with uvicorn.
+
+`raydamp serve [--host H] [--port P]` is the same, reached from the library's command line through the
+entry point ``serve_command`` (group "raydamp.commands" in pyproject.toml): the library never imports
+the service."""
 
 from __future__ import annotations
 
@@ -20,10 +24,23 @@ def _refuse(message: str) -> None:
     sys.exit(2)
 
 
-def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(prog="raydamp-service", description="Serve the raydamp job API.")
+def _address_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("--host", help="address to bind (default: RAYDAMP_HOST or 127.0.0.1)")
     parser.add_argument("--port", type=int, help="port to bind (default: RAYDAMP_PORT or 8000)")
+    return parser
+
+
+def serve_command(argv: list[str]) -> int:
+    """`raydamp serve [--host H] [--port P]` (the library's command line hands over what follows `serve`)."""
+    parser = argparse.ArgumentParser(prog="raydamp serve",
+                                     description="run the job service (same as python -m raydamp_service)")
+    main([arg for name, value in vars(_address_arguments(parser).parse_args(argv)).items() if value is not None
+          for arg in (f"--{name}", str(value))])
+    return 0
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = _address_arguments(argparse.ArgumentParser(prog="raydamp-service", description="Serve the raydamp job API."))
     parser.add_argument("--workers", type=int, help="runs executed at once (default: RAYDAMP_WORKERS or 2)")
     args = parser.parse_args(argv)
     # Command-line values win over the environment; absent ones fall back to it.

@@ -1,7 +1,7 @@
 """A finished job's trajectory as a file (CSV, NPZ, NetCDF) or a plot (PNG).
 
 No numerics here: the stored arrays become a raydamp.Solution carrying the job's spec as its
-provenance, and raydamp writes the file (raydamp.results) or draws the plot (raydamp.plotting).
+provenance, and raydamp writes the file (raydamp.results.io) or draws the plot (raydamp.results.plotting).
 Plots use matplotlib's object API on a fresh Figure per request (no pyplot state), so requests
 served on different threads do not share a figure.
 """

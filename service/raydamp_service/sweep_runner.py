@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 
 import raydamp
-from raydamp.ensemble_solution import STATUSES
-from raydamp.results import save_sweep
+from raydamp.results.ensemble_solution import STATUSES
+from raydamp.results.io.sweep import save_sweep
 
 from .config import Settings
 from .problems import sweep_arguments

@@ -6,8 +6,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..integrate import integrate
-from ..models import Model
+from ..run.integrate import integrate
+from ..systems.models import Model
 from .energy import reference_solution
 
 

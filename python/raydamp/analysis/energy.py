@@ -7,8 +7,8 @@ from typing import NamedTuple
 import numpy as np
 
 from .._validation import vector
-from ..models import Model
-from ..solution import Solution
+from ..results.solution import Solution
+from ..systems.models import Model
 
 
 class ReferenceSolution(NamedTuple):

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..solution import Solution
+from ..results.solution import Solution
 
 
 def momentum_drift(solution: Solution) -> np.ndarray:

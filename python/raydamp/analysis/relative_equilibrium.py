@@ -21,9 +21,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..integrate import integrate
-from ..models import ElasticPendulum
-from ..solution import Solution
+from ..results.solution import Solution
+from ..run.integrate import integrate
+from ..systems.models import ElasticPendulum
 
 
 class RelativeEquilibrium(NamedTuple):

@@ -7,16 +7,17 @@ into raydamp.integrate's arguments.
        "save_every": 1, "initial_state": {"q": [...], "p": [...]}, "work": true}
 """
 
-from .build import PROVENANCE_KEYS, JobCall, build_job, error_at, job_arguments, parse_job, validation_error
+from ..systems.kinds import describe_model
+from .build import (PROVENANCE_KEYS, JobCall, build_job, error_at, job_arguments, model_from_spec, parse_job,
+                    validation_error)
 from .errors import JobError
 from .forms import InitialState, ModeState, RestState, TableauInput
-from .provenance import describe_model, job_spec, model_from_spec
 from .spec import STEP_SIZE_ALIAS, UNION_TAGS, JobSpec, ModelSpec, client_path
 from .sweep_spec import GridRange, SweepSpec
 from .system_forms import ChainInput, CooForm, DiagonalForm, FileForm, LinearStructureInput, SystemInput
 
 __all__ = ["JobSpec", "ModelSpec", "SweepSpec", "GridRange", "JobError", "JobCall", "parse_job", "build_job",
            "error_at", "job_arguments", "validation_error", "client_path", "describe_model", "model_from_spec",
-           "job_spec", "PROVENANCE_KEYS", "STEP_SIZE_ALIAS", "UNION_TAGS", "InitialState", "ModeState", "RestState",
+           "PROVENANCE_KEYS", "STEP_SIZE_ALIAS", "UNION_TAGS", "InitialState", "ModeState", "RestState",
            "TableauInput", "SystemInput", "ChainInput", "LinearStructureInput", "CooForm", "DiagonalForm",
            "FileForm"]

@@ -18,10 +18,11 @@ from pydantic import ValidationError
 
 from .errors import JobError, head_path
 from .forms import ModeState, RestState
-from .spec import JobSpec, client_path
+from .spec import JobSpec, ModelSpec, client_path
 from .system_forms import FileResolver
 
-__all__ = ["JobCall", "parse_job", "build_job", "job_arguments", "error_at", "validation_error"]
+__all__ = ["JobCall", "parse_job", "build_job", "job_arguments", "model_from_spec", "error_at", "validation_error",
+           "PROVENANCE_KEYS"]
 
 # What a Solution's provenance adds to the job (a saved result's provenance runs as a job).
 PROVENANCE_KEYS = ("raydamp_version", "job_id", "coordinates", "momentum_names")
@@ -125,7 +126,7 @@ def build_job(spec: JobSpec, files: FileResolver | None = None) -> JobCall:
 
 def error_at(spec: JobSpec, error: ValueError) -> JobError:
     """A ValueError of raydamp.integrate for this job's call, at the JSON path of the field it is about."""
-    from ..system import SpecError
+    from ..systems.system import SpecError
 
     if isinstance(error, JobError):
         return error
@@ -139,6 +140,16 @@ def error_at(spec: JobSpec, error: ValueError) -> JobError:
     if head == "h":
         return JobError((spec.h_key,), spec.h_key + rest)
     return JobError(loc if head in JobSpec.model_fields else (), message)
+
+
+def model_from_spec(spec: Any, files: FileResolver | None = None):
+    """The model of {"model": name, "parameters": {...}} or {"system": {...}} (raydamp.systems.kinds.
+    describe_model's form); a JobError names the path."""
+    try:
+        parsed = ModelSpec.model_validate(_plain(spec))
+    except ValidationError as error:
+        raise validation_error(error) from None
+    return parsed.build_model(files)
 
 
 def job_arguments(data: Any, files: FileResolver | None = None) -> tuple[Any, Any, Any, dict[str, Any]]:

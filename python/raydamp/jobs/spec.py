@@ -13,8 +13,8 @@ from typing import Annotated, Any
 from pydantic import AfterValidator, AliasChoices, ConfigDict, Discriminator, Field, PrivateAttr, Tag, WithJsonSchema, \
     model_validator
 
-from ..methods import compositions, methods
-from ..models import MODELS, make_model
+from ..methods.catalogue import compositions, methods
+from ..systems.models import MODELS, make_model
 from .errors import JobError
 from .forms import FiniteFloat, InitialState, Input, MAX_VECTOR, ModeState, RestState, TableauInput, Vector
 from .system_forms import MATRIX_TAGS, SYSTEM_TAGS, AnySystemInput, FileResolver

@@ -78,7 +78,7 @@ class SystemInput(Input):
         return [names[i] for i in save_dofs] if save_dofs is not None else names, list(self.momenta)
 
     def build(self, files: FileResolver | None = None):
-        from ..system import SpecError
+        from ..systems.system import SpecError
 
         try:
             return _compiled_system(json.dumps(self.model_dump(exclude_unset=True), sort_keys=True))
@@ -90,7 +90,7 @@ class SystemInput(Input):
 def _compiled_system(text: str):
     # Keyed by the canonical JSON: a system checked at submission is not compiled again by the
     # worker, and a sweep over initial states compiles its system once.
-    from ..system import System
+    from ..systems.system import System
 
     return System.from_dict(json.loads(text))
 
@@ -139,7 +139,7 @@ class ChainInput(Input):
         return _site_names(dim, momenta, save_dofs)
 
     def build(self, files: FileResolver | None = None):
-        from ..chain import Chain
+        from ..systems.chain import Chain
 
         try:
             return Chain.from_dict(self.model_dump(exclude_none=True))
@@ -219,7 +219,7 @@ class LinearStructureInput(Input):
     def build(self, files: FileResolver | None = None):
         """raydamp builds and checks the structure (indices, shapes, symmetry and definiteness);
         files(id) opens an uploaded file (a service's store); without it a {"file": id} is refused."""
-        from ..structure import LinearStructure
+        from ..systems.structure import LinearStructure
 
         try:
             return LinearStructure.from_dict(self.model_dump(exclude_none=True), files=files or _no_files)

@@ -21,8 +21,8 @@ from ..analysis import (
 )
 from ..analysis.convergence import fitted_order
 from ..analysis.relative_equilibrium import equilibrium_residual
-from ..integrate import integrate
-from ..models import DampedPendulum, ElasticPendulum
+from ..run.integrate import integrate
+from ..systems.models import DampedPendulum, ElasticPendulum
 from .settings import (
     ELASTIC_P0,
     ELASTIC_Q0,
@@ -404,7 +404,7 @@ def _invariance_pair(damping: str, eps: float = 0.1):
     """The test system as a raydamp.System in q, and pulled back to s = A q: V(A^-1 s),
     M_s = A^-T M A^-1, D_s = A^-T D A^-1 (for the dashpot, g(A^-1 s), whose gradient
     carries the same A^-T)."""
-    from ..system import System
+    from ..systems.system import System
 
     a_inv = np.linalg.inv(INVARIANCE_A)
     in_q = {"x": "x", "y": "y"}

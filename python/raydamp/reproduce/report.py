@@ -5,7 +5,7 @@ from __future__ import annotations
 import platform
 from pathlib import Path
 
-from .. import __version__
+from .._core import __version__
 from .claims import Claim
 from .settings import Settings
 

@@ -7,7 +7,7 @@
 //     t phi1(-tA) = t I - t^2 phi2(-t eps c a) u w^T
 //   (closed form, exact for a = 0 too). The elastic pendulum is one dashpot on |q|.
 //   A dashpot on a distance (|q|, |q_i - q_j|) has a constant a (1/m, 1/m_i + 1/m_j):
-//   python/raydamp/system/dashpot_norm.py proves that symbolically and passes a, and
+//   python/raydamp/systems/system/dashpot_norm.py proves that symbolically and passes a, and
 //   then phi1 and phi2 are taken once per sub-step length in factors(t), as the
 //   built-in radial damping does, so a flow at a new q costs the gradient call and
 //   two dot products (3s on the elastic pendulum: the dot w.grad g, the phi1 series

@@ -87,7 +87,7 @@ struct LennardJonesBond {
 };
 
 // A user's V(r): three functions of r compiled from one expression tree
-// (python/raydamp/chain.py through the systems' JIT).
+// (python/raydamp/systems/chain.py through the systems' JIT).
 struct ExpressionBond {
   static constexpr bool polynomial = false;
   CompiledFunction v, dv, d2v;

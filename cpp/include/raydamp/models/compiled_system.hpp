@@ -1,4 +1,4 @@
-// A user's system (python/raydamp/system): H = 1/2 p^T M^{-1} p + V(q) with V, its
+// A user's system (python/raydamp/systems/system): H = 1/2 p^T M^{-1} p + V(q) with V, its
 // gradient, its Hessian-vector product and the momentum maps compiled at run time
 // from expressions, a constant mass kind and a damping kind. One struct for every
 // system of a kind: the bindings instantiate each (Mass, Damping) pair once, and a

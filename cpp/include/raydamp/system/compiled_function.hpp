@@ -1,5 +1,5 @@
 // A function of a system compiled at run time from the user's expressions
-// (python/raydamp/system/compile.py: SymEngine's LLVM JIT). Its C signature is
+// (python/raydamp/systems/system/compile.py: SymEngine's LLVM JIT). Its C signature is
 // void f(double* out, const double* in, void* data); the caller keeps the compiled
 // code alive as long as any model holds the pointer.
 #pragma once

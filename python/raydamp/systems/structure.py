@@ -39,8 +39,8 @@ from typing import Any
 
 import numpy as np
 
-from . import _core
-from ._validation import real
+from .. import _core
+from .._validation import real
 from .models import Model
 
 __all__ = ["LinearStructure", "MAX_PLAIN_ENTRIES"]
@@ -123,7 +123,7 @@ class LinearStructure(Model):
     f : constant load vector (length n), or None for no load.
 
     The module docstring says how the damping flows are computed and which method suits
-    which damping (``help(raydamp.structure)``). ``chebyshev_degrees(t)`` gives the degrees
+    which damping (``help(raydamp.systems.structure)``). ``chebyshev_degrees(t)`` gives the degrees
     the flows over time t use; ``spectral_bound`` the bound L of the squared frequencies.
     """
 

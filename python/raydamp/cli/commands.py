@@ -1,9 +1,11 @@
-"""The ``raydamp`` command line."""
+"""The ``raydamp`` command line: its parser, and each command handed to the module that runs it."""
 
 from __future__ import annotations
 
 import argparse
 import sys
+
+from .external import add_external_commands, run_external
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -36,10 +38,13 @@ def main(argv: list[str] | None = None) -> int:
     add_client_commands(commands)
     commands.add_parser("methods", help="list the methods and their tableaux")
     commands.add_parser("models", help="list the built-in models and their parameters")
-    serve = commands.add_parser("serve", help="run the job service (same as python -m raydamp_service)")
-    serve.add_argument("--host", help="address to bind (default: RAYDAMP_HOST or 127.0.0.1)")
-    serve.add_argument("--port", type=int, help="port to bind (default: RAYDAMP_PORT or 8000)")
-    args = parser.parse_args(argv)
+    external = add_external_commands(commands)
+    # An external command parses its own arguments: what this parser does not know is handed to it.
+    args, rest = parser.parse_known_args(argv)
+    if args.command in external:
+        return run_external(args.command, external[args.command], rest)
+    if rest:
+        parser.error(f"unrecognized arguments: {' '.join(rest)}")
     if args.command == "run":
         from .run_command import run_file
 
@@ -57,31 +62,22 @@ def main(argv: list[str] | None = None) -> int:
 
         return client_command(args)
     if args.command == "methods":
-        from .methods import methods
+        from ..methods.catalogue import methods
 
         for m in methods():
             print(f"{m.name:<6} {m.tableau or '':<9} order {m.order}  {'damped' if m.damped else 'eps = 0 only'}"
                   f"  {m.description}")
         return 0
     if args.command == "models":
-        from .models import describe_models
+        from ..systems.models import describe_models
 
         for model in describe_models():
             params = ", ".join(f"{p['name']}={p['default']}" for p in model["parameters"])
             print(f"{model['name']:<18} dim {model['dim']}  ({params})  {model['description']}")
         return 0
-    if args.command == "serve":
-        try:
-            from raydamp_service.__main__ import main as serve_main
-        except ImportError as exc:
-            print(f"raydamp serve needs the service extra (pip install 'raydamp[service]'): {exc}", file=sys.stderr)
-            return 2
-        forwarded = [arg for name in ("host", "port") if getattr(args, name) is not None
-                     for arg in (f"--{name}", str(getattr(args, name)))]
-        return serve_main(forwarded) or 0
     if args.command == "reproduce":
         try:
-            from .reproduce import run
+            from ..reproduce import run
         except ImportError as exc:  # matplotlib or scipy missing
             print(f"raydamp reproduce needs the analysis extra (pip install 'raydamp[analysis]'): {exc}",
                   file=sys.stderr)

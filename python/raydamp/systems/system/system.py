@@ -11,8 +11,8 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from .. import _core
-from .._validation import real
+from ... import _core
+from ..._validation import real
 from ..models import Model
 from .compile import compile_system, evaluate
 from .errors import SpecError

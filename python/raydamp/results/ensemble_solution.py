@@ -86,7 +86,7 @@ class EnsembleSolution:
     def provenance(self) -> dict[str, Any] | None:
         if self.origin is None or isinstance(self.origin, dict):
             return None if self.origin is None else copy.deepcopy(self.origin)
-        from .jobs import job_spec
+        from .provenance import job_spec
 
         system, options = self.origin
         options = dict(options)
@@ -163,13 +163,13 @@ class EnsembleSolution:
     def to_xarray(self):
         """An xarray.Dataset with dims (member, time, dof[, momentum_map]), the swept parameters as
         member coordinates and the provenance in attrs (needs the ``io`` extra: xarray)."""
-        from .results import ensemble_to_xarray
+        from .io.ensemble import ensemble_to_xarray
 
         return ensemble_to_xarray(self)
 
     def save(self, path) -> None:
         """Write to ``path``: .nc (NetCDF via h5netcdf) or .zarr (a Zarr store), by its suffix."""
-        from .results import save_ensemble
+        from .io.ensemble import save_ensemble
 
         save_ensemble(self, path)
 

@@ -14,8 +14,8 @@ from typing import Any
 
 import numpy as np
 
-from . import _core
-from ._validation import _short, integer
+from .. import _core
+from .._validation import _short, integer
 
 __all__ = ["MAX_STAGES", "MAX_CHECKED_ORDER", "resolve_user_tableau", "plain_tableau"]
 

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 import symengine as se
 
-from .. import _core
+from ... import _core
 from .dashpot_norm import constant_dashpot_norm
 from .spec import SystemSpec
 

@@ -16,13 +16,15 @@ from typing import Any
 
 import numpy as np
 
-from ._validation import integer, real, vector
+from .._core import __version__
+from .._validation import integer, real, vector
+from ..results.ensemble_solution import STATUSES
+from ..jobs import STEP_SIZE_ALIAS, JobSpec, job_arguments, model_from_spec
+from ..systems.kinds import describe_model
+from ..systems.models import MODELS, Model
+from ..systems.system import System
 from .ensemble import integrate_ensemble, member_parameters
-from .ensemble_solution import STATUSES
 from .integrate import _catalogue, steps_for
-from .jobs import STEP_SIZE_ALIAS, JobSpec, describe_model, job_arguments, model_from_spec
-from .models import MODELS, Model
-from .system import System
 
 __all__ = ["sweep", "check_sweep", "SweepPlan", "parse_grid_item", "SPEC_KEYS", "RUN_ARGUMENTS"]
 
@@ -403,8 +405,6 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
     provenance = {**model_spec, **options,
                   "coordinates": list(model.coordinates), "momentum_names": list(model.momentum_names),
                   "grid": plan.grid, "chunk_size": chunk_size}
-    from . import __version__
-
     provenance["raydamp_version"] = __version__
     attrs = {"kind": "sweep", "provenance": json.dumps(provenance), "grid": json.dumps(list(columns)),
              "raydamp_version": __version__}

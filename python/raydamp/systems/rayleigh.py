@@ -15,7 +15,7 @@ gives two linear equations for (alpha, beta):
 
 from __future__ import annotations
 
-from ._validation import real
+from .._validation import real
 
 __all__ = ["rayleigh_coefficients", "modal_damping_ratio"]
 

@@ -35,7 +35,7 @@ class Solution:
     composition : the composition the method was raised to higher order with, or None.
     provenance : what produced it, as the job JSON the service and ``raydamp run`` take
         (model or system, initial state, method, tableau, step size, span, save_every)
-        plus ``raydamp_version``; ``raydamp.integrate(*raydamp.job.job_arguments(...))``
+        plus ``raydamp_version``; ``raydamp.integrate(*raydamp.run.job.job_arguments(...))``
         runs it again.
     plot : ``sol.plot.energy()``, ``.phase()``, ``.projection()`` (matplotlib axes).
 
@@ -69,7 +69,7 @@ class Solution:
     def provenance(self) -> dict[str, Any] | None:
         if self.origin is None or isinstance(self.origin, dict):
             return None if self.origin is None else dict(self.origin)
-        from .jobs import job_spec
+        from .provenance import job_spec
 
         model, q0, p0, options = self.origin
         return job_spec(model, q0, p0, **options)
@@ -101,13 +101,13 @@ class Solution:
 
     def to_xarray(self):
         """An xarray.Dataset with dims (time, dof[, momentum]) and the provenance in attrs."""
-        from .results import to_xarray
+        from .io.solution import to_xarray
 
         return to_xarray(self)
 
     def save(self, path) -> None:
         """Write to ``path``: .nc (NetCDF, via xarray), .npz or .csv, by its suffix."""
-        from .results import save
+        from .io.solution import save
 
         save(self, path)
 

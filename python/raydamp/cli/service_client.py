@@ -20,7 +20,7 @@ _PIECE = 1 << 20
 
 
 def add_client_commands(commands) -> None:
-    """The jobs and sweeps subcommands, on cli.py's subparsers."""
+    """The jobs and sweeps subcommands, on the command line's subparsers (commands.py)."""
     for kind in ("jobs", "sweeps"):
         one = kind[:-1]
         parser = commands.add_parser(kind, help=f"list, show, cancel, delete or download the {kind} of a running "

@@ -10,9 +10,9 @@ import shutil
 import sys
 from pathlib import Path
 
-from .integrate import integrate
-from .jobs import job_arguments
-from .results import FORMATS
+from ..jobs import job_arguments
+from ..results.io.solution import FORMATS
+from ..run.integrate import integrate
 
 __all__ = ["run_file", "read_spec"]
 

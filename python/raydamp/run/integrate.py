@@ -7,13 +7,13 @@ import math
 import time
 from collections.abc import Callable, Mapping
 
-from . import _core
+from .. import _core
 import numpy as np
 
-from ._validation import _short, integer, real, vector
-from .models import Model
-from .solution import Solution
-from .user_tableau import resolve_user_tableau
+from .._validation import _short, integer, real, vector
+from ..methods.user_tableau import resolve_user_tableau
+from ..results.solution import Solution
+from ..systems.models import Model
 
 __all__ = ["integrate", "steps_for", "CancelToken", "MAX_SAVED_BYTES", "MAX_STEPS", "MAX_AMPLIFICATION"]
 

@@ -42,8 +42,8 @@ from typing import Any
 
 import numpy as np
 
-from . import _core
-from ._validation import _short, integer, real
+from .. import _core
+from .._validation import _short, integer, real
 from .models import Model
 
 __all__ = ["Chain", "BOND_FAMILIES", "chain_mode_energies", "MAX_SITES"]

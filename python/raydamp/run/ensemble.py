@@ -8,12 +8,12 @@ from typing import Any
 
 import numpy as np
 
-from . import _core
-from ._validation import integer, real
-from .ensemble_solution import EnsembleSolution
+from .. import _core
+from .._validation import integer, real
+from ..results.ensemble_solution import EnsembleSolution
+from ..systems.models import DampedPendulum, ElasticPendulum, Model
+from ..systems.system import System
 from .integrate import MAX_SAVED_BYTES, MAX_STEPS, CancelToken, _catalogue, span
-from .models import DampedPendulum, ElasticPendulum, Model
-from .system import System
 
 __all__ = ["integrate_ensemble", "member_parameters"]
 

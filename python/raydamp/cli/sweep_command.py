@@ -14,10 +14,11 @@ from pathlib import Path
 
 import numpy as np
 
-from .ensemble_solution import STATUSES
-from .results import ENSEMBLE_FORMATS, save_sweep
+from ..results.ensemble_solution import STATUSES
+from ..results.io.ensemble import ENSEMBLE_FORMATS
+from ..results.io.sweep import save_sweep
+from ..run.sweep import check_sweep, parse_grid_item, sweep
 from .run_command import read_spec
-from .sweep import check_sweep, parse_grid_item, sweep
 
 __all__ = ["sweep_file"]
 

@@ -4,7 +4,7 @@ SymEngine expressions built from that tree through SymEngine's Python API.
 User text never reaches eval/exec, SymPy's parse_expr/sympify or SymEngine's own
 string parser (which dies with SIGFPE on ``2**2**40``)::
 
-    >>> from raydamp.expressions import parse
+    >>> from raydamp.systems.expressions import parse
     >>> expr = parse("k/2*(sqrt(x^2+y^2+z^2) - l)^2 - m*g*z", field="potential",
     ...              names={"x": "coordinate", "y": "coordinate", "z": "coordinate",
     ...                     "k": "parameter", "l": "parameter", "m": "parameter", "g": "parameter"})

@@ -1,0 +1,42 @@
+"""Results as files, each kind in its module: a Solution (solution.py: NetCDF, NPZ, CSV), an
+EnsembleSolution (ensemble.py: NetCDF, Zarr) and a sweep's Dataset (sweep.py: NetCDF, Zarr);
+``load`` reads any of them back by its suffix and the file's ``kind`` attribute."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..ensemble_solution import EnsembleSolution
+from ..solution import Solution
+from .ensemble import ensemble_from_xarray
+from .solution import from_npz, from_xarray
+
+__all__ = ["load"]
+
+
+def load(path) -> Solution | EnsembleSolution:
+    """Read a solution written by ``Solution.save`` (.nc, .npz) or an ensemble written by
+    ``EnsembleSolution.save`` (.nc, .zarr), with its provenance; a sweep's file (.nc, .zarr)
+    comes back as its xarray.Dataset."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix in (".nc", ".zarr"):
+        import xarray as xr
+
+        if suffix == ".zarr":
+            with xr.open_zarr(path) as ds:
+                return _from_dataset(ds.load())
+        with xr.open_dataset(path, engine="h5netcdf") as ds:
+            return _from_dataset(ds.load())
+    if suffix == ".npz":
+        return from_npz(path)
+    if suffix == ".csv":
+        raise ValueError("path: a .csv file keeps the numbers only; save as .nc or .npz to load it back")
+    raise ValueError(f"path: unknown format {path.suffix!r} (known: .nc, .npz, .zarr)")
+
+
+def _from_dataset(ds):
+    kind = ds.attrs.get("kind")
+    if kind == "sweep":  # a sweep's result is its Dataset (raydamp.sweep's layout)
+        return ds
+    return ensemble_from_xarray(ds) if kind == "ensemble" else from_xarray(ds)

@@ -1,0 +1,100 @@
+"""An EnsembleSolution as files: an xarray Dataset with dims (member, time, dof), NetCDF and Zarr,
+with its provenance."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..ensemble_solution import STATUSES, EnsembleSolution
+
+__all__ = ["ensemble_to_xarray", "ensemble_from_xarray", "save_ensemble", "ENSEMBLE_FORMATS"]
+
+ENSEMBLE_FORMATS = (".nc", ".zarr")
+
+
+def _member_coordinates(parameters: dict[str, np.ndarray]) -> dict[str, Any]:
+    coords: dict[str, Any] = {}
+    for name, values in parameters.items():
+        coords[name] = (("member",), values) if values.ndim == 1 else (("member", f"{name}_component"), values)
+    return coords
+
+
+def ensemble_to_xarray(ens: EnsembleSolution):
+    """The ensemble as an xarray.Dataset: dims (member, time, dof, momentum_map), a member
+    coordinate per swept parameter, the provenance and shared scalars in attrs. Statuses are
+    stored as codes (``status.attrs['flag_meanings']``) and the messages of members that did not
+    complete as a JSON attribute, so the file needs no string arrays."""
+    try:
+        import xarray as xr
+    except ImportError as error:
+        raise ImportError("to_xarray needs xarray: pip install 'raydamp[io]'") from error
+    codes = np.array([STATUSES.index(s) for s in ens.status], dtype=np.int8)
+    data = {
+        "q": (("member", "time", "dof"), ens.q, {"long_name": "positions (NaN past a member's rows)"}),
+        "p": (("member", "time", "dof"), ens.p, {"long_name": "momenta (NaN past a member's rows)"}),
+        "energy": (("member", "time"), ens.energy, {"long_name": "H(q, p)"}),
+        "momentum": (("member", "time", "momentum_map"), ens.momentum, {"long_name": "momentum maps"}),
+        "q0": (("member", "dof"), ens.q0, {"long_name": "initial positions"}),
+        "p0": (("member", "dof"), ens.p0, {"long_name": "initial momenta"}),
+        "rows": (("member",), np.asarray(ens.rows, np.int64), {"long_name": "rows of the save grid reached"}),
+        "t_final": (("member",), ens.t_final, {"long_name": "time of the last (finite) state"}),
+        "q_final": (("member", "dof"), ens.q_final),
+        "p_final": (("member", "dof"), ens.p_final),
+        "energy_final": (("member",), ens.energy_final),
+        "momentum_final": (("member", "momentum_map"), ens.momentum_final),
+        "steps": (("member",), np.asarray(ens.steps, np.int64)),
+        "failed_step": (("member",), np.asarray(ens.failed_step, np.int64), {"long_name": "-1: none"}),
+        "status": (("member",), codes, {"flag_values": list(range(len(STATUSES))),
+                                         "flag_meanings": " ".join(STATUSES)}),
+        "max_momentum_drift": (("member",), ens.max_momentum_drift),
+    }
+    coords = {"member": np.arange(ens.members), "t": (("time",), ens.t), "dof": list(ens.coordinates),
+              "momentum_map": list(ens.momentum_names), **_member_coordinates(ens.parameters)}
+    provenance = ens.provenance or {}
+    messages = {str(i): m for i, (s, m) in enumerate(zip(ens.status, ens.message)) if s != "completed"}
+    attrs = {"kind": "ensemble", "provenance": json.dumps(provenance), "method": ens.method,
+             "tableau": ens.tableau or "", "composition": ens.composition or "", "h": ens.h,
+             "wall_time": ens.wall_time, "threads": ens.threads, "parameters": json.dumps(list(ens.parameters)),
+             "messages": json.dumps(messages), "raydamp_version": provenance.get("raydamp_version", "")}
+    return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+def ensemble_from_xarray(ds) -> EnsembleSolution:
+    """An EnsembleSolution from ``ensemble_to_xarray``'s Dataset, provenance included."""
+    attrs = dict(ds.attrs)
+    status = tuple(STATUSES[int(c)] for c in ds["status"].values)
+    steps = np.asarray(ds["steps"].values, np.int64)
+    messages = json.loads(attrs["messages"])
+    message = tuple(messages.get(str(i), f"completed {steps[i]} steps") for i in range(len(status)))
+    members = ds.sizes["member"]
+
+    def values(name):
+        return np.asarray(ds[name].values, float)
+
+    return EnsembleSolution(
+        t=values("t"), q=values("q"), p=values("p"), energy=values("energy"),
+        momentum=values("momentum").reshape(members, ds.sizes["time"], -1), rows=np.asarray(ds["rows"].values, np.int64),
+        t_final=values("t_final"), q_final=values("q_final"), p_final=values("p_final"),
+        energy_final=values("energy_final"), momentum_final=values("momentum_final").reshape(members, -1),
+        status=status, steps=steps, failed_step=np.asarray(ds["failed_step"].values, np.int64), message=message,
+        max_momentum_drift=values("max_momentum_drift"), q0=values("q0"), p0=values("p0"),
+        parameters={name: values(name) for name in json.loads(attrs["parameters"])}, method=str(attrs["method"]),
+        tableau=str(attrs["tableau"]) or None, composition=str(attrs["composition"]) or None, h=float(attrs["h"]),
+        wall_time=float(attrs["wall_time"]), threads=int(attrs["threads"]), origin=json.loads(attrs["provenance"]))
+
+
+def save_ensemble(ens: EnsembleSolution, path) -> None:
+    """Write ``ens`` to ``path``: .nc (NetCDF via h5netcdf) or .zarr (a Zarr store, replaced if present)."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix == ".nc":
+        ensemble_to_xarray(ens).to_netcdf(path, engine="h5netcdf")
+    elif suffix == ".zarr":
+        # Zarr format 2: its string arrays (the dof names) have a settled spec, unlike format 3 yet.
+        ensemble_to_xarray(ens).to_zarr(path, mode="w", zarr_format=2)
+    else:
+        raise ValueError(f"path: unknown format {path.suffix!r} for an ensemble (known: {', '.join(ENSEMBLE_FORMATS)})")

@@ -1,0 +1,32 @@
+"""The provenance every Solution carries: the job JSON of its run (the JSON the service takes and
+``raydamp run`` reads, so a saved result can be run again) plus the raydamp version."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .._core import __version__
+from ..jobs import PROVENANCE_KEYS
+from ..systems.kinds import describe_model
+from ..systems.models import Model
+
+__all__ = ["PROVENANCE_KEYS", "job_spec"]
+
+
+def job_spec(model: Model, q0: np.ndarray, p0: np.ndarray, *, method: str, tableau: str | None,
+             composition: str | None, h: float, t_end: float | None, n_steps: int | None, save_every: int,
+             work: bool, save_dofs: list[int] | None = None) -> dict[str, Any]:
+    """The job spec of a run: what Solution.provenance holds."""
+    spec = describe_model(model)
+    spec.update({"method": method, "tableau": tableau, "composition": composition, "h": h, "save_every": save_every, "work": work,
+                 "initial_state": {"q": np.asarray(q0, float).tolist(), "p": np.asarray(p0, float).tolist()}})
+    if save_dofs is not None:
+        spec["save_dofs"] = list(save_dofs)
+    if t_end is not None:
+        spec["t_end"] = t_end
+    else:
+        spec["n_steps"] = n_steps
+    spec["raydamp_version"] = __version__
+    return spec
