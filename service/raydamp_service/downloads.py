@@ -16,7 +16,7 @@ from typing import Any, Literal
 import raydamp
 from raydamp.models import MODELS
 
-from .store import JobRecord, TrajectoryArrays
+from .jobs import JobRecord, TrajectoryArrays
 
 __all__ = ["FORMATS", "PLOTS", "stored_solution", "file_bytes", "plot_png"]
 

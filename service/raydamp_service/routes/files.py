@@ -17,7 +17,7 @@ from fastapi.exceptions import RequestValidationError
 from ..deps import SettingsDep, StoreDep
 from ..files import MatrixFileError, check_matrix_market
 from ..schemas import FileInfo, FileList
-from ..store import FileRecord
+from ..files import FileRecord
 
 router = APIRouter(prefix="/v1/files", tags=["files"])
 
