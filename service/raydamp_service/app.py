@@ -15,8 +15,8 @@ from fastapi.exceptions import RequestValidationError
 from .config import Settings
 from .errors import validation_error_handler
 from .guard import RequestGuard, needs_token
-from .routes import catalogue, files, health, jobs, page, sweeps
 from .jobs import JobStore
+from .routes import catalogue, files, health, jobs, page, sweeps
 from .runner import Runner
 from .store import Database
 from .sweeps import SweepStore

@@ -12,7 +12,6 @@ cancel and a worker's claim cannot both win.
 from __future__ import annotations
 
 import dataclasses
-import functools
 import json
 import sqlite3
 import threading
@@ -171,21 +170,13 @@ class TaskRecord:
 
     @classmethod
     def from_row(cls, row: sqlite3.Row) -> TaskRecord:
-        return cls(**{name: decode(row[name]) for name, decode in _decoders(cls)})
+        return cls(**{field.name: _decode(field.type, row[field.name]) for field in dataclasses.fields(cls)})
 
 
-def _json(text: str | None) -> Any:
-    return json.loads(text) if text is not None else None
-
-
-def _same(value: Any) -> Any:
-    return value
-
-
-@functools.cache
-def _decoders(record: type[TaskRecord]) -> tuple[tuple[str, Callable[[Any], Any]], ...]:
-    return tuple((field.name, _json if field.type.startswith("dict") else bool if field.type == "bool" else _same)
-                 for field in dataclasses.fields(record))
+def _decode(annotation: str, value: Any) -> Any:
+    if value is not None and annotation.startswith("dict"):
+        return json.loads(value)
+    return bool(value) if annotation == "bool" else value
 
 
 Record = TypeVar("Record", bound=TaskRecord)
@@ -222,7 +213,7 @@ class TaskStore(Generic[Record]):
                      f"{self.TABLES}", self._upgrade)
 
     def _upgrade(self, db: sqlite3.Connection) -> None:
-        """Bring the kind's tables in a file written by an older service up to SCHEMA."""
+        """Bring the kind's tables in a file written by an older service up to today's columns."""
 
     def close(self) -> None:
         self.db.close()

@@ -27,7 +27,6 @@ __all__ = ["SweepStore", "SweepRecord", "SweepWork"]
 log = logging.getLogger("raydamp_service.sweeps")
 
 
-
 @dataclass(frozen=True, kw_only=True)
 class SweepRecord(TaskRecord):
     members: int

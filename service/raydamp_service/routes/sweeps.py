@@ -11,8 +11,8 @@ from fastapi.responses import StreamingResponse
 
 from ..deps import SettingsDep
 from ..problems import SpecError
-from ..store import FINAL_STATUSES
 from ..runner import Runner
+from ..store import FINAL_STATUSES
 from ..sweep_problems import check_sweep_spec
 from ..sweep_schemas import SweepCreated, SweepList, SweepListItem, SweepSpec, SweepView
 from ..sweeps import SweepRecord, SweepStore
