@@ -168,16 +168,6 @@ class TaskRecord:
     started_at: str | None = None
     finished_at: str | None = None
 
-    @classmethod
-    def from_row(cls, row: sqlite3.Row) -> TaskRecord:
-        return cls(**{field.name: _decode(field.type, row[field.name]) for field in dataclasses.fields(cls)})
-
-
-def _decode(annotation: str, value: Any) -> Any:
-    if value is not None and annotation.startswith("dict"):
-        return json.loads(value)
-    return bool(value) if annotation == "bool" else value
-
 
 Record = TypeVar("Record", bound=TaskRecord)
 
@@ -200,8 +190,12 @@ class TaskStore(Generic[Record]):
     def __init__(self, database: Database | Path | str):
         self.db = database if isinstance(database, Database) else Database(database)
         self._requeued = f"status = 'queued', started_at = NULL, {self.PROGRESS} = 0"
+        fields = dataclasses.fields(self.RECORD)
         self._columns = ", ".join(f"{self.COMPUTED[field.name]} AS {field.name}" if field.name in self.COMPUTED
-                                  else field.name for field in dataclasses.fields(self.RECORD))
+                                  else field.name for field in fields)
+        self._names = tuple(field.name for field in fields)
+        self._json = tuple(field.name for field in fields if field.type.startswith("dict"))
+        self._bool = tuple(field.name for field in fields if field.type == "bool")
 
     @property
     def path(self) -> Path:
@@ -224,20 +218,30 @@ class TaskStore(Generic[Record]):
 
     # ---- reading ----
 
+    def _record(self, row: sqlite3.Row) -> Record:
+        """The record of a row selected as self._columns (the record's fields, in order)."""
+        values = dict(zip(self._names, row))
+        for name in self._json:
+            if values[name] is not None:
+                values[name] = json.loads(values[name])
+        for name in self._bool:
+            values[name] = bool(values[name])
+        return self.RECORD(**values)
+
     def ping(self) -> None:
         self.db.connection().execute("SELECT 1").fetchone()
 
     def get(self, task_id: str) -> Record | None:
         row = self.db.connection().execute(f"SELECT {self._columns} FROM {self.TABLE} WHERE id = ?",
                                            (task_id,)).fetchone()
-        return self.RECORD.from_row(row) if row else None
+        return self._record(row) if row else None
 
     def recent(self, limit: int, status: str | None = None) -> list[Record]:
         """Newest first."""
         where, args = ("WHERE status = ?", (status,)) if status else ("", ())
         rows = self.db.connection().execute(
             f"SELECT {self._columns} FROM {self.TABLE} {where} ORDER BY seq DESC LIMIT ?", (*args, limit)).fetchall()
-        return [self.RECORD.from_row(row) for row in rows]
+        return [self._record(row) for row in rows]
 
     def stored_bytes(self) -> int:
         """Bytes of results held (the arrays; SQLite's own overhead is small beside them)."""
