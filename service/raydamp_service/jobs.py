@@ -122,11 +122,11 @@ class JobWork:
 
     def __init__(self, store: JobStore, settings: Settings):
         self._store = store
-        self.threads = settings.workers
+        self.threads, self.fraction = settings.workers, True
 
     def run(self, record: JobRecord, run: Run) -> Outcome:
         call = build_call(JobSpec.model_validate(record.spec), files=file_resolver(self._store))
-        solution = call.run(progress=lambda done, total: run.report(done / total if total else 1.0), cancel=run.token)
+        solution = call.run(progress=run.report, cancel=run.token)
         result = {"summary": solution.summary(), "trajectory": TrajectoryArrays(
             t=solution.t, q=solution.q, p=solution.p, energy=solution.energy, momentum=solution.momentum,
             work=solution.work)}

@@ -31,22 +31,24 @@ log = logging.getLogger("raydamp_service.runner")
 
 @dataclass
 class Run:
-    """A task being run: its cancel token, and its live progress in its kind's measure (a fraction of the
-    steps, members done), saved to the store at most every `every` seconds."""
+    """A task being run: its cancel token, and its live progress in its kind's measure (done / total, or the
+    count done when not `fraction`), saved to the store at most every `every` seconds."""
 
     save: Callable[[float], None]
     every: float
+    fraction: bool
     stopping: threading.Event
     token: raydamp.CancelToken = field(default_factory=raydamp.CancelToken)
     progress: float = 0
     saved_at: float = field(default_factory=time.monotonic)
     cancelled_by_user: bool = False
 
-    def report(self, progress: float) -> None:
-        self.progress = progress
+    def report(self, done: int, total: int) -> None:
+        """raydamp's progress callback (called once per step of a small job: one Python call, no more)."""
+        self.progress = (done / total if total else 1.0) if self.fraction else done
         if time.monotonic() - self.saved_at >= self.every:
             self.saved_at = time.monotonic()
-            self.save(progress)
+            self.save(self.progress)
 
     @property
     def interrupted(self) -> bool:
@@ -65,9 +67,11 @@ class Outcome:
 
 
 class Work(Protocol):
-    """What a kind supplies: how many of its runs go at once, its run, and what to release at shutdown."""
+    """What a kind supplies: how many of its runs go at once, its progress measure, its run, and what to
+    release at shutdown."""
 
     threads: int
+    fraction: bool  # progress is done / total (a job's steps); else the count done (a sweep's members)
 
     def run(self, record: TaskRecord, run: Run) -> Outcome: ...
 
@@ -174,7 +178,7 @@ class Runner:
 
     def _run(self, task_id: str) -> None:
         run = Run(save=lambda progress: self._save_progress(task_id, progress),
-                  every=self._settings.progress_save_seconds, stopping=self._stopping)
+                  every=self._settings.progress_save_seconds, fraction=self._work.fraction, stopping=self._stopping)
         # Registered before the claim, so a cancel arriving once the task is "running" always finds the token.
         with self._lock:
             self._active[task_id] = run

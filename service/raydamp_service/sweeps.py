@@ -58,7 +58,7 @@ class SweepWork:
     is made at the first sweep: to the scheduler at settings.dask_scheduler, or to a LocalCluster inside this
     process (threads). Progress is the members of the chunks finished; a cancel keeps them as the result."""
 
-    threads = 1
+    threads, fraction = 1, False  # members done
 
     def __init__(self, store: SweepStore, settings: Settings):
         self._store = store
@@ -89,7 +89,7 @@ class SweepWork:
         spec = SweepSpec.model_validate(record.spec)
         job, grid = sweep_arguments(spec)
         ds = raydamp.sweep(job, grid, client=self._dask_client(), chunk_size=spec.chunk_size,
-                           progress=lambda done, total: run.report(done), cancel=run.token)  # once per chunk
+                           progress=run.report, cancel=run.token)  # once per chunk
         cancelled = bool(ds.attrs.get("cancelled"))
         if cancelled and run.interrupted:
             return Outcome("cancelled")  # handed back to the queue: no result to write
