@@ -15,7 +15,8 @@ from pydantic import ValidationError
 
 from .app import create_app
 from .config import Settings, is_loopback
-from .store import JobStore, StoreUnavailable
+from .jobs import JobStore
+from .store import StoreUnavailable
 
 
 def _refuse(message: str) -> None:

@@ -15,11 +15,11 @@ from fastapi.exceptions import RequestValidationError
 from .config import Settings
 from .errors import validation_error_handler
 from .guard import RequestGuard, needs_token
+from .jobs import JobStore
 from .routes import catalogue, files, health, jobs, page, sweeps
 from .runner import Runner
-from .store import JobStore
-from .sweep_runner import SweepRunner
-from .sweep_store import SweepStore
+from .store import Database
+from .sweeps import SweepStore
 
 __all__ = ["ROUTERS", "create_app"]
 
@@ -32,12 +32,11 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
-        store = JobStore(settings.db)
+        database = Database(settings.db)  # one file, one table per kind of task, one runner per kind
+        store, sweeps = JobStore(database), SweepStore(database)
         store.open()
-        runner = Runner(store, settings)
-        sweeps = SweepStore(store)
         sweeps.open()
-        sweep_runner = SweepRunner(sweeps, settings)
+        runner, sweep_runner = Runner(store, settings), Runner(sweeps, settings)
         app.state.store, app.state.runner = store, runner
         app.state.sweeps, app.state.sweep_runner = sweeps, sweep_runner
         runner.start()
@@ -51,7 +50,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         finally:
             sweep_runner.stop()
             runner.stop()
-            store.close()
+            database.close()
 
     # /docs is ours (routes/page.py), with Swagger UI served locally; ReDoc would load from a CDN.
     app = FastAPI(title="raydamp", version=raydamp.__version__, lifespan=lifespan, docs_url=None, redoc_url=None,

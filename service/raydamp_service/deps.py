@@ -13,8 +13,8 @@ from typing import Annotated
 from fastapi import Depends, Request
 
 from .config import Settings
+from .jobs import JobStore
 from .runner import Runner
-from .store import JobStore
 
 __all__ = ["SettingsDep", "StoreDep", "RunnerDep", "get_settings", "get_store", "get_runner"]
 

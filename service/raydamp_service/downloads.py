@@ -16,7 +16,7 @@ from typing import Literal
 import raydamp
 from raydamp.jobs import JobSpec
 
-from .store import JobRecord, TrajectoryArrays
+from .jobs import JobRecord, TrajectoryArrays
 
 __all__ = ["FORMATS", "PLOTS", "stored_solution", "file_bytes", "plot_png"]
 

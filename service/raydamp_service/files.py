@@ -1,4 +1,4 @@
-"""Uploaded Matrix Market files: checking an upload, and handing stored ones to raydamp.
+"""Uploaded Matrix Market files: checking an upload, storing it, and handing stored ones to raydamp.
 
 An upload is read as Matrix Market by scipy (what raydamp.LinearStructure reads too), after its
 header has been checked against the file's size: the reader allocates what the header announces,
@@ -8,16 +8,49 @@ so a 100-byte file claiming 10^9 entries must be refused before it is read, not 
 from __future__ import annotations
 
 import io
+import sqlite3
+import uuid
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from .store import JobStore
+from .store import UNFINISHED_SQL, Database, now
 
-__all__ = ["MatrixFileError", "MatrixFileInfo", "check_matrix_market", "file_resolver"]
+__all__ = ["FILES_TABLE", "FileRecord", "FileStore", "MatrixFileError", "MatrixFileInfo", "check_matrix_market",
+           "file_resolver"]
+
+FILES_TABLE = """
+CREATE TABLE IF NOT EXISTS files (          -- uploaded Matrix Market files, for a structure's {"file": id}
+    seq INTEGER PRIMARY KEY AUTOINCREMENT,
+    id TEXT NOT NULL UNIQUE,
+    name TEXT NOT NULL,
+    bytes INTEGER NOT NULL,
+    rows INTEGER NOT NULL, cols INTEGER NOT NULL, nnz INTEGER NOT NULL,
+    created_at TEXT NOT NULL,
+    content BLOB NOT NULL                   -- the file as uploaded
+);
+"""
 
 # The shortest line an entry can take: "1 1\n" (pattern), and "1\n" for a dense (array) file.
 _MIN_COORDINATE_LINE = 4
 _MIN_ARRAY_LINE = 2
+
+
+@dataclass(frozen=True)
+class FileRecord:
+    id: str
+    name: str
+    bytes: int
+    shape: tuple[int, int]
+    nnz: int
+    created_at: str
+
+
+_FILE_COLUMNS = "id, name, bytes, rows, cols, nnz, created_at"
+
+
+def _file_record(row: sqlite3.Row) -> FileRecord:
+    return FileRecord(id=row["id"], name=row["name"], bytes=row["bytes"], shape=(row["rows"], row["cols"]),
+                      nnz=row["nnz"], created_at=row["created_at"])
 
 
 class MatrixFileError(ValueError):
@@ -64,7 +97,65 @@ def check_matrix_market(content: bytes, *, max_dim: int) -> MatrixFileInfo:
     return MatrixFileInfo(shape=(int(rows), int(cols)), nnz=nnz)
 
 
-def file_resolver(store: JobStore) -> Callable[[str], io.BytesIO]:
+class FileStore:
+    """The uploads, in the database of the task store this is mixed into (jobs.JobStore): a file that one of
+    its tasks still to run names cannot be removed."""
+
+    db: Database
+    TABLE: str
+
+    def add_file(self, name: str, content: bytes, shape: tuple[int, int], nnz: int,
+                 max_total_bytes: int = 0) -> FileRecord | None:
+        """Store an upload; None (nothing written) when it would take the files past max_total_bytes (0: no bound)."""
+        record = FileRecord(id=uuid.uuid4().hex, name=name, bytes=len(content), shape=tuple(shape), nnz=nnz,
+                            created_at=now())
+        with self.db.transaction() as db:
+            # Checked and inserted in one statement, under the write lock, as create() does for the queue.
+            inserted = db.execute(
+                "INSERT INTO files (id, name, bytes, rows, cols, nnz, created_at, content) "
+                "SELECT ?, ?, ?, ?, ?, ?, ?, ? WHERE ? = 0 OR (SELECT COALESCE(SUM(bytes), 0) FROM files) + ? <= ?",
+                (record.id, name, len(content), *shape, nnz, record.created_at, content, max_total_bytes,
+                 len(content), max_total_bytes)).rowcount
+        return record if inserted else None
+
+    def file(self, file_id: str) -> FileRecord | None:
+        row = self.db.connection().execute(f"SELECT {_FILE_COLUMNS} FROM files WHERE id = ?", (file_id,)).fetchone()
+        return _file_record(row) if row else None
+
+    def files(self, limit: int) -> list[FileRecord]:
+        """Newest first."""
+        rows = self.db.connection().execute(f"SELECT {_FILE_COLUMNS} FROM files ORDER BY seq DESC LIMIT ?",
+                                            (limit,)).fetchall()
+        return [_file_record(row) for row in rows]
+
+    def file_content(self, file_id: str) -> bytes | None:
+        row = self.db.connection().execute("SELECT content FROM files WHERE id = ?", (file_id,)).fetchone()
+        return bytes(row[0]) if row else None
+
+    def delete_file(self, file_id: str) -> str:
+        """"deleted", "missing", or "in_use" when a queued or running job refers to it (then nothing changes).
+
+        One statement: a job that names the file and is still to run keeps it, so a run never loses its
+        matrix. Specs are stored as JSON, where the id appears as the string "<id>"."""
+        with self.db.transaction() as db:
+            deleted = db.execute(
+                f"DELETE FROM files WHERE id = ? AND NOT EXISTS (SELECT 1 FROM {self.TABLE} WHERE status IN "
+                f"{UNFINISHED_SQL} AND instr(spec, ?) > 0)", (file_id, f'"{file_id}"')).rowcount
+            exists = not deleted and db.execute("SELECT 1 FROM files WHERE id = ?", (file_id,)).fetchone()
+        if deleted:
+            self.db.give_back_space()
+            return "deleted"
+        return "in_use" if exists else "missing"
+
+    def jobs_using_file(self, file_id: str, limit: int = 10) -> list[str]:
+        """Ids of queued or running jobs whose spec names the file."""
+        rows = self.db.connection().execute(
+            f"SELECT id FROM {self.TABLE} WHERE status IN {UNFINISHED_SQL} AND instr(spec, ?) > 0 "
+            "ORDER BY seq LIMIT ?", (f'"{file_id}"', limit)).fetchall()
+        return [row["id"] for row in rows]
+
+
+def file_resolver(store: FileStore) -> Callable[[str], io.BytesIO]:
     """files(ref) for raydamp.LinearStructure.from_dict: a stored upload as an open file; an unknown id is
     a ValueError that raydamp reports at the matrix's path (system.K.file)."""
 

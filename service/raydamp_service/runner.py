@@ -1,116 +1,161 @@
-"""Worker threads that run queued jobs through raydamp.integrate.
+"""The runner of one kind of task: worker threads that take queued ids, claim the task in its store, run it
+through the kind's work (jobs.JobWork, sweeps.SweepWork) and record how it ended.
 
-HTTP handlers only write a row and put its id on the queue. Each worker takes an id,
-claims the job in the store, runs it (the C++ loop releases the GIL, so the event loop
-and the other workers keep going) and records the outcome with its trajectory.
+HTTP handlers only write a row and put its id on the queue. A cancel stops the run through its token and
+it ends "cancelled" with what it computed; at shutdown the runs are interrupted and handed back to the
+queue, to run again from the start at the next start (as are those a killed process left running).
 """
 
 from __future__ import annotations
 
 import logging
-import math
 import queue
 import sqlite3
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Protocol
 
 import raydamp
 
 from .config import Settings
-from .files import file_resolver
-from .problems import JobError, build_call
-from .schemas import JobSpec
-from .store import JobStore, TrajectoryArrays
 
-__all__ = ["Runner"]
+if TYPE_CHECKING:
+    from .store import TaskRecord, TaskStore
+
+__all__ = ["Runner", "Run", "Outcome", "Work"]
 
 log = logging.getLogger("raydamp_service.runner")
 
 
 @dataclass
-class _ActiveRun:
+class Run:
+    """A task being run: its cancel token, and its live progress in its kind's measure (done / total, or the
+    count done when not `fraction`), saved to the store at most every `every` seconds."""
+
+    save: Callable[[float], None]
+    every: float
+    fraction: bool
+    stopping: threading.Event
     token: raydamp.CancelToken = field(default_factory=raydamp.CancelToken)
-    progress: float = 0.0
+    progress: float = 0
     saved_at: float = field(default_factory=time.monotonic)
     cancelled_by_user: bool = False
 
+    def report(self, done: int, total: int) -> None:
+        """raydamp's progress callback (called once per step of a small job: one Python call, no more)."""
+        self.progress = (done / total if total else 1.0) if self.fraction else done
+        if time.monotonic() - self.saved_at >= self.every:
+            self.saved_at = time.monotonic()
+            self.save(self.progress)
+
+    @property
+    def interrupted(self) -> bool:
+        """Stopped by the service's shutdown, not by a user: a cancelled run is then queued again."""
+        return self.stopping.is_set() and not self.cancelled_by_user
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """How a run ended: a final status, and the kind's result as its store's finish() takes it."""
+
+    status: str
+    error: str | None = None
+    progress: float | None = None
+    result: dict[str, Any] = field(default_factory=dict)
+
+
+class Work(Protocol):
+    """What a kind supplies: how many of its runs go at once, its progress measure, its run, and what to
+    release at shutdown."""
+
+    threads: int
+    fraction: bool  # progress is done / total (a job's steps); else the count done (a sweep's members)
+
+    def run(self, record: TaskRecord, run: Run) -> Outcome: ...
+
+    def close(self) -> None: ...
+
 
 class Runner:
-    def __init__(self, store: JobStore, settings: Settings):
+    def __init__(self, store: TaskStore, settings: Settings):
         self._store = store
         self._settings = settings
+        self._work: Work = store.work(settings)
         self._queue: queue.Queue[str | None] = queue.Queue()
         self._threads: list[threading.Thread] = []
-        self._active: dict[str, _ActiveRun] = {}
+        self._active: dict[str, Run] = {}
         self._lock = threading.Lock()
         self._stopping = threading.Event()
         self._retention_wake = threading.Event()
-        self._retention: threading.Thread | None = None
 
     # ---- called by the application ----
 
     def start(self) -> None:
-        for i in range(self._settings.workers):
+        for i in range(self._work.threads):
             # daemon: a run that ignores cancellation must not keep a stopped service alive.
-            thread = threading.Thread(target=self._work, name=f"raydamp-worker-{i}", daemon=True)
+            self._threads.append(threading.Thread(target=self._serve, name=f"raydamp-{self._store.TABLE}-{i}",
+                                                  daemon=True))
+        if self._store.RETAINED:
+            self._threads.append(threading.Thread(target=self._retain, name="raydamp-retention", daemon=True))
+        for thread in self._threads:
             thread.start()
-            self._threads.append(thread)
-        self._retention = threading.Thread(target=self._retain, name="raydamp-retention", daemon=True)
-        self._retention.start()
         recovered = self._store.recover()
         if recovered:
-            log.info("re-queued %d job(s) left queued or running by a previous process", len(recovered))
-        for job_id in recovered:
-            self._queue.put(job_id)
+            log.info("re-queued %d %s left queued or running by a previous process", len(recovered), self._store.TABLE)
+        for task_id in recovered:
+            self._queue.put(task_id)
 
     def stop(self) -> None:
-        """Interrupt the runs; their jobs go back to "queued" and run again at the next start."""
+        """Interrupt the runs; their tasks go back to "queued" and run again at the next start."""
         self._stopping.set()
         with self._lock:
             for run in self._active.values():
                 run.token.cancel()
-        for _ in self._threads:
+        for _ in range(self._work.threads):
             self._queue.put(None)
         self._retention_wake.set()
         deadline = time.monotonic() + self._settings.shutdown_seconds
-        for thread in [*self._threads, *([self._retention] if self._retention else [])]:
+        for thread in self._threads:
             thread.join(timeout=max(0.0, deadline - time.monotonic()))
         self._threads.clear()
+        self._work.close()
 
-    def submit(self, job_id: str) -> None:
-        self._queue.put(job_id)
+    def submit(self, task_id: str) -> None:
+        self._queue.put(task_id)
 
-    def cancel(self, job_id: str) -> None:
+    def cancel(self, task_id: str) -> None:
         with self._lock:
-            run = self._active.get(job_id)
+            run = self._active.get(task_id)
             if run is not None:
                 run.cancelled_by_user = True
                 run.token.cancel()
 
-    def progress(self, job_id: str) -> float | None:
-        """The live progress of a running job (None if this process is not running it)."""
-        run = self._active.get(job_id)
+    def progress(self, task_id: str) -> float | None:
+        """The live progress of a running task (None if this process is not running it)."""
+        run = self._active.get(task_id)
         return run.progress if run is not None else None
 
     # ---- worker threads ----
 
-    def _work(self) -> None:
+    def _serve(self) -> None:
         while True:
-            job_id = self._queue.get()
-            if job_id is None or self._stopping.is_set():
-                return  # a job still queued stays "queued" in the store and is recovered at the next start
+            task_id = self._queue.get()
+            if task_id is None or self._stopping.is_set():
+                return  # a task still queued stays "queued" in the store and is recovered at the next start
             try:
-                self._run(job_id)
-            except Exception as error:  # a worker outlives any one job
-                log.exception("job %s: internal error", job_id)
+                self._run(task_id)
+            except Exception as error:  # a worker outlives any one task
+                log.exception("%s %s: internal error", self._store.TABLE, task_id)
                 try:
-                    self._store.finish(job_id, "failed", error=f"internal error: {type(error).__name__}: {error}")
+                    self._store.finish(task_id, "failed", error=f"internal error: {type(error).__name__}: {error}")
                 except sqlite3.Error:
-                    log.exception("job %s: could not record the failure; it is re-run at the next start", job_id)
+                    log.exception("%s %s: could not record the failure; it is re-run at the next start",
+                                  self._store.TABLE, task_id)
 
     def _retain(self) -> None:
-        """The retention pass: at start, after jobs finish (at most once a second), and periodically."""
+        """The retention pass: at start, after runs finish (at most once a second), and periodically."""
         settings = self._settings
         while not self._stopping.is_set():
             self._retention_wake.clear()
@@ -118,69 +163,45 @@ class Runner:
                 removed = self._store.prune(max_jobs=settings.retain_jobs, max_age_seconds=settings.retain_seconds,
                                             max_bytes=settings.retain_bytes)
                 if removed:
-                    log.info("retention: removed %d finished job(s)", removed)
+                    log.info("retention: removed %d finished %s", removed, self._store.TABLE)
             except sqlite3.Error:
                 log.warning("retention pass failed; it is tried again later", exc_info=True)
             if self._stopping.wait(1.0):
                 return
             self._retention_wake.wait(settings.retention_interval_seconds)
 
-    def _run(self, job_id: str) -> None:
-        run = _ActiveRun()
-        # Registered before the claim, so a cancel arriving once the job is "running" always finds the token.
-        with self._lock:
-            self._active[job_id] = run
+    def _save_progress(self, task_id: str, progress: float) -> None:
         try:
-            record = self._store.claim(job_id)
+            self._store.set_progress(task_id, progress)
+        except sqlite3.Error:  # the stored progress is advisory; never stop a run for it
+            log.warning("%s %s: could not save progress", self._store.TABLE, task_id, exc_info=True)
+
+    def _run(self, task_id: str) -> None:
+        run = Run(save=lambda progress: self._save_progress(task_id, progress),
+                  every=self._settings.progress_save_seconds, fraction=self._work.fraction, stopping=self._stopping)
+        # Registered before the claim, so a cancel arriving once the task is "running" always finds the token.
+        with self._lock:
+            self._active[task_id] = run
+        try:
+            record = self._store.claim(task_id)
             if record is None:
                 return  # cancelled while queued
             if record.cancel_requested:
                 run.cancelled_by_user = True
                 run.token.cancel()
             if self._stopping.is_set():
-                self._store.requeue(job_id)
+                self._store.requeue(task_id)
                 return
-            self._execute(job_id, JobSpec.model_validate(record.spec), run)
+            try:
+                outcome = self._work.run(record, run)
+            except ValueError as error:  # the spec passed the checks at submission (a file named has gone since)
+                outcome = Outcome("failed", str(error))
+            if outcome.status == "cancelled" and run.interrupted:
+                self._store.requeue(task_id)
+            else:
+                self._store.finish(task_id, outcome.status, error=outcome.error, progress=outcome.progress,
+                                   **outcome.result)
         finally:
             with self._lock:
-                self._active.pop(job_id, None)
+                self._active.pop(task_id, None)
             self._retention_wake.set()
-
-    def _execute(self, job_id: str, spec: JobSpec, run: _ActiveRun) -> None:
-        def on_progress(done: int, total: int) -> None:
-            run.progress = done / total if total else 1.0
-            now = time.monotonic()
-            if now - run.saved_at >= self._settings.progress_save_seconds:
-                run.saved_at = now
-                try:
-                    self._store.set_progress(job_id, run.progress)
-                except sqlite3.Error:  # the stored progress is advisory; never stop a run for it
-                    log.warning("job %s: could not save progress", job_id, exc_info=True)
-
-        try:
-            solution = build_call(spec, files=file_resolver(self._store)).run(progress=on_progress, cancel=run.token)
-        except JobError as error:  # passed at submission; an uploaded file it names has gone since
-            self._store.finish(job_id, "failed", error=error.message)
-            return
-        except ValueError as error:  # the spec passed the checks at submission; report, do not crash
-            self._store.finish(job_id, "failed", error=str(error))
-            return
-
-        if solution.status == "cancelled" and not run.cancelled_by_user and self._stopping.is_set():
-            self._store.requeue(job_id)
-            return
-        trajectory = TrajectoryArrays(t=solution.t, q=solution.q, p=solution.p, energy=solution.energy,
-                                      momentum=solution.momentum, work=solution.work)
-        outcome = {"summary": solution.summary(), "trajectory": trajectory, "progress": run.progress}
-        if solution.status == "completed" and not math.isfinite(float(solution.t[-1])):
-            # Refused at submission (step_size x steps must be finite); kept as a last guard, since a
-            # run whose times overflowed has not computed what was asked.
-            self._store.finish(job_id, "failed", error="the time overflowed to a non-finite value", **outcome)
-        elif solution.status == "completed":
-            self._store.finish(job_id, "completed", **outcome)
-        elif solution.status in ("non_finite", "out_of_memory"):
-            # A blow-up (or a trajectory that outgrew memory) is a failed job that keeps everything
-            # computed up to it.
-            self._store.finish(job_id, "failed", error=solution.message, failed_step=solution.failed_step, **outcome)
-        else:
-            self._store.finish(job_id, "cancelled", **outcome)

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .store import StoredTrajectory
+from .jobs import StoredTrajectory
 
 __all__ = ["FetchLease", "Selection", "trajectory_chunks"]
 

@@ -8,7 +8,7 @@ import time
 import pytest
 from raydamp_service.config import Settings
 from raydamp_service.runner import Runner
-from raydamp_service.store import JobStore
+from raydamp_service.jobs import JobStore
 
 LONG_RUN = {  # about a minute of steps: always still running when the test acts
     "model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "step_size": 0.001,

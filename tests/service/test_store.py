@@ -8,7 +8,7 @@ from datetime import datetime, timezone
 
 import numpy as np
 import pytest
-from raydamp_service.store import JobStore, TrajectoryArrays
+from raydamp_service.jobs import JobStore, TrajectoryArrays
 
 SPEC = {"model": "damped_pendulum", "method": "3s"}
 

@@ -15,9 +15,8 @@ from fastapi import APIRouter, File, HTTPException, Query, Request, Response, Up
 from fastapi.exceptions import RequestValidationError
 
 from ..deps import SettingsDep, StoreDep
-from ..files import MatrixFileError, check_matrix_market
+from ..files import FileRecord, MatrixFileError, check_matrix_market
 from ..schemas import FileInfo, FileList
-from ..store import FileRecord
 
 router = APIRouter(prefix="/v1/files", tags=["files"])
 

@@ -19,7 +19,8 @@ from ..problems import JobError, check_spec
 from ..runner import Runner
 from ..schemas import JobCreated, JobList, JobListItem, JobSpec, JobStatus, JobView, Trajectory
 from ..downloads import file_bytes, plot_png, stored_solution
-from ..store import FINAL_STATUSES, JobRecord, JobStore, TrajectoryArrays
+from ..jobs import JobRecord, JobStore, TrajectoryArrays
+from ..store import FINAL_STATUSES
 from ..trajectory_stream import FetchLease, Selection, trajectory_chunks
 
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"])

@@ -11,10 +11,10 @@ from fastapi.responses import StreamingResponse
 
 from ..deps import SettingsDep
 from ..problems import JobError, check_sweep_spec
+from ..runner import Runner
 from ..schemas import JobStatus, SweepCreated, SweepList, SweepListItem, SweepSpec, SweepView
 from ..store import FINAL_STATUSES
-from ..sweep_runner import SweepRunner
-from ..sweep_store import SweepRecord, SweepStore
+from ..sweeps import SweepRecord, SweepStore
 
 router = APIRouter(prefix="/v1/sweeps", tags=["sweeps"])
 
@@ -26,7 +26,7 @@ def _sweeps(request: Request) -> SweepStore:
     return request.app.state.sweeps
 
 
-def _runner(request: Request) -> SweepRunner:
+def _runner(request: Request) -> Runner:
     return request.app.state.sweep_runner
 
 
@@ -42,7 +42,7 @@ def _existing(request: Request, sweep_id: str) -> SweepRecord:
 
 
 def _done(record: SweepRecord, request: Request) -> int:
-    live = _runner(request).members_done(record.id) if record.status == "running" else None
+    live = _runner(request).progress(record.id) if record.status == "running" else None
     return live if live is not None else record.members_done
 
 
@@ -73,7 +73,7 @@ def submit_sweep(spec: SweepSpec, request: Request, response: Response, settings
     except JobError as error:
         raise RequestValidationError([{"type": "value_error", "loc": ("body", *error.loc), "msg": error.message,
                                        "input": None}]) from None
-    record = _sweeps(request).create(spec.model_dump(mode="json"), plan.members, settings.max_queued_sweeps)
+    record = _sweeps(request).create(spec.model_dump(mode="json"), settings.max_queued_sweeps, members=plan.members)
     if record is None:
         raise HTTPException(429, detail=f"{settings.max_queued_sweeps} sweeps are already queued "
                             "(max_queued_sweeps); retry later", headers={"Retry-After": str(settings.retry_after_seconds)})

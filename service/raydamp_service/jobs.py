@@ -1,0 +1,144 @@
+"""The job: one raydamp integration. Its table in the store (its summary, and its trajectory as float64
+blobs in a table of their own), the uploaded Matrix Market files its system may name, and its run."""
+
+from __future__ import annotations
+
+import math
+import sqlite3
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .config import Settings
+from .files import FILES_TABLE, FileStore, file_resolver
+from .problems import build_call
+from .runner import Outcome, Run
+from .schemas import JobSpec
+from .store import TaskRecord, TaskStore
+
+__all__ = ["JobStore", "JobRecord", "JobWork", "TrajectoryArrays", "StoredTrajectory"]
+
+_FLOAT = np.dtype("<f8")  # the blob format: little-endian float64, row-major
+_TABLES = """
+CREATE TABLE IF NOT EXISTS trajectories (
+    job_id TEXT PRIMARY KEY REFERENCES jobs(id) ON DELETE CASCADE,
+    points INTEGER NOT NULL,
+    dim INTEGER NOT NULL,
+    momenta INTEGER NOT NULL,
+    t BLOB NOT NULL, q BLOB NOT NULL, p BLOB NOT NULL, energy BLOB NOT NULL, momentum BLOB NOT NULL,
+    work BLOB                               -- the damping work W(t) (N), NULL for jobs stored before it was kept
+);
+"""
+
+
+@dataclass(frozen=True, kw_only=True)
+class JobRecord(TaskRecord):
+    progress: float = 0.0
+    summary: dict[str, Any] | None = None
+    failed_step: int | None = None
+    has_trajectory: bool = False
+
+
+@dataclass(frozen=True)
+class TrajectoryArrays:
+    """The saved points: t (N,), q and p (N, n), energy (N,), momentum (N, m), work W(t) (N,) or None."""
+
+    t: np.ndarray
+    q: np.ndarray
+    p: np.ndarray
+    energy: np.ndarray
+    momentum: np.ndarray
+    work: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class StoredTrajectory:
+    """Where a trajectory's blobs are (the row) and their shapes, for reading them in slices."""
+
+    rowid: int
+    points: int
+    dim: int
+    momenta: int
+    has_work: bool = False
+
+
+def _blob(array: np.ndarray | None) -> bytes | None:
+    return np.ascontiguousarray(array, dtype=_FLOAT).tobytes() if array is not None else None
+
+
+def _array(blob: bytes | None, *shape: int) -> np.ndarray | None:
+    return np.frombuffer(blob, dtype=_FLOAT).reshape(shape) if blob is not None else None
+
+
+class JobStore(TaskStore[JobRecord], FileStore):
+    """The jobs, their trajectories, and the uploaded files their systems name."""
+
+    TABLE, RECORD, PROGRESS, RETAINED, TABLES = "jobs", JobRecord, "progress", True, _TABLES + FILES_TABLE
+    COLUMNS = "progress REAL NOT NULL DEFAULT 0, summary TEXT, failed_step INTEGER"  # summary: Solution.summary()
+    COMPUTED = {"has_trajectory": "EXISTS (SELECT 1 FROM trajectories WHERE job_id = jobs.id)"}
+    # Stored bytes of a job's trajectory: t, energy, work (N), q, p (N x dim), momentum (N x m), float64.
+    BYTES = ("(SELECT points * (2 + (work IS NOT NULL) + 2 * dim + momenta) * 8 FROM trajectories "
+             "WHERE job_id = jobs.id)")
+
+    def _upgrade(self, db: sqlite3.Connection) -> None:
+        if "work" not in {row["name"] for row in db.execute("PRAGMA table_info(trajectories)")}:
+            db.execute("ALTER TABLE trajectories ADD COLUMN work BLOB")  # from before the work integral was kept
+
+    def work(self, settings: Settings) -> JobWork:
+        return JobWork(self, settings)
+
+    def finish(self, job_id: str, status: str, *, summary: dict[str, Any] | None = None, error: str | None = None,
+               failed_step: int | None = None, trajectory: TrajectoryArrays | None = None,
+               progress: float | None = None) -> None:
+        """Record the end of a run and its saved points in one transaction: all of it or none."""
+        row = None if trajectory is None else (
+            "INSERT OR REPLACE INTO trajectories (job_id, points, dim, momenta, t, q, p, energy, momentum, work) "
+            "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+            (job_id, *trajectory.q.shape, trajectory.momentum.shape[1],
+             *(_blob(getattr(trajectory, name)) for name in ("t", "q", "p", "energy", "momentum", "work"))))
+        super().finish(job_id, status, error=error, progress=1.0 if status == "completed" else progress, also=row,
+                       summary=summary, failed_step=failed_step)
+
+    def trajectory(self, job_id: str) -> TrajectoryArrays | None:
+        row = self.db.connection().execute("SELECT * FROM trajectories WHERE job_id = ?", (job_id,)).fetchone()
+        if row is None:
+            return None
+        n, dim, m = row["points"], row["dim"], row["momenta"]
+        return TrajectoryArrays(t=_array(row["t"], n), q=_array(row["q"], n, dim), p=_array(row["p"], n, dim),
+                                energy=_array(row["energy"], n), momentum=_array(row["momentum"], n, m),
+                                work=_array(row["work"], n))
+
+    def open_trajectory(self, job_id: str) -> tuple[sqlite3.Connection, StoredTrajectory] | None:
+        """A read-only connection holding a snapshot in which the job's trajectory exists, and where it is.
+        The caller reads the blobs through it (incremental I/O) and closes it."""
+        found = self.db.snapshot("SELECT rowid, points, dim, momenta, work IS NOT NULL FROM trajectories "
+                                 "WHERE job_id = ?", (job_id,))
+        return (found[0], StoredTrajectory(*found[1][:4], has_work=bool(found[1][4]))) if found else None
+
+
+class JobWork:
+    """A job's run: raydamp.integrate on a worker thread (the C++ loop releases the GIL), `workers` at once."""
+
+    def __init__(self, store: JobStore, settings: Settings):
+        self._store = store
+        self.threads, self.fraction = settings.workers, True
+
+    def run(self, record: JobRecord, run: Run) -> Outcome:
+        call = build_call(JobSpec.model_validate(record.spec), files=file_resolver(self._store))
+        solution = call.run(progress=run.report, cancel=run.token)
+        result = {"summary": solution.summary(), "trajectory": TrajectoryArrays(
+            t=solution.t, q=solution.q, p=solution.p, energy=solution.energy, momentum=solution.momentum,
+            work=solution.work)}
+        if solution.status == "completed" and not math.isfinite(float(solution.t[-1])):
+            # Refused at submission (step_size x steps must be finite); kept as a last guard, since a
+            # run whose times overflowed has not computed what was asked.
+            return Outcome("failed", "the time overflowed to a non-finite value", run.progress, result)
+        if solution.status in ("non_finite", "out_of_memory"):
+            # A blow-up (or a trajectory that outgrew memory) is a failed job that keeps everything
+            # computed up to it.
+            return Outcome("failed", solution.message, run.progress, {**result, "failed_step": solution.failed_step})
+        return Outcome("completed" if solution.status == "completed" else "cancelled", None, run.progress, result)
+
+    def close(self) -> None:
+        """Nothing held between runs."""

@@ -1,0 +1,106 @@
+"""The sweep: a job over a grid of members, run through raydamp.sweep on a Dask client. Its table in the
+store (members, members done as its progress, outcomes, the NetCDF result as a blob) and its run."""
+
+from __future__ import annotations
+
+import logging
+import sqlite3
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import raydamp
+from raydamp.results.ensemble_solution import STATUSES
+from raydamp.results.io.sweep import save_sweep
+
+from .config import Settings
+from .runner import Outcome, Run
+from .store import TaskRecord, TaskStore
+from .problems import sweep_arguments
+from .schemas import SweepSpec
+
+__all__ = ["SweepStore", "SweepRecord", "SweepWork"]
+
+log = logging.getLogger("raydamp_service.sweeps")
+
+
+@dataclass(frozen=True, kw_only=True)
+class SweepRecord(TaskRecord):
+    members: int
+    members_done: int = 0
+    outcomes: dict[str, int] | None = None
+    result_bytes: int | None = None
+
+
+class SweepStore(TaskStore[SweepRecord]):
+    TABLE, RECORD, PROGRESS, NOUN = "sweeps", SweepRecord, "members_done", "sweep"
+    # outcomes: {status: members} as JSON; result: the Dataset as NetCDF (raydamp.load reads it)
+    COLUMNS = "members INTEGER NOT NULL, members_done INTEGER NOT NULL DEFAULT 0, outcomes TEXT, result BLOB"
+    COMPUTED = {"result_bytes": "length(result)"}
+    BYTES = "length(result)"
+
+    def work(self, settings: Settings) -> SweepWork:
+        return SweepWork(self, settings)
+
+    def result_handle(self, sweep_id: str) -> tuple[sqlite3.Connection, int, int] | None:
+        """(a read-only connection holding a snapshot, the blob's rowid, its size) for streaming the result;
+        None if there is no result. The caller closes the connection."""
+        found = self.db.snapshot("SELECT rowid, length(result) FROM sweeps WHERE id = ? AND result IS NOT NULL",
+                                 (sweep_id,))
+        return (found[0], *found[1]) if found else None
+
+
+class SweepWork:
+    """A sweep's run, one at a time (a sweep already spreads over every worker of the cluster). The Dask client
+    is made at the first sweep: to the scheduler at settings.dask_scheduler, or to a LocalCluster inside this
+    process (threads). Progress is the members of the chunks finished; a cancel keeps them as the result."""
+
+    threads, fraction = 1, False  # members done
+
+    def __init__(self, store: SweepStore, settings: Settings):
+        self._store = store
+        self._settings = settings
+        self._client = self._cluster = None
+
+    def _dask_client(self):
+        if self._client is None:
+            from dask.distributed import Client, LocalCluster
+
+            if self._settings.dask_scheduler:
+                self._client = Client(self._settings.dask_scheduler, timeout=30)
+            else:
+                self._cluster = LocalCluster(n_workers=1, threads_per_worker=self._settings.sweep_threads,
+                                             processes=False, dashboard_address=None)
+                self._client = Client(self._cluster)
+        return self._client
+
+    def close(self) -> None:
+        for thing in (self._client, self._cluster):
+            if thing is not None:
+                try:
+                    thing.close()
+                except Exception:  # a cluster already gone must not stop the shutdown
+                    log.warning("closing the Dask client failed", exc_info=True)
+
+    def run(self, record: SweepRecord, run: Run) -> Outcome:
+        spec = SweepSpec.model_validate(record.spec)
+        job, grid = sweep_arguments(spec)
+        ds = raydamp.sweep(job, grid, client=self._dask_client(), chunk_size=spec.chunk_size,
+                           progress=run.report, cancel=run.token)  # once per chunk
+        cancelled = bool(ds.attrs.get("cancelled"))
+        if cancelled and run.interrupted:
+            return Outcome("cancelled")  # handed back to the queue: no result to write
+        status = ds["status"].values
+        outcomes = {name: int((status == code).sum()) for code, name in enumerate(STATUSES) if (status == code).any()}
+        done = int(status.size - (status == STATUSES.index("cancelled")).sum()) if cancelled else int(status.size)
+        with tempfile.TemporaryDirectory(dir=self._store.path.resolve().parent) as scratch:
+            path = Path(scratch) / "sweep.nc"
+            save_sweep(ds, path)
+            result: dict[str, Any] = {"outcomes": outcomes, "result": path.read_bytes()}
+        failed = 0 if cancelled else int(np.count_nonzero(status != STATUSES.index("completed")))
+        error = f"{failed} of {status.size} members did not complete (see outcomes and the result's messages)" \
+            if failed else None
+        return Outcome("cancelled" if cancelled else "completed", error, done, result)
