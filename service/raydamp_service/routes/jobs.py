@@ -21,22 +21,12 @@ from ..schemas import JobCreated, JobList, JobListItem, JobSpec, JobStatus, JobV
 from ..downloads import file_bytes, plot_png, stored_solution
 from ..jobs import JobRecord, JobStore, TrajectoryArrays
 from ..store import FINAL_STATUSES
+from .tasks import Tasks, check_limit, invalid
 from ..trajectory_stream import FetchLease, Selection, trajectory_chunks
 
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"])
 
 _NOT_FOUND = {404: {"description": "no job with this id"}}
-
-
-def _job_url(job_id: str) -> str:
-    return f"/v1/jobs/{job_id}"
-
-
-def _existing(store: JobStore, job_id: str) -> JobRecord:
-    record = store.get(job_id)
-    if record is None:
-        raise HTTPException(404, detail=f"no job with id {job_id!r}")
-    return record
 
 
 def _progress(record: JobRecord, runner: Runner) -> float:
@@ -50,20 +40,12 @@ def _view(record: JobRecord, runner: Runner) -> JobView:
     return JobView(
         id=record.id, status=record.status, progress=_progress(record, runner), attempts=record.attempts,
         cancel_requested=record.cancel_requested, error=record.error, failed_step=record.failed_step,
-        summary=record.summary, trajectory=_job_url(record.id) + "/trajectory" if record.has_trajectory else None,
+        summary=record.summary, trajectory=JOBS.url(record.id) + "/trajectory" if record.has_trajectory else None,
         spec=JobSpec.model_validate(record.spec), created_at=record.created_at, started_at=record.started_at,
         finished_at=record.finished_at)
 
 
-def _value_at(data: Any, loc: tuple[str | int, ...]) -> Any:
-    for key in loc:
-        if isinstance(data, dict):
-            data = data.get(key)
-        elif isinstance(data, list) and isinstance(key, int) and 0 <= key < len(data):
-            data = data[key]
-        else:
-            return None
-    return data
+JOBS = Tasks("job", "/v1/jobs", _view)
 
 
 def _model_label(spec: dict[str, Any]) -> str:
@@ -83,16 +65,8 @@ def submit_job(spec: JobSpec, request: Request, response: Response, store: Store
     try:
         check_spec(spec, settings, files=file_resolver(store))
     except JobError as error:
-        # The same shape as pydantic's own 422s, so a client reads one format.
-        raise RequestValidationError([{"type": "value_error", "loc": ("body", *error.loc), "msg": error.message,
-                                       "input": _value_at(spec.model_dump(), error.loc)}]) from None
-    record = store.create(spec.model_dump(mode="json"), max_queued=settings.max_queued)
-    if record is None:
-        raise HTTPException(429, detail=f"{settings.max_queued} jobs are already queued (max_queued); retry later",
-                            headers={"Retry-After": str(settings.retry_after_seconds)})
-    runner.submit(record.id)
-    # A path, never built from the Host header: a forged Host must not come back as a redirect target.
-    response.headers["Location"] = request.scope.get("root_path", "") + _job_url(record.id)
+        raise invalid(error, spec.model_dump()) from None
+    record = JOBS.queue(request, response, store, runner, spec, settings.max_queued, "max_queued", settings)
     return JobCreated(id=record.id, status=record.status)
 
 
@@ -100,19 +74,17 @@ def submit_job(spec: JobSpec, request: Request, response: Response, store: Store
 def list_jobs(store: StoreDep, runner: RunnerDep, settings: SettingsDep,
               limit: Annotated[int, Query(ge=1, description="at most this many jobs, newest first")] = 50,
               status: Annotated[JobStatus | None, Query(description="only jobs in this state")] = None) -> JobList:
-    if limit > settings.max_list_limit:
-        raise RequestValidationError([{"type": "less_than_equal", "loc": ("query", "limit"), "input": limit,
-                                       "msg": f"limit must be <= {settings.max_list_limit}"}])
+    check_limit(limit, settings)
     return JobList(jobs=[
         JobListItem(id=r.id, status=r.status, progress=_progress(r, runner), model=_model_label(r.spec),
-                    method=r.spec["method"], created_at=r.created_at, finished_at=r.finished_at, url=_job_url(r.id))
+                    method=r.spec["method"], created_at=r.created_at, finished_at=r.finished_at, url=JOBS.url(r.id))
         for r in store.recent(limit, status)])
 
 
 @router.get("/{job_id}", response_model=JobView, responses=_NOT_FOUND)
 def get_job(job_id: str, store: StoreDep, runner: RunnerDep) -> JobView:
     """Status, progress, and once finished the summary; a blow-up is "failed" with the solver's reason."""
-    return _view(_existing(store, job_id), runner)
+    return _view(JOBS.existing(store, job_id), runner)
 
 
 @router.get("/{job_id}/trajectory", response_model=Trajectory,
@@ -128,7 +100,7 @@ def get_trajectory(job_id: str, request: Request, store: StoreDep, settings: Set
                                    "spec as provenance; raydamp.load reads them)")] = "json") -> Response:
     """The saved points start, start + every, ... before stop, one row per point, streamed as JSON or
     written as a file."""
-    record = _existing(store, job_id)
+    record = JOBS.existing(store, job_id)
     if format != "json":
         return _trajectory_file(record, store, request, settings, slice(start, stop, every), format)
     opened = store.open_trajectory(job_id)
@@ -211,7 +183,7 @@ def get_plot(job_id: str, kind: Literal["energy", "phase", "projection"], store:
              y: Annotated[str | None, Query(max_length=100, description="projection: vertical coordinate")] = None,
              ) -> Response:
     """energy: H(t) (and H - H0 + W when recorded); phase: (q_i, p_i); projection: (q_x, q_y)."""
-    record = _existing(store, job_id)
+    record = JOBS.existing(store, job_id)
     sol = _stored_solution(record, store, slice(None))
     if sol.t.size > _PLOT_POINTS:
         sol = _stored_solution(record, store, slice(None, None, -(-sol.t.size // _PLOT_POINTS)))
@@ -228,20 +200,11 @@ def get_plot(job_id: str, kind: Literal["energy", "phase", "projection"], store:
     return Response(png, media_type="image/png")
 
 
-def _cancel(job_id: str, store: JobStore, runner: Runner) -> JobView:
-    record = _existing(store, job_id)
-    if record.status in FINAL_STATUSES:
-        raise HTTPException(409, detail=f"job {job_id} is already {record.status}; there is nothing to cancel")
-    record = store.request_cancel(job_id)
-    runner.cancel(job_id)
-    return _view(record, runner)
-
-
 @router.post("/{job_id}/cancel", status_code=202, response_model=JobView,
              responses={**_NOT_FOUND, 409: {"description": "the job has already finished"}})
 def cancel_job(job_id: str, store: StoreDep, runner: RunnerDep) -> JobView:
     """Cancel a queued job at once, or stop a running one (it ends "cancelled" with its partial trajectory)."""
-    return _cancel(job_id, store, runner)
+    return JOBS.cancel(store, runner, job_id)
 
 
 @router.delete("/{job_id}", status_code=202, response_model=JobView,
@@ -249,11 +212,4 @@ def cancel_job(job_id: str, store: StoreDep, runner: RunnerDep) -> JobView:
 def delete_job(job_id: str, store: StoreDep, runner: RunnerDep) -> JobView | Response:
     """A finished job is removed with its trajectory (204); a queued or running one is cancelled as by
     POST /v1/jobs/{id}/cancel (202), and a second DELETE once it has stopped removes it."""
-    record = _existing(store, job_id)
-    if record.status in FINAL_STATUSES and store.delete_finished(job_id):
-        return Response(status_code=204)
-    if record.status in FINAL_STATUSES:  # removed by another request meanwhile
-        raise HTTPException(404, detail=f"no job with id {job_id!r}")
-    record = store.request_cancel(job_id)
-    runner.cancel(job_id)
-    return _view(record, runner)
+    return JOBS.delete(store, runner, job_id)

@@ -6,15 +6,14 @@ from __future__ import annotations
 from typing import Annotated, Literal
 
 from fastapi import APIRouter, HTTPException, Query, Request, Response
-from fastapi.exceptions import RequestValidationError
 from fastapi.responses import StreamingResponse
 
 from ..deps import SettingsDep
 from ..problems import JobError, check_sweep_spec
 from ..runner import Runner
 from ..schemas import JobStatus, SweepCreated, SweepList, SweepListItem, SweepSpec, SweepView
-from ..store import FINAL_STATUSES
 from ..sweeps import SweepRecord, SweepStore
+from .tasks import Tasks, check_limit, invalid
 
 router = APIRouter(prefix="/v1/sweeps", tags=["sweeps"])
 
@@ -30,30 +29,22 @@ def _runner(request: Request) -> Runner:
     return request.app.state.sweep_runner
 
 
-def _url(sweep_id: str) -> str:
-    return f"/v1/sweeps/{sweep_id}"
-
-
-def _existing(request: Request, sweep_id: str) -> SweepRecord:
-    record = _sweeps(request).get(sweep_id)
-    if record is None:
-        raise HTTPException(404, detail=f"no sweep with id {sweep_id!r}")
-    return record
-
-
-def _done(record: SweepRecord, request: Request) -> int:
-    live = _runner(request).progress(record.id) if record.status == "running" else None
+def _done(record: SweepRecord, runner: Runner) -> int:
+    live = runner.progress(record.id) if record.status == "running" else None
     return live if live is not None else record.members_done
 
 
-def _view(record: SweepRecord, request: Request) -> SweepView:
-    done = _done(record, request)
+def _view(record: SweepRecord, runner: Runner) -> SweepView:
+    done = _done(record, runner)
     return SweepView(id=record.id, status=record.status, members=record.members, members_done=done,
                      progress=1.0 if record.status == "completed" else done / record.members,
                      cancel_requested=record.cancel_requested, attempts=record.attempts, error=record.error,
-                     outcomes=record.outcomes, result=_url(record.id) + "/result" if record.result_bytes else None,
+                     outcomes=record.outcomes, result=SWEEPS.url(record.id) + "/result" if record.result_bytes else None,
                      result_bytes=record.result_bytes, spec=SweepSpec.model_validate(record.spec),
                      created_at=record.created_at, started_at=record.started_at, finished_at=record.finished_at)
+
+
+SWEEPS = Tasks("sweep", "/v1/sweeps", _view)
 
 
 @router.post("", status_code=202, response_model=SweepCreated,
@@ -71,14 +62,9 @@ def submit_sweep(spec: SweepSpec, request: Request, response: Response, settings
     try:
         plan = check_sweep_spec(spec, settings)
     except JobError as error:
-        raise RequestValidationError([{"type": "value_error", "loc": ("body", *error.loc), "msg": error.message,
-                                       "input": None}]) from None
-    record = _sweeps(request).create(spec.model_dump(mode="json"), settings.max_queued_sweeps, members=plan.members)
-    if record is None:
-        raise HTTPException(429, detail=f"{settings.max_queued_sweeps} sweeps are already queued "
-                            "(max_queued_sweeps); retry later", headers={"Retry-After": str(settings.retry_after_seconds)})
-    _runner(request).submit(record.id)
-    response.headers["Location"] = request.scope.get("root_path", "") + _url(record.id)
+        raise invalid(error) from None
+    record = SWEEPS.queue(request, response, _sweeps(request), _runner(request), spec, settings.max_queued_sweeps,
+                          "max_queued_sweeps", settings, members=plan.members)
     return SweepCreated(id=record.id, status=record.status, members=record.members)
 
 
@@ -87,20 +73,19 @@ def list_sweeps(request: Request, settings: SettingsDep,
                 limit: Annotated[int, Query(ge=1, description="at most this many sweeps, newest first")] = 50,
                 status: Annotated[JobStatus | None, Query(description="only sweeps in this state")] = None
                 ) -> SweepList:
-    if limit > settings.max_list_limit:
-        raise RequestValidationError([{"type": "less_than_equal", "loc": ("query", "limit"), "input": limit,
-                                       "msg": f"limit must be <= {settings.max_list_limit}"}])
+    check_limit(limit, settings)
+    runner = _runner(request)
     return SweepList(sweeps=[
         SweepListItem(id=r.id, status=r.status, members=r.members,
-                      progress=1.0 if r.status == "completed" else _done(r, request) / r.members,
-                      created_at=r.created_at, finished_at=r.finished_at, url=_url(r.id))
+                      progress=1.0 if r.status == "completed" else _done(r, runner) / r.members,
+                      created_at=r.created_at, finished_at=r.finished_at, url=SWEEPS.url(r.id))
         for r in _sweeps(request).recent(limit, status)])
 
 
 @router.get("/{sweep_id}", response_model=SweepView, responses=_NOT_FOUND)
 def get_sweep(sweep_id: str, request: Request) -> SweepView:
     """Status, members done (per finished chunk), and once finished the members per outcome."""
-    return _view(_existing(request, sweep_id), request)
+    return _view(SWEEPS.existing(_sweeps(request), sweep_id), _runner(request))
 
 
 def _pieces(connection, rowid: int, size: int):
@@ -121,7 +106,7 @@ def get_result(sweep_id: str, request: Request,
                ) -> Response:
     """The members' trajectories and outcomes as one NetCDF file (raydamp.sweep's Dataset; a cancelled
     sweep's file holds the chunks finished before the cancel)."""
-    record = _existing(request, sweep_id)
+    record = SWEEPS.existing(_sweeps(request), sweep_id)
     handle = _sweeps(request).result_handle(sweep_id)
     if handle is None:
         reason = f": {record.error}" if record.error else ""
@@ -137,23 +122,11 @@ def get_result(sweep_id: str, request: Request,
 def cancel_sweep(sweep_id: str, request: Request) -> SweepView:
     """Cancel a queued sweep at once, or stop a running one after its current chunks: it ends
     "cancelled" with the finished chunks as its result."""
-    record = _existing(request, sweep_id)
-    if record.status in FINAL_STATUSES:
-        raise HTTPException(409, detail=f"sweep {sweep_id} is already {record.status}; there is nothing to cancel")
-    record = _sweeps(request).request_cancel(sweep_id)
-    _runner(request).cancel(sweep_id)
-    return _view(record, request)
+    return SWEEPS.cancel(_sweeps(request), _runner(request), sweep_id)
 
 
 @router.delete("/{sweep_id}", status_code=202, response_model=SweepView,
                responses={**_NOT_FOUND, 204: {"description": "the finished sweep and its result were removed"}})
 def delete_sweep(sweep_id: str, request: Request) -> SweepView | Response:
     """A finished sweep is removed with its result (204); a queued or running one is cancelled (202)."""
-    record = _existing(request, sweep_id)
-    if record.status in FINAL_STATUSES and _sweeps(request).delete_finished(sweep_id):
-        return Response(status_code=204)
-    if record.status in FINAL_STATUSES:
-        raise HTTPException(404, detail=f"no sweep with id {sweep_id!r}")
-    record = _sweeps(request).request_cancel(sweep_id)
-    _runner(request).cancel(sweep_id)
-    return _view(record, request)
+    return SWEEPS.delete(_sweeps(request), _runner(request), sweep_id)

@@ -1,0 +1,91 @@
+"""What every kind of task's routes share (jobs, sweeps): the lifecycle seen over HTTP. Submit
+(a 422 naming the field, a 429 when the queue is full, the Location), list's limit, 404, cancel
+(409 once finished) and delete (204 for a finished task, else a cancel). Each kind's router keeps
+its own endpoints, documentation and views; the rules are written here once."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from fastapi import HTTPException, Request, Response
+from fastapi.exceptions import RequestValidationError
+
+from ..config import Settings
+from ..problems import JobError
+from ..runner import Runner
+from ..store import FINAL_STATUSES, TaskStore
+
+__all__ = ["Tasks", "invalid", "check_limit"]
+
+
+def invalid(error: JobError, body: Any = None) -> RequestValidationError:
+    """A JobError as the same shape as pydantic's own 422s, so a client reads one format."""
+    return RequestValidationError([{"type": "value_error", "loc": ("body", *error.loc), "msg": error.message,
+                                    "input": _value_at(body, error.loc)}])
+
+
+def _value_at(data: Any, loc: tuple[str | int, ...]) -> Any:
+    for key in loc:
+        if isinstance(data, dict):
+            data = data.get(key)
+        elif isinstance(data, list) and isinstance(key, int) and 0 <= key < len(data):
+            data = data[key]
+        else:
+            return None
+    return data
+
+
+def check_limit(limit: int, settings: Settings) -> None:
+    if limit > settings.max_list_limit:
+        raise RequestValidationError([{"type": "less_than_equal", "loc": ("query", "limit"), "input": limit,
+                                       "msg": f"limit must be <= {settings.max_list_limit}"}])
+
+
+class Tasks:
+    """One kind's lifecycle routes, given its store and runner: its noun, its URL prefix, and
+    view(record, runner), the body a get, cancel or delete answers with."""
+
+    def __init__(self, noun: str, prefix: str, view: Callable[[Any, Runner], Any]):
+        self.noun, self.prefix, self.view = noun, prefix, view
+
+    def url(self, task_id: str) -> str:
+        return f"{self.prefix}/{task_id}"
+
+    def existing(self, store: TaskStore, task_id: str) -> Any:
+        record = store.get(task_id)
+        if record is None:
+            raise HTTPException(404, detail=f"no {self.noun} with id {task_id!r}")
+        return record
+
+    def queue(self, request: Request, response: Response, store: TaskStore, runner: Runner, spec: Any, limit: int,
+              setting: str, settings: Settings, **columns: Any) -> Any:
+        """Store the checked spec as queued and hand it to the runner; 429 when limit are waiting."""
+        record = store.create(spec.model_dump(mode="json"), limit, **columns)
+        if record is None:
+            raise HTTPException(429, detail=f"{limit} {self.noun}s are already queued ({setting}); retry later",
+                                headers={"Retry-After": str(settings.retry_after_seconds)})
+        runner.submit(record.id)
+        # A path, never built from the Host header: a forged Host must not come back as a redirect target.
+        response.headers["Location"] = request.scope.get("root_path", "") + self.url(record.id)
+        return record
+
+    def cancel(self, store: TaskStore, runner: Runner, task_id: str) -> Any:
+        record = self.existing(store, task_id)
+        if record.status in FINAL_STATUSES:
+            raise HTTPException(409, detail=f"{self.noun} {task_id} is already {record.status}; there is nothing "
+                                            "to cancel")
+        return self._request_cancel(store, runner, task_id)
+
+    def delete(self, store: TaskStore, runner: Runner, task_id: str) -> Any:
+        record = self.existing(store, task_id)
+        if record.status in FINAL_STATUSES and store.delete_finished(task_id):
+            return Response(status_code=204)
+        if record.status in FINAL_STATUSES:  # removed by another request meanwhile
+            raise HTTPException(404, detail=f"no {self.noun} with id {task_id!r}")
+        return self._request_cancel(store, runner, task_id)
+
+    def _request_cancel(self, store: TaskStore, runner: Runner, task_id: str) -> Any:
+        record = store.request_cancel(task_id)
+        runner.cancel(task_id)
+        return self.view(record, runner)
