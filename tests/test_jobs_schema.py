@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import raydamp
+from pydantic import ValidationError
 from raydamp.jobs import JobError, JobSpec, SweepSpec, client_path, job_arguments, parse_job
 from raydamp.models import DampedPendulum
 
@@ -68,3 +69,31 @@ def test_a_sweeps_job_does_not_record_work_unless_asked_and_then_refuses():
 def test_the_service_takes_the_librarys_schema():
     schemas = pytest.importorskip("raydamp_service.schemas")
     assert schemas.JobSpec is JobSpec and schemas.SweepSpec is SweepSpec
+
+
+def _structure_job(rows):
+    n = len(rows)
+    return {"system": {"kind": "linear_structure", "M": {"diagonal": [1.0] * 4},
+                       "K": {"coo": {"shape": [4, 4], "rows": rows, "cols": [0] * n, "values": [1.0] * n}}},
+            "method": "3s", "h": 0.1, "n_steps": 10, "initial_state": {"rest": True}}
+
+
+@pytest.mark.parametrize("bad", [-1, "x", True, 1.5])
+def test_many_bad_items_are_one_error_naming_the_first_twenty(bad):
+    """Issue 27, F2: 666k bad COO indices were validated into 666k error objects (10 s, 1.7 GB)."""
+    rows = [0] * 5 + [bad] * 200_000
+    with pytest.raises(ValidationError) as caught:
+        JobSpec.model_validate(_structure_job(rows))
+    errors = caught.value.errors()
+    assert len(errors) == 1 and client_path(errors[0]["loc"]) == ("system", "K", "coo", "rows")
+    assert errors[0]["msg"].endswith("items 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23, "
+                                     "24 and more are not integers >= 0")
+
+
+def test_a_few_bad_items_are_named_each_at_its_path():
+    rows = [0] * 5000
+    rows[7], rows[4000] = -1, "x"
+    with pytest.raises(ValidationError) as caught:
+        JobSpec.model_validate(_structure_job(rows))
+    assert sorted(client_path(e["loc"]) for e in caught.value.errors()) == [
+        ("system", "K", "coo", "rows", 7), ("system", "K", "coo", "rows", 4000)]

@@ -52,7 +52,7 @@ def _path(loc: list[Any]) -> list[Any]:
 def _error(item: dict[str, Any]) -> dict[str, Any]:
     out = _json_safe({**item, "loc": _path(list(item.get("loc", [])))})
     if isinstance(item.get("msg"), str):
-        out["msg"] = _text(item["msg"], MAX_MESSAGE)
+        out["msg"] = _text(item["msg"].removeprefix("Value error, "), MAX_MESSAGE)  # our messages speak for themselves
     return out
 
 

@@ -9,9 +9,10 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+import numpy as np
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
 
-__all__ = ["Input", "FiniteFloat", "Vector", "InitialState", "ModeState", "RestState", "TableauInput",
+__all__ = ["Input", "FiniteFloat", "Vector", "numbers", "indices", "MAX_ITEM_ERRORS", "InitialState", "ModeState", "RestState", "TableauInput",
            "MAX_VECTOR", "MAX_CHAIN_SITES", "MAX_EXPRESSION", "Expression", "Name"]
 
 # JSON parsing accepts NaN and Infinity (and 1e999 overflows to inf); no run may start from them.
@@ -21,7 +22,50 @@ FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
 MAX_VECTOR = 10_000
 MAX_CHAIN_SITES = 10**7  # a chain's state is built from its description, not sent
 MAX_EXPRESSION = 10_000
-Vector = Annotated[list[FiniteFloat], Field(max_length=MAX_VECTOR)]
+MAX_ITEM_ERRORS = 20  # a list with more bad items gets one error naming the first of them
+_SMALL = 1000  # lists this short are checked by pydantic alone (1000 errors cost about a millisecond)
+
+
+def _few_bad(what: str, allowed: tuple[type, ...], good: Any, max_length: int) -> BeforeValidator:
+    """Validation whose cost is bounded by the list's length, not by its number of bad items.
+
+    Pydantic checks a list item by item in compiled code, which is fast when they are good; each bad
+    item costs an error object, so 666k bad indices took 10 s and 1.7 GB (issue 27, F2). This check runs
+    first at NumPy speed: a list with more than MAX_ITEM_ERRORS bad items (or too long) becomes one
+    error naming the first of them; otherwise pydantic reports each bad item at its own path."""
+
+    def check(value: Any) -> Any:
+        if not isinstance(value, list):
+            return value  # pydantic's own error
+        if len(value) > max_length:
+            raise ValueError(f"{len(value)} items; at most {max_length}")
+        if len(value) <= _SMALL:
+            return value  # at most _SMALL errors: pydantic's own, each at its item's path
+        types = {type(item) for item in value}
+        if types <= set(allowed):
+            bad = np.flatnonzero(~good(np.asarray(value, dtype=float)))
+        else:
+            bad = np.array([i for i, item in enumerate(value)
+                            if type(item) not in allowed or not good(np.array([float(item)]))[0]][:MAX_ITEM_ERRORS + 1])
+        if bad.size > MAX_ITEM_ERRORS:
+            first = ", ".join(map(str, bad[:MAX_ITEM_ERRORS].tolist()))
+            raise ValueError(f"items {first} and more are not {what}")
+        return value
+
+    return BeforeValidator(check)
+
+
+def numbers(max_length: int) -> BeforeValidator:
+    """For a list of finite numbers of at most max_length items (ints count as numbers, as in JSON)."""
+    return _few_bad("finite numbers", (int, float), np.isfinite, max_length)
+
+
+def indices(max_length: int) -> BeforeValidator:
+    """For a list of integers >= 0 of at most max_length items."""
+    return _few_bad("integers >= 0", (int,), lambda a: a >= 0, max_length)
+
+
+Vector = Annotated[list[FiniteFloat], Field(max_length=MAX_VECTOR), numbers(MAX_VECTOR)]
 Expression = Annotated[str, Field(min_length=1, max_length=MAX_EXPRESSION)]
 Name = Annotated[str, Field(min_length=1, max_length=100, pattern=r"^[A-Za-z_][A-Za-z0-9_]*$")]
 
@@ -31,10 +75,10 @@ class Input(BaseModel):
 
 
 class InitialState(Input):
-    q: list[FiniteFloat] = Field(min_length=1, max_length=MAX_VECTOR,
-                                 description="initial positions, length = the model's dim")
-    p: list[FiniteFloat] = Field(min_length=1, max_length=MAX_VECTOR,
-                                 description="initial momenta, length = the model's dim")
+    q: Annotated[list[FiniteFloat], numbers(MAX_VECTOR)] = Field(
+        min_length=1, max_length=MAX_VECTOR, description="initial positions, length = the model's dim")
+    p: Annotated[list[FiniteFloat], numbers(MAX_VECTOR)] = Field(
+        min_length=1, max_length=MAX_VECTOR, description="initial momenta, length = the model's dim")
 
 
 class ModeState(Input):

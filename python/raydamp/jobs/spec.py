@@ -16,7 +16,7 @@ from pydantic import AfterValidator, AliasChoices, ConfigDict, Discriminator, Fi
 from ..methods.catalogue import compositions, methods
 from ..systems.models import MODELS, make_model
 from .errors import JobError
-from .forms import FiniteFloat, InitialState, Input, MAX_VECTOR, ModeState, RestState, TableauInput, Vector
+from .forms import FiniteFloat, InitialState, Input, MAX_VECTOR, ModeState, RestState, TableauInput, Vector, indices
 from .system_forms import MATRIX_TAGS, SYSTEM_TAGS, AnySystemInput, FileResolver
 
 __all__ = ["ModelSpec", "JobSpec", "StateInput", "UNION_TAGS", "STEP_SIZE_ALIAS", "client_path"]
@@ -143,7 +143,7 @@ class JobSpec(ModelSpec):
     work: bool = Field(True, description="record the damping work W(t), so that H(t) - H(0) + W(t) (the energy "
                                          "balance) can be plotted; false skips it and lets 3s merge the damping "
                                          "sub-flows of consecutive steps (a little faster, equal to rounding)")
-    save_dofs: list[Annotated[int, Field(ge=0)]] | None = Field(
+    save_dofs: Annotated[list[Annotated[int, Field(ge=0)]], indices(MAX_VECTOR)] | None = Field(
         None, max_length=MAX_VECTOR, description="save q and p of these coordinates only (energy, W and momenta "
                                                  "still from the whole state); null saves all")
     _h_key: str = PrivateAttr("h")

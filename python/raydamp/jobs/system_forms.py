@@ -13,7 +13,7 @@ from typing import Annotated, Any, Literal
 from pydantic import Discriminator, Field, Tag
 
 from .errors import JobError, path_error
-from .forms import MAX_CHAIN_SITES, MAX_VECTOR, Expression, FiniteFloat, Input, Name
+from .forms import MAX_CHAIN_SITES, MAX_VECTOR, Expression, FiniteFloat, Input, Name, indices, numbers
 
 __all__ = ["SystemInput", "ChainInput", "LinearStructureInput", "CooForm", "DiagonalForm", "FileForm",
            "AnySystemInput", "FileResolver", "MAX_COO_ENTRIES", "MAX_STRUCTURE_DIM", "SYSTEM_TAGS", "MATRIX_TAGS"]
@@ -96,11 +96,11 @@ def _compiled_system(text: str):
 
 
 class ChainDampers(Input):
-    bonds: list[Annotated[int, Field(ge=0)]] = Field(default_factory=list, max_length=MAX_VECTOR,
+    bonds: Annotated[list[Annotated[int, Field(ge=0)]], indices(MAX_VECTOR)] = Field(default_factory=list, max_length=MAX_VECTOR,
                                                      description="damped bonds (bond b joins sites b-1 and b)")
-    sites: list[Annotated[int, Field(ge=0)]] = Field(default_factory=list, max_length=MAX_VECTOR,
+    sites: Annotated[list[Annotated[int, Field(ge=0)]], indices(MAX_VECTOR)] = Field(default_factory=list, max_length=MAX_VECTOR,
                                                      description="sites with on-site friction")
-    c: FiniteFloat | Annotated[list[FiniteFloat], Field(max_length=2 * MAX_VECTOR)] = Field(
+    c: FiniteFloat | Annotated[list[FiniteFloat], Field(max_length=2 * MAX_VECTOR), numbers(2 * MAX_VECTOR)] = Field(
         description="the dashpot coefficient, or one per damper (bonds, then sites)")
 
 
@@ -157,9 +157,9 @@ FileId = Annotated[str, Field(pattern=r"^[0-9a-f]{32}$", description="an id from
 class CooMatrix(Input):
     shape: list[Annotated[int, Field(ge=1, le=MAX_STRUCTURE_DIM)]] = Field(min_length=2, max_length=2,
                                                                            description="[n, n]")
-    rows: list[Annotated[int, Field(ge=0)]] = Field(max_length=MAX_COO_ENTRIES, description="row of each entry")
-    cols: list[Annotated[int, Field(ge=0)]] = Field(max_length=MAX_COO_ENTRIES, description="column of each entry")
-    values: list[FiniteFloat] = Field(max_length=MAX_COO_ENTRIES, description="the entries (repeated "
+    rows: Annotated[list[Annotated[int, Field(ge=0)]], indices(MAX_COO_ENTRIES)] = Field(max_length=MAX_COO_ENTRIES, description="row of each entry")
+    cols: Annotated[list[Annotated[int, Field(ge=0)]], indices(MAX_COO_ENTRIES)] = Field(max_length=MAX_COO_ENTRIES, description="column of each entry")
+    values: Annotated[list[FiniteFloat], numbers(MAX_COO_ENTRIES)] = Field(max_length=MAX_COO_ENTRIES, description="the entries (repeated "
                                                                               "positions add up)")
 
 
@@ -168,7 +168,7 @@ class CooForm(Input):
 
 
 class DiagonalForm(Input):
-    diagonal: list[FiniteFloat] = Field(min_length=1, max_length=MAX_STRUCTURE_DIM,
+    diagonal: Annotated[list[FiniteFloat], numbers(MAX_STRUCTURE_DIM)] = Field(min_length=1, max_length=MAX_STRUCTURE_DIM,
                                         description="a diagonal matrix (lumped mass)")
 
 
@@ -208,7 +208,7 @@ class LinearStructureInput(Input):
     K: MatrixInput = Field(description="the stiffness matrix, in the same forms as M")
     alpha: FiniteFloat = Field(0.0, ge=0, description="Rayleigh damping C = alpha M + beta K")
     beta: FiniteFloat = Field(0.0, ge=0)
-    f: Annotated[list[FiniteFloat], Field(max_length=MAX_STRUCTURE_DIM)] | None = Field(
+    f: Annotated[list[FiniteFloat], Field(max_length=MAX_STRUCTURE_DIM), numbers(MAX_STRUCTURE_DIM)] | None = Field(
         None, description="constant load (length n); null for none")
 
 
