@@ -201,7 +201,8 @@ MatrixInput = Annotated[Annotated[CooForm, Tag("coo form")] | Annotated[Diagonal
 class LinearStructureInput(Input):
     """A linear structure M q'' + (alpha M + beta K) q' + K q = f: raydamp.LinearStructure.to_dict()'s
     form, with a matrix also given as {"file": id} of an uploaded Matrix Market file. M symmetric
-    positive definite (a diagonal M is a lumped mass), K symmetric positive semi-definite."""
+    positive definite (a diagonal M is a lumped mass), K symmetric positive semi-definite (both
+    checked: both triangles compared, and K's inertia; allow_indefinite_stiffness accepts an indefinite K)."""
 
     kind: Literal["linear_structure"]
     M: MatrixInput = Field(description='{"coo": {shape, rows, cols, values}}, {"diagonal": [...]} or {"file": id}')
@@ -210,6 +211,8 @@ class LinearStructureInput(Input):
     beta: FiniteFloat = Field(0.0, ge=0)
     f: Annotated[list[FiniteFloat], Field(max_length=MAX_STRUCTURE_DIM), numbers(MAX_STRUCTURE_DIM)] | None = Field(
         None, description="constant load (length n); null for none")
+    allow_indefinite_stiffness: bool = Field(False, description="accept a K that is not positive semi-definite (a "
+                                                                "structure meant to grow); by default it is refused")
 
 
 

@@ -48,7 +48,7 @@ __all__ = ["LinearStructure", "MAX_PLAIN_ENTRIES"]
 # The plain (JSON) form carries matrices as COO triplets; past this many stored entries per matrix
 # a structure belongs in a Matrix Market file, not in a JSON document.
 MAX_PLAIN_ENTRIES = 1_000_000
-PLAIN_KEYS = ("kind", "M", "K", "alpha", "beta", "f")
+PLAIN_KEYS = ("kind", "M", "K", "alpha", "beta", "f", "allow_indefinite_stiffness")
 
 
 def _scipy_sparse():
@@ -121,6 +121,10 @@ class LinearStructure(Model):
     alpha, beta : Rayleigh coefficients of C = alpha M + beta K, >= 0 (see
         :func:`raydamp.rayleigh_coefficients`).
     f : constant load vector (length n), or None for no load.
+    allow_indefinite_stiffness : K is checked positive semi-definite (a negative eigenvalue of
+        M^{-1} K below -1e-10 L, L the spectral bound, is refused: the structure would blow up);
+        True accepts an indefinite K (a buckled or prestressed structure whose growth you mean to
+        see), and to_dict() then records it.
 
     The module docstring says how the damping flows are computed and which method suits
     which damping (``help(raydamp.systems.structure)``). ``chebyshev_degrees(t)`` gives the degrees
@@ -129,7 +133,8 @@ class LinearStructure(Model):
 
     name = "linear_structure"
 
-    def __init__(self, M, K, *, alpha: float = 0.0, beta: float = 0.0, f=None):
+    def __init__(self, M, K, *, alpha: float = 0.0, beta: float = 0.0, f=None,
+                 allow_indefinite_stiffness: bool = False):
         alpha = real("alpha", alpha, nonnegative=True)
         beta = real("beta", beta, nonnegative=True)
         mass = _read_matrix("M", M)
@@ -137,6 +142,7 @@ class LinearStructure(Model):
         n = mass.shape[0]
         if stiffness.shape != mass.shape:
             raise ValueError(f"K must have the shape of M, {mass.shape}, got {stiffness.shape}")
+        _require_symmetric("M", mass)  # the core's Cholesky factorisation reads one triangle only
         if f is None:
             load = np.zeros(0)
         else:
@@ -160,6 +166,9 @@ class LinearStructure(Model):
         except ValueError as error:  # the core names M, K or f first
             raise ValueError(str(error)) from None
         object.__setattr__(self, "_core_model", core)
+        object.__setattr__(self, "allow_indefinite_stiffness", bool(allow_indefinite_stiffness))
+        if not allow_indefinite_stiffness:
+            _require_semidefinite(stiffness, mass, core.spectral_bound)
         self._freeze()
 
     # -- what it is ---------------------------------------------------------
@@ -214,7 +223,8 @@ class LinearStructure(Model):
                 else {"coo": _coo_plain(self._mass)})
         return {"kind": "linear_structure", "M": mass, "K": {"coo": _coo_plain(self._stiffness)},
                 "alpha": self.alpha, "beta": self.beta,
-                "f": self._load.tolist() if self._load.any() else None}
+                "f": self._load.tolist() if self._load.any() else None,
+                **({"allow_indefinite_stiffness": True} if self.allow_indefinite_stiffness else {})}
 
     @classmethod
     def from_dict(cls, data, *, files=None) -> LinearStructure:
@@ -242,19 +252,57 @@ class LinearStructure(Model):
         if f is not None and (not isinstance(f, list) or len(f) != n
                               or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in f)):
             raise ValueError(f"f: must be null or a list of {n} numbers")
-        return cls(matrices["M"], matrices["K"], alpha=data.get("alpha", 0.0), beta=data.get("beta", 0.0), f=f)
+        return cls(matrices["M"], matrices["K"], alpha=data.get("alpha", 0.0), beta=data.get("beta", 0.0), f=f,
+                   allow_indefinite_stiffness=data.get("allow_indefinite_stiffness", False) is True)
 
     def replace(self, **changes) -> LinearStructure:
-        unknown = set(changes) - {"M", "K", "alpha", "beta", "f"}
+        unknown = set(changes) - {"M", "K", "alpha", "beta", "f", "allow_indefinite_stiffness"}
         if unknown:
             raise ValueError(f"{sorted(unknown)[0]}: LinearStructure has no such argument (M, K, alpha, beta, f)")
         args = {"M": self._mass, "K": self._stiffness, "alpha": self.alpha, "beta": self.beta,
-                "f": self._load, **changes}
+                "f": self._load, "allow_indefinite_stiffness": self.allow_indefinite_stiffness, **changes}
         return LinearStructure(args.pop("M"), args.pop("K"), **args)
 
     def __repr__(self) -> str:
         return (f"LinearStructure(n={self.dim}, mass={self.mass_kind}, nnz(K)={self._stiffness.nnz}, "
                 f"alpha={self.alpha!r}, beta={self.beta!r})")
+
+
+_SYMMETRY_TOLERANCE = 1e-12  # relative to the largest entry: a matrix assembled in floating point
+_DEFINITENESS_SHIFT = 1e-10  # relative to L: rounding in a singular K (free-free) stays above -shift L
+
+
+def _require_symmetric(name: str, matrix) -> None:
+    """Both triangles compared: a solver reading one of them would silently use another matrix."""
+    difference = abs(matrix - matrix.T)
+    worst = difference.max() if difference.nnz else 0.0
+    if worst > _SYMMETRY_TOLERANCE * max(abs(matrix).max(), np.finfo(float).tiny):
+        raise ValueError(f"{name}: must be symmetric (max |{name} - {name}^T| = {worst:.3g})")
+
+
+def _require_semidefinite(stiffness, mass, bound: float) -> None:
+    """K + s M with s = 1e-10 L is positive definite iff every eigenvalue of M^{-1} K exceeds -s: its
+    LU factorisation without row exchanges (the diagonal kept as pivot, a symmetric ordering) has
+    positive pivots then, and a negative or zero pivot shows a negative eigenvalue (Sylvester's law
+    of inertia)."""
+    from scipy.sparse.linalg import splu
+
+    off_diagonal = abs(stiffness).sum(axis=1).A1 - abs(stiffness.diagonal())
+    if (stiffness.diagonal() >= off_diagonal).all():
+        return  # diagonally dominant with a non-negative diagonal: semi-definite by Gershgorin (a chain)
+    shift = _DEFINITENESS_SHIFT * max(bound, 1.0)
+    shifted = (stiffness + shift * mass).tocsc()
+    try:
+        lu = splu(shifted, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                  options={"SymmetricMode": True})
+        pivots = lu.U.diagonal()
+        exchanged = not np.array_equal(lu.perm_r, lu.perm_c)
+    except RuntimeError:  # exactly singular: K + s M is not definite
+        pivots, exchanged = np.array([-1.0]), False
+    if exchanged or not (pivots > 0).all():
+        raise ValueError("K: must be positive semi-definite (M^{-1} K has a negative eigenvalue below "
+                         f"-{shift:.3g}: the structure would grow without bound); pass "
+                         "allow_indefinite_stiffness=True if that is what you mean to simulate")
 
 
 def _coo_plain(matrix) -> dict[str, Any]:
