@@ -372,7 +372,7 @@ def _compile_bond(expression, numeric: dict[str, float]) -> tuple[tuple[Any, Any
     v = expression.to_symengine(symbols)
     dv = se.diff(v, r)
     d2v = se.diff(dv, r)
-    compiled = [_jit([r], [e]) for e in (v, dv, d2v)]
+    compiled = [_jit([r], [e], ("parameters", "potential")) for e in (v, dv, d2v)]
     functions = tuple(f for f, _, _ in compiled)
     addresses = tuple(x for _, a, d in compiled for x in (a, d))
     return functions, addresses

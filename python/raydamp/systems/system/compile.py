@@ -16,6 +16,7 @@ import symengine as se
 
 from ... import _core
 from .dashpot_norm import constant_dashpot_norm
+from .errors import SpecError
 from .spec import SystemSpec
 
 __all__ = ["CompiledSystemFunctions", "compile_system", "fused_body", "number"]
@@ -89,8 +90,32 @@ def _without_half_powers(expr: se.Basic) -> se.Basic:
     return done[expr]
 
 
-def _jit(inputs: list[se.Symbol], outputs: list[se.Basic]) -> tuple[Any, int, int]:
+# Distinct operations in one compiled function, after differentiation. LLVM's time grows faster than
+# linearly in them: 1,200 took 0.2 s, 4,400 took 1.2 s, and a 128-coordinate all-to-all quartic (some
+# 17,000, from a 790-byte potential) half a minute (issue 27, F1). A Chain or LinearStructure carries
+# large systems without expressions.
+MAX_OPERATIONS = 8_000
+
+
+def _operations(outputs: list[se.Basic], limit: int) -> int:
+    """Distinct sub-expressions of outputs, counted up to limit + 1."""
+    seen: set[se.Basic] = set()
+    stack = list(outputs)
+    while stack and len(seen) <= limit:
+        node = stack.pop()
+        if node not in seen:
+            seen.add(node)
+            stack.extend(node.args)
+    return len(seen)
+
+
+def _jit(inputs: list[se.Symbol], outputs: list[se.Basic], what: tuple[str, ...]) -> tuple[Any, int, int]:
+    """Compiled outputs(inputs); what is the spec's path the outputs come from (a too large one is its error)."""
     outputs = [_without_half_powers(e) for e in outputs]
+    if _operations(outputs, MAX_OPERATIONS) > MAX_OPERATIONS:
+        raise SpecError(what, f"after differentiation more than {MAX_OPERATIONS} distinct operations in one compiled "
+                              "function; write it with fewer couplings, or use a Chain or LinearStructure for a "
+                              "large system")
     fn = se.Lambdify(inputs, outputs, backend="llvm", cse=True, real=True)
     cfunc, data = fn.as_ctypes()
     return fn, ctypes.cast(cfunc, ctypes.c_void_p).value, data.value or 0
@@ -112,9 +137,9 @@ def compile_system(spec: SystemSpec) -> CompiledSystemFunctions:
     directional = sum((g * vi for g, vi in zip(gradient, v)), se.Integer(0))
     hessian_product = [se.diff(directional, qi) for qi in q]
 
-    pot_fn, pot_f, pot_d = _jit(q, [potential])
-    grad_fn, grad_f, grad_d = _jit(q, gradient)
-    hv_fn, hv_f, hv_d = _jit(q + v, hessian_product)
+    pot_fn, pot_f, pot_d = _jit(q, [potential], ("potential",))
+    grad_fn, grad_f, grad_d = _jit(q, gradient, ("potential",))
+    hv_fn, hv_f, hv_d = _jit(q + v, hessian_product, ("potential",))
     addresses = [pot_f, pot_d, grad_f, grad_d, hv_f, hv_d]
 
     damper_fn = damper_norm = projection_fn = fused_fn = None
@@ -125,16 +150,16 @@ def compile_system(spec: SystemSpec) -> CompiledSystemFunctions:
         functions = [damper.on.to_symengine(symbols) for damper in spec.dampers]
         for g in functions:
             rows.extend(se.diff(g, qi) for qi in q)
-        damper_fn, f, d = _jit(q, rows)
+        damper_fn, f, d = _jit(q, rows, ("damping", "dampers"))
         addresses += [f, d]
         if len(spec.dampers) == 1:
             inverse = np.linalg.inv(spec.mass)
             damper_norm = constant_dashpot_norm(rows, inverse, lambda x: evaluate(damper_fn, x))
             if damper_norm is not None:
                 projection = _projection(functions[0], rows, q, p, inverse)
-                projection_fn, f, d = _jit(q + p, projection)
+                projection_fn, f, d = _jit(q + p, projection, ("damping", "dampers"))
                 scalars, fused = fused_body(_fused_table(), projection, gradient, q, p, inverse)
-                fused_fn, f2, d2 = _jit(q + p + scalars, fused)
+                fused_fn, f2, d2 = _jit(q + p + scalars, fused, ("damping", "dampers"))
                 projection_address = [f, d, f2, d2]
     else:
         addresses += [0, 0]
@@ -144,7 +169,7 @@ def compile_system(spec: SystemSpec) -> CompiledSystemFunctions:
         with_p = dict(symbols)
         with_p.update({f"p_{name}": pi for name, pi in zip(spec.coordinates, p)})
         outputs = [expr.to_symengine(with_p) for expr in spec.momenta.values()]
-        momenta_fn, f, d = _jit(q + p, outputs)
+        momenta_fn, f, d = _jit(q + p, outputs, ("momenta",))
         addresses += [f, d]
     else:
         addresses += [0, 0]
