@@ -97,3 +97,25 @@ def test_a_few_bad_items_are_named_each_at_its_path():
         JobSpec.model_validate(_structure_job(rows))
     assert sorted(client_path(e["loc"]) for e in caught.value.errors()) == [
         ("system", "K", "coo", "rows", 7), ("system", "K", "coo", "rows", 4000)]
+
+
+@pytest.mark.parametrize(("system", "path", "words"), [
+    ({"coordinates": ["x", "y"], "potential": "x^2", "mass": "1 + x^2"}, ("system", "mass"),
+     "must be constant: a mass matrix that depends on q"),
+    ({"coordinates": ["x", "y"], "potential": "x^2", "mass": [[1.0, "x"], [0.0, 1.0]]}, ("system", "mass"),
+     "must be constant"),
+    ({"coordinates": ["x", "y"], "potential": "x^2", "damping": {"scalar": "x" * 20_000}},
+     ("system", "damping", "scalar"), "valid number"),
+    ({"coordinates": ["x" * 200, "y"], "potential": "x^2"}, ("system", "coordinates", 0), "at most 100 characters"),
+    ({"kind": "chain", "n": 4, "bond": "expression", "parameters": {"potential": "r" * 20_000}},
+     ("system", "parameters", "potential"), "at most 10000 characters"),
+])
+def test_one_error_at_the_path_the_client_wrote(system, path, words):
+    """Issue 27, point 5: a configuration-dependent mass is one error with the library's explanation (it was
+    seven "Input should be a valid number"), and an over-long string is named by its own path (not
+    damping.ScalarDamping.scalar, parameters.potential.float or coordinates.list[constrained-str])."""
+    with pytest.raises(ValidationError) as caught:
+        JobSpec.model_validate({**JOB, "model": None, "parameters": {}, "system": system,
+                                "initial_state": {"q": [1.0, 0.0], "p": [0.0, 0.0]}})
+    errors = caught.value.errors()
+    assert len(errors) == 1 and client_path(errors[0]["loc"]) == path and words in errors[0]["msg"], errors

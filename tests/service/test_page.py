@@ -195,6 +195,7 @@ def test_invalid_spec_shows_the_json_path(module_server) -> None:
         page.click("#submit")
         page.wait_for_selector("#errors:not([hidden])", timeout=30_000)
         assert page.inner_text("#errors code") == "system.potential"
+        assert page.inner_text("#errors").count("system.potential") == 1  # the path once (issue 27)
         assert "system" in page.eval_on_selector_all(".invalid", "controls => controls.map(c => c.id)")
 
         page.fill("#system", page.input_value("#system").replace("cos(theta", "cos(theta)"))

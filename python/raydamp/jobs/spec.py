@@ -17,7 +17,7 @@ from ..methods.catalogue import compositions, methods
 from ..systems.models import MODELS, make_model
 from .errors import JobError
 from .forms import FiniteFloat, InitialState, Input, MAX_VECTOR, ModeState, RestState, TableauInput, Vector, indices
-from .system_forms import MATRIX_TAGS, SYSTEM_TAGS, AnySystemInput, FileResolver
+from .system_forms import FORM_TAGS, MATRIX_TAGS, SYSTEM_TAGS, VALUE_TAGS, AnySystemInput, FileResolver
 
 __all__ = ["ModelSpec", "JobSpec", "StateInput", "UNION_TAGS", "STEP_SIZE_ALIAS", "client_path"]
 
@@ -41,7 +41,8 @@ ModelName = _one_of("model", list(MODELS))
 MethodName = _one_of("method", [m.name for m in methods()])
 TableauName = _one_of("tableau", [m.tableau for m in methods() if m.tableau is not None])
 CompositionName = _one_of("composition", [c.name for c in compositions()])
-ParameterValue = FiniteFloat | Vector
+ParameterValue = Annotated[Annotated[FiniteFloat, Tag("number")] | Annotated[Vector, Tag("vector")],
+                           Discriminator(lambda value: "vector" if isinstance(value, list) else "number")]
 
 
 # Forms a field may take, told apart by their content rather than tried in turn: a bad input then gets
@@ -56,7 +57,7 @@ def _state_form(value: object) -> str:
 StateInput = Annotated[Annotated[InitialState, Tag("state")] | Annotated[ModeState, Tag("mode")]
                        | Annotated[RestState, Tag("rest")], Discriminator(_state_form)]
 UNION_TAGS = {"initial_state": frozenset({"state", "mode", "rest"}), "system": SYSTEM_TAGS, "M": MATRIX_TAGS,
-              "K": MATRIX_TAGS}
+              "K": MATRIX_TAGS, **FORM_TAGS}
 GRID_TAGS = frozenset({"range", "values"})  # a sweep's axis forms (sweep_spec.py)
 
 
@@ -66,6 +67,7 @@ def client_path(loc: tuple | list) -> tuple:
     return tuple(part for i, part in enumerate(loc)
                  if not (i >= 1 and isinstance(loc[i - 1], str) and part in UNION_TAGS.get(loc[i - 1], ()))
                  and not (i >= 2 and loc[i - 2] == "grid" and part in GRID_TAGS)
+                 and not (i >= 2 and loc[i - 2] == "parameters" and part in VALUE_TAGS)
                  # tableau is a name or a table, tried in turn (an enum of names in the JSON Schema): pydantic
                  # labels each try's errors with the type tried
                  and not (i >= 1 and loc[i - 1] == "tableau" and isinstance(part, str)

@@ -10,13 +10,24 @@ import json
 from collections.abc import Callable
 from typing import Annotated, Any, Literal
 
-from pydantic import Discriminator, Field, Tag
+from pydantic import BeforeValidator, Discriminator, Field, Tag
 
+from ..systems.system.spec import OUTSIDE_CLASS
 from .errors import JobError, path_error
 from .forms import MAX_CHAIN_SITES, MAX_VECTOR, Expression, FiniteFloat, Input, Name, indices, numbers
 
 __all__ = ["SystemInput", "ChainInput", "LinearStructureInput", "CooForm", "DiagonalForm", "FileForm",
-           "AnySystemInput", "FileResolver", "MAX_COO_ENTRIES", "MAX_STRUCTURE_DIM", "SYSTEM_TAGS", "MATRIX_TAGS"]
+           "AnySystemInput", "FileResolver", "MAX_COO_ENTRIES", "MAX_STRUCTURE_DIM", "SYSTEM_TAGS", "MATRIX_TAGS",
+           "FORM_TAGS", "VALUE_TAGS"]
+
+def _constant_mass(value: Any) -> Any:
+    """An expression where a mass is expected gets the library's explanation as one error, rather than
+    one "Input should be a valid number" per form of mass."""
+    items = value if isinstance(value, list) else [value]
+    if any(isinstance(x, str) or (isinstance(x, list) and any(isinstance(y, str) for y in x)) for x in items):
+        raise ValueError(f"must be constant: {OUTSIDE_CLASS}")
+    return value
+
 
 # Bounds of an expression system: raydamp.system.spec's own limits, stated in the schema.
 _MAX_COORDINATES = 256
@@ -47,22 +58,43 @@ class DamperDamping(Input):
                                   description="D(q) = sum_i c_i grad g_i grad g_i^T")
 
 
+def _damping_form(value: object) -> str | None:
+    if isinstance(value, dict):
+        return next((key for key in ("scalar", "diagonal", "matrix", "dampers") if key in value), None)
+    forms = ((ScalarDamping, "scalar"), (DiagonalDamping, "diagonal"), (MatrixDamping, "matrix"),
+             (DamperDamping, "dampers"))
+    return next((tag for form, tag in forms if isinstance(value, form)), None)
+
+
+DampingInput = Annotated[Annotated[ScalarDamping, Tag("scalar")] | Annotated[DiagonalDamping, Tag("diagonal")]
+                         | Annotated[MatrixDamping, Tag("matrix")] | Annotated[DamperDamping, Tag("dampers")],
+                         Discriminator(_damping_form, custom_error_type="damping_form",
+                                       custom_error_message='damping is null, {"scalar": c}, {"diagonal": [...]}, '
+                                                            '{"matrix": [[...]]} or {"dampers": [...]}')]
+Coordinates = Annotated[Annotated[list[Name], Field(min_length=1, max_length=_MAX_COORDINATES), Tag("names")]
+                        | Annotated[int, Field(ge=1, le=_MAX_COORDINATES), Tag("count")],
+                        Discriminator(lambda value: "count" if isinstance(value, int) else "names")]
+# A value that is a number or something else (an expression, a vector), told apart by its type, so that an
+# error is about the form the client meant.
+NumberOrExpression = Annotated[Annotated[FiniteFloat, Tag("number")] | Annotated[Expression, Tag("expression")],
+                               Discriminator(lambda value: "expression" if isinstance(value, str) else "number")]
+
+
 class SystemInput(Input):
     """A user-defined system: raydamp.System.to_dict()'s form. H = 1/2 p^T M^{-1} p + V(q) with
     damping -eps D(q) M^{-1} p; M constant SPD, D(q) symmetric PSD."""
 
-    coordinates: Annotated[list[Name], Field(min_length=1, max_length=_MAX_COORDINATES)] | Annotated[
-            int, Field(ge=1, le=_MAX_COORDINATES)] = Field(
+    coordinates: Coordinates = Field(
         description="coordinate names, or their number n (names q0..q{n-1})")
     potential: Expression = Field(description="V(q): numbers, names, + - * / ^, parentheses, pi, and "
                                               "sin cos tan asin acos atan atan2 sinh cosh tanh asinh acosh "
                                               "atanh exp log sqrt cbrt")
     parameters: dict[Name, FiniteFloat] = Field(default_factory=dict, max_length=256)
-    mass: FiniteFloat | Annotated[list[FiniteFloat], Field(max_length=_MAX_COORDINATES)] | Annotated[
+    mass: Annotated[FiniteFloat | Annotated[list[FiniteFloat], Field(max_length=_MAX_COORDINATES)] | Annotated[
             list[Annotated[list[FiniteFloat], Field(max_length=_MAX_COORDINATES)]],
-            Field(max_length=_MAX_COORDINATES)] = Field(
+            Field(max_length=_MAX_COORDINATES)], BeforeValidator(_constant_mass)] = Field(
         1.0, description="a number m (M = m I), a diagonal (n numbers) or an n x n SPD matrix")
-    damping: ScalarDamping | DiagonalDamping | MatrixDamping | DamperDamping | None = Field(
+    damping: DampingInput | None = Field(
         None, description="null (undamped) or exactly one form")
     eps: FiniteFloat = Field(0.0, ge=0, description="damping strength")
     momenta: dict[Name, Expression] = Field(default_factory=dict, max_length=16,
@@ -122,7 +154,7 @@ class ChainInput(Input):
     kind: Literal["chain"]
     n: int = Field(ge=2, le=MAX_CHAIN_SITES, description="number of sites")
     bond: Literal["harmonic", "fput", "toda", "morse", "lennard_jones", "expression"] = "fput"
-    parameters: dict[Name, FiniteFloat | Expression] = Field(
+    parameters: dict[Name, NumberOrExpression] = Field(
         default_factory=dict, max_length=64,
         description="the family's parameters (fput: k, alpha, beta; ...); an expression bond gives "
                     "potential: V(r) as text, and its named parameters")
@@ -248,5 +280,8 @@ def _system_form(value: object) -> str:
 
 MATRIX_TAGS = frozenset({"coo form", "diagonal form", "file form"})
 SYSTEM_TAGS = frozenset({"expressions", "chain", "linear_structure"})
+FORM_TAGS = {"damping": frozenset({"scalar", "diagonal", "matrix", "dampers"}),
+             "coordinates": frozenset({"names", "count"})}
+VALUE_TAGS = frozenset({"number", "expression", "vector"})  # after a parameter's name
 AnySystemInput = Annotated[Annotated[SystemInput, Tag("expressions")] | Annotated[ChainInput, Tag("chain")]
                            | Annotated[LinearStructureInput, Tag("linear_structure")], Discriminator(_system_form)]

@@ -190,14 +190,19 @@ function showErrors(errors) {
   box.hidden = errors.length === 0;
   for (const { loc, msg } of errors) {
     const line = document.createElement("div");
+    let text = msg;
     if (loc && loc.length) {
       const path = document.createElement("code");
       path.textContent = jsonPath(loc);
       line.append(path, ": ");
+      // raydamp's own messages start with the path already: show it once
+      for (const prefix of [path.textContent + ": ", path.textContent + " "]) {
+        if (text.startsWith(prefix)) { text = text.slice(prefix.length); break; }
+      }
       const control = controlFor(loc);
       if (control) control.classList.add("invalid");
     }
-    line.append(msg);
+    line.append(text);
     box.append(line);
   }
 }
