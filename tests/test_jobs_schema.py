@@ -53,7 +53,10 @@ def test_form_tags_are_not_in_a_path():
     assert client_path(("system", "linear_structure", "K", "coo form", "coo", "rows", 2)) == (
         "system", "K", "coo", "rows", 2)
     assert client_path(("grid", "eps", "range", "num")) == ("grid", "eps", "num")
-    assert client_path(("initial_state", "state", "q", 0)) == ("initial_state", "q", 0)
+    assert client_path(("initial_state", "q, p form", "q", 0)) == ("initial_state", "q", 0)
+    # a path of ours keeps every part, even one that names a form's key
+    assert client_path(("system", "damping", "dampers", 0, "on")) == ("system", "damping", "dampers", 0, "on")
+    assert client_path(("initial_state", "mode")) == ("initial_state", "mode")
 
 
 def test_a_sweeps_job_does_not_record_work_unless_asked_and_then_refuses():

@@ -37,10 +37,10 @@ def _few_bad(what: str, allowed: tuple[type, ...], good: Any, max_length: int) -
     def check(value: Any) -> Any:
         if not isinstance(value, list):
             return value  # pydantic's own error
-        if len(value) > max_length:
-            raise ValueError(f"{len(value)} items; at most {max_length}")
-        if len(value) <= _SMALL:
-            return value  # at most _SMALL errors: pydantic's own, each at its item's path
+        if len(value) > max_length or len(value) <= _SMALL:
+            # too long: pydantic's one too_long error, found before any item is looked at; short: at most
+            # _SMALL errors, pydantic's own, each at its item's path
+            return value
         types = {type(item) for item in value}
         if types <= set(allowed):
             bad = np.flatnonzero(~good(np.asarray(value, dtype=float)))

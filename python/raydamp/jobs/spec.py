@@ -41,8 +41,8 @@ ModelName = _one_of("model", list(MODELS))
 MethodName = _one_of("method", [m.name for m in methods()])
 TableauName = _one_of("tableau", [m.tableau for m in methods() if m.tableau is not None])
 CompositionName = _one_of("composition", [c.name for c in compositions()])
-ParameterValue = Annotated[Annotated[FiniteFloat, Tag("number")] | Annotated[Vector, Tag("vector")],
-                           Discriminator(lambda value: "vector" if isinstance(value, list) else "number")]
+ParameterValue = Annotated[Annotated[FiniteFloat, Tag("number form")] | Annotated[Vector, Tag("vector form")],
+                           Discriminator(lambda value: "vector form" if isinstance(value, list) else "number form")]
 
 
 # Forms a field may take, told apart by their content rather than tried in turn: a bad input then gets
@@ -50,13 +50,13 @@ ParameterValue = Annotated[Annotated[FiniteFloat, Tag("number")] | Annotated[Vec
 # error's loc after the field; client_path drops it, so a loc is the path the client wrote.
 def _state_form(value: object) -> str:
     if isinstance(value, dict):
-        return "mode" if "mode" in value else "rest" if "rest" in value else "state"
-    return "mode" if isinstance(value, ModeState) else "rest" if isinstance(value, RestState) else "state"
+        return "mode form" if "mode" in value else "rest form" if "rest" in value else "q, p form"
+    return "mode form" if isinstance(value, ModeState) else "rest form" if isinstance(value, RestState) else "q, p form"
 
 
-StateInput = Annotated[Annotated[InitialState, Tag("state")] | Annotated[ModeState, Tag("mode")]
-                       | Annotated[RestState, Tag("rest")], Discriminator(_state_form)]
-UNION_TAGS = {"initial_state": frozenset({"state", "mode", "rest"}), "system": SYSTEM_TAGS, "M": MATRIX_TAGS,
+StateInput = Annotated[Annotated[InitialState, Tag("q, p form")] | Annotated[ModeState, Tag("mode form")]
+                       | Annotated[RestState, Tag("rest form")], Discriminator(_state_form)]
+UNION_TAGS = {"initial_state": frozenset({"q, p form", "mode form", "rest form"}), "system": SYSTEM_TAGS, "M": MATRIX_TAGS,
               "K": MATRIX_TAGS, **FORM_TAGS}
 GRID_TAGS = frozenset({"range", "values"})  # a sweep's axis forms (sweep_spec.py)
 

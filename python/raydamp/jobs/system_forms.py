@@ -60,24 +60,24 @@ class DamperDamping(Input):
 
 def _damping_form(value: object) -> str | None:
     if isinstance(value, dict):
-        return next((key for key in ("scalar", "diagonal", "matrix", "dampers") if key in value), None)
-    forms = ((ScalarDamping, "scalar"), (DiagonalDamping, "diagonal"), (MatrixDamping, "matrix"),
-             (DamperDamping, "dampers"))
+        return next((f"{key} form" for key in ("scalar", "diagonal", "matrix", "dampers") if key in value), None)
+    forms = ((ScalarDamping, "scalar form"), (DiagonalDamping, "diagonal form"), (MatrixDamping, "matrix form"),
+             (DamperDamping, "dampers form"))
     return next((tag for form, tag in forms if isinstance(value, form)), None)
 
 
-DampingInput = Annotated[Annotated[ScalarDamping, Tag("scalar")] | Annotated[DiagonalDamping, Tag("diagonal")]
-                         | Annotated[MatrixDamping, Tag("matrix")] | Annotated[DamperDamping, Tag("dampers")],
+DampingInput = Annotated[Annotated[ScalarDamping, Tag("scalar form")] | Annotated[DiagonalDamping, Tag("diagonal form")]
+                         | Annotated[MatrixDamping, Tag("matrix form")] | Annotated[DamperDamping, Tag("dampers form")],
                          Discriminator(_damping_form, custom_error_type="damping_form",
                                        custom_error_message='damping is null, {"scalar": c}, {"diagonal": [...]}, '
                                                             '{"matrix": [[...]]} or {"dampers": [...]}')]
-Coordinates = Annotated[Annotated[list[Name], Field(min_length=1, max_length=_MAX_COORDINATES), Tag("names")]
-                        | Annotated[int, Field(ge=1, le=_MAX_COORDINATES), Tag("count")],
-                        Discriminator(lambda value: "count" if isinstance(value, int) else "names")]
+Coordinates = Annotated[Annotated[list[Name], Field(min_length=1, max_length=_MAX_COORDINATES), Tag("names form")]
+                        | Annotated[int, Field(ge=1, le=_MAX_COORDINATES), Tag("count form")],
+                        Discriminator(lambda value: "count form" if isinstance(value, int) else "names form")]
 # A value that is a number or something else (an expression, a vector), told apart by its type, so that an
 # error is about the form the client meant.
-NumberOrExpression = Annotated[Annotated[FiniteFloat, Tag("number")] | Annotated[Expression, Tag("expression")],
-                               Discriminator(lambda value: "expression" if isinstance(value, str) else "number")]
+NumberOrExpression = Annotated[Annotated[FiniteFloat, Tag("number form")] | Annotated[Expression, Tag("expression form")],
+                               Discriminator(lambda value: "expression form" if isinstance(value, str) else "number form")]
 
 
 class SystemInput(Input):
@@ -280,8 +280,9 @@ def _system_form(value: object) -> str:
 
 MATRIX_TAGS = frozenset({"coo form", "diagonal form", "file form"})
 SYSTEM_TAGS = frozenset({"expressions", "chain", "linear_structure"})
-FORM_TAGS = {"damping": frozenset({"scalar", "diagonal", "matrix", "dampers"}),
-             "coordinates": frozenset({"names", "count"})}
-VALUE_TAGS = frozenset({"number", "expression", "vector"})  # after a parameter's name
+# Tags name forms, never keys: a path of ours ("damping", "dampers", 0, "on") keeps every part.
+FORM_TAGS = {"damping": frozenset({"scalar form", "diagonal form", "matrix form", "dampers form"}),
+             "coordinates": frozenset({"names form", "count form"})}
+VALUE_TAGS = frozenset({"number form", "expression form", "vector form"})  # after a parameter's name
 AnySystemInput = Annotated[Annotated[SystemInput, Tag("expressions")] | Annotated[ChainInput, Tag("chain")]
                            | Annotated[LinearStructureInput, Tag("linear_structure")], Discriminator(_system_form)]
