@@ -122,3 +122,12 @@ def test_one_error_at_the_path_the_client_wrote(system, path, words):
                                 "initial_state": {"q": [1.0, 0.0], "p": [0.0, 0.0]}})
     errors = caught.value.errors()
     assert len(errors) == 1 and client_path(errors[0]["loc"]) == path and words in errors[0]["msg"], errors
+
+
+@pytest.mark.parametrize("axis", ["h", "step_size"])
+def test_a_sweep_refuses_a_step_whose_times_overflow_as_a_job_does(axis):
+    """Issue 27, point 5: a sweep accepted h = 1e308 over 1000 steps."""
+    spec = {"model": "damped_pendulum", "q0": [1.0], "p0": [0.0], "method": "3s", "h": 0.1, "n_steps": 1000}
+    with pytest.raises(ValueError, match=rf"^grid\.{axis}: 1000 steps of 1e\+308 end beyond the largest float"):
+        raydamp.check_sweep(spec, {axis: [0.1, 1e308]})
+    assert raydamp.check_sweep(spec, {axis: [0.1, 0.2]}).members == 2

@@ -75,7 +75,7 @@ def _document_limits(app: FastAPI, settings: Settings) -> None:
         if app.openapi_schema is not None:
             return app.openapi_schema
         schema = generate()
-        for listing in ("/v1/jobs", "/v1/files"):
+        for listing in ("/v1/jobs", "/v1/sweeps", "/v1/files"):
             for parameter in schema["paths"][listing]["get"]["parameters"]:
                 if parameter["name"] == "limit":
                     parameter["schema"]["maximum"] = settings.max_list_limit

@@ -51,3 +51,13 @@ def test_openapi_declares_names_limits_and_exclusive_fields(server):
     post = schema["paths"]["/v1/jobs"]["post"]["responses"]
     assert {"400", "413", "422", "429"} <= set(post)
     assert "UTF-8" in post["400"]["description"] and "2097152" in post["413"]["description"]
+
+
+def test_openapi_declares_file_responses_and_every_list_limit(server):
+    """Issue 27, point 5: the trajectory's files and the sweeps' list limit were missing from /openapi.json."""
+    paths = server.client.get("/openapi.json").json()["paths"]
+    content = paths["/v1/jobs/{job_id}/trajectory"]["get"]["responses"]["200"]["content"]
+    assert {"application/json", "text/csv", "application/octet-stream", "application/x-netcdf"} <= set(content)
+    for listing in ("/v1/jobs", "/v1/sweeps", "/v1/files"):
+        limit = next(p for p in paths[listing]["get"]["parameters"] if p["name"] == "limit")
+        assert limit["schema"]["maximum"] == 1000, listing

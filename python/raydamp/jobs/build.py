@@ -145,6 +145,8 @@ def error_at(spec: JobSpec, error: ValueError) -> JobError:
 def model_from_spec(spec: Any, files: FileResolver | None = None):
     """The model of {"model": name, "parameters": {...}} or {"system": {...}} (raydamp.systems.kinds.
     describe_model's form); a JobError names the path."""
+    if isinstance(spec, Mapping):  # None as "not given", as the job form's null
+        spec = {key: value for key, value in spec.items() if value is not None}
     try:
         parsed = ModelSpec.model_validate(_plain(spec))
     except ValidationError as error:

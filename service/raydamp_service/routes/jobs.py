@@ -89,6 +89,8 @@ def get_job(job_id: str, store: StoreDep, runner: RunnerDep) -> JobView:
 
 @router.get("/{job_id}/trajectory", response_model=Trajectory,
             responses={**_NOT_FOUND, 409: {"description": "the job has no trajectory (yet)"},
+                       # the files ?format= writes, beside the JSON of the response model
+                       200: {"content": {"text/csv": {}, "application/octet-stream": {}, "application/x-netcdf": {}}},
                        429: {"description": "max_large_fetches large fetches are being served; retry after "
                                             "Retry-After seconds, or ask for fewer points"}})
 def get_trajectory(job_id: str, request: Request, store: StoreDep, settings: SettingsDep,
