@@ -11,6 +11,9 @@ struct IsotropicDamping {
 
   DecayFactors factors(double t) const { return decay_factors(a, t); }
 
+  // The largest eigenvalue of A (the amplification guard's rho).
+  double spectral_radius() const { return a; }
+
   // p <- exp(-t A) p: the exact flow of eps Y (f = factors(t)).
   template <class Q, class P>
   void decay(const Q&, const DecayFactors& f, P& p) const { p *= f.exp; }
