@@ -13,6 +13,10 @@ struct IsotropicDamping {
 
   // The largest eigenvalue of A (the amplification guard's rho).
   double spectral_radius() const { return a; }
+  // A = a I decays every direction of p alike, so a momentum map J = p . xi(q) of a
+  // symmetry of V decays under the exact flow as J(t) = J(0) e^{-a t}
+  // (the step loop's momentum drift measures the distance from that law).
+  double momentum_decay_rate() const { return a; }
 
   // p <- exp(-t A) p: the exact flow of eps Y (f = factors(t)).
   template <class Q, class P>
