@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import functools
 import math
+import re
 
 import numpy as np
 import pytest
@@ -180,3 +181,113 @@ def test_guard_sees_the_implicit_midpoint_pole():
                           n_steps=4)
     # The exact backward flow of 2s at the same h amplifies by e^{1.998} = 7.4 only: accepted.
     assert raydamp.integrate(model, [1.0], [0.0], method="2s", composition="yoshida4", h=h, n_steps=4).success
+
+
+# ---- Issue 28: the guard's bound holds where the spectrum is only estimated, and its message
+# evaluates the formula it quotes.
+
+def consistent_bar(n: int = 200):
+    """A bar of n linear elements (length 1, EA = rho A = 1), fixed at x = 0: consistent M and K."""
+    import scipy.sparse as sp
+
+    size = 1.0 / n
+    main = np.full(n, 2.0)
+    main[-1] = 1.0  # the free end belongs to one element
+    off = np.ones(n - 1)
+    K = sp.diags([main, -off, -off], [0, 1, -1]) / size
+    M = sp.diags([2.0 * main, off, off], [0, 1, -1]) * (size / 6.0)
+    return M.tocsc(), K.tocsc()
+
+
+def gammas(name: str) -> np.ndarray:
+    return np.array(next(c.gammas for c in raydamp.compositions() if c.name == name))
+
+
+def test_guard_bound_holds_on_a_200_dof_consistent_mass_bar():
+    # 200 DOF, Rayleigh C = 0.1 M + 1e-4 K: the damping rates alpha + beta omega^2 reach 48.1. The
+    # guard once estimated rho by power iteration that stopped 0.12% low here, accepting an h at
+    # which a backward sub-step amplified the top mode by 10.03; it now takes the structure's
+    # guaranteed bound alpha + beta L (L from Lanczos with its residual, times 1.05).
+    import scipy.linalg
+
+    M, K = consistent_bar(200)
+    alpha, beta = 0.1, 1e-4
+    bar = raydamp.LinearStructure(M, K, alpha=alpha, beta=beta)
+    omega2, modes = scipy.linalg.eigh(K.toarray(), M.toarray())  # dense reference: K v = omega^2 M v
+    rates = alpha + beta * omega2  # the eigenvalues of A = C M^{-1}
+    assert bar.damping_rate_bound >= rates.max()
+    zero = np.zeros(200)
+
+    def accepted(h: float) -> bool:
+        try:
+            raydamp.integrate(bar, zero, zero, method="3s", composition="kahan_li8", h=h, n_steps=1)
+        except ValueError as refused:
+            assert str(refused).startswith("composition: 'kahan_li8'")
+            return False
+        return True
+
+    lo, hi = 0.0, 1.0  # the largest h integrate accepts, to 2^-40 relative
+    assert not accepted(hi)
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if accepted(mid) else (lo, mid)
+    # 3s's backward damping sub-steps: the merged (gamma_i + gamma_{i+1}) h / 2 between stages.
+    g = gammas("kahan_li8")
+    c = min(((g[:-1] + g[1:]) / 2).min(), g[0] / 2)
+    assert c == pytest.approx(-0.155248405, abs=1e-9)
+    amplification = np.exp(-c * lo * rates).max()  # measured 8.95
+    assert amplification <= raydamp.run.integrate.MAX_AMPLIFICATION
+    assert amplification >= 10 ** (1 / 1.06)  # the bound's slack is Lanczos' 5% margin, no more
+    assert not accepted(1.001 * lo)
+    # The backward damping flow raydamp runs multiplies the top mode by that factor (to 1e-10).
+    top = M @ modes[:, -1]
+    _, grown = bar.flow("damp", zero, top, c * lo)
+    assert np.linalg.norm(grown) / np.linalg.norm(top) == pytest.approx(amplification, rel=1e-10)
+
+
+def _refusal(model, q0, p0, **options) -> str:
+    with pytest.raises(ValueError) as refused:
+        raydamp.integrate(model, q0, p0, n_steps=1, **options)
+    return str(refused.value)
+
+
+def _number(pattern: str, message: str) -> float:
+    found = re.search(pattern, message)
+    assert found, (pattern, message)
+    return float(found.group(1))
+
+
+@pytest.mark.parametrize("method, composition, coefficient", [
+    ("3s", "kahan_li8", lambda g: (g[7] + g[8]) / 2),  # the merged damp joining stages 8 and 9
+    ("3s", "yoshida4", lambda g: (g[0] + g[1]) / 2),
+    ("2s", "yoshida4", lambda g: g[1]),  # kick+damp for gamma_2 h
+])
+def test_guard_message_evaluates_the_formula_on_the_coefficient_it_names(method, composition, coefficient):
+    # 3s over kahan_li8 once quoted gamma = -0.606 and e^{|gamma h| rho}, with a number computed from
+    # the merged -0.155 (18.4 reported where the formula as written gave 8.6e4). The message now names
+    # the sub-step's coefficient c and the formula it evaluated: every number checks against them
+    # (c, the exponent and rho to the 6 digits printed, the factor to its 3).
+    model = stiff_structure()  # rho = 100
+    message = _refusal(model, [0.01, 1.0], [0.0, 0.0], method=method, composition=composition, h=0.5)
+    c = _number(r"lasts c h with c = [^=]+ = (-?[\d.]+(?:e[+-]\d+)?)", message)
+    assert c == pytest.approx(coefficient(gammas(composition)), rel=1e-5)
+    h = _number(r"with h = ([\d.e+-]+) ", message)
+    rho = _number(r"with rho = ([\d.e+-]+) ", message)
+    assert (h, rho) == (0.5, pytest.approx(100, rel=1e-12))
+    exponent = _number(r"e\^\{\|c\| h rho\} = e\^\{([\d.e+-]+)\}", message)
+    assert exponent == pytest.approx(abs(c) * h * rho, rel=1e-5)
+    factor = _number(r"e\^\{[\d.e+-]+\} = ([\d.e+-]+) with rho", message)
+    assert factor == pytest.approx(math.exp(abs(c) * h * rho), rel=5e-3)
+
+
+def test_guard_message_names_the_stability_function_where_it_decides():
+    # rks(midpoint) over yoshida4: the backward kick+damp runs for gamma_2 h, z = 1.7024 h rho = 1.8,
+    # where R(z) = (1 + z/2)/(1 - z/2) = 19 exceeds the limit while e^z = 6.05 does not.
+    model = raydamp.System(["a"], "a^2/2", damping={"scalar": 1.0}, eps=2.0)  # rho = 2
+    h = 1.8 / (2 * 1.7024143839193153)
+    message = _refusal(model, [1.0], [0.0], method="rks", tableau="midpoint", composition="yoshida4", h=h)
+    assert "kick_damp_rk sub-step in stage 2" in message and "c = gamma_2 = -1.70241, " in message
+    z = _number(r"\|R\(\|c\| h rho\)\| of tableau 'midpoint' = \|R\(([\d.e+-]+)\)\|", message)
+    assert z == pytest.approx(1.8, rel=1e-5)
+    factor = _number(r"\|R\([\d.e+-]+\)\| = ([\d.e+-]+) with rho", message)
+    assert factor == pytest.approx((1 + z / 2) / (1 - z / 2), rel=5e-3)

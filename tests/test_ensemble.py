@@ -226,3 +226,32 @@ def test_file_round_trip_keeps_provenance(tmp_path, suffix):
     # a loaded member's provenance runs again to the same numbers
     model, q0, p0, options = job_arguments(back.member(3).provenance)
     assert same(back.member(3), raydamp.integrate(model, q0, p0, **options))
+
+
+@pytest.mark.parametrize("kind", ["built-in", "system"])
+@pytest.mark.parametrize("suffix", [".nc", ".zarr"])
+def test_provenance_records_each_members_eps_and_runs_again(tmp_path, kind, suffix):
+    # Issue 28, point 5: the provenance once recorded the base model's eps (0.01 here) and only the
+    # name of the varied parameter, so the file did not say which eps each member ran with.
+    from raydamp.jobs import model_from_spec
+
+    eps = np.array([0.0, 0.05, 0.3])
+    base = DampedPendulum(eps=0.01) if kind == "built-in" else systems.damped_pendulum(0.01)
+    ens = raydamp.integrate_ensemble(base, [[1.0], [2.0], [3.0]], [0.0], parameters={"eps": eps}, h=0.1,
+                                     n_steps=50, save_every=10)
+    spec = ens.provenance
+    assert spec["ensemble"]["parameters"] == {"eps": [0.0, 0.05, 0.3]}
+    # The base is member 0 as it ran, not a model no member was.
+    assert (spec["parameters"]["eps"] if kind == "built-in" else spec["system"]["eps"]) == 0.0
+    ens.save(tmp_path / f"ensemble{suffix}")
+    back = raydamp.load(tmp_path / f"ensemble{suffix}")
+    assert back.provenance == spec
+    # Run again from the loaded provenance and initial states alone: the same numbers, bit for bit.
+    spec = back.provenance
+    model = model_from_spec({k: spec[k] for k in ("model", "parameters", "system") if k in spec})
+    again = raydamp.integrate_ensemble(model, back.q0, back.p0, parameters=spec["ensemble"]["parameters"],
+                                       method=spec["method"], h=spec["h"], n_steps=spec["n_steps"],
+                                       save_every=spec["save_every"])
+    for name in ("q", "p", "energy", "steps"):
+        assert np.array_equal(getattr(again, name), getattr(ens, name)), name
+    assert np.array_equal(again.parameters["eps"], eps)

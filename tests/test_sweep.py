@@ -4,6 +4,11 @@
 from __future__ import annotations
 
 import math
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -178,3 +183,51 @@ def test_sweep_over_a_chains_initial_state_equals_the_ensemble(client):
         picked = ds.sel(member=(ds["method"] == method).values)
         np.testing.assert_array_equal(picked["q"].values, ens.q)
         np.testing.assert_array_equal(picked["energy"].values, ens.energy)
+
+
+UNGUARDED = """\
+import raydamp
+
+spec = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "q0": [1.0], "p0": [0.0], "h": 0.1, "n_steps": 10}
+ds = raydamp.sweep(spec, grid={"eps": [0.0, 0.1]})
+print("members", ds.sizes["member"])
+"""
+
+
+def _run_script(path) -> subprocess.CompletedProcess:
+    env = {**os.environ, "PYTHONPATH": str(Path(raydamp.__file__).resolve().parent.parent)}
+    return subprocess.run([sys.executable, str(path)], capture_output=True, text=True, timeout=120, env=env,
+                          cwd=path.parent)
+
+
+def test_script_without_main_guard_gets_one_line_instead_of_dask_tracebacks(tmp_path):
+    # Issue 28, point 4: pasted into a script, the README's sweep printed 814 lines of Dask tracebacks
+    # ending in "Nanny failed to start", the worker processes (spawned) importing the script again.
+    # sweep now sees the call run while the main script is imported and says so in one line; the
+    # same script under the guard runs.
+    script = tmp_path / "unguarded.py"
+    script.write_text(UNGUARDED)
+    started = time.perf_counter()
+    out = _run_script(script)
+    assert out.returncode == 1 and "members" not in out.stdout
+    lines = out.stderr.strip().splitlines()
+    assert lines[-1].startswith(f"RuntimeError: raydamp.sweep: {script}:4 calls sweep while the script is being "
+                                "imported"), out.stderr
+    assert 'put the call under `if __name__ == "__main__":`' in lines[-1]
+    assert len(lines) <= 12 and "Nanny" not in out.stderr  # Python's own few lines of traceback, no more
+    assert time.perf_counter() - started < 30  # no cluster was started
+
+    guarded = tmp_path / "guarded.py"
+    body = UNGUARDED.split("\n", 2)[2]
+    guarded.write_text("import raydamp\n\nif __name__ == \"__main__\":\n" +
+                       "".join(f"    {line}\n" for line in body.splitlines() if line))
+    out = _run_script(guarded)
+    assert out.returncode == 0 and out.stdout.strip() == "members 2", out.stderr[-2000:]
+
+
+def test_spec_without_parameters_takes_the_defaults():
+    # The README's sweep spec gives no "parameters"; it was refused ("parameters: Input should be a
+    # valid dictionary") once the job schema built the model.
+    plan = raydamp.check_sweep({"model": "damped_pendulum", "q0": [0.0], "p0": [0.0], "h": 0.05, "t_end": 50},
+                               grid={"eps": [0.0, 0.5]})
+    assert plan.members == 2 and plan.model.parameters == DampedPendulum().parameters

@@ -17,18 +17,6 @@ static const char* kind_name(TableauKind k) {
   }
 }
 
-static const char* flow_name(Flow f) {
-  switch (f) {
-    case Flow::drift: return "drift";
-    case Flow::kick: return "kick";
-    case Flow::damp: return "damp";
-    case Flow::kick_damp: return "kick_damp";
-    case Flow::kick_damp_rk: return "kick_damp_rk";
-    case Flow::drift_damp_rk: return "drift_damp_rk";
-    default: return "full_rk";
-  }
-}
-
 void bind_catalogue(py::module_& m) {
   m.def("methods", [] {
     py::list rows;

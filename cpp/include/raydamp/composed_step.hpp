@@ -45,15 +45,20 @@ struct StepDurations {
     }
   }
 
-  // Every sub-flow of the step in order, with its duration (for the amplification bound).
+  // Every sub-flow of the step in order (for the amplification bound), as
+  // f(flow, duration, stage, fraction, joint): the sub-flow runs for fraction * gamma_stage * h,
+  // or, a joint, for fraction * (gamma_stage + gamma_{stage+1}) * h (a symmetric table's first
+  // and last fractions are equal), stages counted from 0.
   template <class F>
   void for_each(F f) const {
-    f(Method::stages[0].flow, lead);
+    const double first = Method::stages[0].fraction;
+    f(Method::stages[0].flow, lead, 0, first, false);
     for (int s = 0; s < m; ++s) {
-      for (int j = 1; j < S - 1; ++j) f(Method::stages[j].flow, body[s * stride + j - 1]);
-      if (s + 1 < m) f(Method::stages[0].flow, body[s * stride + S - 2]);
+      for (int j = 1; j < S - 1; ++j)
+        f(Method::stages[j].flow, body[s * stride + j - 1], s, Method::stages[j].fraction, false);
+      if (s + 1 < m) f(Method::stages[0].flow, body[s * stride + S - 2], s, first, true);
     }
-    f(Method::stages[S - 1].flow, trail);
+    f(Method::stages[S - 1].flow, trail, m - 1, Method::stages[S - 1].fraction, false);
   }
 };
 

@@ -87,13 +87,35 @@ struct RunResult {
   long steps = 0;          // steps taken whose result is finite
   long failed_step = -1;   // 1-based index of the step whose result was not finite
   std::string message;
-  double max_momentum_drift = 0.0;  // max over every step of max_j |J_j - J_j(0)| (merged steps: see run_steps)
+  // max over every step of max_j |J_j(t) - J_j(0) e^{-a t}|: the distance of the momentum maps from
+  // the law the exact flow follows, a = momentum_decay_rate(model) (0: conserved; see run_steps).
+  double max_momentum_drift = 0.0;
   Trajectory trajectory;
 };
 
 template <class Model, int Dim>
 double energy(const Model& model, const State<Dim>& z) {
   return model.mass.kinetic(z.p) + model.potential(z.q);
+}
+
+// The law the momentum maps J = p . xi(q) a model lists follow under its exact flow:
+// J(t) = J(0) e^{-a t}. A damping kind with A = eps D M^{-1} = a I (D = c M) gives a as
+// momentum_decay_rate(): the Hamiltonian part conserves J and the damping scales p. Every
+// other kind gives a = 0: the momentum maps a model lists are those of symmetries of V and
+// of D (the elastic pendulum's J3 under radial damping, a chain's total momentum with
+// dashpots on bonds only), which the exact flow conserves (paper section 5).
+template <class D, class = void>
+struct has_momentum_decay_rate : std::false_type {};
+template <class D>
+struct has_momentum_decay_rate<D, std::void_t<decltype(std::declval<const D&>().momentum_decay_rate())>>
+    : std::true_type {};
+template <class Model>
+inline constexpr bool decays_momenta_v = has_momentum_decay_rate<decltype(std::declval<const Model&>().damping)>::value;
+
+template <class Model>
+double momentum_decay_rate(const Model& model) {
+  if constexpr (decays_momenta_v<Model>) return model.damping.momentum_decay_rate();
+  else return 0.0;
 }
 
 namespace detail {
@@ -123,11 +145,12 @@ void save_point(const Model& model, const State<Dim>& z, double t, const Workspa
   out.momentum.insert(out.momentum.end(), mb.j.begin(), mb.j.end());
 }
 
+// max_j |J_j - J_j(0) law|, law = J(t) / J(0) by momentum_decay_rate (1 when conserved).
 template <class Model, int Dim>
-double momentum_drift(const Model& model, const State<Dim>& z, MomentumBuffers& mb) {
+double momentum_drift(const Model& model, const State<Dim>& z, MomentumBuffers& mb, double law) {
   model.momenta(z.q, z.p, mb.j.data());
   double drift = 0.0;
-  for (int i = 0; i < mb.count(); ++i) drift = std::max(drift, std::abs(mb.j[i] - mb.j0[i]));
+  for (int i = 0; i < mb.count(); ++i) drift = std::max(drift, std::abs(mb.j[i] - law * mb.j0[i]));
   return drift;
 }
 
@@ -141,11 +164,11 @@ struct FixedMomentumDrift {
     for (int i = 0; i < M; ++i) j0[i] = mb.j0[i];
   }
   template <int Dim>
-  double operator()(const Model& model, const State<Dim>& z) const {
+  double operator()(const Model& model, const State<Dim>& z, double law) const {
     std::array<double, (M > 0 ? M : 1)> j{};
     model.momenta(z.q, z.p, j.data());
     double drift = 0.0;
-    for (int i = 0; i < M; ++i) drift = std::max(drift, std::abs(j[i] - j0[i]));
+    for (int i = 0; i < M; ++i) drift = std::max(drift, std::abs(j[i] - law * j0[i]));
     return drift;
   }
 };
@@ -184,7 +207,9 @@ auto make_stepper(const Composition& composition, const RunSpec& spec) {
 }
 
 // Steps k .. end-1 of y, with nothing saved in between; returns the largest
-// momentum-map drift seen. (run_block below decides whether it is flattened.)
+// momentum-map drift seen, step_drift(y, i, before_trail) after step i (before_trail:
+// without its last sub-flow, which the merged loop runs joined to the next step's first).
+// (run_block below decides whether it is flattened.)
 template <bool Mergeable, class Model, class Tab, class Stepper, int Dim, class DF, class Advance, class Drift>
 inline double run_block_body(const Model& model, const Tab& shared_tab, const Stepper& stepper, Workspace<Dim, DF>& ws,
                              State<Dim>& state, long k, long end, bool merge, bool track_momenta,
@@ -210,11 +235,11 @@ inline double run_block_body(const Model& model, const Tab& shared_tab, const St
       local.lead(model, tab, y, k, ws);
       local.body(model, tab, y, k, ws);
       for (long i = k; i + 1 < end; ++i) {
-        if (track_momenta) block_drift = std::max(block_drift, step_drift(y));
+        if (track_momenta) block_drift = std::max(block_drift, step_drift(y, i, true));
         local.join_then_body(model, tab, y, i, ws);
       }
       local.trail(model, tab, y, end - 1, ws);
-      if (track_momenta) block_drift = std::max(block_drift, step_drift(y));
+      if (track_momenta) block_drift = std::max(block_drift, step_drift(y, end - 1, false));
       if constexpr (!in_place) state = y;
       return block_drift;
     }
@@ -223,19 +248,19 @@ inline double run_block_body(const Model& model, const Tab& shared_tab, const St
       local.lead(model, tab, y, k, ws);
       for (long i = k; i + 1 < end; ++i) {
         local.body(model, tab, y, i, ws);
-        if (track_momenta) block_drift = std::max(block_drift, step_drift(y));
+        if (track_momenta) block_drift = std::max(block_drift, step_drift(y, i, true));
         local.join(model, tab, y, i, ws);
       }
       local.body(model, tab, y, end - 1, ws);
       local.trail(model, tab, y, end - 1, ws);
-      if (track_momenta) block_drift = std::max(block_drift, step_drift(y));
+      if (track_momenta) block_drift = std::max(block_drift, step_drift(y, end - 1, false));
       if constexpr (!in_place) state = y;
       return block_drift;
     }
   }
   for (long i = k; i < end; ++i) {
     advance(y, i);
-    if (track_momenta) block_drift = std::max(block_drift, step_drift(y));
+    if (track_momenta) block_drift = std::max(block_drift, step_drift(y, i, false));
   }
   if constexpr (!in_place) state = y;
   return block_drift;
@@ -266,6 +291,11 @@ template <class Method, class Model, class Tab, int Dim>
 RunResult run_steps(const Model& model, const Tab& tab, const Composition& composition, State<Dim> z,
                     const RunSpec& spec, const Control& control) {
   static_assert(is_model_v<Model>, "Model lacks part of the interface listed in raydamp/concepts.hpp");
+  // At eps = 0 every damping flow is the identity, so 3s is sv with identities between its
+  // drifts. Run as sv's table, it equals sv bit for bit: its merged steps would otherwise
+  // run drift h/2 twice where sv's run drift h once (both exact; they differ by rounding).
+  if constexpr (std::is_same_v<Method, ThreeTermSplitting>)
+    if (model.eps == 0.0) return run_steps<StormerVerlet>(model, tab, composition, std::move(z), spec, control);
   const long N = spec.n_steps;
   const int n = model.size();
   RunResult result;
@@ -293,10 +323,6 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
   State<Dim> checkpoint = z, before = z;
   State<Dim> y = Dim == Eigen::Dynamic ? State<Dim>{} : z;  // a Dynamic state is stepped in place
   if (mb.count() > 0) model.momenta(z.q, z.p, mb.j0.data());
-  auto step_drift = [&, fixed = FixedMomentumDrift<Model>(mb)](const State<Dim>& x) {
-    if constexpr (Model::n_momenta > 0) return fixed(model, x);
-    else return momentum_drift(model, x, mb);
-  };
   const bool track_momenta = mb.count() > 0;
   auto time_at = [&](long k) { return k == N && spec.h_last != spec.h ? (N - 1) * spec.h + spec.h_last : k * spec.h; };
   auto step_size = [&](long k) { return k == N - 1 ? spec.h_last : spec.h; };  // size of step k -> k+1
@@ -343,11 +369,30 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
   const auto stepper = make_stepper<Method>(composition, spec);
   // First-same-as-last merging needs no intermediate state except the momentum
   // maps', which are read before the merged sub-flow: an exact flow of a part of
-  // H or of the damping, each of which conserves J (paper section 5), so up to
-  // rounding that is J at the step's end. The damping work needs the step's end
-  // points: with work tracked, steps run whole.
+  // H, which conserves J, or of the damping, which conserves J or scales it by a
+  // known factor (paper section 5; `law` below). The damping work needs the step's
+  // end points: with work tracked, steps run whole.
   constexpr bool mergeable = is_mergeable<Method>();
   const bool merge = mergeable && spec.merge_steps && !spec.track_work;
+  // The momentum maps' drift from their law J(0) e^{-a t} (see momentum_decay_rate), after
+  // step i or, merged, before its last sub-flow: when that is a damping flow (3s's damp),
+  // the state has then been damped for t_{i+1} minus its duration.
+  const double decay_rate = momentum_decay_rate(model);
+  auto law = [&](long i, bool before_trail) {
+    if constexpr (decays_momenta_v<Model>) {
+      if (decay_rate != 0.0) {
+        double t = time_at(i + 1);
+        if constexpr (mergeable && is_damping_flow(Method::stages[0].flow))
+          if (before_trail) t -= stepper.durations(i).trail;
+        return std::exp(-decay_rate * t);
+      }
+    }
+    return 1.0;
+  };
+  auto step_drift = [&, fixed = FixedMomentumDrift<Model>(mb)](const State<Dim>& x, long i, bool before_trail) {
+    if constexpr (Model::n_momenta > 0) return fixed(model, x, law(i, before_trail));
+    else return momentum_drift(model, x, mb, law(i, before_trail));
+  };
   auto advance = [&](State<Dim>& x, long i) {
     stepper.step(model, tab, x, i, ws);
     if constexpr (trapezoid) {
@@ -391,7 +436,7 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
           ws.work = work_before;
           break;
         }
-        if (track_momenta) max_drift = std::max(max_drift, momentum_drift(model, z, mb));
+        if (track_momenta) max_drift = std::max(max_drift, step_drift(z, i, false));
       }
       k = i;
       result.status = Status::non_finite;

@@ -36,8 +36,10 @@ class EnsembleSolution:
         max_momentum_drift : (members,) arrays.
     q0, p0 : (members, n) initial states; parameters : {name: per-member values}.
     method, tableau, composition, h : shared by every member; threads : threads used.
-    provenance : the job JSON of the base system and method, plus ``ensemble``: the swept
-        parameter names and member count, and ``raydamp_version``.
+    provenance : the job JSON of member 0 (the system with member 0's parameter values; the
+        initial states are the arrays q0 and p0), plus ``ensemble``: the member count and
+        ``parameters``, {name: [one value per member]} of the parameters that vary (so member i
+        is the job JSON with member i's values), and ``raydamp_version``.
 
     ``member(i)`` is member i as a :class:`raydamp.Solution`, equal bit for bit to a single
     ``raydamp.integrate`` run of it (to rounding when the ensemble ran with ``vector_sine``).
@@ -95,7 +97,11 @@ class EnsembleSolution:
         del spec["initial_state"]  # per member: the q0, p0 arrays
         spec["coordinates"] = list(system.coordinates)
         spec["momentum_names"] = list(system.momentum_names)
-        spec["ensemble"] = {"members": self.members, "parameters": list(self.parameters)}
+        # The system as member 0 ran it: the base model's values of the varied parameters (its
+        # eps, say) are no member's unless a member has them.
+        _set_parameters(spec, {name: values[0].tolist() for name, values in self.parameters.items()})
+        spec["ensemble"] = {"members": self.members,
+                            "parameters": {name: values.tolist() for name, values in self.parameters.items()}}
         if vector_sine:
             spec["ensemble"]["vector_sine"] = True
         return spec
@@ -149,14 +155,7 @@ class EnsembleSolution:
         if spec is None:
             return None
         spec.pop("ensemble", None)
-        values = {name: (array[i].tolist()) for name, array in self.parameters.items()}
-        if "system" in spec and spec["system"] is not None:
-            system = spec["system"]
-            if "eps" in values:
-                system["eps"] = values.pop("eps")
-            system["parameters"] = {**system.get("parameters", {}), **values}
-        else:
-            spec["parameters"] = {**spec.get("parameters", {}), **values}
+        _set_parameters(spec, {name: array[i].tolist() for name, array in self.parameters.items()})
         spec["initial_state"] = {"q": self.q0[i].tolist(), "p": self.p0[i].tolist()}
         return spec
 
@@ -177,3 +176,17 @@ class EnsembleSolution:
         counts = {s: self.status.count(s) for s in dict.fromkeys(self.status)}
         return (f"EnsembleSolution(members={self.members}, method={self.method!r}, h={self.h}, "
                 f"saved={self.t.size}, status={counts})")
+
+
+def _set_parameters(spec: dict[str, Any], values: dict[str, Any]) -> None:
+    """Put parameter values into a job JSON: a System's eps and expression parameters, or a built-in
+    model's parameters."""
+    values = dict(values)
+    if "system" in spec and spec["system"] is not None:
+        system = spec["system"]
+        if "eps" in values:
+            system["eps"] = values.pop("eps")
+        if values:
+            system["parameters"] = {**system.get("parameters", {}), **values}
+    elif values:
+        spec["parameters"] = {**spec.get("parameters", {}), **values}

@@ -29,6 +29,17 @@ class Solution:
         first step whose result was not finite and every saved row is finite) or
         "cancelled".
     steps : steps taken (all with finite results).
+    max_momentum_drift : the largest distance, over every step, of the momentum maps from the
+        law the exact flow gives them: max_j |J_j(t) - J_j(0) e^{-a t}|. a = eps c when the
+        damping is D = c M (a System's ``{"scalar": c}``: A = eps D M^{-1} = a I scales p, and
+        so every momentum map J = p . xi(q) of a symmetry of V); a = 0 for every other model and
+        damping form, whose momentum maps are those of symmetries of both V and D, which the
+        flow conserves (the elastic pendulum's J3, L under a radial dashpot, a chain's total
+        momentum). 3s, 2s and rks keep it at rounding (rks with an explicit tableau plus its
+        stability function's error against e^{-a h} per step); a method that does not keep
+        momentum maps (heun, rk4) shows its error. 0 for a model without momentum maps. A System's ``momenta`` under non-scalar
+        damping that breaks their symmetry follow no such law: there the figure includes the
+        damping's real change of J.
     work : (N,) damping work W(t) if the run was asked for it (``work=True``), else None.
     dofs : the indices of the saved coordinates when the run saved only some (``save_dofs``),
         else None.
@@ -142,7 +153,8 @@ class Solution:
         return self.energy - self.energy[0] + self.work
 
     def summary(self) -> dict[str, Any]:
-        """The scalar results as plain JSON-ready values (non-finite numbers as None)."""
+        """The scalar results as plain JSON-ready values (non-finite numbers as None);
+        ``momentum_drift`` is ``max_momentum_drift`` (None for a model without momentum maps)."""
 
         def num(x: float) -> float | None:
             return float(x) if math.isfinite(x) else None

@@ -80,15 +80,18 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
         :func:`raydamp.compositions`); None (default) runs the method itself.
         Every composition of order above 2 has negative coefficients, so some
         damping sub-step runs backward and multiplies the mode of eps D M^{-1}
-        with eigenvalue lambda by e^{|tau| lambda} (tau < 0 its duration). Before
-        the run the bound e^{|tau| rho} (rho: the spectral radius of eps D M^{-1}
-        at q0; for an rks Runge-Kutta sub-step its stability function where
-        larger) is computed, and a run whose bound passes
-        ``MAX_AMPLIFICATION`` (10: one decimal digit of a damped mode per
-        backward sub-step) is refused with a ValueError that gives the bound and
-        the largest h that passes. Order 2 (no composition) has no backward
-        sub-step. 3s composes most gently: its backward damping is only the
-        merged (gamma_i + gamma_{i+1}) h / 2 between stages.
+        with eigenvalue lambda by e^{|tau| lambda} (tau < 0 its duration as the
+        step loop runs it, merged sub-steps summed). Before the run the bound
+        e^{|tau| rho} (rho: the spectral radius of eps D M^{-1} at q0, or for a
+        LinearStructure its guaranteed upper bound ``damping_rate_bound``; for an
+        rks Runge-Kutta sub-step its stability function where larger) is
+        computed, and a run whose bound passes ``MAX_AMPLIFICATION`` (10: one
+        decimal digit of a damped mode per backward sub-step) is refused with a
+        ValueError that names the sub-step, its coefficient c (tau = c h), the
+        formula evaluated on it and its value, and the largest h that passes.
+        Order 2 (no composition) has no backward sub-step. 3s composes most
+        gently: its backward damping is only the merged
+        c = (gamma_i + gamma_{i+1}) / 2 between stages.
     save_dofs : save q and p of these coordinates only (indices, in the order given); None
         (default) saves all. Energy, W and the momentum maps are still computed from the whole
         state at each saved point, so a 10^6-site chain run keeps a few numbers per row.

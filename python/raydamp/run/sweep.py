@@ -8,8 +8,10 @@ by chunk. Needs the ``sweep`` extra (dask[distributed], xarray, zarr).
 
 from __future__ import annotations
 
+import ast
 import json
 import re
+import sys
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -54,8 +56,9 @@ def _base(spec: Mapping[str, Any]) -> tuple[Model, np.ndarray, np.ndarray, dict[
             raise ValueError(f"spec.{unknown[0]}: unknown key (known: {', '.join(SPEC_KEYS)}; or give the job "
                              f"JSON form: {', '.join(JobSpec.model_fields)})")
         model = spec.get("system", spec.get("model"))
-        if isinstance(model, str):
-            model = model_from_spec({"model": model, "parameters": spec.get("parameters")})
+        if isinstance(model, str):  # parameters may be left out (the defaults), as in the job JSON
+            given = {} if spec.get("parameters") is None else {"parameters": spec["parameters"]}
+            model = model_from_spec({"model": model, **given})
         elif isinstance(model, Mapping):
             model = model_from_spec({"system": model})
         elif not isinstance(model, Model):
@@ -334,6 +337,49 @@ def check_sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, chunk_size:
     return plan
 
 
+def _unguarded_main_call() -> tuple[str, str] | None:
+    """("file:line", start method) when this call runs as part of importing the main script outside
+    ``if __name__ == "__main__":``, where processes started by spawn or forkserver would import the
+    script again and run the call once more each (multiprocessing's spawn.get_preparation_data:
+    a package's __main__ and an interactive session are not re-imported); else None."""
+    import dask
+
+    method = dask.config.get("distributed.worker.multiprocessing-method", "spawn")
+    main = sys.modules.get("__main__")
+    if method == "fork" or main is None:
+        return None
+    name = getattr(getattr(main, "__spec__", None), "name", None)
+    if name is not None and (name == "__main__" or name.endswith(".__main__")):
+        return None
+    if name is None and getattr(main, "__file__", None) is None:
+        return None
+    frame = sys._getframe(1)
+    while frame is not None and not (frame.f_globals is main.__dict__ and frame.f_code.co_name == "<module>"):
+        frame = frame.f_back
+    if frame is None:  # not called while the main module runs (e.g. from a thread, or after it)
+        return None
+    filename, line = frame.f_code.co_filename, frame.f_lineno
+    try:
+        with open(filename, encoding="utf-8") as f:
+            tree = ast.parse(f.read())
+    except (OSError, SyntaxError, ValueError):
+        return None  # no source to read: assume the script knows what it does
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and _is_main_test(node.test) and \
+                node.body[0].lineno <= line <= (node.body[-1].end_lineno or line):
+            return None
+    return f"{filename}:{line}", method
+
+
+def _is_main_test(test: ast.expr) -> bool:
+    """Whether ``test`` is ``__name__ == "__main__"`` (either way round)."""
+    if not (isinstance(test, ast.Compare) and len(test.ops) == 1 and isinstance(test.ops[0], ast.Eq)):
+        return False
+    sides = (test.left, test.comparators[0])
+    return (any(isinstance(x, ast.Name) and x.id == "__name__" for x in sides)
+            and any(isinstance(x, ast.Constant) and x.value == "__main__" for x in sides))
+
+
 def _task(plan: SweepPlan, model_spec: dict, run: dict, a: int, b: int, threads: int) -> dict[str, Any]:
     return {"model": model_spec, "run": run, "start": a, "q0": plan.q0[a:b], "p0": plan.p0[a:b],
             "parameters": {k: v[a:b] for k, v in plan.parameters.items()}, "threads": threads}
@@ -356,7 +402,10 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
         The members are every combination, the first name varying slowest.
     client : a ``dask.distributed.Client`` (e.g. ``Client("tcp://scheduler:8786")`` for a
         cluster); None starts a LocalCluster of 2 worker processes on this machine and closes it
-        at the end.
+        at the end. Those processes start by importing the main script again (multiprocessing's
+        "spawn", Dask's default), so a script must call sweep under
+        ``if __name__ == "__main__":``; called while the script is being imported, sweep raises
+        a RuntimeError saying so instead of starting the cluster.
     chunk_size : members per task; each task is one compiled ensemble call. Members that differ
         in a run argument go in different tasks, so members are ordered group by group (by
         their run arguments) and within a group in grid order.
@@ -377,6 +426,13 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
     """
     import xarray as xr
 
+    if client is None and (unguarded := _unguarded_main_call()) is not None:
+        where, method = unguarded
+        raise RuntimeError(f"raydamp.sweep: {where} calls sweep while the script is being imported, and the "
+                           f"worker processes of the LocalCluster it would start import the script again "
+                           f"({method!r} start method), each running it anew; put the call under "
+                           f"`if __name__ == \"__main__\":`, or pass client= (e.g. a "
+                           f"distributed.Client(processes=False))")
     threads = integer("threads", threads, maximum=4096)
     if progress is not None and progress is not True and progress is not False and not callable(progress):
         raise ValueError(f"progress must be True, a callable or None, got {progress!r}")

@@ -48,6 +48,9 @@ struct ConstantDamping {
     a = eps * d * chol.inverse;
   }
 
+  // The largest eigenvalue of A (the amplification guard's rho).
+  double spectral_radius() const { return lambda.size() ? lambda.maxCoeff() : 0.0; }
+
   Factors factors(double t) const {
     Factors f;
     f.t = t;

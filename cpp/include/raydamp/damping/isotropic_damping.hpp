@@ -11,6 +11,13 @@ struct IsotropicDamping {
 
   DecayFactors factors(double t) const { return decay_factors(a, t); }
 
+  // The largest eigenvalue of A (the amplification guard's rho).
+  double spectral_radius() const { return a; }
+  // A = a I decays every direction of p alike, so a momentum map J = p . xi(q) of a
+  // symmetry of V decays under the exact flow as J(t) = J(0) e^{-a t}
+  // (the step loop's momentum drift measures the distance from that law).
+  double momentum_decay_rate() const { return a; }
+
   // p <- exp(-t A) p: the exact flow of eps Y (f = factors(t)).
   template <class Q, class P>
   void decay(const Q&, const DecayFactors& f, P& p) const { p *= f.exp; }

@@ -13,6 +13,9 @@ struct RadialDamping {
 
   DecayFactors factors(double t) const { return decay_factors(a, t); }
 
+  // The largest eigenvalue of A = a u u^T (the amplification guard's rho).
+  double spectral_radius() const { return a; }
+
   // p <- exp(-t A) p: only the radial component decays. Times 1/|q|^2, not divided
   // by it: the division then runs beside q.p, off the step's serial chain (the
   // elastic pendulum's 3s step, about 1% faster; the result differs by rounding).

@@ -22,6 +22,18 @@ enum class Flow {
 
 inline constexpr int n_flows = 7;
 
+inline constexpr const char* flow_name(Flow f) {
+  switch (f) {
+    case Flow::drift: return "drift";
+    case Flow::kick: return "kick";
+    case Flow::damp: return "damp";
+    case Flow::kick_damp: return "kick_damp";
+    case Flow::kick_damp_rk: return "kick_damp_rk";
+    case Flow::drift_damp_rk: return "drift_damp_rk";
+    default: return "full_rk";
+  }
+}
+
 struct Stage {
   Flow flow;
   double fraction;  // of the step size h
