@@ -17,40 +17,32 @@ namespace raydamp::bindings {
 
 using Rows = py::array_t<double, py::array::c_style | py::array::forcecast>;
 
-// A member's model: `base` with the per-member parameters `names` set to `values`,
-// built in C++ so that an ensemble over, say, eps costs no Python per member. Kinds
-// without per-member parameters (a System: Python builds one model per distinct
-// parameter set) take none.
-inline DampedPendulum with_parameters(const DampedPendulum& base, const std::vector<std::string>& names,
-                                      const double* values) {
-  double eps = base.eps;
-  for (std::size_t k = 0; k < names.size(); ++k) {
-    if (names[k] != "eps") throw std::invalid_argument("parameters: damped_pendulum has no parameter '" + names[k] + "'");
-    eps = values[k];
-  }
-  return DampedPendulum(eps);
-}
-
-inline ElasticPendulum with_parameters(const ElasticPendulum& base, const std::vector<std::string>& names,
-                                       const double* values) {
-  double eps = base.eps, m = base.mass.m, k = base.k, l = base.l;
-  std::array<double, 3> g{base.g[0], base.g[1], base.g[2]};
-  for (std::size_t j = 0; j < names.size(); ++j) {
-    const std::string& name = names[j];
-    if (name == "eps") eps = values[j];
-    else if (name == "m") m = values[j];
-    else if (name == "k") k = values[j];
-    else if (name == "l") l = values[j];
-    else if (name == "g[0]" || name == "g[1]" || name == "g[2]") g[name[2] - '0'] = values[j];
-    else throw std::invalid_argument("parameters: elastic_pendulum has no parameter '" + name + "'");
-  }
-  return ElasticPendulum(eps, m, k, l, g);
-}
-
+// The places of the per-member parameters `names` ("eps", "g[1]") in Model's flat
+// parameter values (models/parameters.hpp), found once before the member loop. Kinds
+// without a parameter table (a System: Python builds one model per distinct parameter
+// set; a Chain, a LinearStructure) take none.
 template <class Model>
-Model with_parameters(const Model& base, const std::vector<std::string>& names, const double*) {
-  if (!names.empty()) throw std::invalid_argument("parameters: this model kind takes no per-member parameters");
-  return base;
+std::vector<int> member_value_slots(const std::vector<std::string>& names) {
+  std::vector<int> slots;
+  if constexpr (has_parameter_table<Model>::value) {
+    for (const std::string& name : names) slots.push_back(resolve_value<Model>(name));
+  } else if (!names.empty()) {
+    throw std::invalid_argument("parameters: this model kind takes no per-member parameters");
+  }
+  return slots;
+}
+
+// A member's model: `base` with the values at `slots` set to `values`, built in C++ so
+// that an ensemble over, say, eps costs no Python per member.
+template <class Model>
+Model with_parameters(const Model& base, const std::vector<int>& slots, const double* values) {
+  if constexpr (has_parameter_table<Model>::value) {
+    typename Model::Values all = base.values;
+    for (std::size_t k = 0; k < slots.size(); ++k) all[slots[k]] = values[k];
+    return Model(all);
+  } else {
+    return base;
+  }
 }
 
 template <class Model>
@@ -75,6 +67,7 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
   const RunSpec spec{h, n_steps, h_last, save_every, false};
 
   // Every member's model, checked here, before any thread starts.
+  const std::vector<int> slots = member_value_slots<Model>(names);
   const long* index = model_index.data();
   std::vector<Model> built;
   std::vector<const Model*> member_model(members);
@@ -86,7 +79,7 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
     if (model->size() != n) throw std::invalid_argument("models: every member needs the same dimension");
     if (!names.empty()) {
       try {
-        built.push_back(with_parameters(*model, names, values.data(i, 0)));
+        built.push_back(with_parameters(*model, slots, values.data(i, 0)));
       } catch (const std::invalid_argument& e) {
         throw std::invalid_argument("member " + std::to_string(i) + ": parameters." + e.what());
       }

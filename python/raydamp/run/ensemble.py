@@ -11,25 +11,15 @@ import numpy as np
 from .. import _core
 from .._validation import integer, real
 from ..results.ensemble_solution import EnsembleSolution
-from ..systems.models import DampedPendulum, ElasticPendulum, Model
-from ..systems.system import System
+from ..systems.models import Model
 from .integrate import MAX_SAVED_BYTES, MAX_STEPS, CancelToken, _catalogue, span
 
 __all__ = ["integrate_ensemble", "member_parameters"]
 
-# The parameters the core sets per member for the built-in models (run_ensemble.hpp's
-# with_parameters), so an ensemble over them costs no Python per member.
-_CORE_PARAMETERS: dict[type, tuple[str, ...]] = {DampedPendulum: ("eps",),
-                                                ElasticPendulum: ("eps", "m", "k", "l", "g")}
-
 
 def member_parameters(system: Model) -> tuple[str, ...]:
     """The names ``integrate_ensemble``'s ``parameters`` may vary for ``system``."""
-    if isinstance(system, System):
-        return (*(("eps",) if system._spec.damping_form is not None else ()), *system.parameters)
-    # A Chain or a LinearStructure: members differ by initial state only (and, in a sweep,
-    # by run arguments); for another eps or stiffness build another model.
-    return _CORE_PARAMETERS.get(type(system), ())
+    return tuple(system.member_parameters())
 
 
 def _states(name: str, value, members: int | None, n: int) -> np.ndarray:
@@ -55,19 +45,19 @@ def _states(name: str, value, members: int | None, n: int) -> np.ndarray:
 
 
 def _parameter_arrays(system: Model, parameters, members: int) -> dict[str, np.ndarray]:
-    """{name: (members,) floats} ((members, 3) for the elastic pendulum's g)."""
+    """{name: (members,) floats}, (members, size) for a vector parameter (the elastic pendulum's g)."""
     if parameters is None:
         return {}
     if not isinstance(parameters, Mapping):
         raise ValueError("parameters must be a dict of name: per-member values, e.g. {'eps': [0.1, 0.2]}")
-    known = member_parameters(system)
+    known = system.member_parameters()
     out = {}
     for name, values in parameters.items():
         if name not in known:
             raise ValueError(f"parameters.{name}: not a parameter of this model that can vary per member "
                              f"(known: {', '.join(known) or 'none'}"
                              f"{'' if known else '; its members differ by initial state: build one model per value'})")
-        shape = (members, 3) if name == "g" else (members,)
+        shape = (members,) if known[name] == 1 else (members, known[name])
         try:
             array = np.asarray(values, dtype=float)
         except (TypeError, ValueError):
@@ -82,39 +72,6 @@ def _parameter_arrays(system: Model, parameters, members: int) -> dict[str, np.n
     return out
 
 
-def _member_models(system: Model, params: dict[str, np.ndarray], members: int):
-    """(models, model_index, core names, core values): the core builds each member's model from
-    models[model_index[i]] and the values; a System gets one model per distinct parameter set,
-    built here before the run (eps alone reuses the compiled functions)."""
-    if not isinstance(system, System):
-        names, columns = [], []
-        for name, array in params.items():
-            if name == "g":
-                names += ["g[0]", "g[1]", "g[2]"]
-                columns += [array[:, 0], array[:, 1], array[:, 2]]
-            else:
-                names.append(name)
-                columns.append(array)
-        values = np.column_stack(columns) if columns else np.zeros((members, 0))
-        return [system], np.zeros(members, dtype=np.int64), names, values
-    if not params:
-        return [system], np.zeros(members, dtype=np.int64), [], np.zeros((members, 0))
-    names = list(params)
-    table = np.column_stack([params[name] for name in names])
-    distinct, index = np.unique(table, axis=0, return_inverse=True)
-    models = []
-    expression_names = [name for name in names if name != "eps"]
-    for row in distinct:
-        values = dict(zip(names, row.tolist()))
-        model = system
-        if expression_names:
-            model = system.replace(parameters={**system.parameters, **{k: values[k] for k in expression_names}})
-        if "eps" in values:
-            model = model._with_eps(values["eps"])
-        models.append(model)
-    return models, np.ascontiguousarray(index.reshape(-1), dtype=np.int64), [], np.zeros((members, 0))
-
-
 def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] | None = None, method: str = "3s",
                        h: float, t_end: float | None = None, n_steps: int | None = None, save_every: int = 1,
                        tableau: str | None = None, composition: str | None = None, threads: int | None = None,
@@ -127,12 +84,13 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
     system : a built-in model, a :class:`raydamp.System` (one built from expressions), a
         :class:`raydamp.Chain` or a :class:`raydamp.LinearStructure`.
     q0, p0 : (members, n) initial states; a single state of length n is used for every member.
-    parameters : {name: per-member values} of the system's parameters: ``eps`` for the
-        built-in models and a damped System; ``m``, ``k``, ``l`` and ``g`` ((members, 3)) for the
-        elastic pendulum; the expression parameters of a System. A Chain or a LinearStructure
-        takes none (its members differ by initial state; build one model per eps). Built-in models are rebuilt per member in C++; a
-        System is rebuilt once per distinct parameter set before the run (a change of eps alone
-        reuses its compiled functions; other parameters recompile it).
+    parameters : {name: per-member values} of the parameters :func:`member_parameters` names:
+        every parameter of a built-in model (``eps``; for the elastic pendulum also ``m``, ``k``,
+        ``l`` and ``g``, a vector given as (members, 3)), ``eps`` of a damped System and its
+        expression parameters. A Chain or a LinearStructure takes none (its members differ by
+        initial state; build one model per eps). Built-in models are rebuilt per member in C++
+        from their parameter tables; a System is rebuilt once per distinct parameter set before
+        the run (a change of eps alone reuses its compiled functions; other parameters recompile it).
     method, h, t_end, n_steps, save_every, tableau, composition : as :func:`raydamp.integrate`,
         shared by every member.
     threads : threads to spread the members over (None: one per hardware thread).
@@ -154,9 +112,6 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
     """
     if not isinstance(system, Model):
         raise ValueError(f"system must be a raydamp model or System, got {system!r}")
-    if isinstance(system, System) and system._python is not None:
-        raise ValueError("system: a System built from Python functions runs Python in its step loop and "
-                         "cannot run as an ensemble; write its potential as an expression")
     names, with_tableau = _catalogue()
     if not isinstance(method, str) or method not in names:
         raise ValueError(f"method: unknown method {method!r} (known: {', '.join(names)})")
@@ -174,7 +129,9 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
             members = np.shape(value)[0]
             break
     if members is None and parameters:
-        lengths = {len(np.atleast_1d(np.asarray(v, dtype=object))) for k, v in parameters.items() if k != "g"}
+        sizes = system.member_parameters()
+        lengths = {len(np.atleast_1d(np.asarray(v, dtype=object))) for k, v in parameters.items()
+                   if sizes.get(k, 1) == 1}
         members = max(lengths) if lengths else None
     q0 = _states("q0", q0, members, n)
     members = q0.shape[0]
@@ -200,7 +157,7 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
                          f"{members * rows * row_bytes / 2**30:.1f} GiB (limit {MAX_SAVED_BYTES / 2**30:.0f} GiB); "
                          "raise save_every or split the ensemble")
 
-    models, index, core_names, core_values = _member_models(system, params, members)
+    models, index, core_names, core_values = system.member_models(params, members)
     start = time.perf_counter()
     cores = [m._core_model for m in models]
     out = type(cores[0]).integrate_ensemble(cores, index, core_names, core_values, method, tableau or "",

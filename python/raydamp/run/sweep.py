@@ -25,7 +25,7 @@ from ..jobs import STEP_SIZE_ALIAS, JobSpec, job_arguments, model_from_spec
 from ..systems.kinds import describe_model
 from ..systems.models import MODELS, Model
 from ..systems.system import System
-from .ensemble import integrate_ensemble, member_parameters
+from .ensemble import integrate_ensemble
 from .integrate import _catalogue, steps_for
 
 __all__ = ["sweep", "check_sweep", "SweepPlan", "parse_grid_item", "SPEC_KEYS", "RUN_ARGUMENTS"]
@@ -158,7 +158,7 @@ def _plan(model: Model, options: dict[str, Any], grid: Mapping[str, Any]):
     {grid name: per-member values} in that order and groups [(run options, start, stop)]."""
     if not isinstance(grid, Mapping) or not grid:
         raise ValueError("grid must be a non-empty dict of name: values")
-    known = member_parameters(model)
+    known = model.member_parameters()
     axes = {}
     h_label = "h"
     for name, values in grid.items():
@@ -172,8 +172,8 @@ def _plan(model: Model, options: dict[str, Any], grid: Mapping[str, Any]):
         if not (state or name in RUN_ARGUMENTS or name in known):
             raise ValueError(f"grid.{name}: not a parameter of the model ({', '.join(known) or 'none'}), a run "
                              f"argument ({', '.join(RUN_ARGUMENTS)}) or an initial-state component (q0[i], p0[i])")
-        if name == "g":
-            raise ValueError("grid.g: sweep the components of g through a model per value instead")
+        if known.get(name, 1) > 1:
+            raise ValueError(f"grid.{name}: sweep the components of {name} through a model per value instead")
         axes[name] = _axis(h_label if name == "h" else name, values)
     names = list(axes)
     index = np.stack(np.meshgrid(*[np.arange(a.size) for a in axes.values()], indexing="ij"), axis=-1)

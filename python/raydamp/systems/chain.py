@@ -44,6 +44,7 @@ import numpy as np
 
 from .. import _core
 from .._validation import _short, integer, real
+from .kinds import MemberModels
 from .models import Model
 
 __all__ = ["Chain", "BOND_FAMILIES", "chain_mode_energies", "MAX_SITES"]
@@ -147,6 +148,18 @@ class Chain(Model):
         if "n" not in spec:
             raise ValueError("n: missing (the number of sites)")
         return cls(**{k: v for k, v in spec.items() if k != "kind"})
+
+    # -- the kind protocol (kinds.SystemKind) ---------------------------------------------------
+    def describe(self) -> dict[str, Any]:
+        return {"system": self.to_dict()}
+
+    def member_parameters(self) -> dict[str, int]:
+        # Members differ by initial state only (and, in a sweep, by run arguments): another eps or
+        # bond parameter is another model (its damping blocks' flows are built with them).
+        return {}
+
+    def member_models(self, parameters: Mapping[str, np.ndarray], members: int) -> MemberModels:
+        return MemberModels.shared(self, members)
 
     def __repr__(self) -> str:
         return (f"Chain(n={self.n}, bond={self.bond!r}, parameters={self.bond_parameters!r}, mass={self.mass!r}, "

@@ -1,32 +1,34 @@
 """The mechanical systems raydamp integrates.
 
 Each model is H(q, p) = 1/2 p^T M^{-1} p + V(q) perturbed by Rayleigh damping
--eps D(q) M^{-1} p. The numbers live in the compiled core; these classes own the
-names, the defaults and the documentation.
+-eps D(q) M^{-1} p. The numbers live in the compiled core, and so does each built-in
+model's parameter table (name, size, default, rule, description: the C++ struct's
+``parameters``, exported as ``_core.models()``); these classes own the coordinates'
+names and the documentation, and read everything about their parameters from that table.
 """
 
 from __future__ import annotations
 
-import functools
 import inspect
+from collections.abc import Mapping
 from typing import Any, ClassVar
 
 import numpy as np
 
 from .. import _core
 from .._validation import real, vector
+from .kinds import MemberModels, plain
 
-__all__ = ["Model", "DampedPendulum", "ElasticPendulum", "MODELS", "describe_models", "make_model"]
+__all__ = ["Model", "BuiltinModel", "DampedPendulum", "ElasticPendulum", "MODELS", "describe_models", "make_model"]
 
-
-@functools.cache
-def _parameter_names(cls: type) -> tuple[str, ...]:
-    """A model class's constructor parameters (inspect.signature costs ~50 us; every job asks)."""
-    return tuple(inspect.signature(cls).parameters)
+# The core's catalogue of built-in models, by name (cpp/include/raydamp/models/*.hpp, each
+# struct's `parameters` table).
+_CATALOGUE: dict[str, dict[str, Any]] = {entry["name"]: entry for entry in _core.models()}
 
 
 class Model:
-    """Base class: a model wraps one compiled model struct.
+    """Base class of every kind of system: a model wraps one compiled model struct, and answers
+    the questions of the kind protocol (:class:`raydamp.systems.kinds.SystemKind`).
 
     Models are immutable: the compiled struct is built from the parameters once, so
     changing a parameter afterwards could only change the repr, not the run.
@@ -35,7 +37,6 @@ class Model:
 
     name: ClassVar[str]
     momentum_names: ClassVar[tuple[str, ...]] = ()
-    parameter_docs: ClassVar[dict[str, str]] = {}
     _core_model: Any
     _frozen: bool = False
 
@@ -55,6 +56,19 @@ class Model:
         """A new model of the same kind with some parameters changed."""
         return type(self)(**{**self.parameters, **changes})
 
+    # -- the kind protocol (kinds.SystemKind); each kind implements these -----------------------
+    def describe(self) -> dict[str, Any]:
+        """The JSON form (kinds.SystemKind.describe)."""
+        raise NotImplementedError
+
+    def member_parameters(self) -> Mapping[str, int]:
+        """The parameters an ensemble may vary per member, with their sizes (kinds.SystemKind)."""
+        raise NotImplementedError
+
+    def member_models(self, parameters: Mapping[str, np.ndarray], members: int) -> MemberModels:
+        """What the compiled ensemble runs (kinds.SystemKind.member_models)."""
+        raise NotImplementedError
+
     @property
     def coordinates(self) -> tuple[str, ...]:
         """The names of the coordinates (q0, q1, ... unless the model names them)."""
@@ -64,11 +78,6 @@ class Model:
     def dim(self) -> int:
         """Configuration dimension n (the state is (q, p) in R^n x R^n)."""
         return self._core_model.dim
-
-    @property
-    def parameters(self) -> dict[str, Any]:
-        """The parameters this model was built with, by name."""
-        return {name: getattr(self, name) for name in _parameter_names(type(self))}
 
     def check_configuration(self, name: str, q: np.ndarray) -> np.ndarray:
         """Refuse a configuration outside the model's configuration space; returns q."""
@@ -115,7 +124,115 @@ class Model:
         return f"{type(self).__name__}({args})"
 
 
-class DampedPendulum(Model):
+def _checked(parameter: Mapping[str, Any], value) -> float | tuple[float, ...]:
+    """A value for a catalogue row: a real number, or a vector of its size, obeying its rule;
+    the errors name the parameter as the row does ("eps must be >= 0, got -0.1")."""
+    name, rule = parameter["name"], parameter["rule"]
+    if parameter["size"] == 1:
+        return real(name, value, nonnegative=rule == ">= 0", positive=rule == "> 0")
+    components = tuple(float(x) for x in vector(name, value, parameter["size"]))
+    for i, x in enumerate(components):
+        if (rule == ">= 0" and not x >= 0) or (rule == "> 0" and not x > 0):
+            raise ValueError(f"{name}[{i}] must be {rule}, got {x!r}")
+    return components
+
+
+class BuiltinModel(Model):
+    """A model compiled into the core. Its parameters (names, sizes, defaults, rules and
+    descriptions) are the core's table for the model named ``name`` (``_core.models()``): the
+    signature, the checks, ``parameters``, ``describe_models()`` and the ensemble's per-member
+    parameters all read that table, so a parameter is added in the C++ struct alone."""
+
+    parameter_docs: ClassVar[dict[str, str]] = {}
+    _parameter_table: ClassVar[tuple[dict[str, Any], ...]] = ()
+    _core_class: ClassVar[Any]
+
+    def __init_subclass__(cls, **kwargs) -> None:
+        super().__init_subclass__(**kwargs)
+        entry = _CATALOGUE[cls.name]
+        cls._parameter_table = tuple(entry["parameters"])
+        cls._core_class = getattr(_core, entry["class_name"])
+        cls.momentum_names = tuple(entry["momenta"])
+        cls.parameter_docs = {p["name"]: p["description"] for p in cls._parameter_table}
+        for p in cls._parameter_table:  # a parameter is an attribute: it must not hide one of Model's
+            if hasattr(cls, p["name"]):
+                raise TypeError(f"{cls.__name__}: parameter {p['name']!r} would hide the attribute of that name")
+        # The signature help() and inspect.signature show: the table's names, defaults and sizes.
+        signature = inspect.Signature([
+            inspect.Parameter(p["name"], inspect.Parameter.POSITIONAL_OR_KEYWORD,
+                              default=p["default"] if p["size"] == 1 else tuple(p["default"]),
+                              annotation=float if p["size"] == 1 else tuple[(float,) * p["size"]])
+            for p in cls._parameter_table])
+        cls.__signature__ = signature
+
+        names = tuple(p["name"] for p in cls._parameter_table)
+        class_name = cls.__name__
+
+        def __init__(self, *args, **kwargs):
+            # Python's own argument binding, written out (Signature.bind costs a few microseconds).
+            if len(args) > len(names):
+                raise TypeError(f"{class_name}() takes at most {len(names)} arguments ({len(args)} given)")
+            given = dict(zip(names, args))
+            for key in kwargs:
+                if key not in names:
+                    raise TypeError(f"{class_name}() got an unexpected keyword argument {key!r}")
+                if key in given:
+                    raise TypeError(f"{class_name}() got multiple values for argument {key!r}")
+            given.update(kwargs)
+            BuiltinModel._build(self, given)
+
+        __init__.__signature__ = signature.replace(parameters=[
+            inspect.Parameter("self", inspect.Parameter.POSITIONAL_OR_KEYWORD), *signature.parameters.values()])
+        __init__.__doc__ = "Parameters (defaults): " + "; ".join(
+            f"{p['name']} ({plain(p['default'])}): {p['description']}" for p in cls._parameter_table)
+        __init__.__qualname__ = f"{cls.__qualname__}.__init__"
+        cls.__init__ = __init__
+
+    def _build(self, given: Mapping[str, Any]) -> None:
+        values: list[float] = []
+        for p in self._parameter_table:
+            name = p["name"]
+            if name in given:
+                value = _checked(p, given[name])
+            else:
+                value = p["default"] if p["size"] == 1 else tuple(p["default"])
+            object.__setattr__(self, name, value)
+            if p["size"] == 1:
+                values.append(value)
+            else:
+                values.extend(value)
+        object.__setattr__(self, "_core_model", self._core_class(values))
+        self._freeze()
+
+    @property
+    def parameters(self) -> dict[str, Any]:
+        """The parameters this model was built with, by name, in the table's order."""
+        return {p["name"]: getattr(self, p["name"]) for p in self._parameter_table}
+
+    # -- the kind protocol ----------------------------------------------------------------------
+    def describe(self) -> dict[str, Any]:
+        return {"model": self.name, "parameters": {k: plain(v) for k, v in self.parameters.items()}}
+
+    def member_parameters(self) -> dict[str, int]:
+        # Every parameter: the core rebuilds each member's model from the table (run_ensemble.hpp's
+        # with_parameters), so an ensemble over them costs no Python per member.
+        return {p["name"]: p["size"] for p in self._parameter_table}
+
+    def member_models(self, parameters: Mapping[str, np.ndarray], members: int) -> MemberModels:
+        # A vector parameter goes to the core as its components' columns, "g[0]", "g[1]", ...
+        names, columns = [], []
+        for name, array in parameters.items():
+            if array.ndim == 1:
+                names.append(name)
+                columns.append(array)
+            else:
+                names += [f"{name}[{i}]" for i in range(array.shape[1])]
+                columns += list(array.T)
+        values = np.column_stack(columns) if columns else np.zeros((members, 0))
+        return MemberModels([self], np.zeros(members, dtype=np.int64), names, values)
+
+
+class DampedPendulum(BuiltinModel):
     """The damped pendulum of the paper's section 4.3.
 
     q' = p, p' = -sin q - eps p (n = 1, M = 1, V = 1 - cos q, D = 1).
@@ -124,15 +241,9 @@ class DampedPendulum(Model):
 
     name = "damped_pendulum"
     coordinates = ("q",)
-    parameter_docs = {"eps": "damping coefficient, >= 0"}
-
-    def __init__(self, eps: float = 0.01):
-        self.eps = real("eps", eps, nonnegative=True)
-        self._core_model = _core.DampedPendulum(self.eps)
-        self._freeze()
 
 
-class ElasticPendulum(Model):
+class ElasticPendulum(BuiltinModel):
     """The elastic 3-D pendulum of the paper's section 6.2.
 
     q' = p/m, p' = -k (1 - l/|q|) q + m g - eps (q q^T / |q|^2) p / m: a mass m on a
@@ -144,24 +255,6 @@ class ElasticPendulum(Model):
 
     name = "elastic_pendulum"
     coordinates = ("x", "y", "z")
-    momentum_names = ("J3",)
-    parameter_docs = {
-        "eps": "damping coefficient along the spring, >= 0",
-        "m": "mass, > 0",
-        "k": "spring stiffness, >= 0",
-        "l": "spring rest length, >= 0",
-        "g": "gravity vector (3 components)",
-    }
-
-    def __init__(self, eps: float = 0.1, m: float = 1.0, k: float = 1.0, l: float = 1.0,  # noqa: E741
-                 g=(0.0, 0.0, -1.0)):
-        self.eps = real("eps", eps, nonnegative=True)
-        self.m = real("m", m, positive=True)
-        self.k = real("k", k, nonnegative=True)
-        self.l = real("l", l, nonnegative=True)
-        self.g = tuple(float(x) for x in vector("g", g, 3))
-        self._core_model = _core.ElasticPendulum(self.eps, self.m, self.k, self.l, list(self.g))
-        self._freeze()
 
     def check_configuration(self, name: str, q: np.ndarray) -> np.ndarray:
         # Configuration space R^3 minus the origin (paper section 6.2): at q = 0 neither
@@ -178,27 +271,20 @@ class ElasticPendulum(Model):
             self.check_configuration(f"{name}[{i}]", qs[i])
 
 
-MODELS: dict[str, type[Model]] = {cls.name: cls for cls in (DampedPendulum, ElasticPendulum)}
+MODELS: dict[str, type[BuiltinModel]] = {cls.name: cls for cls in (DampedPendulum, ElasticPendulum)}
 
 
 def describe_models() -> list[dict[str, Any]]:
-    """Every model with its dimension, momentum maps, and parameters with defaults."""
-    out = []
-    for name, cls in MODELS.items():
-        params = inspect.signature(cls).parameters
-        default = cls()
-        out.append({
-            "name": name,
-            "description": inspect.getdoc(cls).split("\n")[0],
-            "dim": default.dim,
-            "momenta": list(cls.momentum_names),
-            "parameters": [
-                {"name": p, "default": list(v) if isinstance(v := params[p].default, tuple) else v,
-                 "description": cls.parameter_docs.get(p, "")}
-                for p in params
-            ],
-        })
-    return out
+    """Every model with its dimension, momentum maps, and parameters with defaults (the core's
+    catalogue, with each class's first docstring line as its description)."""
+    return [{
+        "name": name,
+        "description": inspect.getdoc(cls).split("\n")[0],
+        "dim": _CATALOGUE[name]["dim"],
+        "momenta": list(cls.momentum_names),
+        "parameters": [{"name": p["name"], "default": plain(p["default"]), "description": p["description"]}
+                       for p in cls._parameter_table],
+    } for name, cls in MODELS.items()]
 
 
 def make_model(name: str, parameters: dict[str, Any] | None = None) -> Model:
@@ -207,7 +293,7 @@ def make_model(name: str, parameters: dict[str, Any] | None = None) -> Model:
         raise ValueError(f"model: unknown model {name!r} (known: {', '.join(MODELS)})")
     cls = MODELS[name]
     parameters = dict(parameters or {})
-    known = _parameter_names(cls)
+    known = [p["name"] for p in cls._parameter_table]
     for key in parameters:
         if key not in known:
             raise ValueError(f"parameters.{key}: {name} has no parameter {key!r} (known: {', '.join(known)})")

@@ -1,7 +1,6 @@
 // Parameter checks shared by the models: errors name the offending argument.
 #pragma once
 
-#include <cmath>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -14,10 +13,6 @@ inline void require(bool ok, const std::string& argument, const std::string& rul
   msg.precision(17);
   msg << argument << " must be " << rule << ", got " << value;
   throw std::invalid_argument(msg.str());
-}
-
-inline void require_nonnegative(const std::string& argument, double value) {
-  require(std::isfinite(value) && value >= 0.0, argument, "a finite number >= 0", value);
 }
 
 }  // namespace raydamp::detail

@@ -10,33 +10,48 @@
 
 #include "raydamp/damping/radial_damping.hpp"
 #include "raydamp/mass/scalar_mass.hpp"
-#include "raydamp/models/check.hpp"
+#include "raydamp/models/parameters.hpp"
 #include "raydamp/state.hpp"
 
 namespace raydamp {
 
 struct ElasticPendulum {
+  static constexpr const char* name = "elastic_pendulum";
   static constexpr int dim = 3;
-  static constexpr int n_momenta = 1;  // J3
+  static constexpr std::array<const char*, 1> momentum_names{"J3"};
+  static constexpr int n_momenta = 1;
+  // The parameters (models/parameters.hpp): the one list Python, the service and ensembles read.
+  static constexpr std::array<Parameter, 5> parameters{{
+      {"eps", 0.1, Rule::nonnegative, "damping coefficient along the spring, >= 0"},
+      {"m", 1.0, Rule::positive, "mass, > 0"},
+      {"k", 1.0, Rule::nonnegative, "spring stiffness, >= 0"},
+      {"l", 1.0, Rule::nonnegative, "spring rest length, >= 0"},
+      {"g", {0.0, 0.0, -1.0}, Rule::finite, "gravity vector (3 components)"},
+  }};
+  using Values = std::array<double, value_count(parameters)>;
   using Vec = Vector<dim>;
 
+  Values values;  // as built, in table order
   double eps, k, l;
   Vec g;
   ScalarMass mass;
   RadialDamping damping;
   Vec mg;  // m g, the constant part of -grad V
 
-  ElasticPendulum(double eps_ = 0.1, double m_ = 1.0, double k_ = 1.0, double l_ = 1.0,
-                  std::array<double, 3> g_ = {0.0, 0.0, -1.0})
-      : eps(eps_), k(k_), l(l_), g(g_[0], g_[1], g_[2]), mass(m_) {
-    detail::require_nonnegative("eps", eps_);
-    detail::require_nonnegative("k", k_);
-    detail::require_nonnegative("l", l_);
-    for (int i = 0; i < 3; ++i)
-      detail::require(std::isfinite(g_[i]), "g[" + std::to_string(i) + "]", "finite", g_[i]);
-    damping.a = eps_ / m_;
-    mg = m_ * g;
+  explicit ElasticPendulum(const Values& values_ = default_values<ElasticPendulum>())
+      : values(check_values<ElasticPendulum>(values_)),
+        eps(value_of<ElasticPendulum>(values, "eps")),
+        k(value_of<ElasticPendulum>(values, "k")),
+        l(value_of<ElasticPendulum>(values, "l")),
+        g(vector_of<ElasticPendulum, 3>(values, "g")),
+        mass(value_of<ElasticPendulum>(values, "m")) {
+    damping.a = eps / mass.m;
+    mg = mass.m * g;
   }
+  // Positionally, in table order, the parameters left out taking the table's defaults.
+  explicit ElasticPendulum(double eps_) : ElasticPendulum(leading_values<ElasticPendulum>(eps_)) {}
+  ElasticPendulum(double eps_, double m_, double k_, double l_, const std::array<double, 3>& g_)
+      : ElasticPendulum(leading_values<ElasticPendulum>(eps_, m_, k_, l_, g_)) {}
 
   int size() const { return dim; }
 

@@ -13,6 +13,7 @@ import numpy as np
 
 from ... import _core
 from ..._validation import real
+from ..kinds import MemberModels
 from ..models import Model
 from .compile import compile_system, evaluate
 from .errors import SpecError
@@ -174,6 +175,41 @@ class System(Model):
                                                              self._compiled, self._compiled.damper_norm))
         other._freeze()
         return other
+
+    # -- the kind protocol (kinds.SystemKind) ---------------------------------
+    def describe(self) -> dict[str, Any]:
+        try:
+            return {"system": self.to_dict()}
+        except ValueError:  # built from Python functions: no plain form
+            return {"system": None, "label": repr(self)}
+
+    def member_parameters(self) -> dict[str, int]:
+        # eps (when there is damping for it to scale) and the expressions' parameters.
+        return {**({"eps": 1} if self._spec.damping_form is not None else {}), **{k: 1 for k in self._spec.parameters}}
+
+    def member_models(self, parameters: Mapping[str, np.ndarray], members: int) -> MemberModels:
+        # One model per distinct parameter set, built here before the run (eps alone reuses the
+        # compiled functions; the expressions' parameters recompile them).
+        if self._python is not None:
+            raise ValueError("system: a System built from Python functions runs Python in its step loop and "
+                             "cannot run as an ensemble; write its potential as an expression")
+        if not parameters:
+            return MemberModels.shared(self, members)
+        names = list(parameters)
+        table = np.column_stack([parameters[name] for name in names])
+        distinct, index = np.unique(table, axis=0, return_inverse=True)
+        models = []
+        expression_names = [name for name in names if name != "eps"]
+        for row in distinct:
+            values = dict(zip(names, row.tolist()))
+            model = self
+            if expression_names:
+                model = self.replace(parameters={**self.parameters, **{k: values[k] for k in expression_names}})
+            if "eps" in values:
+                model = model._with_eps(values["eps"])
+            models.append(model)
+        return MemberModels(models, np.ascontiguousarray(index.reshape(-1), dtype=np.int64), [],
+                            np.zeros((members, 0)))
 
     # -- Model ---------------------------------------------------------------
     @property
