@@ -7,16 +7,22 @@ so a 100-byte file claiming 10^9 entries must be refused before it is read, not 
 
 from __future__ import annotations
 
+import functools
 import io
 import sqlite3
+import threading
 import uuid
+from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
+
+from raydamp.systems.structure import read_matrix
 
 from .store import UNFINISHED_SQL, Database, now
 
 __all__ = ["FILES_TABLE", "FileRecord", "FileStore", "MatrixFileError", "MatrixFileInfo", "check_matrix_market",
-           "file_resolver"]
+           "file_resolver", "ParsedFiles"]
 
 FILES_TABLE = """
 CREATE TABLE IF NOT EXISTS files (          -- uploaded Matrix Market files, for a structure's {"file": id}
@@ -103,6 +109,11 @@ class FileStore:
 
     db: Database
     TABLE: str
+    PARSED_ENTRIES = 20_000_000  # stored entries kept parsed (about 240 MB as CSC) across uploads
+
+    @functools.cached_property
+    def parsed_files(self) -> ParsedFiles:
+        return ParsedFiles(self, self.PARSED_ENTRIES)
 
     def add_file(self, name: str, content: bytes, shape: tuple[int, int], nnz: int,
                  max_total_bytes: int = 0) -> FileRecord | None:
@@ -143,6 +154,7 @@ class FileStore:
                 f"{UNFINISHED_SQL} AND instr(spec, ?) > 0)", (file_id, f'"{file_id}"')).rowcount
             exists = not deleted and db.execute("SELECT 1 FROM files WHERE id = ?", (file_id,)).fetchone()
         if deleted:
+            self.parsed_files.forget(file_id)
             self.db.give_back_space()
             return "deleted"
         return "in_use" if exists else "missing"
@@ -155,15 +167,54 @@ class FileStore:
         return [row["id"] for row in rows]
 
 
-def file_resolver(store: FileStore) -> Callable[[str], io.BytesIO]:
-    """files(ref) for raydamp.LinearStructure.from_dict: a stored upload as an open file; an unknown id is
-    a ValueError that raydamp reports at the matrix's path (system.K.file)."""
+class ParsedFiles:
+    """Uploaded files as raydamp reads them, parsed once per id (an upload never changes): eight
+    submissions naming one 46 MB file parsed it eight times, 10-13 s each and 2.3 GB (issue 27, F4).
+    A parse in progress is waited for, not repeated; at most max_entries stored entries are kept,
+    the least recently used dropped first."""
 
-    def resolve(file_id: str) -> io.BytesIO:
-        content = store.file_content(file_id)
-        if content is None:
-            raise ValueError(f"no uploaded file with id {file_id!r} (POST /v1/files uploads one, GET /v1/files "
-                             "lists them)")
-        return io.BytesIO(content)
+    def __init__(self, store: FileStore, max_entries: int):
+        self._store, self._max = store, max_entries
+        self._lock = threading.Lock()
+        self._parsed: OrderedDict[str, tuple[threading.Lock, Any]] = OrderedDict()
+        self._size: dict[str, int] = {}
 
-    return resolve
+    def __call__(self, file_id: str) -> Any:
+        with self._lock:
+            entry = self._parsed.get(file_id)
+            if entry is None:
+                entry = self._parsed[file_id] = (threading.Lock(), None)
+            self._parsed.move_to_end(file_id)
+        lock, _ = entry
+        with lock:  # one parse per id; the others wait for it
+            matrix = self._parsed.get(file_id, (None, None))[1]
+            if matrix is None:
+                content = self._store.file_content(file_id)
+                if content is None:
+                    with self._lock:
+                        self._parsed.pop(file_id, None)
+                    raise ValueError(f"no uploaded file with id {file_id!r} (POST /v1/files uploads one, GET "
+                                     "/v1/files lists them)")
+                matrix = read_matrix(io.BytesIO(content))
+                with self._lock:
+                    self._parsed[file_id] = (lock, matrix)
+                    self._size[file_id] = matrix.nnz
+                    self._evict()
+        return matrix
+
+    def forget(self, file_id: str) -> None:
+        with self._lock:
+            self._parsed.pop(file_id, None)
+            self._size.pop(file_id, None)
+
+    def _evict(self) -> None:
+        while sum(self._size.values()) > self._max and len(self._parsed) > 1:
+            oldest = next(iter(self._parsed))
+            self._parsed.pop(oldest)
+            self._size.pop(oldest, None)
+
+
+def file_resolver(store: FileStore) -> Callable[[str], Any]:
+    """files(ref) for raydamp.LinearStructure.from_dict: a stored upload, parsed once (the store's
+    ParsedFiles); an unknown id is a ValueError that raydamp reports at the matrix's path (system.K.file)."""
+    return store.parsed_files

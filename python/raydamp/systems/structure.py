@@ -45,7 +45,7 @@ from .._validation import real
 from .kinds import MemberModels
 from .models import Model
 
-__all__ = ["LinearStructure", "MAX_PLAIN_ENTRIES"]
+__all__ = ["LinearStructure", "MAX_PLAIN_ENTRIES", "read_matrix"]
 
 # The plain (JSON) form carries matrices as COO triplets; past this many stored entries per matrix
 # a structure belongs in a Matrix Market file, not in a JSON document.
@@ -59,6 +59,12 @@ def _scipy_sparse():
     except ImportError as error:  # pragma: no cover - scipy comes with the structures extra
         raise ImportError("raydamp.LinearStructure needs scipy (pip install 'raydamp[structures]')") from error
     return sparse
+
+
+def read_matrix(value, name: str = "matrix"):
+    """A scipy.sparse CSC matrix from what LinearStructure takes for M or K (an array, a scipy.sparse
+    matrix, a Matrix Market path or binary file object): a matrix read once serves many structures."""
+    return _read_matrix(name, value)
 
 
 def _read_matrix(name: str, value):

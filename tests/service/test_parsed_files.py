@@ -1,0 +1,63 @@
+"""Uploaded files are parsed once per id (issue 27, F4: eight submissions naming one 46 MB file parsed
+it eight times, 10-13 s each, 2.3 GB)."""
+
+from __future__ import annotations
+
+import io
+import threading
+
+import pytest
+from raydamp_service.files import ParsedFiles
+
+sparse = pytest.importorskip("scipy.sparse")
+scipy_io = pytest.importorskip("scipy.io")
+
+
+class CountingStore:
+    def __init__(self, files: dict[str, bytes]):
+        self.files, self.reads, self.lock = files, 0, threading.Lock()
+
+    def file_content(self, file_id: str) -> bytes | None:
+        with self.lock:
+            self.reads += 1
+        return self.files.get(file_id)
+
+
+def _mtx(n: int) -> bytes:
+    out = io.BytesIO()
+    scipy_io.mmwrite(out, sparse.diags([2.0] * n).tocoo())
+    return out.getvalue()
+
+
+def test_eight_concurrent_resolutions_read_and_parse_once():
+    store = CountingStore({"a" * 32: _mtx(20_000)})
+    parsed = ParsedFiles(store, max_entries=10**6)
+    start, results = threading.Barrier(8), []
+
+    def resolve():
+        start.wait()
+        results.append(parsed("a" * 32))
+
+    threads = [threading.Thread(target=resolve) for _ in range(8)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert store.reads == 1 and len(results) == 8 and all(r is results[0] for r in results)
+    assert results[0].shape == (20_000, 20_000) and results[0].nnz == 20_000
+
+
+def test_unknown_ids_are_not_cached_and_the_oldest_parse_is_dropped_past_the_bound():
+    store = CountingStore({"a" * 32: _mtx(100), "b" * 32: _mtx(100)})
+    parsed = ParsedFiles(store, max_entries=150)
+    with pytest.raises(ValueError, match="no uploaded file with id 'ccc"):
+        parsed("c" * 32)
+    parsed("a" * 32)
+    parsed("b" * 32)  # 200 entries > 150: a's parse is dropped
+    parsed("b" * 32)
+    assert store.reads == 3
+    parsed("a" * 32)
+    assert store.reads == 4
+    parsed.forget("a" * 32)
+    parsed("a" * 32)
+    assert store.reads == 5
