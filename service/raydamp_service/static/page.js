@@ -395,9 +395,14 @@ function draw(job, trajectory) {
   if (momentum.hidden) {
     Plotly.purge(momentum);
   } else {
+    // The drift from the law the exact flow gives a momentum map, as the summary's figure:
+    // J(0) e^{-a t} with a = eps c for a system whose damping is D = c M, else J(0).
+    const system = job.spec.system || {};
+    const a = system.damping && system.damping.scalar !== undefined ? (system.eps || 0) * system.damping.scalar : 0;
     const drift = momentumNames(job.spec, count).map((name, k) => {
       const values = column(trajectory.momentum, k);
-      return { x: trajectory.t, y: values.map((v) => v - values[0]), mode: "lines", name: `${name}(t) - ${name}(0)` };
+      return { x: trajectory.t, y: values.map((v, i) => v - values[0] * Math.exp(-a * trajectory.t[i])),
+               mode: "lines", name: a ? `${name}(t) - ${name}(0) e^(-${a} t)` : `${name}(t) - ${name}(0)` };
     });
     // Drifts are near rounding (1e-14): "2e-14" on the axis, not Plotly's SI "20f".
     Plotly.newPlot(momentum, drift, layout("momentum drift", "t", "drift",
