@@ -25,6 +25,7 @@ static const char* flow_name(Flow f) {
     case Flow::kick_damp: return "kick_damp";
     case Flow::kick_damp_rk: return "kick_damp_rk";
     case Flow::drift_damp_rk: return "drift_damp_rk";
+    case Flow::linear_implicit: return "linear_implicit";
     default: return "full_rk";
   }
 }
@@ -40,9 +41,10 @@ void bind_catalogue(py::module_& m) {
         row["tableau"] = tab ? py::cast(tab->name()) : py::none();
         row["default"] = !tab || tab->name() == e.default_tableau;
         row["order"] = tab ? method_order(e, *tab) : e.splitting_order;
-        row["explicit"] = !tab || tab->is_explicit();
+        row["explicit"] = tab ? tab->is_explicit() : !e.linear_implicit;
         row["damped"] = !e.ignores_damping;
         row["symmetric"] = is_composable(e, tab ? *tab : builtin_tableau("euler"));
+        row["linear_structure_only"] = e.linear_implicit;
         rows.append(row);
       };
       if (e.tableau_use == TableauUse::none) {

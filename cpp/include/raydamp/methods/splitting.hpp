@@ -18,9 +18,10 @@ enum class Flow {
   kick_damp_rk,   // Runge-Kutta step of X_V + eps Y (q frozen), tableau chosen at run time
   drift_damp_rk,  // explicit Runge-Kutta step of X_T + eps Y
   full_rk,        // explicit Runge-Kutta step of the whole field
+  linear_implicit,  // implicit step of a linear structure's whole system (methods/linear_implicit.hpp)
 };
 
-inline constexpr int n_flows = 7;
+inline constexpr int n_flows = 8;
 
 struct Stage {
   Flow flow;
