@@ -170,7 +170,8 @@ def test_loop_releases_the_gil():
 def test_methods_catalogue():
     rows = raydamp.methods()
     names = {m.name for m in rows}
-    assert names == {"sv", "3s", "2s", "rks", "rksb", "heun", "rk4", "rk"}
+    # midpoint and gauss4: LinearStructure only (tests/test_implicit_structure.py)
+    assert names == {"sv", "3s", "2s", "rks", "rksb", "heun", "rk4", "rk", "midpoint", "gauss4"}
     by_key = {(m.name, m.tableau): m for m in rows}
     # rk: any explicit tableau on the whole system (rk4 by default); never an implicit one.
     assert {m.tableau for m in rows if m.name == "rk"} == {"euler", "heun", "rk4"}

@@ -13,6 +13,7 @@
 #include <type_traits>
 
 #include "bindings.hpp"
+#include "raydamp/implicit/linear_implicit_step.hpp"
 #include "raydamp/raydamp.hpp"
 
 namespace raydamp::bindings {
@@ -78,7 +79,7 @@ py::dict run(const Model& model, const std::string& method, const std::string& t
   RunResult r;
   {
     py::gil_scoped_release release;
-    r = with_method(method, [&](auto m) {
+    r = with_method_for<Model>(method, [&](auto m) {
       return integrate_model<decltype(m)>(model, tab, comp, State<Model::dim>{q0, p0}, spec, control);
     });
   }

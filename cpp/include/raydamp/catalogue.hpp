@@ -10,6 +10,7 @@
 
 #include "raydamp/methods/butcher_tableau.hpp"
 #include "raydamp/methods/composition.hpp"
+#include "raydamp/methods/linear_implicit.hpp"
 #include "raydamp/methods/splitting.hpp"
 #include "raydamp/methods/user_tableaux.hpp"
 
@@ -25,6 +26,7 @@ struct MethodEntry {
   bool tableau_fixed;           // heun and rk4 are one tableau each
   bool ignores_damping;         // sv: applying it to a damped model would silently drop eps
   bool symmetric_table;         // its table can be composed (with a symmetric tableau, if it takes one)
+  bool linear_implicit = false;  // an implicit step of a LinearStructure's whole system, for that kind only
 };
 
 // An entry whose table, tableau use and order come from the Method type itself.
@@ -34,6 +36,13 @@ MethodEntry entry(std::string name, std::string description, std::string default
   return {std::move(name),    std::move(description), Method::name,    Method::tableau,
           Method::splitting_order, std::move(default_tableau), tableau_fixed, ignores_damping,
           is_mergeable<Method>()};
+}
+
+// The implicit methods of a linear structure's whole system (methods/linear_implicit.hpp).
+template <class Method>
+MethodEntry linear_implicit_entry(std::string name, std::string description) {
+  return {std::move(name), std::move(description), Method::name, Method::tableau, Method::splitting_order, "",
+          false, false, Method::composable, true};
 }
 
 inline const std::vector<MethodEntry>& method_entries() {
@@ -53,6 +62,17 @@ inline const std::vector<MethodEntry>& method_entries() {
       entry<RungeKutta>("rk4", "classical fourth-order Runge-Kutta on the whole system", "rk4", true),
       entry<RungeKutta>("rk", "any explicit Runge-Kutta tableau on the whole system (ours by name, or your own)",
                         "rk4"),
+      linear_implicit_entry<ImplicitMidpoint>(
+          "midpoint",
+          "implicit midpoint rule on the whole linear system M q'' + C q' + K q = f (LinearStructure only): "
+          "unconditionally stable, one sparse solve with M + (h/2) C + (h^2/4) K per step; Newmark average "
+          "acceleration for free vibration; symplectic when undamped; exact discrete energy balance "
+          "H(z1) - H(z0) = -h vbar^T C vbar + h f^T vbar"),
+      linear_implicit_entry<Gauss4>(
+          "gauss4",
+          "2-stage Gauss method on the whole linear system (LinearStructure only): order 4, A-stable, "
+          "symplectic when undamped, exact energy balance (Gauss quadrature of the stage velocities); one "
+          "complex sparse solve with M + c C + c^2 K (c = h / (3 + i sqrt 3)) per step"),
   };
   return entries;
 }
@@ -125,7 +145,8 @@ inline const Composition& resolve_composition(const MethodEntry& method, const B
   std::string base = "'" + method.name + "'";
   if (method.tableau_use != TableauUse::none) base += " with tableau '" + tab.name() + "'";
   throw std::invalid_argument("composition: '" + c.name() + "' composes a symmetric order-2 step, and method " + base +
-                              " is not one; use sv, 3s, 2s or rks with tableau='midpoint'");
+                              " is not one; use sv, 3s, 2s, rks with tableau='midpoint', or midpoint (a "
+                              "LinearStructure)");
 }
 
 // The order of a run: the composition's, over a symmetric order-2 base.
@@ -145,8 +166,14 @@ decltype(auto) with_table(const std::string& table, F& f) {
 }  // namespace detail
 
 // Calls f(MethodType{}) for the method named `name`: the one place a name becomes a type.
+// The implicit methods of a linear structure are not among these: see with_method_for
+// (implicit/linear_implicit_step.hpp), which runs them on a LinearStructure only.
 template <class F>
 decltype(auto) with_method(const std::string& name, F&& f) {
+  const MethodEntry& entry = method_entry(name);
+  if (entry.linear_implicit)
+    throw std::invalid_argument("method: '" + name + "' steps a LinearStructure's whole linear system implicitly, "
+                                "and runs only raydamp.integrate of a LinearStructure (no ensemble run yet)");
   return detail::with_table<F, StormerVerlet, ThreeTermSplitting, TwoTermSplitting, RungeKuttaSplitting,
                             RungeKuttaSplittingB, RungeKutta>(method_entry(name).table, f);
 }

@@ -194,9 +194,18 @@ struct WholeStepper {
   }
 };
 
+// A method with a stepper of its own (Method::Stepper: the linear implicit methods,
+// implicit/linear_implicit_step.hpp, which factorise before the first step).
+template <class Method, class = void>
+struct has_own_stepper : std::false_type {};
 template <class Method>
-auto make_stepper(const Composition& composition, const RunSpec& spec) {
-  if constexpr (is_mergeable<Method>()) {
+struct has_own_stepper<Method, std::void_t<typename Method::Stepper>> : std::true_type {};
+
+template <class Method, class Model>
+auto make_stepper(const Model& model, const Composition& composition, const RunSpec& spec) {
+  if constexpr (has_own_stepper<Method>::value) {
+    return typename Method::Stepper(model, composition, spec);
+  } else if constexpr (is_mergeable<Method>()) {
     return ComposedStepper<Method>(composition, spec.h, spec.h_last, spec.n_steps);
   } else {
     if (composition.stages() != 1)
@@ -366,7 +375,7 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
   // method integrates it itself (see integrates_work).
   constexpr bool trapezoid = !integrates_work<Method>::value;
   double power = spec.track_work && trapezoid ? dissipated_power(model, z, ws) : 0.0;
-  const auto stepper = make_stepper<Method>(composition, spec);
+  const auto stepper = make_stepper<Method>(model, composition, spec);
   // First-same-as-last merging needs no intermediate state except the momentum
   // maps', which are read before the merged sub-flow: an exact flow of a part of
   // H, which conserves J, or of the damping, which conserves J or scales it by a

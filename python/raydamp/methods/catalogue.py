@@ -6,7 +6,8 @@ from typing import NamedTuple
 
 from .. import _core
 
-__all__ = ["MethodInfo", "TableauInfo", "CompositionInfo", "methods", "tableaux", "compositions"]
+__all__ = ["MethodInfo", "TableauInfo", "CompositionInfo", "methods", "tableaux", "compositions",
+           "linear_structure_methods"]
 
 
 class MethodInfo(NamedTuple):
@@ -51,8 +52,16 @@ def methods() -> list[MethodInfo]:
     ``symmetric`` marks the symmetric order-2 steps a composition can raise to
     higher order (see :func:`compositions`).
     Orders are computed from the tableau's order conditions, not typed in.
+    'midpoint' and 'gauss4' are implicit steps of a :class:`raydamp.LinearStructure`'s
+    whole linear system and run that kind only (:func:`linear_structure_methods`).
     """
     return [MethodInfo(**{k: row[k] for k in MethodInfo._fields}) for row in _core.methods()]
+
+
+def linear_structure_methods() -> frozenset[str]:
+    """The methods that run only a :class:`raydamp.LinearStructure` (implicit steps of its whole
+    system M q'' + C q' + K q = f; any other kind refuses them with a ValueError naming the method)."""
+    return frozenset(row["name"] for row in _core.methods() if row["linear_structure_only"])
 
 
 def tableaux() -> list[TableauInfo]:

@@ -63,7 +63,10 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
     model : a model from :mod:`raydamp.models`.
     q0, p0 : initial positions and momenta, length ``model.dim``.
     method : "3s" (default), "2s", "rks", "rksb", "sv", "heun", "rk4" or "rk" (any
-        explicit tableau on the whole system, default "rk4"); see :func:`raydamp.methods`.
+        explicit tableau on the whole system, default "rk4"); for a
+        :class:`raydamp.LinearStructure` also the implicit, unconditionally stable
+        "midpoint" (order 2; Newmark average acceleration) and "gauss4" (order 4), which
+        step the whole linear system with one sparse solve per step; see :func:`raydamp.methods`.
     h : step size, > 0.
     t_end, n_steps : give exactly one. With ``t_end`` not a whole multiple of ``h``
         the last step is shortened to land on ``t_end``.
@@ -74,8 +77,8 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
         row of A must sum to c, the order is computed from the order conditions (up
         to 4) and a claimed ``order`` must hold; rks takes diagonally implicit
         tableaux, and a fully implicit one is refused with the reason.
-    composition : raise a symmetric order-2 method ("sv", "3s", "2s", or "rks" with
-        ``tableau="midpoint"``) to higher order by composing its steps:
+    composition : raise a symmetric order-2 method ("sv", "3s", "2s", "rks" with
+        ``tableau="midpoint"``, or "midpoint") to higher order by composing its steps:
         "yoshida4", "suzuki4", "kahan_li6", "mclachlan8" or "kahan_li8" (see
         :func:`raydamp.compositions`); None (default) runs the method itself.
         Every composition of order above 2 has negative coefficients, so some
@@ -92,6 +95,9 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
         Order 2 (no composition) has no backward sub-step. 3s composes most
         gently: its backward damping is only the merged
         c = (gamma_i + gamma_{i+1}) / 2 between stages.
+        Over "midpoint" a backward sub-step s < 0 solves with M - (|s|/2) C + (s^2/4) K: refused, with
+        the reason, where that is not positive definite (beta K damping with |s| < 2 beta) or amplifies
+        a mode more than ``MAX_AMPLIFICATION``-fold.
     save_dofs : save q and p of these coordinates only (indices, in the order given); None
         (default) saves all. Energy, W and the momentum maps are still computed from the whole
         state at each saved point, so a 10^6-site chain run keeps a few numbers per row.

@@ -30,6 +30,17 @@ Which method when (rho = alpha + beta L, the largest damping rate):
 - Every explicit method here (3s, 2s, rks) is Stormer-Verlet in its drift and kick, so
   h omega_max < 2 (omega_max^2 = L without the margin) is needed for stability of the
   undamped part, whatever the damping.
+- h omega_max >> 1 (a fine mesh, whose highest modes carry almost nothing of the answer):
+  the implicit methods on the whole system, which only this kind runs. "midpoint" (implicit
+  midpoint rule; for free vibration it is Newmark's average acceleration) and "gauss4" (the
+  2-stage Gauss method, order 4) are A-stable (any h), symplectic when undamped, keep
+  quadratic invariants, and balance energy exactly over each step,
+  H(z1) - H(z0) = -h sum_i b_i V_i^T C V_i (V_i the stage velocities, the midpoint velocity
+  for "midpoint"; H with the load's potential). A step is one sparse solve with
+  M + c C + c^2 K (c = h/2; complex c = h / (3 + i sqrt 3) for gauss4), factorised once per
+  run by raydamp's sparse LDL^T. "gauss4" is the one to reach a tight tolerance
+  (benchmarks/bench_vs_opensees.py); "midpoint" composes (``composition="yoshida4"``) where
+  the backward sub-step's M - (|s|/2) C + (s^2/4) K stays positive definite (beta = 0).
 """
 
 from __future__ import annotations

@@ -18,9 +18,10 @@ enum class Flow {
   kick_damp_rk,   // Runge-Kutta step of X_V + eps Y (q frozen), tableau chosen at run time
   drift_damp_rk,  // explicit Runge-Kutta step of X_T + eps Y
   full_rk,        // explicit Runge-Kutta step of the whole field
+  linear_implicit,  // implicit step of a linear structure's whole system (methods/linear_implicit.hpp)
 };
 
-inline constexpr int n_flows = 7;
+inline constexpr int n_flows = 8;
 
 inline constexpr const char* flow_name(Flow f) {
   switch (f) {
@@ -30,6 +31,7 @@ inline constexpr const char* flow_name(Flow f) {
     case Flow::kick_damp: return "kick_damp";
     case Flow::kick_damp_rk: return "kick_damp_rk";
     case Flow::drift_damp_rk: return "drift_damp_rk";
+    case Flow::linear_implicit: return "linear_implicit";
     default: return "full_rk";
   }
 }

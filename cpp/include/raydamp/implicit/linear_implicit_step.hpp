@@ -1,0 +1,285 @@
+// The steps of the implicit methods of methods/linear_implicit.hpp on a
+// LinearStructure: M q'' + C q' + K q = f, C = alpha M + beta K, p = M q'.
+//
+// In first-order form y = (q, v), y' = A y + b. A Gauss method with s stages applied
+// to it gives y1 = y0 + h Q(hA)^{-1} (A y0 + b) (R(z) - 1 = z / Q(z) for the diagonal
+// Pade approximant R = P / Q). For s = 1, Q(z) = 1 - z/2; for s = 2, Q(z) = (z - mu)
+// (z - conj mu) / 12 with mu = 3 + i sqrt(3), and by partial fractions
+// Q(z)^{-1} = 2 Re[(2 sqrt(3) i / mu) (1 - z / mu)^{-1}]. Each factor (I - c A)^{-1},
+// c = h lambda (lambda = 1/2, or 1/mu), reduces to one n x n solve: writing
+// (I - cA) w = A y0 + b with w = (u, .), the velocity part u solves
+//     (M + c C + c^2 K) u = p0 + c (f - K q0)                                  (*)
+// with no M^{-1} anywhere, and then
+//   midpoint (u = vbar, the midpoint velocity):  q1 = q0 + h u,  p1 = 2 M u - p0;
+//   gauss4:  q1 = q0 - 4 sqrt(3) h Im(lambda u),  p1 = p0 - 4 sqrt(3) M Im(u).
+// u is also the stage velocities: V = u (midpoint), V_i = Re u - g_i Im u with
+// g_{1,2} = sqrt(3) -+ 2 (gauss4; K_i = 2 Re(kappa_i w) from the eigenvectors of the
+// Butcher matrix), so the damping work of a step, h sum_i b_i V_i^T C V_i, is the
+// method's own: H(z1) - H(z0) + W_step = 0 to rounding (H with the load's potential).
+//
+// The matrix of (*) is factorised once per distinct sub-step length (a run has one,
+// two with a shortened last step, more for a composition) before the first step:
+// real SPD for the midpoint, complex symmetric with an SPD real part for gauss4
+// (Re(c) > 0, Re(c^2) > 0), both by SparseLDLT over one shared analysis.
+// Loads are constant here (LinearStructure's f); a time-dependent f(t) needs the
+// stage times, f(t + h/2) for the midpoint.
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <complex>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+#include "raydamp/amplification.hpp"
+#include "raydamp/catalogue.hpp"
+#include "raydamp/implicit/sparse_ldlt.hpp"
+#include "raydamp/integrate.hpp"
+#include "raydamp/methods/linear_implicit.hpp"
+#include "raydamp/models/linear_structure.hpp"
+#include "raydamp/state.hpp"
+#include "raydamp/workspace.hpp"
+
+namespace raydamp {
+
+template <class Model>
+struct is_linear_structure : std::false_type {};
+template <class Mass>
+struct is_linear_structure<LinearStructure<Mass>> : std::true_type {};
+
+namespace detail {
+
+// What the implicit steps read of a structure, the same for either mass kind (one
+// compiled step for both).
+struct LinearSystem {
+  SparseRowMajor mass;
+  std::shared_ptr<const SparseRowMajor> stiffness;
+  Eigen::VectorXd force;
+  double alpha, beta, spectral_bound;
+  std::shared_ptr<const SparsePattern> pattern;  // of M + K
+
+  template <class Mass>
+  explicit LinearSystem(const LinearStructure<Mass>& s)
+      : mass(s.mass.matrix()), stiffness(s.stiffness), force(s.force), alpha(s.damping.alpha()),
+        beta(s.damping.beta()), spectral_bound(s.damping.spectral_bound()) {
+    const SparseColMajor m(mass), k(*stiffness);
+    pattern = std::make_shared<const SparsePattern>(SparseColMajor(m.cwiseAbs() + k.cwiseAbs()));
+  }
+
+  // M + c C + c^2 K = (1 + c alpha) M + (c beta + c^2) K.
+  template <class Scalar>
+  Eigen::SparseMatrix<Scalar, Eigen::ColMajor, int> shifted(Scalar c) const {
+    const Scalar a = Scalar(1) + c * alpha, b = c * beta + c * c;
+    return SparseColMajor(mass).cast<Scalar>() * a + SparseColMajor(*stiffness).cast<Scalar>() * b;
+  }
+};
+
+// The largest factor by which one backward implicit-midpoint sub-step of length s < 0
+// multiplies a mode (|R(s lambda)|, R(z) = (1 + z/2) / (1 - z/2), lambda an eigenvalue
+// of the mode's [[0, 1], [-w^2, -(alpha + beta w^2)]]), over w^2 in [0, L]: the
+// composition's counterpart of amplification.hpp's bound.
+inline double backward_midpoint_amplification(const LinearSystem& sys, double s) {
+  double worst = 1.0;
+  auto mode = [&](double w2) {
+    const double c = sys.alpha + sys.beta * w2;
+    const std::complex<double> root = std::sqrt(std::complex<double>(c * c - 4.0 * w2, 0.0));
+    for (const std::complex<double> lambda : {0.5 * (-c + root), 0.5 * (-c - root)}) {
+      const std::complex<double> z = s * lambda;
+      worst = std::max(worst, std::abs((1.0 + 0.5 * z) / (1.0 - 0.5 * z)));
+    }
+  };
+  mode(0.0);
+  constexpr int kSamples = 400;
+  for (int i = 0; i <= kSamples; ++i) mode(sys.spectral_bound * std::pow(10.0, -12.0 * (1.0 - double(i) / kSamples)));
+  return worst;
+}
+
+// One factorised sub-step length.
+template <class Scalar>
+struct ImplicitFactor {
+  double s;
+  SparseLDLT<Scalar> solver;
+};
+
+// The step of Method over a sub-step of length s with its factor; scratch vectors
+// are sized once (the step loop allocates nothing).
+template <class Method>
+class LinearImplicitCore {
+ public:
+  static constexpr bool is_complex = std::is_same_v<Method, Gauss4>;
+  using Scalar = std::conditional_t<is_complex, std::complex<double>, double>;
+  using ScalarVector = Eigen::Matrix<Scalar, Eigen::Dynamic, 1>;
+  // lambda: the eigenvalue of the Butcher matrix, 1/2 or 1/mu = (3 - i sqrt 3) / 12.
+  static Scalar lambda() {
+    if constexpr (is_complex) return Scalar(3.0, -std::sqrt(3.0)) / 12.0;
+    else return 0.5;
+  }
+
+  explicit LinearImplicitCore(LinearSystem system) : sys_(std::move(system)) {
+    const Eigen::Index n = sys_.mass.rows();
+    kq_.resize(n);
+    real_.resize(n);
+    product_.resize(n);
+    rhs_.resize(n);
+    u_.resize(n);
+    work_.resize(n);
+  }
+
+  const LinearSystem& system() const { return sys_; }
+
+  // The factor of sub-steps of length s (made once; a run asks for a handful).
+  const ImplicitFactor<Scalar>* factor(double s) {
+    for (const auto& f : factors_)
+      if (f->s == s) return f.get();
+    const Scalar c = Scalar(s) * lambda();
+    auto made = std::make_unique<ImplicitFactor<Scalar>>(
+        ImplicitFactor<Scalar>{s, SparseLDLT<Scalar>(sys_.pattern, sys_.shifted(c), "M + c C + c^2 K")});
+    factors_.push_back(std::move(made));
+    return factors_.back().get();
+  }
+
+  // z <- one step of length f.s; adds the step's damping work to *work if given.
+  void step(const ImplicitFactor<Scalar>& f, Eigen::VectorXd& q, Eigen::VectorXd& p, double* work) {
+    const double s = f.s;
+    const Scalar c = Scalar(s) * lambda();
+    kq_.noalias() = *sys_.stiffness * q;
+    real_ = sys_.force - kq_;
+    rhs_ = p.cast<Scalar>() + c * real_.cast<Scalar>();  // (*)'s right side
+    f.solver.solve(rhs_, u_, work_);
+    if constexpr (!is_complex) {
+      q += s * u_;
+      product_.noalias() = sys_.mass * u_;
+      p = 2.0 * product_ - p;
+      if (work) *work += s * damping_power(u_);
+    } else {
+      const double k = 4.0 * std::sqrt(3.0);
+      real_ = (lambda() * u_).imag();
+      q -= (k * s) * real_;
+      real_ = u_.imag();
+      product_.noalias() = sys_.mass * real_;
+      p -= k * product_;
+      if (work) {
+        // b_1 = b_2 = 1/2; V_i = Re u - g_i Im u.
+        double w = 0.0;
+        for (const double g : {std::sqrt(3.0) - 2.0, std::sqrt(3.0) + 2.0}) {
+          real_ = u_.real() - g * u_.imag();
+          w += 0.5 * damping_power(real_);
+        }
+        *work += s * w;
+      }
+    }
+  }
+
+ private:
+  // v^T C v = alpha v^T M v + beta v^T K v.
+  double damping_power(const Eigen::VectorXd& v) {
+    double out = 0.0;
+    if (sys_.alpha != 0.0) {
+      product_.noalias() = sys_.mass * v;
+      out += sys_.alpha * v.dot(product_);
+    }
+    if (sys_.beta != 0.0) {
+      kq_.noalias() = *sys_.stiffness * v;
+      out += sys_.beta * v.dot(kq_);
+    }
+    return out;
+  }
+
+  LinearSystem sys_;
+  std::vector<std::unique_ptr<ImplicitFactor<Scalar>>> factors_;
+  Eigen::VectorXd kq_, real_, product_;
+  ScalarVector rhs_, u_, work_;
+};
+
+}  // namespace detail
+
+// The steps of one run of Method (ImplicitMidpoint or Gauss4) on a linear structure:
+// each step is the composition's sub-steps gamma_j h (one sub-step of h uncomposed),
+// the last step's of h_last. Copied once per block of steps by the step loop: it holds
+// only the sub-step table and a shared pointer to the factors and scratch.
+template <class Method>
+class LinearImplicitStepper {
+ public:
+  using Core = detail::LinearImplicitCore<Method>;
+  using Scalar = typename Core::Scalar;
+
+  template <class Model>
+  LinearImplicitStepper(const Model& model, const Composition& composition, const RunSpec& spec)
+      : last_step_(spec.n_steps - 1), stages_(composition.stages()) {
+    static_assert(is_linear_structure<Model>::value, "the linear implicit methods run a LinearStructure");
+    core_ = std::make_shared<Core>(detail::LinearSystem(model));
+    for (int j = 0; j < stages_; ++j) {
+      regular_[j] = checked_factor(composition, composition.gamma(j) * spec.h);
+      last_[j] = checked_factor(composition, composition.gamma(j) * spec.h_last);
+    }
+  }
+
+  template <class Model, class Tab, int Dim, class DF>
+  void step(const Model&, const Tab&, State<Dim>& z, long i, Workspace<Dim, DF>& ws) const {
+    const auto& sub = i == last_step_ ? last_ : regular_;
+    double* work = ws.track_work ? &ws.work : nullptr;
+    for (int j = 0; j < stages_; ++j) core_->step(*sub[j], z.q, z.p, work);
+  }
+
+ private:
+  // The factor of a sub-step of length s; a backward one (a composition's negative
+  // coefficient) only where its matrix stays positive definite and it amplifies no
+  // mode past kMaxAmplification.
+  const detail::ImplicitFactor<Scalar>* checked_factor(const Composition& composition, double s) {
+    const detail::ImplicitFactor<Scalar>* f = core_->factor(s);
+    if constexpr (std::is_same_v<Scalar, double>) {
+      if (s >= 0.0) return f;
+      const detail::LinearSystem& sys = core_->system();
+      std::ostringstream why;
+      why.precision(3);
+      why << "composition: '" << composition.name() << "' over '" << Method::name
+          << "' runs backward sub-steps (s = " << s << ", coefficient " << composition.min_gamma()
+          << " of h), each solving with M + (s/2) C + (s^2/4) K = (1 - |s| alpha/2) M + (s^2/4 - |s| beta/2) K";
+      if (!f->solver.positive_pivots()) {
+        why << ", which is not positive definite here (alpha = " << sys.alpha << ", beta = " << sys.beta
+            << (sys.beta > 0.0 ? "; with beta K damping the K term is negative once |s| < 2 beta" : "")
+            << "): the backward step has a pole in the structure's spectrum; use the order-2 method "
+               "(composition=None), method 'gauss4' (order 4), or "
+            << (sys.beta > 0.0 ? "a structure with beta = 0" : "a smaller h");
+        throw std::invalid_argument(why.str());
+      }
+      const double bound = detail::backward_midpoint_amplification(sys, s);
+      if (bound > kMaxAmplification) {
+        why << ", which amplifies a damped mode by up to " << bound << " per backward sub-step, past the limit "
+            << kMaxAmplification << "; use the order-2 method (composition=None), method 'gauss4' (order 4), "
+            << "or a smaller h";
+        throw std::invalid_argument(why.str());
+      }
+    }
+    return f;
+  }
+
+  std::shared_ptr<Core> core_;
+  long last_step_;
+  int stages_;
+  std::array<const detail::ImplicitFactor<Scalar>*, kMaxCompositionStages> regular_{}, last_{};
+};
+
+// Calls f(MethodType{}) for the method named `name` on a model of type Model: with_method
+// (catalogue.hpp), and the linear implicit methods for a LinearStructure, refused for any
+// other kind with a message naming the method.
+template <class Model, class F>
+decltype(auto) with_method_for(const std::string& name, F&& f) {
+  const MethodEntry& entry = method_entry(name);
+  if (!entry.linear_implicit) return with_method(name, f);
+  if constexpr (is_linear_structure<Model>::value) {
+    if (entry.table == Gauss4::name) return f(Gauss4{});
+    return f(ImplicitMidpoint{});
+  } else {
+    throw std::invalid_argument("method: '" + name + "' is an implicit step of a linear structure's whole system "
+                                "M q'' + C q' + K q = f, and runs only a raydamp.LinearStructure; for this model "
+                                "use 3s, 2s or rks");
+  }
+}
+
+}  // namespace raydamp
