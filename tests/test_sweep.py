@@ -231,3 +231,23 @@ def test_spec_without_parameters_takes_the_defaults():
     plan = raydamp.check_sweep({"model": "damped_pendulum", "q0": [0.0], "p0": [0.0], "h": 0.05, "t_end": 50},
                                grid={"eps": [0.0, 0.5]})
     assert plan.members == 2 and plan.model.parameters == DampedPendulum().parameters
+
+
+def test_frequency_response_is_one_sweep_over_load_omega(client):
+    """A sweep over load.omega of a damped oscillator's job JSON: the steady-state amplitude of each
+    member equals F0 / sqrt((k - m w^2)^2 + (c w)^2) (issue 26)."""
+    m, k, c, F0 = 1.0, 4.0, 0.4, 0.5
+    job = {"system": {"kind": "linear_structure", "M": {"diagonal": [m]},
+                      "K": {"coo": {"rows": [0], "cols": [0], "values": [k], "shape": [1, 1]}}, "alpha": c / m},
+           "method": "3s", "h": 0.002, "t_end": 120.0, "save_every": 5, "initial_state": {"rest": True},
+           "work": False, "load": {"harmonic": {"amplitude": [F0], "omega": 1.0}}}
+    omegas = np.linspace(0.5, 3.5, 7)
+    ds = raydamp.sweep(job, grid={"load.omega": omegas}, client=client)
+    assert np.array_equal(ds["load.omega"].values, omegas)
+    t = ds["t"].values[0] if ds["t"].ndim == 2 else ds["t"].values
+    for i, w in enumerate(omegas):
+        tail = t > 120.0 - 6 * np.pi / w
+        basis = np.column_stack([np.sin(w * t[tail]), np.cos(w * t[tail])])
+        coef, *_ = np.linalg.lstsq(basis, ds["q"].values[i, tail, 0], rcond=None)
+        exact = F0 / np.hypot(k - m * w ** 2, c * w)
+        assert abs(np.hypot(*coef) - exact) / exact < 2e-5, w

@@ -5,6 +5,7 @@
 
 namespace raydamp::bindings {
 void bind_catalogue(pybind11::module_& m);
+void bind_load(pybind11::module_& m);
 void bind_models(pybind11::module_& m);
 void bind_integrate(pybind11::module_& m);
 void bind_system_scalar_mass(pybind11::module_& m);

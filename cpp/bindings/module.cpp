@@ -9,6 +9,7 @@ PYBIND11_MODULE(_core, m) {
   m.doc() = "raydamp's compiled core (private: use the raydamp package)";
   m.attr("__version__") = RAYDAMP_VERSION;
   raydamp::bindings::bind_catalogue(m);
+  raydamp::bindings::bind_load(m);
   raydamp::bindings::bind_models(m);
   raydamp::bindings::bind_integrate(m);
   raydamp::bindings::bind_system_scalar_mass(m);

@@ -13,6 +13,7 @@
 #include <type_traits>
 
 #include "bindings.hpp"
+#include "load_binding.hpp"
 #include "raydamp/implicit/linear_implicit_step.hpp"
 #include "raydamp/raydamp.hpp"
 
@@ -62,13 +63,14 @@ template <class Model>
 py::dict run(const Model& model, const std::string& method, const std::string& tableau,
              const std::string& composition, const typename Model::Vec& q0, const typename Model::Vec& p0, double h, long n_steps, double h_last,
              long save_every, bool track_work, py::object progress, CancelToken* cancel,
-             const std::vector<int>& save_dofs) {
+             const std::vector<int>& save_dofs, const BoundLoad* load) {
   const MethodEntry& entry = method_entry(method);
   require_applicable(entry, model.eps);
   const ButcherTableau& tab = resolve_tableau(entry, tableau);
   const Composition& comp = resolve_composition(entry, tab, composition);
   RunSpec spec{h, n_steps, h_last, save_every, track_work};
   spec.save_dofs = save_dofs;
+  spec.load = load_of(load);
   Control control;
   if (cancel) control.cancel = &cancel->flag;
   if (!progress.is_none())
@@ -98,6 +100,7 @@ py::dict run(const Model& model, const std::string& method, const std::string& t
   out["energy"] = to_numpy(std::move(tr.energy), {rows});
   out["momentum"] = to_numpy(std::move(tr.momentum), {rows, tr.n_momenta});
   out["work"] = track_work ? py::object(to_numpy(std::move(tr.work), {rows})) : py::none();
+  out["load_work"] = track_work && spec.load ? py::object(to_numpy(std::move(tr.load_work), {rows})) : py::none();
   return out;
 }
 
@@ -112,7 +115,7 @@ void def_integrate(py::module_&) {
   cls.def("integrate", &run<Model>, py::arg("method"), py::arg("tableau"), py::arg("composition"), py::arg("q0"),
           py::arg("p0"), py::arg("h"), py::arg("n_steps"), py::arg("h_last"), py::arg("save_every"),
           py::arg("track_work"), py::arg("progress"), py::arg("cancel").none(true),
-          py::arg("save_dofs") = std::vector<int>{});
+          py::arg("save_dofs") = std::vector<int>{}, py::arg("load").none(true) = py::none());
 }
 
 }  // namespace raydamp::bindings

@@ -5,6 +5,7 @@
 // there as soon as the member ends.
 #pragma once
 
+#include <algorithm>
 #include <limits>
 #include <string>
 #include <vector>
@@ -50,7 +51,8 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
                       const std::vector<std::string>& names, Rows values, const std::string& method,
                       const std::string& tableau, const std::string& composition, Rows q0, Rows p0, double h,
                       long n_steps, double h_last, long save_every, int threads, py::object progress,
-                      CancelToken* cancel, bool vector_sine) {
+                      CancelToken* cancel, bool vector_sine, const std::vector<const BoundLoad*>& loads,
+                      py::array_t<long, py::array::c_style | py::array::forcecast> load_index) {
   if (q0.ndim() != 2 || q0.shape(0) < 1) throw std::invalid_argument("q0: expected an array of shape (members, n), members >= 1");
   const long members = static_cast<long>(q0.shape(0));
   if (models.empty()) throw std::invalid_argument("models: empty");
@@ -65,6 +67,19 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
   const ButcherTableau& tab = resolve_tableau(entry, tableau);
   const Composition& comp = resolve_composition(entry, tab, composition);
   const RunSpec spec{h, n_steps, h_last, save_every, false};
+  // Each member's load: loads[load_index[i]] (none without loads).
+  std::vector<const Load*> member_load(members, nullptr);
+  if (!loads.empty()) {
+    if (load_index.ndim() != 1 || load_index.shape(0) != members)
+      throw std::invalid_argument("load_index: expected one index per member");
+    for (long i = 0; i < members; ++i) {
+      const long j = load_index.data()[i];
+      if (j < 0 || j >= static_cast<long>(loads.size()))
+        throw std::invalid_argument("load_index: out of range at member " + std::to_string(i));
+      member_load[i] = load_of(loads[j]);
+    }
+  }
+  const bool loaded = std::any_of(member_load.begin(), member_load.end(), [](const Load* l) { return l != nullptr; });
 
   // Every member's model, checked here, before any thread starts.
   const std::vector<int> slots = member_value_slots<Model>(names);
@@ -161,7 +176,9 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
       using Method = decltype(method_tag);
       auto run_member = [&](long i) {
         try {
-          store(i, integrate_model<Method>(*member_model[i], tab, comp, initial(i), spec, member_control));
+          RunSpec member_spec = spec;
+          member_spec.load = member_load[i];
+          store(i, integrate_model<Method>(*member_model[i], tab, comp, initial(i), member_spec, member_control));
         } catch (const std::invalid_argument& e) {
           throw std::invalid_argument("member " + std::to_string(i) + ": " + e.what());
         }
@@ -170,7 +187,10 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
       if (vector_sine && !lanes)
         throw std::invalid_argument("vector_sine: only the damped pendulum's 3s, 2s and sv ensembles run their "
                                     "sines as SIMD lanes");
-      if constexpr (lanes) {
+      if (vector_sine && loaded) throw std::invalid_argument("vector_sine: the SIMD lanes take no load");
+      if (lanes && loaded) {  // the lanes share one clock-free step: loaded members run one by one
+        for_each_member(members, threads, run_member, control);
+      } else if constexpr (lanes) {
         // Runs of members sharing eps go as the lanes of one run (run_lanes.hpp).
         const std::vector<LaneBatch> batches =
             lane_batches(member_model, batch_lanes(members, ensemble_threads(threads, members)));
@@ -226,7 +246,8 @@ void def_integrate_ensemble(py::module_&) {
                  py::arg("names"), py::arg("values"), py::arg("method"), py::arg("tableau"), py::arg("composition"),
                  py::arg("q0"), py::arg("p0"), py::arg("h"), py::arg("n_steps"), py::arg("h_last"),
                  py::arg("save_every"), py::arg("threads"), py::arg("progress"), py::arg("cancel").none(true),
-                 py::arg("vector_sine") = false);
+                 py::arg("vector_sine") = false, py::arg("loads") = std::vector<const BoundLoad*>{},
+                 py::arg("load_index") = py::array_t<long>());
 }
 
 }  // namespace raydamp::bindings

@@ -12,6 +12,7 @@ equilibria.
 
 from . import models
 from ._core import __version__
+from .loads import GroundMotion, Load
 from .methods.catalogue import CompositionInfo, MethodInfo, TableauInfo, compositions, methods, tableaux
 from .results.ensemble_solution import EnsembleSolution
 from .results.io import load
@@ -24,7 +25,7 @@ from .systems.rayleigh import modal_damping_ratio, rayleigh_coefficients
 from .systems.structure import LinearStructure
 from .systems.system import SpecError, System
 
-__all__ = ["__version__", "models", "System", "Chain", "chain_mode_energies", "LinearStructure", "SpecError",
+__all__ = ["__version__", "models", "Load", "GroundMotion", "System", "Chain", "chain_mode_energies", "LinearStructure", "SpecError",
            "integrate", "steps_for", "CancelToken", "Solution", "integrate_ensemble", "EnsembleSolution", "sweep",
            "check_sweep", "parse_grid_item", "SweepPlan", "load", "rayleigh_coefficients", "modal_damping_ratio",
            "methods", "tableaux", "compositions", "MethodInfo", "TableauInfo", "CompositionInfo"]

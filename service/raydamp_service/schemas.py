@@ -50,6 +50,10 @@ class JobSummary(BaseModel):
     energy_dissipated: float | None
     mean_dissipation_rate: float | None
     momentum_drift: float | None
+    work_final: float | None = Field(None, description="the damping work W at the end (jobs with work)")
+    load_work_final: float | None = Field(None, description="the load's work W_f at the end (jobs with work)")
+    energy_balance_max: float | None = Field(None, description="max |H - H0 + W - W_f| over the saved points: the "
+                                                               "energy budget's error (jobs with work)")
     wall_time: float
 
 

@@ -66,6 +66,8 @@ struct RunSpec {
   // The coordinates whose q and p each saved point keeps (empty: all). A large
   // lattice saves a few sites and the scalar diagnostics, not n numbers per row.
   std::vector<int> save_dofs{};
+  // A time-dependent load f(t) (load.hpp), or none; with track_work its work W_f is recorded too.
+  const Load* load = nullptr;
 };
 
 struct Control {
@@ -79,6 +81,7 @@ struct Control {
 struct Trajectory {
   int n = 0, n_momenta = 0;
   std::vector<double> t, q, p, energy, momentum, work;  // work: empty unless tracked
+  std::vector<double> load_work;  // W_f = int f . M^{-1} p dt; empty unless tracked with a load
   long rows() const { return static_cast<long>(t.size()); }
 };
 
@@ -132,6 +135,7 @@ void save_point(const Model& model, const State<Dim>& z, double t, const Workspa
                 MomentumBuffers& mb, const std::vector<int>& dofs, Trajectory& out) {
   out.t.push_back(t);
   if (ws.track_work) out.work.push_back(ws.work);
+  if (ws.track_work && ws.load) out.load_work.push_back(ws.load_work);
   if (dofs.empty()) {
     out.q.insert(out.q.end(), z.q.data(), z.q.data() + z.q.size());
     out.p.insert(out.p.end(), z.p.data(), z.p.data() + z.p.size());
@@ -327,6 +331,13 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
   WorkspaceFor<Model> ws(n, tab.stages());
   ws.track_work = spec.track_work;
   if (spec.track_work) out.work.reserve(rows);
+  if (spec.load && !spec.load->empty()) {
+    if (spec.load->size() != n)
+      throw std::invalid_argument("load: made for " + std::to_string(spec.load->size()) + " coordinates, the model has " +
+                                  std::to_string(n));
+    ws.load = spec.load;
+    if (spec.track_work) out.load_work.reserve(rows);
+  }
   // Copies made now, so the loop never allocates. The block loop steps y, a local
   // that only inlined code sees, so the compiler can keep it in registers.
   State<Dim> checkpoint = z, before = z;
@@ -346,7 +357,7 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
   // A save that runs out of memory takes back its partial row, so every array keeps the same rows.
   auto save = [&](double t) {
     const std::size_t sizes[] = {out.t.size(), out.q.size(), out.p.size(), out.energy.size(), out.momentum.size(),
-                                 out.work.size()};
+                                 out.work.size(), out.load_work.size()};
     try {
       save_point(model, z, t, ws, mb, spec.save_dofs, out);
       return true;
@@ -357,6 +368,7 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
       out.energy.resize(sizes[3]);
       out.momentum.resize(sizes[4]);
       out.work.resize(sizes[5]);
+      out.load_work.resize(sizes[6]);
       return false;
     }
   };
@@ -375,6 +387,13 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
   // method integrates it itself (see integrates_work).
   constexpr bool trapezoid = !integrates_work<Method>::value;
   double power = spec.track_work && trapezoid ? dissipated_power(model, z, ws) : 0.0;
+  // The load's power f(t) . M^{-1} p, by the same rule.
+  auto load_power = [&](const State<Dim>& x, double t) {
+    model.mass.velocity(x.p, ws.v);
+    return ws.load->dot(t, ws.v.data());
+  };
+  const bool track_load = spec.track_work && trapezoid && ws.load;
+  double power_f = track_load ? load_power(z, 0.0) : 0.0;
   const auto stepper = make_stepper<Method>(model, composition, spec);
   // First-same-as-last merging needs no intermediate state except the momentum
   // maps', which are read before the merged sub-flow: an exact flow of a part of
@@ -403,12 +422,18 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
     else return momentum_drift(model, x, mb, law(i, before_trail));
   };
   auto advance = [&](State<Dim>& x, long i) {
+    ws.time = time_at(i);
     stepper.step(model, tab, x, i, ws);
     if constexpr (trapezoid) {
       if (spec.track_work) {
         const double next = dissipated_power(model, x, ws);
         ws.work += 0.5 * step_size(i) * (power + next);
         power = next;
+        if (track_load) {
+          const double next_f = load_power(x, time_at(i + 1));
+          ws.load_work += 0.5 * step_size(i) * (power_f + next_f);
+          power_f = next_f;
+        }
       }
     }
   };
@@ -421,7 +446,9 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
     }
     const long end = std::min({N, next_save, next_progress, k + kBlock});
     checkpoint = z;
-    const double checkpoint_work = ws.work, checkpoint_power = power;
+    const double checkpoint_work = ws.work, checkpoint_power = power, checkpoint_load_work = ws.load_work,
+                 checkpoint_power_f = power_f;
+    ws.time = time_at(k);  // the merged loop's clock; advance() sets it per step
     double block_drift = 0.0;
     if constexpr (Dim == Eigen::Dynamic) {  // stepped in place (see run_block)
       block_drift = run_block<mergeable>(model, tab, stepper, ws, z, k, end, merge, track_momenta, advance, step_drift);
@@ -435,14 +462,17 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
       z = checkpoint;
       ws.work = checkpoint_work;
       power = checkpoint_power;
+      ws.load_work = checkpoint_load_work;
+      power_f = checkpoint_power_f;
       long i = k;
       for (; i < end; ++i) {
         before = z;
-        const double work_before = ws.work;
+        const double work_before = ws.work, load_work_before = ws.load_work;
         advance(z, i);
         if (!z.all_finite()) {
           z = before;
           ws.work = work_before;
+          ws.load_work = load_work_before;
           break;
         }
         if (track_momenta) max_drift = std::max(max_drift, step_drift(z, i, false));

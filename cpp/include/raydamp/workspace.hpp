@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "raydamp/damping/decay_factors.hpp"
+#include "raydamp/load.hpp"
 #include "raydamp/state.hpp"
 
 namespace raydamp {
@@ -19,6 +20,10 @@ struct Workspace {
   bool track_work = false;  // accumulate the damping work W in `work`
   double work = 0.0;
   Factors damp_factors, kick_damp_factors;  // for the last t each exact damping flow ran for
+  // The load and the clock it reads: t, advanced by the drifts (flows/exact.hpp) and set
+  // by the step loop at each step it starts from scratch. load_work: W_f = int f . M^{-1} p dt.
+  const Load* load = nullptr;
+  double time = 0.0, load_work = 0.0;
 
   Workspace(int n, int stages) : v(fresh(n)), g(fresh(n)), f(fresh(n)), stage_q(fresh(n)), stage_p(fresh(n)) {
     for (int i = 0; i < stages; ++i) {  // each its own fresh vector (a copy of one would write it)

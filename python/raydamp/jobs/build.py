@@ -120,8 +120,26 @@ def build_job(spec: JobSpec, files: FileResolver | None = None) -> JobCall:
             options[key] = getattr(spec, key)
     if spec.save_dofs is not None:
         options["save_dofs"] = list(spec.save_dofs)
+    load = job_load(spec, files)
+    if load is not None:
+        options["load"] = load
     q0, p0 = _initial_state(spec, model)
     return JobCall(model, q0, p0, options)
+
+
+def job_load(spec: JobSpec, files: FileResolver | None = None):
+    """The job's load (its "load" plus its "ground_motion"), or None; a JobError names the path."""
+    from ..loads import GroundMotion, Load
+
+    parts = []
+    try:
+        if spec.load is not None:
+            parts.append(Load.from_dict(spec.load, name="load", files=files))
+        if spec.ground_motion is not None:
+            parts.append(GroundMotion.from_dict(spec.ground_motion, files=files))
+    except ValueError as error:
+        raise JobError(head_path(str(error)), str(error)) from None
+    return sum(parts) if parts else None
 
 
 def error_at(spec: JobSpec, error: ValueError) -> JobError:

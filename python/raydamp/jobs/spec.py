@@ -148,6 +148,17 @@ class JobSpec(ModelSpec):
     save_dofs: Annotated[list[Annotated[int, Field(ge=0)]], indices(MAX_VECTOR)] | None = Field(
         None, max_length=MAX_VECTOR, description="save q and p of these coordinates only (energy, W and momenta "
                                                  "still from the whole state); null saves all")
+    load: dict[str, Any] | None = Field(
+        None, description="a time-dependent force f(t): {\"harmonic\": {\"amplitude\": [...], \"omega\": w, "
+                          "\"phase\": 0}}, {\"series\": {\"t\": [...], \"values\": [...], \"direction\": [...], "
+                          "\"hold\": false}}, {\"expression\": {\"expression\": \"F0*sin(w*t)\", \"parameters\": "
+                          "{...}, \"direction\": [...]}}, {\"file\": {\"id\": <uploaded .AT2/CSV/.npy>, "
+                          "\"direction\": [...], \"factor\": 1}}, or {\"terms\": [several], \"amplitude\": a}")
+    ground_motion: dict[str, Any] | None = Field(
+        None, description="uniform base excitation (as OpenSees' UniformExcitation): {\"acceleration\": a load form "
+                          "without direction (series, file, harmonic with a scalar amplitude, expression), "
+                          "\"direction\": r, \"factor\": 1}; the load is -M r a_g(t) and the result is the motion "
+                          "relative to the ground")
     _h_key: str = PrivateAttr("h")
 
     @model_validator(mode="wrap")

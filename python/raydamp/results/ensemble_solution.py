@@ -8,6 +8,8 @@ from typing import Any
 
 import numpy as np
 
+from ..loads.load import set_load_parameters
+
 from .solution import Solution
 
 __all__ = ["EnsembleSolution", "STATUSES"]
@@ -182,6 +184,9 @@ def _set_parameters(spec: dict[str, Any], values: dict[str, Any]) -> None:
     """Put parameter values into a job JSON: a System's eps and expression parameters, or a built-in
     model's parameters."""
     values = dict(values)
+    load_values = {k[5:]: values.pop(k) for k in list(values) if k.startswith("load.")}
+    if load_values and spec.get("load") is not None:
+        spec["load"] = set_load_parameters(spec["load"], load_values)
     if "system" in spec and spec["system"] is not None:
         system = spec["system"]
         if "eps" in values:

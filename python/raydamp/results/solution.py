@@ -41,6 +41,9 @@ class Solution:
         damping that breaks their symmetry follow no such law: there the figure includes the
         damping's real change of J.
     work : (N,) damping work W(t) if the run was asked for it (``work=True``), else None.
+    load_work : (N,) the load's work W_f(t) = int f . qdot dt for a run with a load and ``work=True``,
+        else None.
+    load : the run's :class:`raydamp.Load` (or GroundMotion), or None.
     dofs : the indices of the saved coordinates when the run saved only some (``save_dofs``),
         else None.
     composition : the composition the method was raised to higher order with, or None.
@@ -72,6 +75,8 @@ class Solution:
     wall_time: float = field(default=0.0)
     composition: str | None = field(default=None)
     dofs: np.ndarray | None = field(default=None)
+    load_work: np.ndarray | None = field(default=None)
+    load: Any = field(default=None, compare=False)
     # (model, q0, p0, options) of the run, turned into `provenance` when asked for (cheap
     # runs stay cheap); or the provenance dict itself, for a loaded solution.
     origin: Any = field(default=None, compare=False)
@@ -147,10 +152,42 @@ class Solution:
 
     @property
     def energy_balance(self) -> np.ndarray:
-        """H(t) - H(0) + W(t): zero for the exact flow; needs ``work=True``."""
+        """H(t) - H(0) + W(t) - W_f(t): zero for the exact flow; needs ``work=True``.
+        (H is the unforced energy; W the damping's work, W_f the load's.)"""
         if self.work is None:
             raise ValueError("work: this run did not record the damping work; pass work=True to integrate")
-        return self.energy - self.energy[0] + self.work
+        balance = self.energy - self.energy[0] + self.work
+        return balance if self.load_work is None else balance - self.load_work
+
+    def load_values(self) -> np.ndarray:
+        """f(t) at the saved times, (N, n) over every coordinate (zeros without a load)."""
+        model = self._model("load_values")
+        if self.load is None:
+            return np.zeros((self.t.size, model.dim))
+        return self.load.values(model, self.t)
+
+    def absolute_acceleration(self) -> np.ndarray:
+        """Under a ground motion: the absolute acceleration q''(t) + r a_g(t) at the saved times,
+        (N, n), with q'' = M^{-1} (f(t) - grad V(q) - eps D M^{-1} p) from the saved state (a run
+        saving every coordinate)."""
+        model = self._model("absolute_acceleration")
+        if self.load is None or not getattr(self.load, "is_ground_motion", False):
+            raise ValueError("absolute_acceleration: this run had no ground motion")
+        if self.dofs is not None:
+            raise ValueError("absolute_acceleration: needs every coordinate saved (save_dofs=None)")
+        f = self.load.values(model, self.t)
+        core = model._core_model
+        out = np.empty_like(self.q)
+        for k in range(self.t.size):
+            force = f[k] - np.asarray(core.gradient(self.q[k])).ravel() - np.asarray(
+                core.damping_rate(self.q[k], self.p[k])).ravel()
+            out[k] = np.asarray(core.velocity(force)).ravel()
+        return out + self.load.ground_part().values(model, self.t)
+
+    def _model(self, what: str):
+        if not isinstance(self.origin, tuple):
+            raise ValueError(f"{what}: needs the model of the run (a solution from integrate, not a loaded file)")
+        return self.origin[0]
 
     def summary(self) -> dict[str, Any]:
         """The scalar results as plain JSON-ready values (non-finite numbers as None);
@@ -176,6 +213,10 @@ class Solution:
             "energy_dissipated": num(self.energy_dissipated),
             "mean_dissipation_rate": num(self.mean_dissipation_rate),
             "momentum_drift": num(self.max_momentum_drift) if self.momentum.shape[1] else None,
+            # with work recorded: W and W_f at the end, and max |H - H0 + W - W_f| (the energy budget's error)
+            "work_final": num(float(self.work[-1])) if self.work is not None else None,
+            "load_work_final": num(float(self.load_work[-1])) if self.load_work is not None else None,
+            "energy_balance_max": num(float(np.max(np.abs(self.energy_balance)))) if self.work is not None else None,
             "wall_time": self.wall_time,
         }
 
@@ -183,3 +224,4 @@ class Solution:
         return (f"Solution(status={self.status!r}, method={self.method!r}, steps={self.steps}, "
                 f"saved={self.t.size}, t_final={self.t[-1]:.6g}, energy {self.initial_energy:.6g} -> "
                 f"{self.final_energy:.6g})")
+

@@ -10,6 +10,7 @@ import numpy as np
 
 from .. import _core
 from .._validation import integer, real
+from ..loads import Load
 from ..results.ensemble_solution import EnsembleSolution
 from ..systems.models import Model
 from .integrate import MAX_SAVED_BYTES, MAX_STEPS, CancelToken, _catalogue, span
@@ -76,7 +77,8 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
                        h: float, t_end: float | None = None, n_steps: int | None = None, save_every: int = 1,
                        tableau: str | None = None, composition: str | None = None, threads: int | None = None,
                        progress: Callable[[int, int], object] | None = None,
-                       cancel: CancelToken | None = None, vector_sine: bool = False) -> EnsembleSolution:
+                       cancel: CancelToken | None = None, vector_sine: bool = False,
+                       load: Load | None = None) -> EnsembleSolution:
     """Integrate many members of one system in one compiled call, spread over threads.
 
     Parameters
@@ -98,6 +100,10 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
     cancel : a :class:`raydamp.CancelToken`; cancelling it stops every member within a few
         hundred steps (status "cancelled").
 
+    load : a :class:`raydamp.Load` every member feels (see :func:`raydamp.integrate`); its parameters
+        (``Load.parameters``: ``amplitude``, ``omega``, ``phase``, an expression's) vary per member
+        as ``parameters={"load.amplitude": [...], "load.omega": [...]}``. Members share the load's
+        data (a record is held once); each distinct set of expression parameters is compiled once.
     vector_sine : damped pendulums only (3s, 2s, sv), off by default. The members run as the
         SIMD lanes of one step loop either way; with this set their sines run as SIMD too
         (raydamp's own sine, within 1 ulp), about twice the throughput. That sine differs from
@@ -128,6 +134,11 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
         if np.ndim(value) == 2:
             members = np.shape(value)[0]
             break
+    if load is not None and not isinstance(load, Load):
+        raise ValueError(f"load must be a raydamp.Load or None, got {type(load).__name__}")
+    parameters, load_parameters = _split_load_parameters(parameters, load)
+    if members is None and load_parameters:
+        members = len(next(iter(load_parameters.values())))
     if members is None and parameters:
         sizes = system.member_parameters()
         lengths = {len(np.atleast_1d(np.asarray(v, dtype=object))) for k, v in parameters.items()
@@ -138,6 +149,7 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
     p0 = _states("p0", p0, members, n)
     system.check_configurations("q0", q0)
     params = _parameter_arrays(system, parameters, members)
+    loads, load_index, load_arrays = _member_loads(system, load, load_parameters, members)
     save_every = integer("save_every", save_every, maximum=MAX_STEPS)
     n_steps, h_last = span(h, t_end, n_steps)
     if threads is None:
@@ -162,18 +174,67 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
     cores = [m._core_model for m in models]
     out = type(cores[0]).integrate_ensemble(cores, index, core_names, core_values, method, tableau or "",
                                             composition or "", q0, p0, h, n_steps, h_last, save_every, threads,
-                                            progress, cancel, vector_sine=vector_sine)
+                                            progress, cancel, vector_sine=vector_sine, loads=loads,
+                                            load_index=load_index)
     wall = time.perf_counter() - start
     composition_name = None if resolved_composition == "none" else resolved_composition
     options = {"method": method, "tableau": tableau, "composition": composition_name, "h": h, "t_end": t_end,
                "n_steps": None if t_end is not None else n_steps, "save_every": save_every, "work": False}
     if vector_sine:
         options["vector_sine"] = True
+    if loads:
+        options["load"] = load
     return EnsembleSolution(
         t=out["t"], q=out["q"], p=out["p"], energy=out["energy"], momentum=out["momentum"], rows=out["rows"],
         t_final=out["t_final"], q_final=out["q_final"], p_final=out["p_final"], energy_final=out["energy_final"],
         momentum_final=out["momentum_final"], status=tuple(out["status"]), steps=out["steps"],
         failed_step=out["failed_step"], message=tuple(out["message"]), max_momentum_drift=out["max_momentum_drift"],
-        q0=q0, p0=p0, parameters=params, method=method,
+        q0=q0, p0=p0, parameters={**params, **load_arrays}, method=method,
         tableau=resolved_tableau if method in with_tableau else None, composition=composition_name, h=h,
         wall_time=wall, threads=out["threads"], origin=(system, options))
+
+
+def _split_load_parameters(parameters, load: Load | None) -> tuple[Any, dict[str, Any]]:
+    """(the model's parameters, {name: values} of the "load.<name>" ones)."""
+    if not isinstance(parameters, Mapping):
+        return parameters, {}
+    mine = {k[5:]: v for k, v in parameters.items() if isinstance(k, str) and k.startswith("load.")}
+    if mine and load is None:
+        raise ValueError(f"parameters.load.{next(iter(mine))}: the ensemble has no load")
+    rest = {k: v for k, v in parameters.items() if not (isinstance(k, str) and k.startswith("load."))}
+    return (rest or None), mine
+
+
+def _member_loads(system: Model, load: Load | None, varied: dict[str, Any], members: int):
+    """(core loads, (members,) index into them, {"load.<name>": (members,) values}): one core load per
+    distinct set of the varied parameters other than the amplitude, scaled per member (data shared)."""
+    if load is None or not load.terms:
+        return [], np.zeros(0, dtype=np.int64), {}
+    known = load.parameters
+    arrays: dict[str, np.ndarray] = {}
+    for name, values in varied.items():
+        if name not in known:
+            raise ValueError(f"parameters.load.{name}: this load has no parameter {name!r} (it has: "
+                             f"{', '.join(sorted(known))})")
+        try:
+            array = np.broadcast_to(np.asarray(values, dtype=float), (members,))
+        except (TypeError, ValueError):
+            raise ValueError(f"parameters.load.{name} must be {members} real numbers") from None
+        if not np.isfinite(array).all():
+            raise ValueError(f"parameters.load.{name} must be finite")
+        arrays[name] = np.ascontiguousarray(array)
+    others = [k for k in arrays if k != "amplitude"]
+    base: dict[tuple, int] = {}
+    bound = []
+    index = np.empty(members, dtype=np.int64)
+    for i in range(members):
+        key = tuple(float(arrays[k][i]) for k in others)
+        if key not in base:
+            base[key] = len(bound)
+            unit = {"amplitude": 1.0} if "amplitude" in arrays else {}
+            bound.append(load.with_parameters(**unit, **dict(zip(others, key))).bind(system))
+        index[i] = base[key]
+    if "amplitude" in arrays:
+        scaled = [bound[index[i]].scaled(float(arrays["amplitude"][i]), 1.0) for i in range(members)]
+        bound, index = scaled, np.arange(members, dtype=np.int64)
+    return bound, index, {f"load.{k}": v for k, v in arrays.items()}

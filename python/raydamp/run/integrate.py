@@ -11,6 +11,7 @@ from .. import _core
 import numpy as np
 
 from .._validation import _short, integer, real, vector
+from ..loads import Load
 from ..methods.user_tableau import resolve_user_tableau
 from ..results.solution import Solution
 from ..systems.models import Model
@@ -55,7 +56,7 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
               n_steps: int | None = None, save_every: int = 1, tableau: str | Mapping | None = None,
               composition: str | None = None, work: bool = False, save_dofs=None,
               progress: Callable[[int, int], object] | None = None,
-              cancel: CancelToken | None = None) -> Solution:
+              cancel: CancelToken | None = None, load: Load | None = None) -> Solution:
     """Integrate ``model`` from (q0, p0) with fixed steps of size ``h``.
 
     Parameters
@@ -107,7 +108,14 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
     cancel : a :class:`CancelToken`; cancelling it stops the run.
     work : also record the damping work W(t) = eps int qdot^T D(q) qdot dt at the saved
         points (``Solution.work``), integrated in the step loop with a quadrature of
-        the method's order, so that H(t) - H(0) + W(t) measures the energy error.
+        the method's order, so that H(t) - H(0) + W(t) measures the energy error; with a
+        load also its work W_f(t) = int f(t) . qdot dt (``Solution.load_work``), and
+        ``Solution.energy_balance`` is H - H(0) + W - W_f.
+    load : a time-dependent force f(t) (:class:`raydamp.Load`, or a :class:`raydamp.GroundMotion`,
+        whose solution is the motion relative to the ground), added to p' = -grad V - eps D M^{-1} p.
+        The splittings apply it in their kicks at the time their drifts have reached (t + h/2 for
+        3s, 2s and rks), so they keep order 2 and compositions their order; "midpoint" samples
+        it at t + h/2, "gauss4" at its two Gauss points, "rk"/"heun"/"rk4" at their stage times.
 
     The step loop runs in C++ with the GIL released.
     """
@@ -133,17 +141,21 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
         raise ValueError(f"work must be True or False, got {work!r}")
     if cancel is not None and not isinstance(cancel, _core.CancelToken):
         raise ValueError(f"cancel must be a raydamp.CancelToken or None, got {cancel!r}")
+    if load is not None and not isinstance(load, Load):
+        raise ValueError(f"load must be a raydamp.Load or raydamp.GroundMotion or None, got {_short(load)}")
+    core_load = None if load is None or not load.terms else load.bind(model)  # raises naming load.direction etc.
     dofs = _save_dofs(save_dofs, model.dim)
     rows = n_steps // save_every + 2
     saved = model.dim if dofs is None else len(dofs)
-    row_bytes = 8 * (2 + work + 2 * saved + len(model.momentum_names))
+    row_bytes = 8 * (2 + 2 * work + 2 * saved + len(model.momentum_names))
     if rows * row_bytes > MAX_SAVED_BYTES:
         raise ValueError(f"save_every: {rows} saved points would take {rows * row_bytes / 2**30:.1f} GiB "
                          f"(limit {MAX_SAVED_BYTES / 2**30:.0f} GiB); raise save_every")
 
     start = time.perf_counter()
     out = model._core_model.integrate(method, tableau_name, composition or "", q0, p0, h, n_steps, h_last,
-                                      save_every, work, progress, cancel, save_dofs=[] if dofs is None else dofs)
+                                      save_every, work, progress, cancel, save_dofs=[] if dofs is None else dofs,
+                                      load=core_load)
     wall = time.perf_counter() - start
     message = out["message"]
     explain = getattr(model, "_explain_failure", None)
@@ -154,12 +166,15 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
                     message=message, method=method, tableau=resolved_tableau if method in with_tableau else None,
                     composition=None if resolved_composition == "none" else resolved_composition, h=h,
                     max_momentum_drift=out["max_momentum_drift"], work=out["work"], wall_time=wall,
+                    load_work=out["load_work"],
+                    load=load if core_load is not None else None,
                     dofs=None if dofs is None else np.asarray(dofs, dtype=np.int64),
                     origin=(model, q0.copy(), p0.copy(), {
                         "method": method, "tableau": tableau,
                         "composition": None if resolved_composition == "none" else resolved_composition, "h": h,
                         "t_end": t_end, "n_steps": None if t_end is not None else n_steps,
-                        "save_every": save_every, "work": work, "save_dofs": dofs}))
+                        "save_every": save_every, "work": work, "save_dofs": dofs,
+                        "load": load if core_load is not None else None}))
 
 
 def _save_dofs(save_dofs, dim: int) -> list[int] | None:

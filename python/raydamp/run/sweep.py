@@ -22,6 +22,7 @@ from .._core import __version__
 from .._validation import integer, real, vector
 from ..results.ensemble_solution import STATUSES
 from ..jobs import STEP_SIZE_ALIAS, JobSpec, job_arguments, model_from_spec
+from ..loads import Load
 from ..systems.kinds import describe_model
 from ..systems.models import MODELS, Model
 from ..systems.system import System
@@ -31,7 +32,7 @@ from .integrate import _catalogue, steps_for
 __all__ = ["sweep", "check_sweep", "SweepPlan", "parse_grid_item", "SPEC_KEYS", "RUN_ARGUMENTS"]
 
 # The Python form of a sweep's spec: integrate's arguments and the model.
-SPEC_KEYS = ("model", "system", "parameters", "q0", "p0", "method", "tableau", "composition", "h", "t_end",
+SPEC_KEYS = ("model", "system", "parameters", "q0", "p0", "method", "tableau", "composition", "h", "t_end", "load",
              "n_steps", "save_every")
 # The integrate arguments a grid may vary; members differing in them run in different ensembles.
 RUN_ARGUMENTS = ("method", "tableau", "composition", "h")
@@ -70,8 +71,12 @@ def _base(spec: Mapping[str, Any]) -> tuple[Model, np.ndarray, np.ndarray, dict[
             if key not in spec:
                 raise ValueError(f"spec.{key}: missing")
         q0, p0 = spec["q0"], spec["p0"]
-        options = {k: spec[k] for k in ("method", "tableau", "composition", "h", "t_end", "n_steps", "save_every")
-                   if spec.get(k) is not None}
+        options = {k: spec[k] for k in ("method", "tableau", "composition", "h", "t_end", "n_steps", "save_every",
+                                        "load") if spec.get(k) is not None}
+        if "load" in options and not isinstance(options["load"], Load):
+            raise ValueError(f"spec.load must be a raydamp.Load, got {type(options['load']).__name__}")
+    if options.get("load") is not None:
+        options["load"] = options["load"].to_dict()  # plain data: the workers rebuild it
     options.setdefault("method", "3s")
     options.setdefault("save_every", 1)
     if isinstance(model, System) and model._python is not None:
@@ -158,7 +163,9 @@ def _plan(model: Model, options: dict[str, Any], grid: Mapping[str, Any]):
     {grid name: per-member values} in that order and groups [(run options, start, stop)]."""
     if not isinstance(grid, Mapping) or not grid:
         raise ValueError("grid must be a non-empty dict of name: values")
-    known = model.member_parameters()
+    known = dict(model.member_parameters())
+    if options.get("load") is not None:  # the load's parameters sweep as "load.<name>" (load.omega: a response curve)
+        known.update({f"load.{k}": 1 for k in Load.from_dict(options["load"]).parameters})
     axes = {}
     h_label = "h"
     for name, values in grid.items():
@@ -222,7 +229,8 @@ def _run_chunk(task: dict[str, Any]) -> dict[str, Any]:
     ens = integrate_ensemble(model, task["q0"], task["p0"], parameters=task["parameters"] or None,
                              method=run["method"], tableau=run.get("tableau"), composition=run.get("composition"),
                              h=run["h"], t_end=run.get("t_end"), n_steps=run.get("n_steps"),
-                             save_every=run["save_every"], threads=task["threads"])
+                             save_every=run["save_every"], threads=task["threads"],
+                             load=Load.from_dict(run["load"]) if run.get("load") is not None else None)
     return {"start": task["start"], "t": ens.t, "q": ens.q, "p": ens.p, "energy": ens.energy,
             "momentum": ens.momentum, "rows": ens.rows, "t_final": ens.t_final, "q_final": ens.q_final,
             "p_final": ens.p_final, "energy_final": ens.energy_final, "momentum_final": ens.momentum_final,

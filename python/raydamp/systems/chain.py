@@ -161,6 +161,10 @@ class Chain(Model):
     def member_models(self, parameters: Mapping[str, np.ndarray], members: int) -> MemberModels:
         return MemberModels.shared(self, members)
 
+    def mass_product(self, r) -> np.ndarray:
+        """M r: every site has mass ``mass``."""
+        return self.mass * np.asarray(r, dtype=float)
+
     def __repr__(self) -> str:
         return (f"Chain(n={self.n}, bond={self.bond!r}, parameters={self.bond_parameters!r}, mass={self.mass!r}, "
                 f"boundary={self.boundary!r}, dampers={self.dampers!r}, eps={self.eps!r}"

@@ -107,6 +107,16 @@ class Model:
         """The momentum maps of the model's symmetries (empty if it has none)."""
         return np.asarray(self._core_model.momenta(vector("q", q, self.dim), vector("p", p, self.dim)), dtype=float)
 
+    def mass_product(self, r) -> np.ndarray:
+        """M r (a ground motion's load is -M r a_g(t)). Here from the core's M^{-1}, column by
+        column, for a model of a few coordinates; the large kinds give their own."""
+        if self.dim > 2048:
+            raise ValueError(f"mass_product: {type(self).__name__} of {self.dim} coordinates gives no mass matrix")
+        r = vector("r", r, self.dim)
+        inverse = np.column_stack([np.asarray(self._core_model.velocity(e)).reshape(self.dim)
+                                   for e in np.eye(self.dim)])
+        return np.linalg.solve(inverse, r)
+
     def vector_field(self, q, p) -> tuple[np.ndarray, np.ndarray]:
         """(q', p') = (M^{-1} p, -grad V(q) - eps D(q) M^{-1} p): for reference solvers."""
         core = self._core_model

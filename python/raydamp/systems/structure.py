@@ -215,6 +215,10 @@ class LinearStructure(Model):
         """1 when damped (D = alpha M + beta K), 0 when alpha = beta = 0."""
         return self._core_model.eps
 
+    def mass_product(self, r) -> np.ndarray:
+        """M r."""
+        return self._mass @ np.asarray(r, dtype=float)
+
     @property
     def mass_kind(self) -> str:
         """"lumped" (diagonal M) or "consistent" (sparse SPD M, factorised)."""

@@ -26,7 +26,8 @@ struct has_kick<M, std::void_t<decltype(std::declval<const M&>().kick(
                        std::declval<const typename M::Vec&>(), std::declval<typename M::Vec&>(), 0.0))>>
     : std::true_type {};
 
-// exp(t X_T): q <- q + t M^{-1} p.
+// exp(t X_T): q <- q + t M^{-1} p, and the clock: t is the coordinate the drift advances
+// with unit speed, so that a load seen by the kicks is f at the time the drifts left.
 template <class Model, int Dim, class DF>
 inline void drift(const Model& model, State<Dim>& z, double t, Workspace<Dim, DF>& ws) {
   if constexpr (has_drift<Model>::value) {
@@ -35,9 +36,10 @@ inline void drift(const Model& model, State<Dim>& z, double t, Workspace<Dim, DF
     model.mass.velocity(z.p, ws.v);
     z.q += t * ws.v;
   }
+  ws.time += t;
 }
 
-// exp(t X_V): p <- p - t grad V(q).
+// exp(t X_V): p <- p - t (grad V(q) - f(time)), time frozen.
 template <class Model, int Dim, class DF>
 inline void kick(const Model& model, State<Dim>& z, double t, Workspace<Dim, DF>& ws) {
   if constexpr (has_kick<Model>::value) {
@@ -46,6 +48,14 @@ inline void kick(const Model& model, State<Dim>& z, double t, Workspace<Dim, DF>
     model.gradient(z.q, ws.g);
     z.p -= t * ws.g;
   }
+  if (ws.load) ws.load->add(ws.time, t, z.p.data());
+}
+
+// ws.g <- grad V(q) - f(time): the force of a kick, with the load.
+template <class Model, int Dim, class DF>
+inline void loaded_gradient(const Model& model, const Vector<Dim>& q, double time, Workspace<Dim, DF>& ws) {
+  model.gradient(q, ws.g);
+  if (ws.load) ws.load->add(time, -1.0, ws.g.data());
 }
 
 // exp(t eps Y): p <- exp(-t eps D(q) M^{-1}) p.
@@ -55,11 +65,11 @@ inline void damp(const Model& model, State<Dim>& z, double t, Workspace<Dim, DF>
   model.damping.decay(z.q, ws.damp_factors, z.p);
 }
 
-// exp(t (X_V + eps Y)): the exact solution of the affine ODE p' = -grad V(q) - A p,
-// p(t) = e^{-tA} p - t phi1(-tA) grad V(q).
+// exp(t (X_V + eps Y)): the exact solution of the affine ODE p' = -grad V(q) + f - A p
+// (q and the load's time frozen), p(t) = e^{-tA} p - t phi1(-tA) (grad V(q) - f).
 template <class Model, int Dim, class DF>
 inline void kick_damp(const Model& model, State<Dim>& z, double t, Workspace<Dim, DF>& ws) {
-  model.gradient(z.q, ws.g);
+  loaded_gradient(model, z.q, ws.time, ws);
   if (ws.kick_damp_factors.t != t) ws.kick_damp_factors = model.damping.factors(t);
   model.damping.decay_affine(z.q, ws.kick_damp_factors, ws.g, z.p);
 }

@@ -7,6 +7,7 @@
 // - full_rk: the whole system, the classical baseline; explicit tableaux only.
 #pragma once
 
+#include "raydamp/flows/exact.hpp"
 #include "raydamp/methods/butcher_tableau.hpp"
 #include "raydamp/state.hpp"
 #include "raydamp/workspace.hpp"
@@ -23,7 +24,7 @@ namespace raydamp::flows {
 template <class Model, class Tab, int Dim, class DF>
 inline void kick_damp_rk(const Model& model, const Tab& tab, State<Dim>& z, double h, Workspace<Dim, DF>& ws) {
   const int s = tab.stages();
-  model.gradient(z.q, ws.g);  // constant over the stages: q is frozen
+  loaded_gradient(model, z.q, ws.time, ws);  // constant over the stages: q and the load's time are frozen
   for (int i = 0; i < s; ++i) {
     // At c_i = 0 (an explicit tableau's first stage) P_i is p itself; writing
     // p - 0 g would make the stage wait for grad V (a square root and a division).
@@ -84,19 +85,28 @@ inline void drift_damp_rk(const Model& model, const Tab& tab, State<Dim>& z, dou
     model.damping.rate(q, p, dp);
     dp = -dp;
   });
+  ws.time += h;  // a drift of the clock as of q
 }
 
+// The load at the stage times t + c_i h.
 template <class Model, class Tab, int Dim, class DF>
 inline void full_rk(const Model& model, const Tab& tab, State<Dim>& z, double h, Workspace<Dim, DF>& ws) {
+  const double t0 = ws.time;
   detail::explicit_rk(tab, z, h, ws, [&](int i, const Vector<Dim>& q, const Vector<Dim>& p, Vector<Dim>& dq, Vector<Dim>& dp) {
     model.mass.velocity(p, dq);
     model.gradient(q, ws.g);
     model.damping.rate(q, p, dp);
-    // The damping work W' = v . A p is integrated as one more component of the
-    // system, by the same tableau, so its quadrature has the method's order.
+    // The damping work W' = v . A p (and the load's W_f' = f . v) are integrated as more
+    // components of the system, by the same tableau, so their quadrature has the method's order.
     if (ws.track_work) ws.work += h * tab.b(i) * dq.dot(dp);
     dp = -dp - ws.g;
+    if (ws.load) {
+      const double t = t0 + tab.c(i) * h;
+      ws.load->add(t, 1.0, dp.data());
+      if (ws.track_work) ws.load_work += h * tab.b(i) * ws.load->dot(t, dq.data());
+    }
   });
+  ws.time = t0 + h;
 }
 
 }  // namespace raydamp::flows

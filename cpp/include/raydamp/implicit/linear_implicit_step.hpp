@@ -21,8 +21,14 @@
 // two with a shortened last step, more for a composition) before the first step:
 // real SPD for the midpoint, complex symmetric with an SPD real part for gauss4
 // (Re(c) > 0, Re(c^2) > 0), both by SparseLDLT over one shared analysis.
-// Loads are constant here (LinearStructure's f); a time-dependent f(t) needs the
-// stage times, f(t + h/2) for the midpoint.
+// A time-dependent load f(t) (load.hpp) enters (*) as f~, the stage forces weighted by
+// the left eigenvector of the Butcher matrix for lambda (the transformation that gives
+// the partial fractions above, applied to stage-dependent b_i; the weights sum to one):
+//   midpoint: f~ = f(t + h/2);
+//   gauss4:   f~ = (f_1 - i k f_2) / (1 - i k), k = 2 - sqrt(3), f_i = f(t + c_i h),
+//             c_{1,2} = 1/2 -+ sqrt(3)/6.
+// Everything after the solve reads only u, so q1, p1 and V_i keep their formulas, and
+// the load's work h sum_i b_i f_i^T V_i balances the energy to rounding as the damping's does.
 #pragma once
 
 #include <array>
@@ -40,6 +46,7 @@
 #include "raydamp/catalogue.hpp"
 #include "raydamp/implicit/sparse_ldlt.hpp"
 #include "raydamp/integrate.hpp"
+#include "raydamp/load.hpp"
 #include "raydamp/methods/linear_implicit.hpp"
 #include "raydamp/models/linear_structure.hpp"
 #include "raydamp/state.hpp"
@@ -128,6 +135,7 @@ class LinearImplicitCore {
     rhs_.resize(n);
     u_.resize(n);
     work_.resize(n);
+    load_.resize(n);
   }
 
   const LinearSystem& system() const { return sys_; }
@@ -143,19 +151,37 @@ class LinearImplicitCore {
     return factors_.back().get();
   }
 
-  // z <- one step of length f.s; adds the step's damping work to *work if given.
-  void step(const ImplicitFactor<Scalar>& f, Eigen::VectorXd& q, Eigen::VectorXd& p, double* work) {
+  // z <- one step of length f.s from time t; adds the step's damping work to *work and
+  // the load's to *load_work if given.
+  void step(const ImplicitFactor<Scalar>& f, Eigen::VectorXd& q, Eigen::VectorXd& p, double* work,
+            const Load* load, double t, double* load_work) {
     const double s = f.s;
     const Scalar c = Scalar(s) * lambda();
     kq_.noalias() = *sys_.stiffness * q;
     real_ = sys_.force - kq_;
     rhs_ = p.cast<Scalar>() + c * real_.cast<Scalar>();  // (*)'s right side
+    if (load) {
+      if constexpr (!is_complex) {
+        load_.setZero();
+        load->add(t + 0.5 * s, 1.0, load_.data());
+        rhs_ += c * load_;
+      } else {
+        const double k = 2.0 - std::sqrt(3.0);
+        const Scalar w1 = Scalar(1.0) / Scalar(1.0, -k), w2 = Scalar(0.0, -k) / Scalar(1.0, -k);
+        for (int i = 0; i < 2; ++i) {
+          load_.setZero();
+          load->add(t + stage_c(i) * s, 1.0, load_.data());
+          rhs_ += (c * (i == 0 ? w1 : w2)) * load_.template cast<Scalar>();
+        }
+      }
+    }
     f.solver.solve(rhs_, u_, work_);
     if constexpr (!is_complex) {
       q += s * u_;
       product_.noalias() = sys_.mass * u_;
       p = 2.0 * product_ - p;
       if (work) *work += s * damping_power(u_);
+      if (load && load_work) *load_work += s * load->dot(t + 0.5 * s, u_.data());
     } else {
       const double k = 4.0 * std::sqrt(3.0);
       real_ = (lambda() * u_).imag();
@@ -171,6 +197,14 @@ class LinearImplicitCore {
           w += 0.5 * damping_power(real_);
         }
         *work += s * w;
+      }
+      if (load && load_work) {
+        double w = 0.0;
+        for (int i = 0; i < 2; ++i) {
+          real_ = u_.real() - stage_g(i) * u_.imag();
+          w += 0.5 * load->dot(t + stage_c(i) * s, real_.data());
+        }
+        *load_work += s * w;
       }
     }
   }
@@ -190,9 +224,13 @@ class LinearImplicitCore {
     return out;
   }
 
+  // The Gauss nodes c_i and the g_i of V_i = Re u - g_i Im u, stage by stage.
+  static double stage_c(int i) { return 0.5 + (i == 0 ? -1.0 : 1.0) * std::sqrt(3.0) / 6.0; }
+  static double stage_g(int i) { return std::sqrt(3.0) + (i == 0 ? -2.0 : 2.0); }
+
   LinearSystem sys_;
   std::vector<std::unique_ptr<ImplicitFactor<Scalar>>> factors_;
-  Eigen::VectorXd kq_, real_, product_;
+  Eigen::VectorXd kq_, real_, product_, load_;
   ScalarVector rhs_, u_, work_;
 };
 
@@ -223,7 +261,11 @@ class LinearImplicitStepper {
   void step(const Model&, const Tab&, State<Dim>& z, long i, Workspace<Dim, DF>& ws) const {
     const auto& sub = i == last_step_ ? last_ : regular_;
     double* work = ws.track_work ? &ws.work : nullptr;
-    for (int j = 0; j < stages_; ++j) core_->step(*sub[j], z.q, z.p, work);
+    double* load_work = ws.track_work ? &ws.load_work : nullptr;
+    for (int j = 0; j < stages_; ++j) {
+      core_->step(*sub[j], z.q, z.p, work, ws.load, ws.time, load_work);
+      ws.time += sub[j]->s;
+    }
   }
 
  private:

@@ -65,6 +65,8 @@ def to_xarray(sol: Solution):
     }
     if sol.work is not None:
         data["work"] = (("time",), sol.work, {"long_name": "damping work W(t)"})
+    if sol.load_work is not None:
+        data["load_work"] = (("time",), sol.load_work, {"long_name": "load work W_f(t)"})
     coords = {"t": (("time",), sol.t), "dof": list(sol.coordinates), "momentum_map": list(sol.momentum_names)}
     return xr.Dataset(data, coords=coords, attrs=_attributes(sol))
 
@@ -76,6 +78,7 @@ def from_xarray(ds) -> Solution:
                     p=np.asarray(ds["p"].values, float), energy=np.asarray(ds["energy"].values, float),
                     momentum=np.asarray(ds["momentum"].values, float).reshape(ds.sizes["time"], -1),
                     work=np.asarray(ds["work"].values, float) if "work" in ds else None, origin=provenance,
+                    load_work=np.asarray(ds["load_work"].values, float) if "load_work" in ds else None,
                     **_scalars_from(dict(ds.attrs)))
 
 
@@ -83,9 +86,10 @@ def _csv_table(sol: Solution) -> tuple[list[str], np.ndarray]:
     names = ["t", *(f"q_{c}" for c in sol.coordinates), *(f"p_{c}" for c in sol.coordinates), "energy",
              *sol.momentum_names]
     columns = [sol.t[:, None], sol.q, sol.p, sol.energy[:, None], sol.momentum]
-    if sol.work is not None:
-        names.append("work")
-        columns.append(sol.work[:, None])
+    for name in ("work", "load_work"):
+        if getattr(sol, name) is not None:
+            names.append(name)
+            columns.append(getattr(sol, name)[:, None])
     return names, np.hstack(columns)
 
 
@@ -99,6 +103,8 @@ def save(sol: Solution, path) -> None:
         arrays = {"t": sol.t, "q": sol.q, "p": sol.p, "energy": sol.energy, "momentum": sol.momentum}
         if sol.work is not None:
             arrays["work"] = sol.work
+        if sol.load_work is not None:
+            arrays["load_work"] = sol.load_work
         attrs = _attributes(sol)
         np.savez(path, **arrays, attrs=np.array(json.dumps(attrs, allow_nan=True)))
     elif suffix == ".csv":
@@ -117,4 +123,5 @@ def from_npz(path) -> Solution:
         return Solution(t=data["t"], q=data["q"], p=data["p"], energy=data["energy"],
                         momentum=data["momentum"].reshape(rows, -1),
                         work=data["work"] if "work" in data else None, origin=provenance,
+                        load_work=data["load_work"] if "load_work" in data else None,
                         **_scalars_from(attrs))
