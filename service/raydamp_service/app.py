@@ -12,6 +12,7 @@ import raydamp
 from fastapi import FastAPI
 from fastapi.exceptions import RequestValidationError
 
+from .checks import CheckPool
 from .config import Settings
 from .errors import validation_error_handler
 from .guard import RequestGuard, needs_token
@@ -39,6 +40,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         runner, sweep_runner = Runner(store, settings), Runner(sweeps, settings)
         app.state.store, app.state.runner = store, runner
         app.state.sweeps, app.state.sweep_runner = sweeps, sweep_runner
+        app.state.checks = checks = CheckPool(settings)
+        checks.start()
         runner.start()
         sweep_runner.start()
         # Everything built so far (modules, FastAPI's routes and schemas, raydamp's catalogue) lives as
@@ -48,6 +51,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         try:
             yield
         finally:
+            checks.stop()
             sweep_runner.stop()
             runner.stop()
             database.close()

@@ -50,8 +50,10 @@ class Settings(BaseSettings):
     max_saved_points: int = Field(10**6, ge=2, description="n_steps // save_every + 2 at most")
     max_dim: int = Field(1000, ge=1, le=10_000,  # schemas.MAX_VECTOR
                          description="longest initial_state.q / p or vector parameter accepted")
-    # SQLite refuses blobs above 1e9 bytes; stay well under it per array.
-    max_trajectory_bytes: int = Field(512 * 2**20, ge=1, le=900_000_000)
+    # All of a job's stored arrays (t, q, p, energy, momentum, work); SQLite refuses blobs above 1e9 bytes.
+    max_trajectory_bytes: int = Field(512 * 2**20, ge=1, le=900_000_000,
+                                      description="a job whose stored trajectory would be larger gets 422 on "
+                                                  "save_every (raise it, or save fewer coordinates: save_dofs)")
     max_list_limit: int = Field(1000, ge=1)
 
     # Linear structures: matrices inline as COO triplets up to max_structure_nnz entries each (the schema
@@ -66,9 +68,21 @@ class Settings(BaseSettings):
     max_stored_file_bytes: int = Field(2**30, ge=0, description="uploaded files kept at most, in all; past it an "
                                                                 "upload gets 507 (delete files first); 0: no bound")
 
-    # Trajectory fetches stream; those above large_fetch_points points are held to a few at once.
-    large_fetch_points: int = Field(100_000, ge=1)
+    # Trajectory fetches, files and plots read the stored arrays in slices; those that select more than
+    # large_fetch_bytes of them (float64, all arrays) are held to a few at once.
+    large_fetch_bytes: int = Field(16 * 2**20, ge=1, description="stored bytes selected above which a fetch, file "
+                                                                 "or plot is large")
     max_large_fetches: int = Field(2, ge=1, description="large trajectory fetches served at once; more get 429")
+    max_plot_bytes: int = Field(16 * 2**20, ge=2**16, description="stored bytes a plot reads at most (its points "
+                                                                  "decimated evenly to fit)")
+
+    # Checks of a submitted system (compiling its functions, parsing the files it names, one trial step) run in
+    # worker processes, each within a time and a memory budget; past either the submission gets 422 on `system`.
+    check_workers: int = Field(2, ge=1, le=16, description="processes that check submitted systems")
+    check_seconds: float = Field(10.0, gt=0, description="time budget of one check")
+    check_memory_bytes: int = Field(2**30, ge=2**26, description="memory budget of one check: address space a "
+                                                                 "check process may add to what it holds at start")
+    max_pending_checks: int = Field(8, ge=1, description="checks running or waiting for a process; more get 429")
 
     # Retention: finished jobs (oldest first) are removed past any of these; 0 means no bound.
     retain_jobs: int = Field(10_000, ge=0, description="finished jobs kept at most")

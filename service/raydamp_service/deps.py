@@ -12,11 +12,12 @@ from typing import Annotated
 
 from fastapi import Depends, Request
 
+from .checks import CheckPool
 from .config import Settings
 from .jobs import JobStore
 from .runner import Runner
 
-__all__ = ["SettingsDep", "StoreDep", "RunnerDep", "get_settings", "get_store", "get_runner"]
+__all__ = ["SettingsDep", "StoreDep", "RunnerDep", "ChecksDep", "get_settings", "get_store", "get_runner", "get_checks"]
 
 
 async def get_settings(request: Request) -> Settings:
@@ -31,6 +32,11 @@ async def get_runner(request: Request) -> Runner:
     return request.app.state.runner
 
 
+async def get_checks(request: Request) -> CheckPool:
+    return request.app.state.checks
+
+
 SettingsDep = Annotated[Settings, Depends(get_settings)]
 StoreDep = Annotated[JobStore, Depends(get_store)]
 RunnerDep = Annotated[Runner, Depends(get_runner)]
+ChecksDep = Annotated[CheckPool, Depends(get_checks)]

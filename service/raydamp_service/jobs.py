@@ -62,9 +62,15 @@ class StoredTrajectory:
     momenta: int
     has_work: bool = False
 
+    @property
+    def row_bytes(self) -> int:
+        """Stored bytes per saved point: t, energy, work, a row of q and of p, a row of momentum."""
+        return (2 + self.has_work + 2 * self.dim + self.momenta) * 8
 
-def _blob(array: np.ndarray | None) -> bytes | None:
-    return np.ascontiguousarray(array, dtype=_FLOAT).tobytes() if array is not None else None
+
+def _blob(array: np.ndarray | None) -> memoryview | None:
+    # The array's own buffer, not a copy of it (a 480 MB q stored as bytes was a second 480 MB).
+    return memoryview(np.ascontiguousarray(array, dtype=_FLOAT).reshape(-1)).cast("B") if array is not None else None
 
 
 def _array(blob: bytes | None, *shape: int) -> np.ndarray | None:

@@ -18,7 +18,7 @@ from raydamp.jobs import (CooForm, DiagonalForm, JobCall, JobError, JobSpec, Lin
 from .config import Settings
 
 __all__ = ["JobError", "RaydampCall", "build_call", "check_spec", "check_sweep_spec", "planned_steps",
-           "sweep_arguments"]
+           "sweep_arguments", "trajectory_bytes"]
 
 
 @dataclass(frozen=True)
@@ -50,6 +50,12 @@ def planned_steps(spec: JobSpec) -> int:
         return raydamp.steps_for(spec.t_end, spec.h)[0]
     except ValueError as error:
         raise error_at(spec, error) from None
+
+
+def trajectory_bytes(points: int, saved: int, momenta: int, work: bool = True) -> int:
+    """Bytes the store keeps for a run's saved points (float64): t, energy, work, q and p (saved coordinates),
+    momentum (jobs.StoredTrajectory.row_bytes)."""
+    return points * (2 + work + 2 * saved + momenta) * 8
 
 
 def _check_sizes(spec: JobSpec, settings: Settings) -> None:
@@ -101,12 +107,14 @@ def check_spec(spec: JobSpec, settings: Settings, files=None) -> RaydampCall:
         raise JobError(("save_every",), f"save_every: {saved_points} saved points (n_steps // save_every + 2) "
                        f"exceed max_saved_points = {settings.max_saved_points}; raise save_every")
     call = build_call(spec, files)
-    # The largest stored array is q or p: saved_points x dim float64.
+    # What the store will hold: t, energy, work, and q, p (saved coordinates) and momentum per saved point.
     saved = call.model.dim if spec.save_dofs is None else len(spec.save_dofs)
-    largest = saved_points * max(saved, len(call.model.momentum_names)) * 8
-    if largest > settings.max_trajectory_bytes:
-        raise JobError(("save_every",), f"save_every: the trajectory would take {largest / 2**20:.0f} MiB per "
-                       f"array (limit {settings.max_trajectory_bytes / 2**20:.0f} MiB); raise save_every")
+    stored = trajectory_bytes(saved_points, saved, len(call.model.momentum_names), work=True)
+    if stored > settings.max_trajectory_bytes:
+        raise JobError(("save_every",), f"save_every: the stored trajectory would take {stored / 2**20:.0f} MiB "
+                       f"({saved_points} saved points x {saved} saved coordinates); the limit is max_trajectory_bytes "
+                       f"= {settings.max_trajectory_bytes / 2**20:.0f} MiB: raise save_every, or save fewer "
+                       "coordinates with save_dofs")
     # One step validates method, tableau, their fit with the model, h and the initial state the way
     # the real run will, in microseconds.
     try:

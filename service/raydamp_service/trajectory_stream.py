@@ -16,9 +16,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .jobs import StoredTrajectory
+from .jobs import StoredTrajectory, TrajectoryArrays
 
-__all__ = ["FetchLease", "Selection", "trajectory_chunks"]
+__all__ = ["FetchLease", "Selection", "read_arrays", "read_column", "trajectory_chunks"]
 
 CHUNK_BYTES = 1 << 16  # floats read per piece. Small: json.dumps holds the GIL (and so the event loop) for a whole piece
 _ROW_READ_LIMIT = 1 << 16  # a decimation step wider than this reads its rows one by one
@@ -52,6 +52,40 @@ class Selection:
 
     def __len__(self) -> int:
         return len(range(self.start, self.stop, self.every))
+
+    def pieces(self, rows: int) -> Iterator[Selection]:
+        """The selection as consecutive parts of at most `rows` points each."""
+        n = len(self)
+        for done in range(0, n, max(1, rows)):
+            first = self.start + done * self.every
+            yield Selection(first, first + min(rows, n - done) * self.every, self.every)
+
+
+_COLUMNS = ("t", "q", "p", "energy", "momentum", "work")
+
+
+def _width(stored: StoredTrajectory, column: str) -> int:
+    return {"q": stored.dim, "p": stored.dim, "momentum": stored.momenta}.get(column, 1)
+
+
+def read_column(connection: sqlite3.Connection, stored: StoredTrajectory, column: str,
+                selection: Selection) -> np.ndarray:
+    """One array's selected rows, (points,) for t, energy and work, else (points, width); a part of the
+    blob is read, never the whole of it."""
+    width, n = _width(stored, column), len(selection)
+    if width == 0 or n == 0:
+        rows = np.empty((n, width))
+    else:
+        with connection.blobopen("trajectories", column, stored.rowid, readonly=True) as blob:
+            rows = _read_rows(blob, selection.start, n, selection.every, width)
+    return rows if column in ("q", "p", "momentum") else rows[:, 0]
+
+
+def read_arrays(connection: sqlite3.Connection, stored: StoredTrajectory, selection: Selection) -> TrajectoryArrays:
+    """The selected points of every array (a caller bounds their size: Selection.pieces, a plot's decimation)."""
+    arrays = {column: read_column(connection, stored, column, selection)
+              for column in _COLUMNS if column != "work" or stored.has_work}
+    return TrajectoryArrays(**arrays)
 
 
 def _json_rows(array: np.ndarray) -> str:

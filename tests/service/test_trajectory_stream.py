@@ -20,8 +20,8 @@ ELASTIC = {"model": "elastic_pendulum", "parameters": {"eps": 0.1}, "method": "2
 MILLION = 999_998  # steps: 999,999 saved points, the most max_saved_points = 10^6 allows at save_every 1
 
 
-# The module's server: large fetches above 50,000 points, one at a time.
-SERVER_ENV = {"RAYDAMP_LARGE_FETCH_POINTS": "50000", "RAYDAMP_MAX_LARGE_FETCHES": "1"}
+# The module's server: large fetches above 50,000 pendulum points (48 bytes each stored), one at a time.
+SERVER_ENV = {"RAYDAMP_LARGE_FETCH_BYTES": str(50_000 * 48), "RAYDAMP_MAX_LARGE_FETCHES": "1"}
 
 
 @pytest.fixture(scope="module")

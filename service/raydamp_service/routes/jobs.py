@@ -6,23 +6,29 @@ hold up the event loop; no handler waits for a run.
 
 from __future__ import annotations
 
+import shutil
+import tempfile
+import threading
+from pathlib import Path
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, HTTPException, Query, Request, Response
 from fastapi.exceptions import RequestValidationError
-from fastapi.responses import StreamingResponse
+from fastapi.responses import FileResponse, StreamingResponse
 from starlette.background import BackgroundTask
 
-from ..deps import RunnerDep, SettingsDep, StoreDep
+from ..checks import ChecksBusy
+from ..deps import ChecksDep, RunnerDep, SettingsDep, StoreDep
 from ..files import file_resolver
-from ..problems import JobError, check_spec
+from ..problems import JobError
 from ..runner import Runner
 from ..schemas import JobCreated, JobList, JobListItem, JobSpec, JobStatus, JobView, Trajectory
-from ..downloads import file_bytes, plot_png, stored_solution
-from ..jobs import JobRecord, JobStore, TrajectoryArrays
+from ..config import Settings
+from ..downloads import plot_png, stored_solution, write_file
+from ..jobs import JobRecord, JobStore
 from ..store import FINAL_STATUSES
-from .tasks import Tasks, check_limit, invalid
-from ..trajectory_stream import FetchLease, Selection, trajectory_chunks
+from .tasks import Tasks, check_limit, checks_busy, invalid
+from ..trajectory_stream import FetchLease, Selection, read_arrays, trajectory_chunks
 
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"])
 
@@ -58,14 +64,18 @@ def _model_label(spec: dict[str, Any]) -> str:
 
 @router.post("", status_code=202, response_model=JobCreated,
              responses={422: {"description": "the spec is invalid; detail[].loc names the field"},
-                        429: {"description": "max_queued jobs are waiting; retry after Retry-After seconds"}})
+                        429: {"description": "max_queued jobs are waiting, or max_pending_checks checks of "
+                                             "systems are under way; retry after Retry-After seconds"}})
 def submit_job(spec: JobSpec, request: Request, response: Response, store: StoreDep, runner: RunnerDep,
-               settings: SettingsDep) -> JobCreated:
-    """Queue an integration; poll the Location for its status."""
+               settings: SettingsDep, checks: ChecksDep) -> JobCreated:
+    """Queue an integration; poll the Location for its status. A system is checked (compiled, one trial
+    step) in a check process within check_seconds and check_memory_bytes: past either, 422 on system."""
     try:
-        check_spec(spec, settings, files=file_resolver(store))
+        checks.job(spec, files=file_resolver(store))
     except JobError as error:
         raise invalid(error, spec.model_dump()) from None
+    except ChecksBusy:
+        raise checks_busy(settings) from None
     record = JOBS.queue(request, response, store, runner, spec, settings.max_queued, "max_queued", settings)
     return JobCreated(id=record.id, status=record.status)
 
@@ -115,37 +125,27 @@ def get_trajectory(job_id: str, request: Request, store: StoreDep, settings: Set
         raise HTTPException(409, detail=detail)
     connection, stored = opened
     selection = Selection(*slice(start, stop, every).indices(stored.points))
-    lease = FetchLease(None)
-    if len(selection) > settings.large_fetch_points:
-        semaphore = request.app.state.large_fetches
-        if not semaphore.acquire(blocking=False):
-            connection.close()
-            raise HTTPException(429, detail=f"{settings.max_large_fetches} large trajectory fetches are being "
-                                f"served (max_large_fetches); retry, or ask for fewer points with every/stop",
-                                headers={"Retry-After": "1"})
-        lease = FetchLease(semaphore)
+    try:
+        lease = FetchLease(_large_slot(request, settings, len(selection) * stored.row_bytes))
+    except HTTPException:
+        connection.close()
+        raise
     # Not validated against the response model: the pieces are written to have exactly its schema.
     return StreamingResponse(trajectory_chunks(connection, stored, selection, lease), media_type="application/json",
                              background=BackgroundTask(lease.release))
 
 
-def _stored_solution(record: JobRecord, store: JobStore, points: slice):
-    arrays = store.trajectory(record.id)
-    if arrays is None:
+def _opened(record: JobRecord, store: JobStore):
+    opened = store.open_trajectory(record.id)
+    if opened is None:
         raise HTTPException(409, detail=f"job {record.id} is {record.status} and has no trajectory"
                             + (f": {record.error}" if record.error else ""))
-    picked = TrajectoryArrays(*(getattr(arrays, name)[points] for name in ("t", "q", "p", "energy", "momentum")),
-                              work=arrays.work[points] if arrays.work is not None else None)
-    if picked.t.size == 0:
-        # The same shape as every other 422 (detail[] with loc), as /openapi.json declares.
-        raise RequestValidationError([{"type": "value_error", "loc": ("query", "start"), "input": points.start,
-                                       "msg": f"start, stop, every select none of the {arrays.t.size} saved points"}])
-    return stored_solution(record, picked)
+    return opened
 
 
-def _with_large_slot(request: Request, settings, points: int):
-    """The large-fetch slot a file or plot of this many points needs (None for a small one)."""
-    if points <= settings.large_fetch_points:
+def _large_slot(request: Request, settings: Settings, selected_bytes: int) -> threading.Semaphore | None:
+    """The large-fetch slot a fetch, file or plot reading this many stored bytes needs (None for a small one)."""
+    if selected_bytes <= settings.large_fetch_bytes:
         return None
     semaphore = request.app.state.large_fetches
     if not semaphore.acquire(blocking=False):
@@ -155,17 +155,41 @@ def _with_large_slot(request: Request, settings, points: int):
     return semaphore
 
 
-def _trajectory_file(record: JobRecord, store: JobStore, request: Request, settings, points: slice,
+class _Download(FetchLease):
+    """A file being sent: its slot and its directory, both given back once, when the response ends (or is
+    collected, the client gone)."""
+
+    def __init__(self, semaphore: threading.Semaphore | None, directory: Path):
+        self._directory = directory
+        super().__init__(semaphore)
+
+    def release(self) -> None:
+        super().release()
+        shutil.rmtree(self._directory, ignore_errors=True)
+
+
+def _trajectory_file(record: JobRecord, store: JobStore, request: Request, settings: Settings, points: slice,
                      fmt: str) -> Response:
-    saved = int((record.summary or {}).get("saved_points", settings.large_fetch_points + 1))
-    slot = _with_large_slot(request, settings, len(range(*points.indices(saved))))
+    """The selected points written as a file, a slice at a time (downloads.write_file), and sent from disk."""
+    connection, stored = _opened(record, store)
     try:
-        body, media_type, name = file_bytes(_stored_solution(record, store, points), fmt)
+        selection = Selection(*points.indices(stored.points))
+        if len(selection) == 0:
+            # The same shape as every other 422 (detail[] with loc), as /openapi.json declares.
+            raise RequestValidationError([{"type": "value_error", "loc": ("query", "start"), "input": points.start,
+                                           "msg": f"start, stop, every select none of the {stored.points} saved "
+                                                  "points"}])
+        download = _Download(_large_slot(request, settings, len(selection) * stored.row_bytes),
+                             Path(tempfile.mkdtemp(prefix="raydamp-download-")))
+        try:
+            path, media_type = write_file(record, connection, stored, selection, fmt, download._directory)
+        except BaseException:
+            download.release()
+            raise
     finally:
-        if slot is not None:
-            slot.release()
-    return Response(body, media_type=media_type,
-                    headers={"Content-Disposition": f'attachment; filename="{record.id}-{name}"'})
+        connection.close()
+    return FileResponse(path, media_type=media_type, background=BackgroundTask(download.release),
+                        headers={"Content-Disposition": f'attachment; filename="{record.id}-{path.name}"'})
 
 
 _PLOT_POINTS = 20_000  # points drawn at most: a plot of more is decimated evenly
@@ -175,8 +199,11 @@ _PLOT_POINTS = 20_000  # points drawn at most: a plot of more is decimated evenl
             responses={**_NOT_FOUND, 200: {"content": {"image/png": {}}, "description": "a PNG image"},
                        409: {"description": "the job has no trajectory (yet)"},
                        422: {"description": "a plot this system cannot have (a projection of one coordinate), "
-                                            "or an unknown coordinate"}})
-def get_plot(job_id: str, kind: Literal["energy", "phase", "projection"], store: StoreDep,
+                                            "or an unknown coordinate"},
+                       429: {"description": "max_large_fetches large fetches are being served; retry after "
+                                            "Retry-After seconds"}})
+def get_plot(job_id: str, kind: Literal["energy", "phase", "projection"], request: Request, store: StoreDep,
+             settings: SettingsDep,
              width: Annotated[int, Query(ge=200, le=3000, description="pixels")] = 800,
              height: Annotated[int, Query(ge=150, le=3000, description="pixels")] = 500,
              coordinate: Annotated[str | None, Query(max_length=100, description="phase: the coordinate "
@@ -184,11 +211,20 @@ def get_plot(job_id: str, kind: Literal["energy", "phase", "projection"], store:
              x: Annotated[str | None, Query(max_length=100, description="projection: horizontal coordinate")] = None,
              y: Annotated[str | None, Query(max_length=100, description="projection: vertical coordinate")] = None,
              ) -> Response:
-    """energy: H(t) (and H - H0 + W when recorded); phase: (q_i, p_i); projection: (q_x, q_y)."""
+    """energy: H(t) (and H - H0 + W when recorded); phase: (q_i, p_i); projection: (q_x, q_y). At most 20,000
+    points and max_plot_bytes of stored floats are drawn, decimated evenly."""
     record = JOBS.existing(store, job_id)
-    sol = _stored_solution(record, store, slice(None))
-    if sol.t.size > _PLOT_POINTS:
-        sol = _stored_solution(record, store, slice(None, None, -(-sol.t.size // _PLOT_POINTS)))
+    connection, stored = _opened(record, store)
+    try:
+        points = max(2, min(_PLOT_POINTS, settings.max_plot_bytes // stored.row_bytes))
+        selection = Selection(0, stored.points, max(1, -(-stored.points // points)))
+        lease = FetchLease(_large_slot(request, settings, len(selection) * stored.row_bytes))
+        try:
+            sol = stored_solution(record, read_arrays(connection, stored, selection))
+        finally:
+            lease.release()
+    finally:
+        connection.close()
 
     def pick(value: str | None):  # a coordinate's name, or its index
         return int(value) if value is not None and value.isdigit() else value

@@ -8,12 +8,13 @@ from typing import Annotated, Literal
 from fastapi import APIRouter, HTTPException, Query, Request, Response
 from fastapi.responses import StreamingResponse
 
-from ..deps import SettingsDep
-from ..problems import JobError, check_sweep_spec
+from ..checks import ChecksBusy
+from ..deps import ChecksDep, SettingsDep
+from ..problems import JobError
 from ..runner import Runner
 from ..schemas import JobStatus, SweepCreated, SweepList, SweepListItem, SweepSpec, SweepView
 from ..sweeps import SweepRecord, SweepStore
-from .tasks import Tasks, check_limit, invalid
+from .tasks import Tasks, check_limit, checks_busy, invalid
 
 router = APIRouter(prefix="/v1/sweeps", tags=["sweeps"])
 
@@ -50,8 +51,10 @@ SWEEPS = Tasks("sweep", "/v1/sweeps", _view)
 @router.post("", status_code=202, response_model=SweepCreated,
              responses={422: {"description": "the spec or grid is invalid; detail[].loc names the field"},
                         503: {"description": "this installation has no Dask (the sweep extra)"},
-                        429: {"description": "max_queued_sweeps sweeps are waiting; retry after Retry-After seconds"}})
-def submit_sweep(spec: SweepSpec, request: Request, response: Response, settings: SettingsDep) -> SweepCreated:
+                        429: {"description": "max_queued_sweeps sweeps are waiting, or max_pending_checks checks of "
+                                             "systems are under way; retry after Retry-After seconds"}})
+def submit_sweep(spec: SweepSpec, request: Request, response: Response, settings: SettingsDep,
+                 checks: ChecksDep) -> SweepCreated:
     """Queue a sweep: every combination of the grid's axes, each member the job with that point's values.
     Poll the Location for progress; the result is a NetCDF file (raydamp.load reads it)."""
     try:
@@ -60,11 +63,13 @@ def submit_sweep(spec: SweepSpec, request: Request, response: Response, settings
         raise HTTPException(503, detail="sweeps need dask[distributed] and xarray: install raydamp with the "
                                         "sweep extra (pip install 'raydamp[sweep]')") from None
     try:
-        plan = check_sweep_spec(spec, settings)
+        members = checks.sweep(spec)
     except JobError as error:
         raise invalid(error) from None
+    except ChecksBusy:
+        raise checks_busy(settings) from None
     record = SWEEPS.queue(request, response, _sweeps(request), _runner(request), spec, settings.max_queued_sweeps,
-                          "max_queued_sweeps", settings, members=plan.members)
+                          "max_queued_sweeps", settings, members=members)
     return SweepCreated(id=record.id, status=record.status, members=record.members)
 
 

@@ -16,7 +16,7 @@ from ..problems import JobError
 from ..runner import Runner
 from ..store import FINAL_STATUSES, TaskStore
 
-__all__ = ["Tasks", "invalid", "check_limit"]
+__all__ = ["Tasks", "invalid", "check_limit", "checks_busy"]
 
 
 def invalid(error: JobError, body: Any = None) -> RequestValidationError:
@@ -34,6 +34,13 @@ def _value_at(data: Any, loc: tuple[str | int, ...]) -> Any:
         else:
             return None
     return data
+
+
+def checks_busy(settings: Settings) -> HTTPException:
+    """The 429 of a submission whose system's check finds max_pending_checks checks under way."""
+    return HTTPException(429, detail=f"{settings.max_pending_checks} checks of submitted systems are running or "
+                         "waiting (max_pending_checks); retry later",
+                         headers={"Retry-After": str(settings.retry_after_seconds)})
 
 
 def check_limit(limit: int, settings: Settings) -> None:

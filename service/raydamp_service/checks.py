@@ -1,0 +1,274 @@
+"""The checks of a submission that can be heavy, run in worker processes under a budget (issue 27, F1).
+
+A system's check compiles its functions (SymEngine's LLVM JIT holds the interpreter lock all the while:
+a 790-byte potential took 34 s, and the whole service stood still), parses the matrix files it names and
+takes one trial step. Here those checks run in a small pool of processes forked from a forkserver that has
+raydamp imported, never in the server's interpreter. Each check has a time budget (check_seconds) and a
+memory budget (check_memory_bytes: address space its process may add to what it holds at start, by
+RLIMIT_AS); past either the process is killed and replaced, and the submission gets 422 on `system` naming
+the budget. At most max_pending_checks run or wait for a process at once; more get 429.
+
+What the checks compile stays in their processes (raydamp builds a System from its spec only): a job that
+passes is compiled again when it runs, once, cached there by the system's canonical JSON (raydamp.jobs).
+A built-in model's check costs microseconds and runs in the server itself.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import logging
+import multiprocessing
+import queue
+import resource
+import signal
+import sqlite3
+import threading
+from pathlib import Path
+from typing import Any
+
+from .config import Settings
+from .files import ParsedFiles
+from .problems import JobError, check_spec, check_sweep_spec
+from .schemas import JobSpec, SweepSpec
+
+__all__ = ["CheckPool", "ChecksBusy", "isolated"]
+
+log = logging.getLogger("raydamp_service.checks")
+
+_BYTES_PER_PARSED_ENTRY = 12  # a CSC matrix: a float64 value and an int32 row index per stored entry
+
+
+class ChecksBusy(Exception):
+    """max_pending_checks checks are running or waiting, or no process came free within the time budget."""
+
+
+def isolated(spec: JobSpec) -> bool:
+    """Whether a job's check runs in a check process: every user-defined system (an expression compiles,
+    a chain of expression bonds too, a structure parses its files and factorises M)."""
+    return spec.system is not None
+
+
+# ---- in a check process ----
+
+
+class _StoredFiles:
+    """The uploads as ParsedFiles reads them, through a read-only connection of the check process's own."""
+
+    def __init__(self, db: str):
+        self._db = db
+        self._connection: sqlite3.Connection | None = None
+
+    def file_content(self, file_id: str) -> bytes | None:
+        if self._connection is None:
+            self._connection = sqlite3.connect(Path(self._db).as_uri() + "?mode=ro", uri=True)
+        row = self._connection.execute("SELECT content FROM files WHERE id = ?", (file_id,)).fetchone()
+        return bytes(row[0]) if row else None
+
+
+def _status_bytes(field: str) -> int:
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith(field + ":"):
+            return int(line.split()[1]) * 1024
+    raise LookupError(field)
+
+
+def _limit_address_space(extra: int) -> None:
+    """The memory budget: what the process holds now (raydamp imported) plus extra."""
+    _, hard = resource.getrlimit(resource.RLIMIT_AS)
+    limit = _status_bytes("VmSize") + extra
+    if hard != resource.RLIM_INFINITY:
+        limit = min(limit, hard)
+    resource.setrlimit(resource.RLIMIT_AS, (limit, hard))
+
+
+def _die_with_parent() -> None:
+    """SIGKILL when the forkserver (which ends with the service) goes: a check busy compiling never reads
+    the pipe that would tell it."""
+    try:
+        ctypes.CDLL(None).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+
+
+# One small system of each kind, checked when a check process starts, before its memory budget applies: what
+# their checks import or initialise on first use (SciPy's sparse solvers and their BLAS, LLVM) is then in place,
+# and is not counted against the budget of the first real check (a library mapped under RLIMIT_AS can fail).
+_WARM_UP = (
+    {"system": {"coordinates": 2, "potential": "q0^2 + q0*q1^3", "damping": {"dampers": [{"on": "q0 - q1"}]},
+                "eps": 0.1}},
+    {"system": {"kind": "chain", "n": 4, "bond": "expression", "parameters": {"potential": "r^2/2 + r^4/4"}}},
+    {"system": {"kind": "linear_structure", "M": {"diagonal": [1.0, 1.0]},
+                "K": {"coo": {"shape": [2, 2], "rows": [0, 0, 1, 1], "cols": [0, 1, 0, 1],
+                               "values": [2.0, -1.0, -1.0, 2.0]}},
+                "alpha": 0.1, "beta": 0.01}},
+)
+
+
+def _warm_up(settings: Settings) -> None:
+    for system in _WARM_UP:
+        spec = {**system, "method": "3s", "h": 0.01, "n_steps": 2, "initial_state": {"rest": True}}
+        try:
+            check_spec(JobSpec.model_validate(spec), settings)
+        except Exception:  # noqa: BLE001 - a warm-up only; a real check reports its own errors
+            log.warning("check warm-up: %s", spec, exc_info=True)
+
+
+def _check(kind: str, spec: Any, settings: Settings, files: ParsedFiles) -> Any:
+    if kind == "job":
+        check_spec(spec, settings, files=files)
+        return None
+    return check_sweep_spec(spec, settings).members  # the plan holds the compiled model: only its size travels
+
+
+def _serve(connection, settings: Settings) -> None:
+    """A check process: answers (kind, spec, settings) with ("ok", value), ("invalid", (loc, message)),
+    ("error", text), or ("memory", None) and then ends (a fresh process replaces it)."""
+    _die_with_parent()
+    _warm_up(settings)
+    db, memory_bytes = str(Path(settings.db).resolve()), settings.check_memory_bytes
+    _limit_address_space(memory_bytes)
+    files = ParsedFiles(_StoredFiles(db), memory_bytes // 4 // _BYTES_PER_PARSED_ENTRY)
+    while True:
+        try:
+            kind, spec, settings = connection.recv()
+        except (EOFError, OSError):
+            return
+        try:
+            answer = ("ok", _check(kind, spec, settings, files))
+        except JobError as error:
+            answer = ("invalid", (error.loc, error.message))
+        except MemoryError:
+            connection.send(("memory", None))
+            return
+        except Exception as error:  # noqa: BLE001 - reported to the server, which logs it as its own
+            answer = ("error", f"{type(error).__name__}: {error}")
+        connection.send(answer)
+
+
+# ---- in the server ----
+
+
+class _Process:
+    def __init__(self, context, settings: Settings):
+        self.connection, child = context.Pipe()
+        self.process = context.Process(target=_serve, name="raydamp-check", daemon=True,
+                                       args=(child, settings))
+        self.process.start()
+        child.close()
+
+    def end(self) -> None:
+        self.process.kill()
+        self.process.join(timeout=10)
+        self.connection.close()
+
+
+class CheckPool:
+    """check_workers processes that check submitted systems, each check within the budgets."""
+
+    def __init__(self, settings: Settings):
+        self._settings = settings
+        self._context = multiprocessing.get_context("forkserver")
+        self._idle: queue.Queue[_Process] = queue.Queue()
+        self._pending = threading.BoundedSemaphore(settings.max_pending_checks)
+        self._lock = threading.Lock()
+        self._processes: set[_Process] = set()
+        self._closed = False
+
+    def start(self) -> None:
+        """Start the processes in the background: the service answers while the forkserver imports raydamp."""
+        # Each check process is a fork of a process that has imported this module, raydamp with it.
+        self._context.set_forkserver_preload(["raydamp_service.checks"])
+        threading.Thread(target=self._add, args=(self._settings.check_workers,), name="raydamp-checks-start",
+                         daemon=True).start()
+
+    def stop(self) -> None:
+        with self._lock:
+            self._closed = True
+            processes, self._processes = self._processes, set()
+        for process in processes:
+            process.end()
+
+    def job(self, spec: JobSpec, files=None) -> None:
+        """Every check of a job (problems.check_spec); raises JobError naming the field, or ChecksBusy."""
+        if not isolated(spec):
+            check_spec(spec, self._settings, files=files)
+            return
+        self._run("job", spec, ("system",))
+
+    def sweep(self, spec: SweepSpec) -> int:
+        """Every check of a sweep (problems.check_sweep_spec); its number of members."""
+        if not isolated(spec.job):
+            return check_sweep_spec(spec, self._settings).members
+        return self._run("sweep", spec, ("job", "system"))
+
+    # ----
+
+    def _add(self, count: int = 1) -> None:
+        for _ in range(count):
+            try:
+                process = _Process(self._context, self._settings)
+            except Exception:  # noqa: BLE001 - the checks wait for a process, then answer 429
+                log.exception("could not start a check process")
+                return
+            with self._lock:
+                if self._closed:
+                    process.end()
+                    return
+                self._processes.add(process)
+            self._idle.put(process)
+
+    def _replace(self, process: _Process) -> None:
+        with self._lock:
+            self._processes.discard(process)
+        process.end()
+        threading.Thread(target=self._add, name="raydamp-checks-replace", daemon=True).start()
+
+    def _run(self, kind: str, spec: Any, where: tuple[str, ...]) -> Any:
+        if not self._pending.acquire(blocking=False):
+            raise ChecksBusy
+        try:
+            status, value = self._answer(kind, spec)
+        finally:
+            self._pending.release()
+        if status == "ok":
+            return value
+        if status == "invalid":
+            raise JobError(*value)
+        if status == "error":
+            raise RuntimeError(f"the check of a {kind} failed: {value}")
+        raise JobError(where, self._budget_message(where, status, value))
+
+    def _answer(self, kind: str, spec: Any) -> tuple[str, Any]:
+        budget = self._settings.check_seconds
+        for _ in range(3):  # a process found dead when asked is replaced, and the next one asked
+            try:
+                process = self._idle.get(timeout=budget)
+            except queue.Empty:
+                raise ChecksBusy from None
+            try:
+                process.connection.send((kind, spec, self._settings))
+            except OSError:
+                self._replace(process)
+                continue
+            try:
+                answer = process.connection.recv() if process.connection.poll(budget) else ("time", None)
+            except (EOFError, OSError):  # it died mid-check: the budget's RLIMIT_AS made an allocation abort
+                process.process.join(timeout=1)
+                answer = ("died", process.process.exitcode)
+            if answer[0] in ("ok", "invalid", "error"):
+                self._idle.put(process)
+            else:
+                self._replace(process)
+            return answer
+        raise ChecksBusy
+
+    def _budget_message(self, where: tuple[str, ...], status: str, value: Any) -> str:
+        path, settings = ".".join(where), self._settings
+        if status == "time":
+            return (f"{path}: checking this system (compiling its functions, one trial step) took longer than the "
+                    f"time budget of {settings.check_seconds:g} s (check_seconds); write it with fewer couplings, "
+                    "or use a Chain or LinearStructure for a large system")
+        ended = f" (its check process ended with exit code {value})" if status == "died" else ""
+        return (f"{path}: checking this system needed more than the memory budget of "
+                f"{settings.check_memory_bytes / 2**20:.0f} MiB (check_memory_bytes){ended}; write it with fewer "
+                "couplings, or use a Chain or LinearStructure for a large system")
