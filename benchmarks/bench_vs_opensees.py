@@ -38,6 +38,11 @@ for comparison, midpoint (the same method as Newmark's average acceleration).
     .venv/bin/pip install openseespy                           # optional
     .venv/bin/python benchmarks/bench_vs_opensees.py           # everything: about an hour on 2 cores
     .venv/bin/python benchmarks/bench_vs_opensees.py --quick   # 200 and 2,000 DOF only
+    .venv/bin/python benchmarks/bench_vs_opensees.py --models ground   # the ground-motion case alone (seconds)
+
+The ground-motion case (benchmarks/ground_motion_frame.py, issue 26): a 10-storey shear frame with 5%
+Rayleigh damping under a 20 s record as uniform base excitation, OpenSees' UniformExcitation beside
+raydamp.GroundMotion, error against the exact piecewise-linear response and time at several h.
 
 OpenSeesPy's Linux wheel links the LAPACK and BLAS it carries in
 <site-packages>/openseespylinux/lib, which the dynamic loader finds only on LD_LIBRARY_PATH: the
@@ -483,7 +488,8 @@ def reference_states(problem: Problem, out=print):
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="200 and 2,000 DOF only")
-    parser.add_argument("--models", default="chain,beam", help="chain, beam or chain,beam")
+    parser.add_argument("--models", default="chain,beam,ground",
+                        help="any of chain, beam, ground (the 10-storey frame under a record), comma-separated")
     args = parser.parse_args()
     ops = opensees()
     print(f"raydamp {raydamp.__version__}; OpenSeesPy "
@@ -491,7 +497,12 @@ def main() -> None:
           f"error: max over {SAVES} saved times of ||q - q_exact|| / ||q0||, tolerance {TOLERANCE:g} "
           "(unless the row says otherwise)")
     rows = []
-    for name in args.models.split(","):
+    names = args.models.split(",")
+    if "ground" in names:
+        import ground_motion_frame
+
+        ground_motion_frame.run(ops)
+    for name in (n for n in names if n != "ground"):
         for size in SIZES[name][: 2 if args.quick else 3]:
             s = chain(size) if name == "chain" else beam(size)
             w = lowest_frequencies(s)
