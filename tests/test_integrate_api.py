@@ -171,7 +171,7 @@ def test_methods_catalogue():
     rows = raydamp.methods()
     names = {m.name for m in rows}
     # midpoint and gauss4: LinearStructure only (tests/test_implicit_structure.py)
-    assert names == {"sv", "3s", "2s", "rks", "rksb", "heun", "rk4", "rk", "midpoint", "gauss4"}
+    assert names == {"sv", "3s", "baoab", "2s", "rks", "rksb", "heun", "rk4", "rk", "midpoint", "gauss4"}
     by_key = {(m.name, m.tableau): m for m in rows}
     # rk: any explicit tableau on the whole system (rk4 by default); never an implicit one.
     assert {m.tableau for m in rows if m.name == "rk"} == {"euler", "heun", "rk4"}

@@ -15,7 +15,7 @@ HS = [0.1, 0.05, 0.025, 0.0125]
 T = 10.0
 
 CASES = [
-    ("3s", None, 2), ("2s", None, 2), ("rks", "heun", 2), ("rks", "rk4", 2), ("rks", "midpoint", 2),
+    ("3s", None, 2), ("baoab", None, 2), ("2s", None, 2), ("rks", "heun", 2), ("rks", "rk4", 2), ("rks", "midpoint", 2),
     ("rks", "euler", 1), ("rksb", "heun", 2), ("rksb", "rk4", 2), ("rksb", "euler", 1),
     ("heun", None, 2), ("rk4", None, 4), ("rk", "euler", 1), ("rk", "heun", 2), ("rk", "rk4", 4),
 ]

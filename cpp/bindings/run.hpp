@@ -63,7 +63,8 @@ template <class Model>
 py::dict run(const Model& model, const std::string& method, const std::string& tableau,
              const std::string& composition, const typename Model::Vec& q0, const typename Model::Vec& p0, double h, long n_steps, double h_last,
              long save_every, bool track_work, py::object progress, CancelToken* cancel,
-             const std::vector<int>& save_dofs, const BoundLoad* load) {
+             const std::vector<int>& save_dofs, const BoundLoad* load, double temperature, std::uint64_t seed,
+             std::uint64_t stream) {
   const MethodEntry& entry = method_entry(method);
   require_applicable(entry, model.eps);
   const ButcherTableau& tab = resolve_tableau(entry, tableau);
@@ -71,6 +72,9 @@ py::dict run(const Model& model, const std::string& method, const std::string& t
   RunSpec spec{h, n_steps, h_last, save_every, track_work};
   spec.save_dofs = save_dofs;
   spec.load = load_of(load);
+  spec.temperature = temperature;
+  spec.seed = seed;
+  spec.stream = stream;
   Control control;
   if (cancel) control.cancel = &cancel->flag;
   if (!progress.is_none())
@@ -115,7 +119,8 @@ void def_integrate(py::module_&) {
   cls.def("integrate", &run<Model>, py::arg("method"), py::arg("tableau"), py::arg("composition"), py::arg("q0"),
           py::arg("p0"), py::arg("h"), py::arg("n_steps"), py::arg("h_last"), py::arg("save_every"),
           py::arg("track_work"), py::arg("progress"), py::arg("cancel").none(true),
-          py::arg("save_dofs") = std::vector<int>{}, py::arg("load").none(true) = py::none());
+          py::arg("save_dofs") = std::vector<int>{}, py::arg("load").none(true) = py::none(),
+          py::arg("temperature") = 0.0, py::arg("seed") = 0, py::arg("stream") = 0);
 }
 
 }  // namespace raydamp::bindings

@@ -52,7 +52,8 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
                       const std::string& tableau, const std::string& composition, Rows q0, Rows p0, double h,
                       long n_steps, double h_last, long save_every, int threads, py::object progress,
                       CancelToken* cancel, bool vector_sine, const std::vector<const BoundLoad*>& loads,
-                      py::array_t<long, py::array::c_style | py::array::forcecast> load_index) {
+                      py::array_t<long, py::array::c_style | py::array::forcecast> load_index, double temperature,
+                      std::uint64_t seed, std::uint64_t first_stream) {
   if (q0.ndim() != 2 || q0.shape(0) < 1) throw std::invalid_argument("q0: expected an array of shape (members, n), members >= 1");
   const long members = static_cast<long>(q0.shape(0));
   if (models.empty()) throw std::invalid_argument("models: empty");
@@ -66,7 +67,9 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
   const MethodEntry& entry = method_entry(method);
   const ButcherTableau& tab = resolve_tableau(entry, tableau);
   const Composition& comp = resolve_composition(entry, tab, composition);
-  const RunSpec spec{h, n_steps, h_last, save_every, false};
+  RunSpec spec{h, n_steps, h_last, save_every, false};
+  spec.temperature = temperature;
+  spec.seed = seed;
   // Each member's load: loads[load_index[i]] (none without loads).
   std::vector<const Load*> member_load(members, nullptr);
   if (!loads.empty()) {
@@ -174,10 +177,14 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
     py::gil_scoped_release release;
     with_method(method, [&](auto method_tag) {
       using Method = decltype(method_tag);
+      if (temperature != 0.0) check_temperature<Method>(*member_model.front(), comp, temperature);  // once, here
       auto run_member = [&](long i) {
         try {
           RunSpec member_spec = spec;
           member_spec.load = member_load[i];
+          // member i's noise: stream first_stream + i of the seed, whatever the threads (a sweep's chunk
+          // starting at member k passes first_stream = k, so streams follow the whole grid's numbering)
+          member_spec.stream = first_stream + static_cast<std::uint64_t>(i);
           store(i, integrate_model<Method>(*member_model[i], tab, comp, initial(i), member_spec, member_control));
         } catch (const std::invalid_argument& e) {
           throw std::invalid_argument("member " + std::to_string(i) + ": " + e.what());
@@ -188,7 +195,9 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
         throw std::invalid_argument("vector_sine: only the damped pendulum's 3s, 2s and sv ensembles run their "
                                     "sines as SIMD lanes");
       if (vector_sine && loaded) throw std::invalid_argument("vector_sine: the SIMD lanes take no load");
-      if (lanes && loaded) {  // the lanes share one clock-free step: loaded members run one by one
+      if (vector_sine && temperature != 0.0)
+        throw std::invalid_argument("vector_sine: the SIMD lanes take no temperature");
+      if (lanes && (loaded || temperature != 0.0)) {  // the lanes' step has no clock and no noise: one by one
         for_each_member(members, threads, run_member, control);
       } else if constexpr (lanes) {
         // Runs of members sharing eps go as the lanes of one run (run_lanes.hpp).
@@ -247,7 +256,8 @@ void def_integrate_ensemble(py::module_&) {
                  py::arg("q0"), py::arg("p0"), py::arg("h"), py::arg("n_steps"), py::arg("h_last"),
                  py::arg("save_every"), py::arg("threads"), py::arg("progress"), py::arg("cancel").none(true),
                  py::arg("vector_sine") = false, py::arg("loads") = std::vector<const BoundLoad*>{},
-                 py::arg("load_index") = py::array_t<long>());
+                 py::arg("load_index") = py::array_t<long>(), py::arg("temperature") = 0.0, py::arg("seed") = 0,
+                 py::arg("first_stream") = 0);
 }
 
 }  // namespace raydamp::bindings

@@ -69,3 +69,23 @@ def vector(name: str, value, dim: int) -> np.ndarray:
         first = int(np.argmin(finite))
         raise ValueError(f"{name} must be finite, got {name}[{first}] = {float(array[first])!r}")
     return np.ascontiguousarray(array)
+
+
+MAX_SEED = 2**64 - 1
+
+
+def thermal(temperature, seed, stream: int = 0) -> tuple[float, int, int]:
+    """(kT, seed, stream) checked; kT 0 for no noise. A temperature without a seed gets a fresh one
+    from the operating system (kept in the run's provenance, so the run can be repeated)."""
+    kT = 0.0 if temperature is None else real("temperature", temperature, nonnegative=True)
+    if seed is None:
+        import secrets
+
+        seed = secrets.randbits(64) if kT > 0 else 0
+    elif isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
+        raise ValueError(f"seed must be an integer in [0, 2^64), got {_short(seed)}")
+    elif not 0 <= int(seed) <= MAX_SEED:
+        raise ValueError(f"seed must be an integer in [0, 2^64), got {int(seed)}")
+    if isinstance(stream, bool) or not isinstance(stream, (int, np.integer)) or not 0 <= int(stream) <= MAX_SEED:
+        raise ValueError(f"stream must be an integer in [0, 2^64), got {_short(stream)}")
+    return kT, int(seed), int(stream)

@@ -51,6 +51,9 @@ inline const std::vector<MethodEntry>& method_entries() {
                            "", false, true),
       entry<ThreeTermSplitting>(
           "3s", "three-term splitting (paper Algorithm 3S): damp h/2, drift h/2, kick h, drift h/2, damp h/2"),
+      entry<Baoab>("baoab",
+                   "BAOAB: kick h/2, drift h/2, damp h, drift h/2, kick h/2 (at a temperature: the exact OU damping "
+                   "flow in the middle, the Langevin standard)"),
       entry<TwoTermSplitting>("2s", "two-term splitting (paper Algorithm 2S): drift h/2, exact kick+damp h, drift h/2"),
       entry<RungeKuttaSplitting>(
           "rks", "Runge-Kutta splitting (paper Algorithm RKS): drift h/2, one RK step of kick+damp, drift h/2", "heun"),
@@ -174,7 +177,7 @@ decltype(auto) with_method(const std::string& name, F&& f) {
   if (entry.linear_implicit)
     throw std::invalid_argument("method: '" + name + "' steps a LinearStructure's whole linear system implicitly, "
                                 "and runs only raydamp.integrate of a LinearStructure (no ensemble run yet)");
-  return detail::with_table<F, StormerVerlet, ThreeTermSplitting, TwoTermSplitting, RungeKuttaSplitting,
+  return detail::with_table<F, StormerVerlet, ThreeTermSplitting, Baoab, TwoTermSplitting, RungeKuttaSplitting,
                             RungeKuttaSplittingB, RungeKutta>(method_entry(name).table, f);
 }
 

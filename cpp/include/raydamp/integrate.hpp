@@ -6,6 +6,7 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <new>
 #include <stdexcept>
@@ -68,6 +69,10 @@ struct RunSpec {
   std::vector<int> save_dofs{};
   // A time-dependent load f(t) (load.hpp), or none; with track_work its work W_f is recorded too.
   const Load* load = nullptr;
+  // Thermal noise: temperature kT > 0 turns every damping flow into its exact Ornstein-Uhlenbeck flow,
+  // its normal numbers from the Philox stream (seed, stream) (random/philox.hpp).
+  double temperature = 0.0;
+  std::uint64_t seed = 0, stream = 0;
 };
 
 struct Control {
@@ -119,6 +124,28 @@ template <class Model>
 double momentum_decay_rate(const Model& model) {
   if constexpr (decays_momenta_v<Model>) return model.damping.momentum_decay_rate();
   else return 0.0;
+}
+
+// Refuses, naming the reason, a temperature that Method, composition or the model's damping cannot take.
+template <class Method, class Model>
+void check_temperature(const Model& model, const Composition& composition, double temperature) {
+  if (!(temperature >= 0.0) || !std::isfinite(temperature))
+    throw std::invalid_argument("temperature must be a finite number >= 0");
+  if (temperature == 0.0) return;
+  if constexpr (!takes_temperature<Method>())
+    throw std::invalid_argument(std::string("temperature: method '") + Method::name +
+                                "' has no exact noise flow (a Runge-Kutta or implicit sub-step, or no damping "
+                                "sub-flow); use 3s, 2s or baoab");
+  if (composition.stages() != 1)
+    throw std::invalid_argument("temperature: composition '" + composition.name() +
+                                "' runs sub-steps backward, and a noise flow over a negative time is meaningless; "
+                                "use the order-2 method");
+  if (model.eps == 0.0)
+    throw std::invalid_argument("temperature: this model has no damping (eps = 0); thermal noise is the damping's "
+                                "fluctuation-dissipation partner");
+  if constexpr (!flows::has_thermal_noise<Model>::value)
+    throw std::invalid_argument("temperature: this system's damping has no exact noise flow yet (isotropic, "
+                                "radial and constant-matrix damping have)");
 }
 
 namespace detail {
@@ -304,6 +331,7 @@ template <class Method, class Model, class Tab, int Dim>
 RunResult run_steps(const Model& model, const Tab& tab, const Composition& composition, State<Dim> z,
                     const RunSpec& spec, const Control& control) {
   static_assert(is_model_v<Model>, "Model lacks part of the interface listed in raydamp/concepts.hpp");
+  if (spec.temperature != 0.0) check_temperature<Method, Model>(model, composition, spec.temperature);
   // At eps = 0 every damping flow is the identity, so 3s is sv with identities between its
   // drifts. Run as sv's table, it equals sv bit for bit: its merged steps would otherwise
   // run drift h/2 twice where sv's run drift h once (both exact; they differ by rounding).
@@ -337,6 +365,10 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
                                   std::to_string(n));
     ws.load = spec.load;
     if (spec.track_work) out.load_work.reserve(rows);
+  }
+  if (spec.temperature > 0.0) {
+    ws.sigma = std::sqrt(spec.temperature);
+    ws.noise = NormalStream(spec.seed, spec.stream);
   }
   // Copies made now, so the loop never allocates. The block loop steps y, a local
   // that only inlined code sees, so the compiler can keep it in registers.
@@ -449,6 +481,7 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
     const double checkpoint_work = ws.work, checkpoint_power = power, checkpoint_load_work = ws.load_work,
                  checkpoint_power_f = power_f;
     ws.time = time_at(k);  // the merged loop's clock; advance() sets it per step
+    const NormalStream::State checkpoint_noise = ws.noise.state();  // a replay draws the same noise
     double block_drift = 0.0;
     if constexpr (Dim == Eigen::Dynamic) {  // stepped in place (see run_block)
       block_drift = run_block<mergeable>(model, tab, stepper, ws, z, k, end, merge, track_momenta, advance, step_drift);
@@ -464,6 +497,7 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
       power = checkpoint_power;
       ws.load_work = checkpoint_load_work;
       power_f = checkpoint_power_f;
+      ws.noise.restore(checkpoint_noise);
       long i = k;
       for (; i < end; ++i) {
         before = z;

@@ -7,6 +7,7 @@
 
 #include "raydamp/damping/decay_factors.hpp"
 #include "raydamp/load.hpp"
+#include "raydamp/random/philox.hpp"
 #include "raydamp/state.hpp"
 
 namespace raydamp {
@@ -24,8 +25,14 @@ struct Workspace {
   // by the step loop at each step it starts from scratch. load_work: W_f = int f . M^{-1} p dt.
   const Load* load = nullptr;
   double time = 0.0, load_work = 0.0;
+  // Thermal noise (temperature kT > 0): each exact damping flow becomes its Ornstein-Uhlenbeck flow,
+  // sigma = sqrt(kT), its normal numbers drawn into xi from this run's stream.
+  double sigma = 0.0;
+  NormalStream noise;
+  Vector<Dim> xi;
 
-  Workspace(int n, int stages) : v(fresh(n)), g(fresh(n)), f(fresh(n)), stage_q(fresh(n)), stage_p(fresh(n)) {
+  Workspace(int n, int stages)
+      : v(fresh(n)), g(fresh(n)), f(fresh(n)), stage_q(fresh(n)), stage_p(fresh(n)), xi(fresh(n)) {
     for (int i = 0; i < stages; ++i) {  // each its own fresh vector (a copy of one would write it)
       kq.push_back(fresh(n));
       kp.push_back(fresh(n));

@@ -7,6 +7,7 @@ Needs SciPy (``pip install raydamp[analysis]``) for the reference solver and roo
 from .convergence import ConvergenceResult, convergence
 from .energy import energy_error, modified_energy, reference_solution
 from .momentum import momentum_drift
+from .temperature import configurational_temperature, kinetic_temperature
 from .relative_equilibrium import (
     RelativeEquilibrium,
     cartesian_state,
@@ -19,6 +20,6 @@ from .relative_equilibrium import (
 
 __all__ = [
     "ConvergenceResult", "convergence", "energy_error", "modified_energy", "reference_solution",
-    "momentum_drift", "RelativeEquilibrium", "cartesian_state", "distance_from", "modified_relative_equilibrium",
+    "momentum_drift", "kinetic_temperature", "configurational_temperature", "RelativeEquilibrium", "cartesian_state", "distance_from", "modified_relative_equilibrium",
     "reduced_coordinates", "reduced_hessian", "relative_equilibrium",
 ]

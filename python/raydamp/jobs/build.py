@@ -120,6 +120,8 @@ def build_job(spec: JobSpec, files: FileResolver | None = None) -> JobCall:
             options[key] = getattr(spec, key)
     if spec.save_dofs is not None:
         options["save_dofs"] = list(spec.save_dofs)
+    if spec.temperature:
+        options.update({"temperature": spec.temperature, "seed": spec.seed, "stream": spec.stream})
     load = job_load(spec, files)
     if load is not None:
         options["load"] = load

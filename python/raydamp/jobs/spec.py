@@ -159,6 +159,12 @@ class JobSpec(ModelSpec):
                           "without direction (series, file, harmonic with a scalar amplitude, expression), "
                           "\"direction\": r, \"factor\": 1}; the load is -M r a_g(t) and the result is the motion "
                           "relative to the ground")
+    temperature: FiniteFloat | None = Field(
+        None, ge=0, description="kT of thermal noise: every damping flow of 3s, 2s or baoab becomes its exact "
+                                "Ornstein-Uhlenbeck flow (null or 0: none)")
+    seed: int | None = Field(None, ge=0, le=2**64 - 1, description="the noise's seed (null: a fresh one, kept in the "
+                                                                  "result's provenance)")
+    stream: int = Field(0, ge=0, le=2**64 - 1, description="which stream of the seed: ensemble member i draws stream i")
     _h_key: str = PrivateAttr("h")
 
     @model_validator(mode="wrap")

@@ -159,6 +159,10 @@ class EnsembleSolution:
         spec.pop("ensemble", None)
         _set_parameters(spec, {name: array[i].tolist() for name, array in self.parameters.items()})
         spec["initial_state"] = {"q": self.q0[i].tolist(), "p": self.p0[i].tolist()}
+        if "seed" in spec:  # member i drew stream first_stream + i
+            stream = spec.pop("stream", 0) + i
+            if stream:
+                spec["stream"] = stream
         return spec
 
     def to_xarray(self):

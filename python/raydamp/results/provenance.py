@@ -17,7 +17,7 @@ __all__ = ["PROVENANCE_KEYS", "job_spec"]
 
 def job_spec(model: Model, q0: np.ndarray, p0: np.ndarray, *, method: str, tableau: str | None,
              composition: str | None, h: float, t_end: float | None, n_steps: int | None, save_every: int,
-             work: bool, save_dofs: list[int] | None = None, load=None) -> dict[str, Any]:
+             work: bool, save_dofs: list[int] | None = None, load=None, thermal=None) -> dict[str, Any]:
     """The job spec of a run: what Solution.provenance holds."""
     spec = describe_model(model)
     spec.update({"method": method, "tableau": tableau, "composition": composition, "h": h, "save_every": save_every, "work": work,
@@ -26,6 +26,11 @@ def job_spec(model: Model, q0: np.ndarray, p0: np.ndarray, *, method: str, table
         spec["save_dofs"] = list(save_dofs)
     if load is not None:
         spec["load"] = load.to_dict()
+    if thermal is not None:
+        kT, seed, stream = thermal
+        spec.update({"temperature": kT, "seed": seed})
+        if stream:
+            spec["stream"] = stream
     if t_end is not None:
         spec["t_end"] = t_end
     else:

@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from .. import _core
-from .._validation import integer, real
+from .._validation import integer, real, thermal
 from ..loads import Load
 from ..results.ensemble_solution import EnsembleSolution
 from ..systems.models import Model
@@ -78,7 +78,8 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
                        tableau: str | None = None, composition: str | None = None, threads: int | None = None,
                        progress: Callable[[int, int], object] | None = None,
                        cancel: CancelToken | None = None, vector_sine: bool = False,
-                       load: Load | None = None) -> EnsembleSolution:
+                       load: Load | None = None, temperature: float | None = None, seed: int | None = None,
+                       first_stream: int = 0) -> EnsembleSolution:
     """Integrate many members of one system in one compiled call, spread over threads.
 
     Parameters
@@ -104,6 +105,9 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
         (``Load.parameters``: ``amplitude``, ``omega``, ``phase``, an expression's) vary per member
         as ``parameters={"load.amplitude": [...], "load.omega": [...]}``. Members share the load's
         data (a record is held once); each distinct set of expression parameters is compiled once.
+    temperature, seed : thermal noise as in :func:`raydamp.integrate`; member i draws stream
+        ``first_stream + i`` of the seed, so it equals ``integrate(..., seed=seed, stream=first_stream + i)``
+        bit for bit, whatever ``threads`` is.
     vector_sine : damped pendulums only (3s, 2s, sv), off by default. The members run as the
         SIMD lanes of one step loop either way; with this set their sines run as SIMD too
         (raydamp's own sine, within 1 ulp), about twice the throughput. That sine differs from
@@ -150,6 +154,7 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
     system.check_configurations("q0", q0)
     params = _parameter_arrays(system, parameters, members)
     loads, load_index, load_arrays = _member_loads(system, load, load_parameters, members)
+    kT, seed, first_stream = thermal(temperature, seed, first_stream)
     save_every = integer("save_every", save_every, maximum=MAX_STEPS)
     n_steps, h_last = span(h, t_end, n_steps)
     if threads is None:
@@ -175,7 +180,8 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
     out = type(cores[0]).integrate_ensemble(cores, index, core_names, core_values, method, tableau or "",
                                             composition or "", q0, p0, h, n_steps, h_last, save_every, threads,
                                             progress, cancel, vector_sine=vector_sine, loads=loads,
-                                            load_index=load_index)
+                                            load_index=load_index, temperature=kT, seed=seed,
+                                            first_stream=first_stream)
     wall = time.perf_counter() - start
     composition_name = None if resolved_composition == "none" else resolved_composition
     options = {"method": method, "tableau": tableau, "composition": composition_name, "h": h, "t_end": t_end,
@@ -184,6 +190,8 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
         options["vector_sine"] = True
     if loads:
         options["load"] = load
+    if kT > 0:
+        options["thermal"] = (kT, seed, first_stream)
     return EnsembleSolution(
         t=out["t"], q=out["q"], p=out["p"], energy=out["energy"], momentum=out["momentum"], rows=out["rows"],
         t_final=out["t_final"], q_final=out["q_final"], p_final=out["p_final"], energy_final=out["energy_final"],

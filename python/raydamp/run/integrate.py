@@ -10,7 +10,7 @@ from collections.abc import Callable, Mapping
 from .. import _core
 import numpy as np
 
-from .._validation import _short, integer, real, vector
+from .._validation import _short, integer, real, thermal, vector
 from ..loads import Load
 from ..methods.user_tableau import resolve_user_tableau
 from ..results.solution import Solution
@@ -56,7 +56,8 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
               n_steps: int | None = None, save_every: int = 1, tableau: str | Mapping | None = None,
               composition: str | None = None, work: bool = False, save_dofs=None,
               progress: Callable[[int, int], object] | None = None,
-              cancel: CancelToken | None = None, load: Load | None = None) -> Solution:
+              cancel: CancelToken | None = None, load: Load | None = None, temperature: float | None = None,
+              seed: int | None = None, stream: int = 0) -> Solution:
     """Integrate ``model`` from (q0, p0) with fixed steps of size ``h``.
 
     Parameters
@@ -117,6 +118,17 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
         3s, 2s and rks), so they keep order 2 and compositions their order; "midpoint" samples
         it at t + h/2, "gauss4" at its two Gauss points, "rk"/"heun"/"rk4" at their stage times.
 
+    temperature : kT (energy units) of thermal noise, or None / 0 for none. Each damping sub-flow of
+        3s, 2s and "baoab" becomes its exact Ornstein-Uhlenbeck flow: p -> E p + sqrt(kT (M - E M E^T)) xi,
+        E = exp(-t eps D(q) M^{-1}) at the frozen q (fluctuation-dissipation: the Boltzmann density
+        exp(-H/kT) is what the exact flow keeps). Isotropic (D = c M), radial and constant-matrix
+        damping take it; other kinds, Runge-Kutta and implicit methods and compositions refuse it
+        with the reason.
+    seed : the noise's seed, an integer in [0, 2^64); None draws one from the operating system.
+        Either way ``Solution.provenance`` keeps it, so the run repeats bit for bit.
+    stream : which stream of the seed (Philox-4x32-10, counter-based): ensemble member i uses
+        stream i, so ``integrate(..., seed=s, stream=i)`` is that member alone.
+
     The step loop runs in C++ with the GIL released.
     """
     if not isinstance(model, Model):
@@ -144,6 +156,7 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
     if load is not None and not isinstance(load, Load):
         raise ValueError(f"load must be a raydamp.Load or raydamp.GroundMotion or None, got {_short(load)}")
     core_load = None if load is None or not load.terms else load.bind(model)  # raises naming load.direction etc.
+    kT, seed, stream = thermal(temperature, seed, stream)
     dofs = _save_dofs(save_dofs, model.dim)
     rows = n_steps // save_every + 2
     saved = model.dim if dofs is None else len(dofs)
@@ -155,7 +168,7 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
     start = time.perf_counter()
     out = model._core_model.integrate(method, tableau_name, composition or "", q0, p0, h, n_steps, h_last,
                                       save_every, work, progress, cancel, save_dofs=[] if dofs is None else dofs,
-                                      load=core_load)
+                                      load=core_load, temperature=kT, seed=seed, stream=stream)
     wall = time.perf_counter() - start
     message = out["message"]
     explain = getattr(model, "_explain_failure", None)
@@ -174,7 +187,8 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
                         "composition": None if resolved_composition == "none" else resolved_composition, "h": h,
                         "t_end": t_end, "n_steps": None if t_end is not None else n_steps,
                         "save_every": save_every, "work": work, "save_dofs": dofs,
-                        "load": load if core_load is not None else None}))
+                        "load": load if core_load is not None else None,
+                        "thermal": (kT, seed, stream) if kT > 0 else None}))
 
 
 def _save_dofs(save_dofs, dim: int) -> list[int] | None:

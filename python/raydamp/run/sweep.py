@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from .._core import __version__
-from .._validation import integer, real, vector
+from .._validation import integer, real, thermal, vector
 from ..results.ensemble_solution import STATUSES
 from ..jobs import STEP_SIZE_ALIAS, JobSpec, job_arguments, model_from_spec
 from ..loads import Load
@@ -33,6 +33,7 @@ __all__ = ["sweep", "check_sweep", "SweepPlan", "parse_grid_item", "SPEC_KEYS", 
 
 # The Python form of a sweep's spec: integrate's arguments and the model.
 SPEC_KEYS = ("model", "system", "parameters", "q0", "p0", "method", "tableau", "composition", "h", "t_end", "load",
+             "temperature", "seed",
              "n_steps", "save_every")
 # The integrate arguments a grid may vary; members differing in them run in different ensembles.
 RUN_ARGUMENTS = ("method", "tableau", "composition", "h")
@@ -72,11 +73,15 @@ def _base(spec: Mapping[str, Any]) -> tuple[Model, np.ndarray, np.ndarray, dict[
                 raise ValueError(f"spec.{key}: missing")
         q0, p0 = spec["q0"], spec["p0"]
         options = {k: spec[k] for k in ("method", "tableau", "composition", "h", "t_end", "n_steps", "save_every",
-                                        "load") if spec.get(k) is not None}
+                                        "load", "temperature", "seed") if spec.get(k) is not None}
         if "load" in options and not isinstance(options["load"], Load):
             raise ValueError(f"spec.load must be a raydamp.Load, got {type(options['load']).__name__}")
     if options.get("load") is not None:
         options["load"] = options["load"].to_dict()  # plain data: the workers rebuild it
+    if options.get("temperature"):  # one seed for the whole grid: member k draws its stream k
+        kT, seed, _ = thermal(options["temperature"], options.get("seed"))
+        options.update({"temperature": kT, "seed": seed})
+    options.pop("stream", None)
     options.setdefault("method", "3s")
     options.setdefault("save_every", 1)
     if isinstance(model, System) and model._python is not None:
@@ -230,7 +235,9 @@ def _run_chunk(task: dict[str, Any]) -> dict[str, Any]:
                              method=run["method"], tableau=run.get("tableau"), composition=run.get("composition"),
                              h=run["h"], t_end=run.get("t_end"), n_steps=run.get("n_steps"),
                              save_every=run["save_every"], threads=task["threads"],
-                             load=Load.from_dict(run["load"]) if run.get("load") is not None else None)
+                             load=Load.from_dict(run["load"]) if run.get("load") is not None else None,
+                             temperature=run.get("temperature"), seed=run.get("seed"),
+                             first_stream=task["start"] if run.get("temperature") else 0)
     return {"start": task["start"], "t": ens.t, "q": ens.q, "p": ens.p, "energy": ens.energy,
             "momentum": ens.momentum, "rows": ens.rows, "t_final": ens.t_final, "q_final": ens.q_final,
             "p_final": ens.p_final, "energy_final": ens.energy_final, "momentum_final": ens.momentum_final,

@@ -28,6 +28,7 @@ struct ConstantDamping {
     double t = std::numeric_limits<double>::quiet_NaN();  // the time they are for
     SmallMatrix exp;     // exp(-tA)
     SmallMatrix t_phi1;  // t phi1(-tA)
+    SmallMatrix noise;   // N with N N^T = M - E M^T E^T = L V (I - e^{-2t Lambda}) V^T L^T: the OU flow's noise factor
     mutable SmallVector scratch;  // per workspace, so flows of one run never allocate
   };
 
@@ -61,6 +62,9 @@ struct ConstantDamping {
       p1[i] = t * phi1(-t * lambda[i]);
     }
     f.exp = from_modes * e.asDiagonal() * to_modes;
+    SmallVector s(n);
+    for (Eigen::Index i = 0; i < n; ++i) s[i] = std::sqrt(std::max(0.0, -std::expm1(-2.0 * t * lambda[i])));
+    f.noise = from_modes * s.asDiagonal();
     f.t_phi1 = from_modes * p1.asDiagonal() * to_modes;
     f.scratch.resize(n);
     return f;
@@ -77,6 +81,13 @@ struct ConstantDamping {
     f.scratch.noalias() = f.exp * p;
     f.scratch.noalias() -= f.t_phi1 * g;
     p = f.scratch;
+  }
+
+  // p += sigma N xi: the noise of the exact OU flow (the mass is in N already).
+  template <class Q, class Mass, class X, class P>
+  void add_noise(const Q&, const Factors& f, const Mass&, double sigma, const X& xi, P& p) const {
+    f.scratch.noalias() = f.noise * xi;
+    p += sigma * f.scratch;
   }
 
   template <class Q, class P, class O>

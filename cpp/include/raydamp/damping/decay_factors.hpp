@@ -4,6 +4,7 @@
 // (at a shortened last step): no exp, expm1 or phi1 per step.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -17,12 +18,16 @@ struct DecayFactors {
   double expm1 = 0.0;      // e^{-t a} - 1
   double t_phi1 = 0.0;     // t phi1(-t a)
   double t_phi1_m1 = 0.0;  // t (phi1(-t a) - 1)
+  // sqrt(1 - e^{-2 t a}): the thermal noise of the exact Ornstein-Uhlenbeck flow along a direction
+  // that decays at rate a has variance kT m (1 - e^{-2 t a}) (m its mass).
+  double noise = 0.0;
 };
 
 inline DecayFactors decay_factors(double a, double t) {
   const double x = -t * a;
   const double phi = phi1(x);
-  return {t, std::exp(x), std::expm1(x), t * phi, t * (phi - 1.0)};
+  const double expm1 = std::expm1(x);
+  return {t, std::exp(x), expm1, t * phi, t * (phi - 1.0), std::sqrt(std::max(0.0, -expm1 * (2.0 + expm1)))};
 }
 
 }  // namespace raydamp

@@ -27,6 +27,13 @@ struct IsotropicDamping {
   template <class Q, class G, class P>
   void decay_affine(const Q&, const DecayFactors& f, const G& g, P& p) const { p = f.exp * p - f.t_phi1 * g; }
 
+  // p += sigma sqrt(1 - e^{-2ta}) M^{1/2} xi: the noise of the exact OU flow with A = a I, whose
+  // covariance is kT (M - E M E^T) = kT (1 - e^{-2ta}) M (sigma = sqrt(kT), xi standard normal).
+  template <class Q, class Mass, class X, class P>
+  void add_noise(const Q&, const DecayFactors& f, const Mass& mass, double sigma, const X& xi, P& p) const {
+    mass.add_root_product(sigma * f.noise, xi, p);
+  }
+
   // out = A p: the damping force is -out.
   template <class Q, class P, class O>
   void rate(const Q&, const P& p, O& out) const { out.noalias() = a * p; }

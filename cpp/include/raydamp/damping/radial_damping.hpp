@@ -4,6 +4,8 @@
 // radial component of p alone.
 #pragma once
 
+#include <cmath>
+
 #include "raydamp/damping/decay_factors.hpp"
 
 namespace raydamp {
@@ -30,6 +32,13 @@ struct RadialDamping {
   void decay_affine(const Q& q, const DecayFactors& f, const G& g, P& p) const {
     const double radial = (f.expm1 * q.dot(p) - f.t_phi1_m1 * q.dot(g)) * (1.0 / q.squaredNorm());
     p += radial * q - f.t * g;
+  }
+
+  // The noise of the exact OU flow: A = a u u^T, so kT (M - E M E^T) = kT m (1 - e^{-2ta}) u u^T with the
+  // scalar mass m: one normal number along u.
+  template <class Q, class Mass, class X, class P>
+  void add_noise(const Q& q, const DecayFactors& f, const Mass& mass, double sigma, const X& xi, P& p) const {
+    p += (sigma * f.noise * std::sqrt(mass.m) * xi[0] / q.norm()) * q;
   }
 
   template <class Q, class P, class O>

@@ -58,11 +58,33 @@ inline void loaded_gradient(const Model& model, const Vector<Dim>& q, double tim
   if (ws.load) ws.load->add(time, -1.0, ws.g.data());
 }
 
-// exp(t eps Y): p <- exp(-t eps D(q) M^{-1}) p.
+// Whether a damping kind has the noise of its exact Ornstein-Uhlenbeck flow (add_noise).
+template <class Model, class = void>
+struct has_thermal_noise : std::false_type {};
+template <class Model>
+struct has_thermal_noise<Model, std::void_t<decltype(std::declval<const Model&>().damping.add_noise(
+                                    std::declval<const typename Model::Vec&>(),
+                                    std::declval<const Model&>().damping.factors(0.0), std::declval<const Model&>().mass,
+                                    0.0, std::declval<const typename Model::Vec&>(),
+                                    std::declval<typename Model::Vec&>()))>> : std::true_type {};
+
+// p += the noise of the OU flow over the factors' time: Gaussian with covariance kT (M - E M E^T),
+// E = exp(-t eps D M^{-1}) at the frozen q (fluctuation-dissipation). Independent of the flow's
+// deterministic part, so it is the same for the damping flow and the affine kick-damp flow.
+template <class Model, int Dim, class DF, class F>
+inline void thermal_noise(const Model& model, State<Dim>& z, const F& factors, Workspace<Dim, DF>& ws) {
+  if constexpr (has_thermal_noise<Model>::value) {
+    ws.noise.fill(ws.xi);
+    model.damping.add_noise(z.q, factors, model.mass, ws.sigma, ws.xi, z.p);
+  }
+}
+
+// exp(t eps Y): p <- exp(-t eps D(q) M^{-1}) p (and, at a temperature, the OU flow's noise).
 template <class Model, int Dim, class DF>
 inline void damp(const Model& model, State<Dim>& z, double t, Workspace<Dim, DF>& ws) {
   if (ws.damp_factors.t != t) ws.damp_factors = model.damping.factors(t);
   model.damping.decay(z.q, ws.damp_factors, z.p);
+  if (ws.sigma > 0.0) thermal_noise(model, z, ws.damp_factors, ws);
 }
 
 // exp(t (X_V + eps Y)): the exact solution of the affine ODE p' = -grad V(q) + f - A p
@@ -72,6 +94,7 @@ inline void kick_damp(const Model& model, State<Dim>& z, double t, Workspace<Dim
   loaded_gradient(model, z.q, ws.time, ws);
   if (ws.kick_damp_factors.t != t) ws.kick_damp_factors = model.damping.factors(t);
   model.damping.decay_affine(z.q, ws.kick_damp_factors, ws.g, z.p);
+  if (ws.sigma > 0.0) thermal_noise(model, z, ws.kick_damp_factors, ws);
 }
 
 }  // namespace raydamp::flows

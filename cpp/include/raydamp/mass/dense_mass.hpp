@@ -12,6 +12,7 @@ namespace raydamp {
 struct DenseMass {
   Eigen::MatrixXd m;        // M
   Eigen::MatrixXd inverse;  // M^{-1}, formed once: the drift is one product with it
+  Eigen::MatrixXd lower;    // L with L L^T = M (Cholesky): a root of M for thermal noise
 
   // Refuses (naming `argument`) an M that is not symmetric positive definite.
   explicit DenseMass(const Eigen::MatrixXd& mass, const char* argument = "mass") : m(mass) {
@@ -24,7 +25,14 @@ struct DenseMass {
     if (llt.info() != Eigen::Success)
       throw std::invalid_argument(std::string(argument) + " must be positive definite (its Cholesky factorisation fails)");
     inverse = llt.solve(Eigen::MatrixXd::Identity(n, n));
+    lower = llt.matrixL();
     inverse = 0.5 * (inverse + inverse.transpose()).eval();  // exactly symmetric, so T(p) is a quadratic form
+  }
+
+  // p += c L x (L L^T = M: the noise c L x has covariance c^2 M).
+  template <class X, class P>
+  void add_root_product(double c, const X& x, P& p) const {
+    for (Eigen::Index j = 0; j < x.size(); ++j) p += (c * x[j]) * lower.col(j);
   }
 
   // v = M^{-1} p.

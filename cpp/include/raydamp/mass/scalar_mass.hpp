@@ -1,6 +1,7 @@
 // M = m I: the mass matrix of a particle system in Cartesian coordinates.
 #pragma once
 
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -21,6 +22,10 @@ struct ScalarMass {
   // v = M^{-1} p (the velocity qdot = dH/dp).
   template <class P, class V>
   void velocity(const P& p, V& v) const { v.noalias() = inverse * p; }
+
+  // p += c M^{1/2} x.
+  template <class X, class P>
+  void add_root_product(double c, const X& x, P& p) const { p += (c * std::sqrt(m)) * x; }
 
   // T(p) = 1/2 p^T M^{-1} p.
   template <class P>

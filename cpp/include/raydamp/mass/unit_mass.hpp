@@ -9,6 +9,10 @@ struct UnitMass {
   template <class P, class V>
   void velocity(const P& p, V& v) const { v = p; }
 
+  // p += c M^{1/2} x.
+  template <class X, class P>
+  void add_root_product(double c, const X& x, P& p) const { p += c * x; }
+
   template <class P>
   double kinetic(const P& p) const { return 0.5 * p.squaredNorm(); }
 };

@@ -92,6 +92,17 @@ struct ThreeTermSplitting {  // paper Algorithm 3S
   static constexpr int splitting_order = 2;
 };
 
+// BAOAB (Leimkuhler and Matthews): kick h/2, drift h/2, damp h, drift h/2, kick h/2. The same palindrome
+// as 3s with the damping in the middle; at a temperature its damping flow is the exact OU flow, the
+// molecular-dynamics standard (OpenMM's LangevinMiddleIntegrator), here with any damping kind.
+struct Baoab {
+  static constexpr const char* name = "baoab";
+  static constexpr std::array<Stage, 5> stages =
+      palindrome<3>({{{Flow::kick, 0.5}, {Flow::drift, 0.5}, {Flow::damp, 1.0}}});
+  static constexpr TableauUse tableau = TableauUse::none;
+  static constexpr int splitting_order = 2;
+};
+
 struct TwoTermSplitting {  // paper Algorithm 2S
   static constexpr const char* name = "2s";
   static constexpr std::array<Stage, 3> stages = palindrome<2>({{{Flow::drift, 0.5}, {Flow::kick_damp, 1.0}}});
@@ -156,5 +167,17 @@ constexpr bool valid_table() {
 }
 static_assert(valid_table<StormerVerlet>() && valid_table<ThreeTermSplitting>() && valid_table<TwoTermSplitting>() &&
               valid_table<RungeKuttaSplitting>() && valid_table<RungeKuttaSplittingB>() && valid_table<RungeKutta>());
+
+// Whether a table can run at a temperature: only exact sub-flows (each damping flow then its exact
+// OU flow) and at least one damping flow. Runge-Kutta sub-flows have no exact noise.
+template <class Method>
+constexpr bool takes_temperature() {
+  bool damps = false;
+  for (const auto& s : Method::stages) {
+    if (s.flow == Flow::damp || s.flow == Flow::kick_damp) damps = true;
+    else if (s.flow != Flow::drift && s.flow != Flow::kick) return false;
+  }
+  return damps;
+}
 
 }  // namespace raydamp

@@ -14,6 +14,7 @@
 
 #include "raydamp/damping/sparse_rayleigh_damping.hpp"
 #include "raydamp/damping/spectral_bound.hpp"
+#include "raydamp/implicit/sparse_ldlt.hpp"
 #include "raydamp/mass/sparse_mass.hpp"
 #include "raydamp/state.hpp"
 #include "raydamp/thread_scratch.hpp"
@@ -45,11 +46,43 @@ inline std::shared_ptr<const SparseRowMajor> checked_stiffness(const SparseColMa
   return out;
 }
 
+// Whether L M - K is positive definite, i.e. every eigenvalue of M^{-1} K lies below L: its LDL^T
+// (no pivoting) has only positive pivots (Sylvester's law of inertia); a zero pivot is not a certificate.
+inline bool bounds_spectrum(const SparseColMajor& k, const SparseColMajor& m, double bound,
+                            const std::shared_ptr<const SparsePattern>& pattern) {
+  try {
+    return SparseLDLT<double>(pattern, SparseColMajor(bound * m - k), "L M - K").positive_pivots();
+  } catch (const std::invalid_argument&) {
+    return false;
+  }
+}
+
+// An upper bound L of the spectrum of M^{-1} K, certified. Lanczos' estimate (with Gershgorin's, for a
+// lumped M) is checked by one sparse LDL^T of L M - K: on a widely spread spectrum Lanczos can stop far
+// short of omega_max^2 (found: 0.8% of it for 48 modes from 0.05 to 3.8e5), and then the damping
+// flows' Chebyshev series would be wrong for the top modes. An estimate that fails doubles until it
+// holds, and is then bisected back to within 1/16 of the smallest certified value found.
 template <class Mass>
 double structure_spectral_bound(const SparseRowMajor& k, const Mass& mass) {
-  const double lanczos = lanczos_upper_bound(k, mass);
-  if constexpr (std::is_same_v<Mass, LumpedMass>) return std::min(lanczos, gershgorin_bound(k, mass.m));
-  else return lanczos;
+  double bound = lanczos_upper_bound(k, mass);
+  if constexpr (std::is_same_v<Mass, LumpedMass>) bound = std::min(bound, gershgorin_bound(k, mass.m));
+  const SparseColMajor kc(k), mc(mass.matrix());
+  auto pattern = std::make_shared<const SparsePattern>(SparseColMajor(mc.cwiseAbs() + kc.cwiseAbs()));
+  bound = std::max(bound, 1e-300);
+  if (bounds_spectrum(kc, mc, bound, pattern)) return bound;
+  double low = bound;
+  int doublings = 0;
+  do {
+    low = bound;
+    bound *= 2.0;
+    if (++doublings > 1100) throw std::invalid_argument("K: no finite bound of M^{-1} K's spectrum");
+  } while (!bounds_spectrum(kc, mc, bound, pattern));
+  for (int i = 0; i < 4; ++i) {  // bisect within (low, bound]
+    const double mid = 0.5 * (low + bound);
+    if (bounds_spectrum(kc, mc, mid, pattern)) bound = mid;
+    else low = mid;
+  }
+  return bound;
 }
 
 }  // namespace detail

@@ -1,0 +1,194 @@
+"""Thermal noise (issue 29): each damping flow of 3s, 2s and baoab becomes its exact Ornstein-Uhlenbeck
+flow. Linear systems are checked against the exact one-step maps written here from the methods'
+definitions (affine in z plus Gaussian noise; their stationary covariance from the discrete Lyapunov
+equation); statistical checks use fixed seeds and state their tolerance in standard errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.linalg
+
+import raydamp
+from raydamp.models import DampedPendulum
+
+
+def quadratic_system(M, K, D, eps: float = 1.0) -> raydamp.System:
+    n = K.shape[0]
+    names = [f"x{i}" for i in range(n)]
+    terms = [f"({float(K[i, j])!r})*{names[i]}*{names[j]}" for i in range(n) for j in range(n) if K[i, j] != 0]
+    return raydamp.System(names, "(" + " + ".join(terms) + ")/2", mass=M.tolist(), damping={"matrix": D.tolist()},
+                          eps=eps)
+
+
+def random_linear(seed: int = 5, n: int = 3):
+    rng = np.random.default_rng(seed)
+    a, b = rng.standard_normal((n, n)), rng.standard_normal((n, n))
+    M = a @ a.T + n * np.eye(n)
+    K = b @ b.T + 0.5 * np.eye(n)
+    D = 0.3 * M + 0.05 * K
+    return M, K, D
+
+
+# -- the documented one-step maps: z -> F z + w, w ~ N(0, Q) ------------------------------------
+
+def _kick(K, n, t):
+    F = np.eye(2 * n)
+    F[n:, :n] = -t * K
+    return F, np.zeros((2 * n, 2 * n))
+
+
+def _drift(Minv, n, t):
+    F = np.eye(2 * n)
+    F[:n, n:] = t * Minv
+    return F, np.zeros((2 * n, 2 * n))
+
+
+def _ou(M, A, n, t, kT):
+    E = scipy.linalg.expm(-t * A)
+    F = np.eye(2 * n)
+    F[n:, n:] = E
+    Q = np.zeros((2 * n, 2 * n))
+    Q[n:, n:] = kT * (M - E @ M @ E.T)
+    return F, Q
+
+
+def _kick_ou(M, K, A, n, t, kT):  # 2s's affine kick-damp: p -> E p - A^{-1}(I - E) K q + noise
+    F, Q = _ou(M, A, n, t, kT)
+    E = F[n:, n:]
+    F[n:, :n] = -np.linalg.solve(A, np.eye(n) - E) @ K
+    return F, Q
+
+
+def step_map(method: str, M, K, D, h: float, kT: float):
+    n = M.shape[0]
+    Minv = np.linalg.inv(M)
+    A = D @ Minv
+    parts = {
+        "baoab": [_kick(K, n, h / 2), _drift(Minv, n, h / 2), _ou(M, A, n, h, kT), _drift(Minv, n, h / 2),
+                  _kick(K, n, h / 2)],
+        "3s": [_ou(M, A, n, h / 2, kT), _drift(Minv, n, h / 2), _kick(K, n, h), _drift(Minv, n, h / 2),
+               _ou(M, A, n, h / 2, kT)],
+        "2s": [_drift(Minv, n, h / 2), _kick_ou(M, K, A, n, h, kT), _drift(Minv, n, h / 2)],
+    }[method]
+    F, Q = np.eye(2 * n), np.zeros((2 * n, 2 * n))
+    for Fi, Qi in parts:
+        F, Q = Fi @ F, Fi @ Q @ Fi.T + Qi
+    return F, Q
+
+
+def stationary(method, M, K, D, h, kT):
+    F, Q = step_map(method, M, K, D, h, kT)
+    S = scipy.linalg.solve_discrete_lyapunov(F, Q)
+    return 0.5 * (S + S.T)
+
+
+def omega_max(M, K):
+    return float(np.sqrt(np.max(scipy.linalg.eigh(K, M, eigvals_only=True))))
+
+
+@pytest.mark.parametrize("h_omega", [0.2, 1.0, 1.9])
+def test_baoab_samples_the_exact_position_covariance_of_a_linear_system(h_omega):
+    M, K, D = random_linear()
+    kT = 0.7
+    h = h_omega / omega_max(M, K)
+    S = stationary("baoab", M, K, D, h, kT)
+    np.testing.assert_allclose(S[:3, :3], kT * np.linalg.inv(K), rtol=1e-10, atol=1e-12)
+
+
+@pytest.mark.parametrize("method", ["baoab", "3s", "2s"])
+def test_the_code_runs_the_documented_map(method):
+    """Its deterministic part to rounding (temperature 0, columns of F), its stationary covariance in
+    an ensemble of 10^5 members started from it: every entry within 4 standard errors."""
+    M, K, D = random_linear()
+    system = quadratic_system(M, K, D)
+    kT, h = 0.7, 1.0 / omega_max(M, K)
+    F, _ = step_map(method, M, K, D, h, kT)
+    for j in range(6):
+        z = np.eye(6)[j]
+        one = raydamp.integrate(system, z[:3], z[3:], method=method, h=h, n_steps=1)
+        np.testing.assert_allclose(np.concatenate([one.q[-1], one.p[-1]]), F[:, j], rtol=1e-12, atol=1e-13)
+    S = stationary(method, M, K, D, h, kT)
+    members = 100_000
+    z0 = np.random.default_rng(1).multivariate_normal(np.zeros(6), S, size=members)
+    ens = raydamp.integrate_ensemble(system, z0[:, :3], z0[:, 3:], method=method, h=h, n_steps=6, save_every=6,
+                                     temperature=kT, seed=2024, threads=2)
+    z = np.concatenate([ens.q_final, ens.p_final], axis=1)
+    sample = np.cov(z.T)
+    se = np.sqrt((np.outer(np.diag(S), np.diag(S)) + S ** 2) / members)
+    assert np.all(np.abs(sample - S) <= 4 * se), np.max(np.abs(sample - S) / se)
+
+
+@pytest.mark.parametrize("method", ["3s", "baoab"])
+def test_kinetic_temperature_of_an_oscillator_matches_the_discrete_value(method):
+    m, k, c, kT = 2.0, 3.0, 0.8, 0.4
+    M, K, D = np.array([[m]]), np.array([[k]]), np.array([[c * m]])
+    system = raydamp.System(["x"], f"{k}*x^2/2", mass=m, damping={"scalar": c}, eps=1.0)
+    h = 0.8 / np.sqrt(k / m)
+    S = stationary(method, M, K, D, h, kT)
+    members = 100_000
+    z0 = np.random.default_rng(3).multivariate_normal(np.zeros(2), S, size=members)
+    ens = raydamp.integrate_ensemble(system, z0[:, :1], z0[:, 1:], method=method, h=h, n_steps=8, save_every=8,
+                                     temperature=kT, seed=7)
+    p2m = ens.p_final[:, 0] ** 2 / m
+    exact = S[1, 1] / m
+    assert abs(p2m.mean() - exact) <= 4 * p2m.std() / np.sqrt(members)
+    if method == "3s":  # 3s's saved momentum is sampled at kT exactly (its last sub-flow is the OU flow)
+        assert exact == pytest.approx(kT, rel=1e-12)
+
+
+def test_same_seed_same_run_and_members_equal_their_single_runs():
+    model = DampedPendulum(eps=0.3)
+    q0 = np.linspace(0.1, 1.0, 6)[:, None]
+    p0 = np.zeros((6, 1))
+    runs = [raydamp.integrate_ensemble(model, q0, p0, method="baoab", h=0.05, n_steps=400, save_every=50,
+                                       temperature=0.5, seed=99, threads=t) for t in (1, 2)]
+    np.testing.assert_array_equal(runs[0].q, runs[1].q)
+    for i in range(6):
+        single = raydamp.integrate(model, q0[i], p0[i], method="baoab", h=0.05, n_steps=400, save_every=50,
+                                   temperature=0.5, seed=99, stream=i)
+        np.testing.assert_array_equal(runs[0].member(i).q, single.q)
+        assert runs[0].member(i).provenance.get("stream", 0) == i
+    again = raydamp.integrate(model, q0[2], p0[2], method="baoab", h=0.05, n_steps=400, temperature=0.5, seed=99,
+                              stream=2)
+    other = raydamp.integrate(model, q0[2], p0[2], method="baoab", h=0.05, n_steps=400, temperature=0.5, seed=100,
+                              stream=2)
+    assert again.provenance["seed"] == 99 and again.provenance["temperature"] == 0.5
+    assert not np.array_equal(again.q, other.q)
+    fresh = raydamp.integrate(model, q0[2], p0[2], method="3s", h=0.05, n_steps=10, temperature=0.5)
+    repeat = raydamp.integrate(*raydamp.jobs.job_arguments(fresh.provenance)[:3],
+                               **raydamp.jobs.job_arguments(fresh.provenance)[3])
+    np.testing.assert_array_equal(fresh.q, repeat.q)
+
+
+def test_member_noises_are_independent():
+    """Members 0 and 1 of one seed: their first-step momentum kicks are uncorrelated (10^6 pairs, 4 SE)."""
+    model = DampedPendulum(eps=1.0)
+    members = 200_000
+    draws = []
+    for offset in (0, members):
+        ens = raydamp.integrate_ensemble(model, np.zeros((members, 1)), np.zeros((members, 1)), method="3s", h=0.1,
+                                         n_steps=1, temperature=1.0, seed=5, first_stream=offset)
+        draws.append(ens.p_final[:, 0])
+    a, b = draws
+    r = np.corrcoef(a, b)[0, 1]
+    assert abs(r) <= 4 / np.sqrt(members)
+    assert abs(np.corrcoef(a[:-1], a[1:])[0, 1]) <= 4 / np.sqrt(members)
+
+
+def test_bad_input_names_the_argument():
+    model = DampedPendulum(eps=0.1)
+    run = dict(h=0.1, n_steps=2)
+    with pytest.raises(ValueError, match=r"temperature must be >= 0"):
+        raydamp.integrate(model, [0.1], [0.0], temperature=-1.0, **run)
+    with pytest.raises(ValueError, match=r"seed must be an integer"):
+        raydamp.integrate(model, [0.1], [0.0], temperature=1.0, seed=1.5, **run)
+    with pytest.raises(ValueError, match=r"temperature: method 'rks' has no exact noise flow"):
+        raydamp.integrate(model, [0.1], [0.0], method="rks", temperature=1.0, **run)
+    with pytest.raises(ValueError, match=r"temperature: composition 'yoshida4' runs sub-steps backward"):
+        raydamp.integrate(model, [0.1], [0.0], composition="yoshida4", temperature=1.0, **run)
+    with pytest.raises(ValueError, match=r"temperature: this model has no damping"):
+        raydamp.integrate(DampedPendulum(eps=0.0), [0.1], [0.0], temperature=1.0, **run)
+    chain = raydamp.Chain(4, dampers={"sites": [1], "c": [0.5]}, eps=1.0)
+    with pytest.raises(ValueError, match=r"temperature: this system's damping has no exact noise flow yet"):
+        raydamp.integrate(chain, np.zeros(4), np.zeros(4), temperature=1.0, **run)
