@@ -17,6 +17,7 @@ from .methods.catalogue import CompositionInfo, MethodInfo, TableauInfo, composi
 from .results.ensemble_solution import EnsembleSolution
 from .results.io import load
 from .results.solution import Solution
+from .run.advise import Advice, MethodAdvice, advise
 from .run.ensemble import integrate_ensemble
 from .run.integrate import CancelToken, integrate, steps_for
 from .run.sweep import SweepPlan, check_sweep, parse_grid_item, sweep
@@ -25,7 +26,8 @@ from .systems.rayleigh import modal_damping_ratio, rayleigh_coefficients
 from .systems.structure import LinearStructure
 from .systems.system import SpecError, System
 
-__all__ = ["__version__", "models", "Load", "GroundMotion", "System", "Chain", "chain_mode_energies", "LinearStructure", "SpecError",
-           "integrate", "steps_for", "CancelToken", "Solution", "integrate_ensemble", "EnsembleSolution", "sweep",
+__all__ = ["__version__", "models", "Load", "GroundMotion", "System", "Chain", "chain_mode_energies", "LinearStructure",
+           "SpecError", "integrate", "steps_for", "advise", "Advice", "MethodAdvice", "CancelToken", "Solution",
+           "integrate_ensemble", "EnsembleSolution", "sweep",
            "check_sweep", "parse_grid_item", "SweepPlan", "load", "rayleigh_coefficients", "modal_damping_ratio",
            "methods", "tableaux", "compositions", "MethodInfo", "TableauInfo", "CompositionInfo"]

@@ -47,7 +47,7 @@ def stored_solution(record: JobRecord, arrays: TrajectoryArrays) -> raydamp.Solu
         t=arrays.t, q=arrays.q, p=arrays.p, energy=arrays.energy, momentum=arrays.momentum, work=arrays.work,
         status=summary.get("status", record.status), steps=int(summary.get("steps", 0)),
         failed_step=record.failed_step, message=summary.get("message") or record.error or "",
-        method=record.spec["method"], tableau=summary.get("tableau"), composition=summary.get("composition"),
+        method=summary.get("method") or record.spec.get("method") or "3s", tableau=summary.get("tableau"), composition=summary.get("composition"),
         h=spec.h,
         max_momentum_drift=float(drift) if drift is not None else 0.0,
         wall_time=float(summary.get("wall_time", 0.0)), origin=provenance)

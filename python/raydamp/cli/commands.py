@@ -33,6 +33,15 @@ def main(argv: list[str] | None = None) -> int:
                                          "LocalCluster on this machine)")
     swp.add_argument("--workers", type=int, default=2, help="worker processes of the LocalCluster (default 2)")
     swp.add_argument("--no-progress", action="store_true", help="no progress bar")
+    adv = commands.add_parser("advise", help="for a job file's linear structure: each method's stability limit, "
+                                             "step and predicted time to reach a tolerance")
+    adv.add_argument("spec", help="a job JSON file (as for run) whose system is a linear structure")
+    adv.add_argument("--t-end", type=float, help="the span of the run (default: the file's t_end)")
+    adv.add_argument("--tolerance", type=float, required=True,
+                     help="the error allowed, relative to the initial amplitude (e.g. 1e-6)")
+    adv.add_argument("--omega", type=float, help="the highest circular frequency the answer must resolve "
+                                                 "(default: the lowest natural frequency)")
+    adv.add_argument("--no-measure", action="store_true", help="no trial steps: compare by step counts only")
     from .service_client import add_client_commands
 
     add_client_commands(commands)
@@ -49,6 +58,11 @@ def main(argv: list[str] | None = None) -> int:
         from .run_command import run_file
 
         return run_file(args.spec, out=args.out, plot=args.plot, progress=not args.no_progress)
+    if args.command == "advise":
+        from .advise_command import advise_file
+
+        return advise_file(args.spec, t_end=args.t_end, tolerance=args.tolerance, omega=args.omega,
+                           measure=not args.no_measure)
     if args.command == "sweep":
         try:
             from .sweep_command import sweep_file

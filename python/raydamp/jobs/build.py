@@ -25,7 +25,7 @@ __all__ = ["JobCall", "parse_job", "build_job", "job_arguments", "model_from_spe
            "PROVENANCE_KEYS"]
 
 # What a Solution's provenance adds to the job (a saved result's provenance runs as a job).
-PROVENANCE_KEYS = ("raydamp_version", "job_id", "coordinates", "momentum_names")
+PROVENANCE_KEYS = ("raydamp_version", "job_id", "coordinates", "momentum_names", "method_reason")
 _STATE_ARGUMENTS = {"q0": ("initial_state", "q"), "p0": ("initial_state", "p")}
 
 

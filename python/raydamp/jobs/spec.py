@@ -129,7 +129,10 @@ class JobSpec(ModelSpec):
     model_config = ConfigDict(json_schema_extra={"allOf": [_exactly_one("model", "system", "string", "object"),
                                                            _exactly_one("t_end", "n_steps", "number", "integer")]})
 
-    method: MethodName = Field(description="a name from raydamp.methods() (GET /v1/methods)")
+    method: MethodName | None = Field(
+        None, description="a name from raydamp.methods() (GET /v1/methods); null or absent: raydamp chooses (3s, "
+                          "except for a linear structure on which 3s is a trap: see raydamp.run.choose_method), and "
+                          "the result's provenance names the method and why")
     tableau: TableauName | TableauInput | None = Field(
         None, description="Runge-Kutta tableau for rks, rksb and rk: a name, or your own {A, b, c}")
     composition: CompositionName | None = Field(None, description="raises a symmetric method's order: a name from "

@@ -17,11 +17,15 @@ __all__ = ["PROVENANCE_KEYS", "job_spec"]
 
 def job_spec(model: Model, q0: np.ndarray, p0: np.ndarray, *, method: str, tableau: str | None,
              composition: str | None, h: float, t_end: float | None, n_steps: int | None, save_every: int,
-             work: bool, save_dofs: list[int] | None = None, load=None, thermal=None) -> dict[str, Any]:
-    """The job spec of a run: what Solution.provenance holds."""
+             work: bool, save_dofs: list[int] | None = None, load=None, thermal=None,
+             method_reason: str | None = None) -> dict[str, Any]:
+    """The job spec of a run: what Solution.provenance holds; ``method_reason`` says why the method was
+    chosen when the run named none (raydamp.run.choose_method)."""
     spec = describe_model(model)
     spec.update({"method": method, "tableau": tableau, "composition": composition, "h": h, "save_every": save_every, "work": work,
                  "initial_state": {"q": np.asarray(q0, float).tolist(), "p": np.asarray(p0, float).tolist()}})
+    if method_reason is not None:
+        spec["method_reason"] = method_reason
     if save_dofs is not None:
         spec["save_dofs"] = list(save_dofs)
     if load is not None:

@@ -15,6 +15,7 @@ from ..loads import Load
 from ..methods.user_tableau import resolve_user_tableau
 from ..results.solution import Solution
 from ..systems.models import Model
+from .choose_method import choose_method
 
 __all__ = ["integrate", "steps_for", "CancelToken", "MAX_SAVED_BYTES", "MAX_STEPS", "MAX_AMPLIFICATION"]
 
@@ -52,7 +53,7 @@ def _tableau(tableau) -> tuple[str, str | dict | None]:
     raise ValueError(f"tableau must be a tableau name, a dict with A, b, c, or None, got {_short(tableau)}")
 
 
-def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: float | None = None,
+def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_end: float | None = None,
               n_steps: int | None = None, save_every: int = 1, tableau: str | Mapping | None = None,
               composition: str | None = None, work: bool = False, save_dofs=None,
               progress: Callable[[int, int], object] | None = None,
@@ -64,7 +65,10 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
     ----------
     model : a model from :mod:`raydamp.models`.
     q0, p0 : initial positions and momenta, length ``model.dim``.
-    method : "3s" (default), "2s", "rks", "rksb", "sv", "heun", "rk4" or "rk" (any
+    method : None (default) chooses: "3s", except for a :class:`raydamp.LinearStructure` on which 3s
+        is a trap (h omega_max >= 2: "midpoint"; 3s's damping flow a long Chebyshev series: "rks" with
+        tableau "midpoint"), recorded with the reason in ``provenance["method_reason"]``
+        (:mod:`raydamp.run.choose_method`; :func:`raydamp.advise` compares every method). Or "3s", "2s", "rks", "rksb", "sv", "heun", "rk4" or "rk" (any
         explicit tableau on the whole system, default "rk4"); for a
         :class:`raydamp.LinearStructure` also the implicit, unconditionally stable
         "midpoint" (order 2; Newmark average acceleration) and "gauss4" (order 4), which
@@ -134,6 +138,7 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
     if not isinstance(model, Model):
         raise ValueError(f"model must be a raydamp model (e.g. raydamp.models.DampedPendulum()), got {model!r}")
     names, with_tableau = _catalogue()
+    method, tableau, method_reason = choose_method(model, method, tableau, composition, h)
     if not isinstance(method, str) or method not in names:
         raise ValueError(f"method: unknown method {method!r} (known: {', '.join(names)})")
     tableau_name, tableau = _tableau(tableau)
@@ -188,7 +193,7 @@ def integrate(model: Model, q0, p0, *, method: str = "3s", h: float, t_end: floa
                         "t_end": t_end, "n_steps": None if t_end is not None else n_steps,
                         "save_every": save_every, "work": work, "save_dofs": dofs,
                         "load": load if core_load is not None else None,
-                        "thermal": (kT, seed, stream) if kT > 0 else None}))
+                        "thermal": (kT, seed, stream) if kT > 0 else None, "method_reason": method_reason}))
 
 
 def _save_dofs(save_dofs, dim: int) -> list[int] | None:

@@ -87,7 +87,8 @@ def list_jobs(store: StoreDep, runner: RunnerDep, settings: SettingsDep,
     check_limit(limit, settings)
     return JobList(jobs=[
         JobListItem(id=r.id, status=r.status, progress=_progress(r, runner), model=_model_label(r.spec),
-                    method=r.spec["method"], created_at=r.created_at, finished_at=r.finished_at, url=JOBS.url(r.id))
+                    method=(r.summary or {}).get("method") or r.spec.get("method") or "chosen by raydamp",
+                    created_at=r.created_at, finished_at=r.finished_at, url=JOBS.url(r.id))
         for r in store.recent(limit, status)])
 
 

@@ -1,0 +1,118 @@
+"""integrate's default method (method=None): 3s, except where 3s is a trap on a LinearStructure (issue 25,
+point 2); the choice and its reason are in the provenance, and a job without "method" gets the same."""
+
+import numpy as np
+import pytest
+import scipy.sparse as sparse
+
+import raydamp
+from raydamp.jobs import job_arguments
+from raydamp.models import DampedPendulum
+from raydamp.run.choose_method import DEGREE_LIMIT, choose_method
+
+
+def shear_building(n):
+    main = np.full(n, 2.0)
+    main[-1] = 1.0
+    return sparse.identity(n, format="csc"), sparse.diags([-np.ones(n - 1), main, -np.ones(n - 1)], [-1, 0, 1]).tocsc()
+
+
+def two_percent(n, lumped=True):
+    """A shear building of n storeys, 2% damping in modes 1 and 3 (beta K dominant)."""
+    M, K = shear_building(n)
+    w = np.sqrt(np.sort(np.linalg.eigvalsh(K.toarray())))[:3]
+    alpha, beta = raydamp.rayleigh_coefficients(w[0], w[2], 0.02, 0.02)
+    if not lumped:  # a consistent (tridiagonal, positive definite) mass
+        M = (M + sparse.diags([np.full(n - 1, 0.1), np.full(n - 1, 0.1)], [-1, 1])).tocsc()
+    return raydamp.LinearStructure(M, K, alpha=alpha, beta=beta)
+
+
+@pytest.fixture(scope="module")
+def chain2000():
+    return two_percent(2000)
+
+
+def start(s):
+    q0 = np.linspace(0, 1, s.dim)
+    return q0, np.zeros(s.dim)
+
+
+def test_other_models_keep_3s_and_say_so():
+    sol = raydamp.integrate(DampedPendulum(eps=0.1), [1.0], [0.0], h=0.1, n_steps=10)
+    assert sol.method == "3s"
+    assert sol.provenance["method"] == "3s"
+    assert sol.provenance["method_reason"] == "3s: the default for a DampedPendulum"
+
+
+def test_a_named_method_is_never_changed_and_has_no_reason(chain2000):
+    q0, p0 = start(chain2000)
+    sol = raydamp.integrate(chain2000, q0, p0, method="3s", h=1.2, n_steps=20)   # h omega_max = 2.4: as asked
+    assert sol.method == "3s"
+    assert "method_reason" not in sol.provenance
+
+
+def test_beyond_the_explicit_limit_the_default_is_midpoint(chain2000):
+    q0, p0 = start(chain2000)
+    sol = raydamp.integrate(chain2000, q0, p0, h=1.2, n_steps=200)
+    assert sol.success and sol.method == "midpoint" and sol.tableau is None
+    reason = sol.provenance["method_reason"]
+    assert reason.startswith("midpoint: h omega_max = 2.4 >= 2")
+    same = raydamp.integrate(chain2000, q0, p0, method="midpoint", h=1.2, n_steps=200)
+    assert np.array_equal(sol.q, same.q)
+
+
+def test_a_long_chebyshev_series_makes_the_default_rks_midpoint(chain2000):
+    # h omega_max = 1: stable, but 3s's damping flow would be a Chebyshev series of degree 25 (measured per
+    # step: 3s 162 us, rks-midpoint 47 us, on this chain)
+    assert max(chain2000.chebyshev_degrees(0.5)) == 25 >= DEGREE_LIMIT["lumped"]
+    q0, p0 = start(chain2000)
+    sol = raydamp.integrate(chain2000, q0, p0, h=0.5, n_steps=100)
+    assert (sol.method, sol.tableau, sol.provenance["tableau"]) == ("rks", "midpoint", "midpoint")
+    assert "Chebyshev series of degree 25" in sol.provenance["method_reason"]
+    same = raydamp.integrate(chain2000, q0, p0, method="rks", tableau="midpoint", h=0.5, n_steps=100)
+    assert np.array_equal(sol.q, same.q)
+
+
+def test_a_short_series_keeps_3s():
+    s = two_percent(50)
+    degree = max(s.chebyshev_degrees(0.05))
+    assert degree < DEGREE_LIMIT["lumped"]
+    q0, p0 = start(s)
+    sol = raydamp.integrate(s, q0, p0, h=0.05, n_steps=20)
+    assert sol.method == "3s"
+    assert sol.provenance["method_reason"] == f"3s: h omega_max = {0.05 * np.sqrt(s.spectral_bound):.4g} < 2 and " \
+                                              f"its damping flow's Chebyshev degree {degree} < 12"
+
+
+def test_alpha_damping_alone_keeps_3s():
+    M, K = shear_building(2000)
+    s = raydamp.LinearStructure(M, K, alpha=0.01)
+    q0, p0 = start(s)
+    assert raydamp.integrate(s, q0, p0, h=0.5, n_steps=10).method == "3s"
+
+
+def test_a_consistent_mass_switches_from_degree_4():
+    s = two_percent(40, lumped=False)
+    assert s.mass_kind == "consistent"
+    h = 0.05
+    assert max(s.chebyshev_degrees(h)) >= DEGREE_LIMIT["consistent"]
+    assert choose_method(s, None, None, None, h).method == "rks"
+
+
+def test_a_tableau_or_composition_keeps_3s_as_the_base(chain2000):
+    choice = choose_method(chain2000, None, None, "yoshida4", 1.2)
+    assert (choice.method, choice.tableau) == ("3s", None)
+    assert choose_method(chain2000, "2s", None, None, 1.2) == ("2s", None, None)
+
+
+def test_a_job_without_method_gets_the_same_choice_and_its_provenance_runs_again(chain2000):
+    q0, _ = start(chain2000)
+    job = {"system": chain2000.to_dict(), "h": 1.2, "n_steps": 50, "initial_state": {"q": q0.tolist(),
+                                                                                      "p": [0.0] * 2000}}
+    model, q, p, options = job_arguments(job)
+    assert options["method"] is None
+    sol = raydamp.integrate(model, q, p, **options)
+    assert sol.method == "midpoint" and sol.provenance["method_reason"].startswith("midpoint:")
+    model, q, p, options = job_arguments(sol.provenance)       # method_reason is set aside as provenance
+    assert options["method"] == "midpoint"
+    assert np.array_equal(raydamp.integrate(model, q, p, **options).q, sol.q)
