@@ -131,3 +131,20 @@ def test_a_sweep_refuses_a_step_whose_times_overflow_as_a_job_does(axis):
     with pytest.raises(ValueError, match=rf"^grid\.{axis}: 1000 steps of 1e\+308 end beyond the largest float"):
         raydamp.check_sweep(spec, {axis: [0.1, 1e308]})
     assert raydamp.check_sweep(spec, {axis: [0.1, 0.2]}).members == 2
+
+
+def test_an_initial_state_from_uploaded_vectors():
+    """{"file": id} in place of q or p: resolved by the files the caller gives (a service's uploads), refused
+    at initial_state.q.file without them; the tag of the form never shows in a path."""
+    from raydamp.jobs import build_job
+
+    base = {"model": "damped_pendulum", "method": "3s", "h": 0.1, "n_steps": 2}
+    spec = parse_job({**base, "initial_state": {"q": {"file": "a" * 32}, "p": [0.0]}})
+    call = build_job(spec, lambda file_id: (None, np.array([0.5])))
+    assert list(call.q0) == [0.5] and call.p0 == [0.0]
+    with pytest.raises(JobError, match=r"^initial_state\.q\.file: uploaded files are a service's") as error:
+        build_job(spec)
+    assert error.value.loc == ("initial_state", "q", "file")
+    with pytest.raises(JobError, match=r"^initial_state\.p\.file: String should match pattern") as error:
+        parse_job({**base, "initial_state": {"q": [0.0], "p": {"file": "x"}}})
+    assert error.value.loc == ("initial_state", "p", "file")

@@ -193,3 +193,35 @@ def test_load_json_form_round_trips():
         raydamp.Load.from_dict({"terms": [{"series": {"t": [1, 0], "values": [0, 0], "direction": [1]}}]})
     with pytest.raises(ValueError, match=r"load\.harmonic\.omga: unknown key"):
         raydamp.Load.from_dict({"harmonic": {"amplitude": [1], "omga": 1}})
+
+
+def test_uploaded_bytes_are_read_by_suffix_and_content():
+    """parse_record (the service's upload check and resolver): the format from the suffix or the content,
+    one column of values as (None, values), and a name that disagrees with the content refused."""
+    from raydamp.loads.records import parse_record, record_format
+
+    record, fmt = parse_record(AT2.encode(), name="rec.AT2")
+    assert fmt == "at2" and record_format(AT2.encode()) == "at2"
+    np.testing.assert_allclose(record.t, np.arange(7) * 0.01)
+    record, fmt = parse_record(b"1\n2\n4\n", name="v.csv")
+    assert fmt == "columns" and record.t is None and record.values.tolist() == [1.0, 2.0, 4.0]
+    with pytest.raises(ValueError, match=r"v\.npy: not a NumPy array file"):
+        parse_record(b"1\n2\n", name="v.npy")
+    with pytest.raises(ValueError, match=r"x\.csv: t: times must increase"):
+        parse_record(b"0,1\n1,2\n1,3\n", name="x.csv")
+    with pytest.raises(ValueError, match=r"a Matrix Market matrix, not a record"):
+        parse_record(b"%%MatrixMarket matrix coordinate real general\n1 1 1\n1 1 1\n", name="K.txt")
+    with pytest.raises(ValueError, match=r"reads as npy; rename it"):
+        parse_record(b"\x93NUMPY" + AT2.encode(), name="r.at2")
+
+
+def test_a_resolved_record_of_values_takes_the_jobs_dt():
+    files = {"v": (None, np.array([0.0, 1.0, 0.0])), "tv": (np.array([0.0, 1.0]), np.array([1.0, 3.0]))}
+    load = raydamp.Load.from_dict({"file": {"id": "v", "direction": [2.0], "dt": 0.5}}, files=files.__getitem__)
+    np.testing.assert_allclose(load.values(DampedPendulum(), [0.25, 0.5, 0.75])[:, 0], [1.0, 2.0, 1.0])
+    with pytest.raises(ValueError, match=r"load\.file\.dt: file v holds one column of values"):
+        raydamp.Load.from_dict({"file": {"id": "v", "direction": [1.0]}}, files=files.__getitem__)
+    with pytest.raises(ValueError, match=r"load\.file\.dt: file tv has a time column"):
+        raydamp.Load.from_dict({"file": {"id": "tv", "direction": [1.0], "dt": 0.1}}, files=files.__getitem__)
+    with pytest.raises(ValueError, match=r"load\.file\.dt must be > 0"):
+        raydamp.Load.from_dict({"file": {"id": "v", "direction": [1.0], "dt": 0.0}}, files=files.__getitem__)

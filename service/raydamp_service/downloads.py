@@ -45,6 +45,7 @@ def stored_solution(record: JobRecord, arrays: TrajectoryArrays) -> raydamp.Solu
     drift = summary.get("momentum_drift")
     return raydamp.Solution(
         t=arrays.t, q=arrays.q, p=arrays.p, energy=arrays.energy, momentum=arrays.momentum, work=arrays.work,
+        load_work=arrays.load_work,
         status=summary.get("status", record.status), steps=int(summary.get("steps", 0)),
         failed_step=record.failed_step, message=summary.get("message") or record.error or "",
         method=summary.get("method") or record.spec.get("method") or "3s", tableau=summary.get("tableau"), composition=summary.get("composition"),
@@ -84,7 +85,8 @@ def _write_npz(head: raydamp.Solution, connection: sqlite3.Connection, stored: S
     """raydamp's .npz (np.savez: a zip of .npy members), each member's data copied a slice at a time."""
     sample = path.with_name("head.npz")
     head.save(sample)
-    columns = ["t", "q", "p", "energy", "momentum"] + (["work"] if stored.has_work else [])
+    columns = (["t", "q", "p", "energy", "momentum"] + (["work"] if stored.has_work else [])
+               + (["load_work"] if stored.has_load_work else []))
     n = len(selection)
     with zipfile.ZipFile(sample) as written, zipfile.ZipFile(path, "w", zipfile.ZIP_STORED, allowZip64=True) as out:
         for column in columns:
@@ -114,7 +116,7 @@ def _write_netcdf(head: raydamp.Solution, connection: sqlite3.Connection, stored
             arrays = read_arrays(connection, stored, piece)
             end = done + arrays.t.size
             out.resize_dimension("time", end)
-            for name in ("t", "q", "p", "energy", "momentum", "work"):
+            for name in ("t", "q", "p", "energy", "momentum", "work", "load_work"):
                 values = getattr(arrays, name)
                 if values is not None and values.size and name in out.variables:
                     out.variables[name][done:end, ...] = values

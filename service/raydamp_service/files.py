@@ -1,8 +1,13 @@
-"""Uploaded Matrix Market files: checking an upload, storing it, and handing stored ones to raydamp.
+"""Uploaded files: checking an upload, storing it, and handing stored ones to raydamp.
 
-An upload is read as Matrix Market by scipy (what raydamp.LinearStructure reads too), after its
-header has been checked against the file's size: the reader allocates what the header announces,
-so a 100-byte file claiming 10^9 entries must be refused before it is read, not after.
+Two kinds. A matrix (Matrix Market, for a linear structure's M or K) is read by scipy (what
+raydamp.LinearStructure reads too), after its header has been checked against the file's size: the
+reader allocates what the header announces, so a 100-byte file claiming 10^9 entries must be refused
+before it is read, not after. A record (a PEER .AT2 record, text columns t, value, or a .npy array; one
+column of values serves as a vector too, for an initial state) is read by raydamp's own reader
+(raydamp.loads.records.parse_record), which checks everything a load needs of it. The kind and format
+come from the name's suffix and the content (records.record_format); a stored file is read again by its
+content alone, which the upload made sure agrees.
 """
 
 from __future__ import annotations
@@ -17,24 +22,32 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from raydamp.loads.records import describe_record, parse_record, record_format
 from raydamp.systems.structure import read_matrix
 
 from .store import UNFINISHED_SQL, Database, now
 
-__all__ = ["FILES_TABLE", "FileRecord", "FileStore", "MatrixFileError", "MatrixFileInfo", "check_matrix_market",
-           "file_resolver", "ParsedFiles"]
+__all__ = ["FILES_TABLE", "FILE_COLUMNS_ADDED", "FileRecord", "FileStore", "UploadError", "MatrixFileError",
+           "MatrixFileInfo", "RecordFileInfo", "check_matrix_market", "check_record", "check_upload", "file_resolver",
+           "ParsedFiles"]
 
 FILES_TABLE = """
-CREATE TABLE IF NOT EXISTS files (          -- uploaded Matrix Market files, for a structure's {"file": id}
+CREATE TABLE IF NOT EXISTS files (          -- uploads: a structure's {"file": id}, a load's {"file": {"id": id}}
     seq INTEGER PRIMARY KEY AUTOINCREMENT,
     id TEXT NOT NULL UNIQUE,
     name TEXT NOT NULL,
     bytes INTEGER NOT NULL,
-    rows INTEGER NOT NULL, cols INTEGER NOT NULL, nnz INTEGER NOT NULL,
+    rows INTEGER NOT NULL, cols INTEGER NOT NULL, nnz INTEGER NOT NULL,  -- a record: samples, columns, 0
     created_at TEXT NOT NULL,
-    content BLOB NOT NULL                   -- the file as uploaded
+    content BLOB NOT NULL,                  -- the file as uploaded
+    kind TEXT NOT NULL DEFAULT 'matrix',    -- matrix or record
+    format TEXT NOT NULL DEFAULT 'mtx',     -- mtx, at2, npy or columns (raydamp.loads.records.FORMATS)
+    t_start REAL, t_end REAL, dt REAL       -- a record's time range and uniform sample interval
 );
 """
+# Columns a files table from before records lacks (JobStore._upgrade adds them).
+FILE_COLUMNS_ADDED = {"kind": "TEXT NOT NULL DEFAULT 'matrix'", "format": "TEXT NOT NULL DEFAULT 'mtx'",
+                      "t_start": "REAL", "t_end": "REAL", "dt": "REAL"}
 
 # The shortest line an entry can take: "1 1\n" (pattern), and "1\n" for a dense (array) file.
 _MIN_COORDINATE_LINE = 4
@@ -43,30 +56,72 @@ _MIN_ARRAY_LINE = 2
 
 @dataclass(frozen=True)
 class FileRecord:
+    """A stored upload. shape and nnz: a matrix's; a record's shape is (samples, columns)."""
+
     id: str
     name: str
     bytes: int
     shape: tuple[int, int]
     nnz: int
     created_at: str
+    kind: str = "matrix"
+    format: str = "mtx"
+    t_start: float | None = None
+    t_end: float | None = None
+    dt: float | None = None
 
 
-_FILE_COLUMNS = "id, name, bytes, rows, cols, nnz, created_at"
+_FILE_COLUMNS = "id, name, bytes, rows, cols, nnz, created_at, kind, format, t_start, t_end, dt"
 
 
 def _file_record(row: sqlite3.Row) -> FileRecord:
     return FileRecord(id=row["id"], name=row["name"], bytes=row["bytes"], shape=(row["rows"], row["cols"]),
-                      nnz=row["nnz"], created_at=row["created_at"])
+                      nnz=row["nnz"], created_at=row["created_at"], kind=row["kind"], format=row["format"],
+                      t_start=row["t_start"], t_end=row["t_end"], dt=row["dt"])
 
 
-class MatrixFileError(ValueError):
-    """An upload that is not a Matrix Market file this service can use; the message says why."""
+class UploadError(ValueError):
+    """An upload that is not a file this service can use; the message says why."""
+
+
+MatrixFileError = UploadError  # its name when uploads were matrices only
 
 
 @dataclass(frozen=True)
 class MatrixFileInfo:
     shape: tuple[int, int]
     nnz: int
+
+
+@dataclass(frozen=True)
+class RecordFileInfo:
+    """A record's listing: its format, samples and columns (1: values only; 2: t, value), time range, dt."""
+
+    format: str
+    samples: int
+    columns: int
+    t_start: float | None
+    t_end: float | None
+    dt: float | None
+
+
+def check_record(content: bytes, name: str) -> RecordFileInfo:
+    """Read the upload as raydamp reads a load's record; raises UploadError with raydamp's reason (wrong NPTS,
+    a value that is not a number, DT <= 0, times not increasing, a value that is not finite)."""
+    try:
+        record, fmt = parse_record(content, name=name)
+    except ValueError as error:
+        raise UploadError(f"not a record raydamp can read: {error}") from None
+    described = describe_record(record)
+    return RecordFileInfo(format=fmt, samples=described["samples"], columns=1 if record.t is None else 2,
+                          t_start=described["t_start"], t_end=described["t_end"], dt=described["dt"])
+
+
+def check_upload(content: bytes, name: str, *, max_dim: int) -> MatrixFileInfo | RecordFileInfo:
+    """A matrix or a record, told apart by the name's suffix (.mtx, .AT2, .npy) and the content."""
+    if record_format(content, name) == "mtx":
+        return check_matrix_market(content, max_dim=max_dim)
+    return check_record(content, name)
 
 
 def check_matrix_market(content: bytes, *, max_dim: int) -> MatrixFileInfo:
@@ -115,19 +170,26 @@ class FileStore:
     def parsed_files(self) -> ParsedFiles:
         return ParsedFiles(self, self.PARSED_ENTRIES)
 
-    def add_file(self, name: str, content: bytes, shape: tuple[int, int], nnz: int,
-                 max_total_bytes: int = 0) -> FileRecord | None:
-        """Store an upload; None (nothing written) when it would take the files past max_total_bytes (0: no bound)."""
-        record = FileRecord(id=uuid.uuid4().hex, name=name, bytes=len(content), shape=tuple(shape), nnz=nnz,
-                            created_at=now())
+    def add_file(self, name: str, content: bytes, shape: tuple[int, int] = (0, 0), nnz: int = 0,
+                 max_total_bytes: int = 0, *, record: RecordFileInfo | None = None) -> FileRecord | None:
+        """Store an upload: a matrix (its shape and nnz) or a record; None (nothing written) when it would take
+        the files past max_total_bytes (0: no bound)."""
+        if record is not None:
+            file = FileRecord(id=uuid.uuid4().hex, name=name, bytes=len(content), shape=(record.samples, record.columns),
+                              nnz=0, created_at=now(), kind="record", format=record.format, t_start=record.t_start,
+                              t_end=record.t_end, dt=record.dt)
+        else:
+            file = FileRecord(id=uuid.uuid4().hex, name=name, bytes=len(content), shape=tuple(shape), nnz=nnz,
+                              created_at=now())
         with self.db.transaction() as db:
             # Checked and inserted in one statement, under the write lock, as create() does for the queue.
             inserted = db.execute(
-                "INSERT INTO files (id, name, bytes, rows, cols, nnz, created_at, content) "
-                "SELECT ?, ?, ?, ?, ?, ?, ?, ? WHERE ? = 0 OR (SELECT COALESCE(SUM(bytes), 0) FROM files) + ? <= ?",
-                (record.id, name, len(content), *shape, nnz, record.created_at, content, max_total_bytes,
-                 len(content), max_total_bytes)).rowcount
-        return record if inserted else None
+                "INSERT INTO files (id, name, bytes, rows, cols, nnz, created_at, content, kind, format, t_start, "
+                "t_end, dt) SELECT ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ? "
+                "WHERE ? = 0 OR (SELECT COALESCE(SUM(bytes), 0) FROM files) + ? <= ?",
+                (file.id, name, len(content), *file.shape, file.nnz, file.created_at, content, file.kind, file.format,
+                 file.t_start, file.t_end, file.dt, max_total_bytes, len(content), max_total_bytes)).rowcount
+        return file if inserted else None
 
     def file(self, file_id: str) -> FileRecord | None:
         row = self.db.connection().execute(f"SELECT {_FILE_COLUMNS} FROM files WHERE id = ?", (file_id,)).fetchone()
@@ -170,8 +232,9 @@ class FileStore:
 class ParsedFiles:
     """Uploaded files as raydamp reads them, parsed once per id (an upload never changes): eight
     submissions naming one 46 MB file parsed it eight times, 10-13 s each and 2.3 GB (issue 27, F4).
-    A parse in progress is waited for, not repeated; at most max_entries stored entries are kept,
-    the least recently used dropped first."""
+    A matrix is a scipy.sparse matrix; a record its (t, values), t None for one column of values.
+    A parse in progress is waited for, not repeated; at most max_entries stored entries (a matrix's
+    nonzeros, a record's numbers) are kept, the least recently used dropped first."""
 
     def __init__(self, store: FileStore, max_entries: int):
         self._store, self._max = store, max_entries
@@ -195,10 +258,15 @@ class ParsedFiles:
                         self._parsed.pop(file_id, None)
                     raise ValueError(f"no uploaded file with id {file_id!r} (POST /v1/files uploads one, GET "
                                      "/v1/files lists them)")
-                matrix = read_matrix(io.BytesIO(content))
+                try:
+                    matrix = _parse(content, file_id)
+                except BaseException:
+                    with self._lock:
+                        self._parsed.pop(file_id, None)
+                    raise
                 with self._lock:
                     self._parsed[file_id] = (lock, matrix)
-                    self._size[file_id] = matrix.nnz
+                    self._size[file_id] = _entries(matrix)
                     self._evict()
         return matrix
 
@@ -214,7 +282,22 @@ class ParsedFiles:
             self._size.pop(oldest, None)
 
 
+def _parse(content: bytes, file_id: str) -> Any:
+    """A stored upload as raydamp takes it, by its content (which the upload checked agrees with its name)."""
+    if record_format(content) == "mtx":
+        return read_matrix(io.BytesIO(content))
+    return parse_record(content, source=f"file {file_id}")[0]
+
+
+def _entries(parsed: Any) -> int:
+    if isinstance(parsed, tuple):
+        return sum(part.size for part in parsed if part is not None)
+    return parsed.nnz
+
+
 def file_resolver(store: FileStore) -> Callable[[str], Any]:
-    """files(ref) for raydamp.LinearStructure.from_dict: a stored upload, parsed once (the store's
-    ParsedFiles); an unknown id is a ValueError that raydamp reports at the matrix's path (system.K.file)."""
+    """files(ref) for raydamp's job (raydamp.jobs.build_job): a stored upload, parsed once (the store's
+    ParsedFiles): a matrix for a structure's M or K, a record's (t, values) for a load's or ground motion's
+    {"file": {"id": ...}}, a one-column record's values for an initial state's {"file": id}. An unknown id
+    is a ValueError that raydamp reports at the path that names it (system.K.file, load.file.id, ...)."""
     return store.parsed_files

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from .config import Settings
-from .files import FILES_TABLE, FileStore, file_resolver
+from .files import FILE_COLUMNS_ADDED, FILES_TABLE, FileStore, file_resolver
 from .problems import build_call
 from .runner import Outcome, Run
 from .schemas import JobSpec
@@ -27,7 +27,8 @@ CREATE TABLE IF NOT EXISTS trajectories (
     dim INTEGER NOT NULL,
     momenta INTEGER NOT NULL,
     t BLOB NOT NULL, q BLOB NOT NULL, p BLOB NOT NULL, energy BLOB NOT NULL, momentum BLOB NOT NULL,
-    work BLOB                               -- the damping work W(t) (N), NULL for jobs stored before it was kept
+    work BLOB,                              -- the damping work W(t) (N), NULL for jobs stored before it was kept
+    load_work BLOB                          -- the load's work W_f(t) (N), NULL for a run without a load
 );
 """
 
@@ -42,7 +43,8 @@ class JobRecord(TaskRecord):
 
 @dataclass(frozen=True)
 class TrajectoryArrays:
-    """The saved points: t (N,), q and p (N, n), energy (N,), momentum (N, m), work W(t) (N,) or None."""
+    """The saved points: t (N,), q and p (N, n), energy (N,), momentum (N, m), work W(t) (N,) or None, and
+    load_work W_f(t) (N,) or None (a run without a load)."""
 
     t: np.ndarray
     q: np.ndarray
@@ -50,6 +52,7 @@ class TrajectoryArrays:
     energy: np.ndarray
     momentum: np.ndarray
     work: np.ndarray | None = None
+    load_work: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -61,11 +64,12 @@ class StoredTrajectory:
     dim: int
     momenta: int
     has_work: bool = False
+    has_load_work: bool = False
 
     @property
     def row_bytes(self) -> int:
-        """Stored bytes per saved point: t, energy, work, a row of q and of p, a row of momentum."""
-        return (2 + self.has_work + 2 * self.dim + self.momenta) * 8
+        """Stored bytes per saved point: t, energy, work, load work, a row of q and of p, a row of momentum."""
+        return (2 + self.has_work + self.has_load_work + 2 * self.dim + self.momenta) * 8
 
 
 def _blob(array: np.ndarray | None) -> memoryview | None:
@@ -83,13 +87,19 @@ class JobStore(TaskStore[JobRecord], FileStore):
     TABLE, RECORD, PROGRESS, RETAINED, TABLES = "jobs", JobRecord, "progress", True, _TABLES + FILES_TABLE
     COLUMNS = "progress REAL NOT NULL DEFAULT 0, summary TEXT, failed_step INTEGER"  # summary: Solution.summary()
     COMPUTED = {"has_trajectory": "EXISTS (SELECT 1 FROM trajectories WHERE job_id = jobs.id)"}
-    # Stored bytes of a job's trajectory: t, energy, work (N), q, p (N x dim), momentum (N x m), float64.
-    BYTES = ("(SELECT points * (2 + (work IS NOT NULL) + 2 * dim + momenta) * 8 FROM trajectories "
-             "WHERE job_id = jobs.id)")
+    # Stored bytes of a job's trajectory: t, energy, work, load work (N), q, p (N x dim), momentum (N x m).
+    BYTES = ("(SELECT points * (2 + (work IS NOT NULL) + (load_work IS NOT NULL) + 2 * dim + momenta) * 8 "
+             "FROM trajectories WHERE job_id = jobs.id)")
 
     def _upgrade(self, db: sqlite3.Connection) -> None:
         if "work" not in {row["name"] for row in db.execute("PRAGMA table_info(trajectories)")}:
             db.execute("ALTER TABLE trajectories ADD COLUMN work BLOB")  # from before the work integral was kept
+        if "load_work" not in {row["name"] for row in db.execute("PRAGMA table_info(trajectories)")}:
+            db.execute("ALTER TABLE trajectories ADD COLUMN load_work BLOB")  # from before loads
+        present = {row["name"] for row in db.execute("PRAGMA table_info(files)")}
+        for column, declaration in FILE_COLUMNS_ADDED.items():  # from before records were uploaded
+            if column not in present:
+                db.execute(f"ALTER TABLE files ADD COLUMN {column} {declaration}")
 
     def work(self, settings: Settings) -> JobWork:
         return JobWork(self, settings)
@@ -99,10 +109,11 @@ class JobStore(TaskStore[JobRecord], FileStore):
                progress: float | None = None) -> None:
         """Record the end of a run and its saved points in one transaction: all of it or none."""
         row = None if trajectory is None else (
-            "INSERT OR REPLACE INTO trajectories (job_id, points, dim, momenta, t, q, p, energy, momentum, work) "
-            "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+            "INSERT OR REPLACE INTO trajectories (job_id, points, dim, momenta, t, q, p, energy, momentum, work, "
+            "load_work) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
             (job_id, *trajectory.q.shape, trajectory.momentum.shape[1],
-             *(_blob(getattr(trajectory, name)) for name in ("t", "q", "p", "energy", "momentum", "work"))))
+             *(_blob(getattr(trajectory, name)) for name in ("t", "q", "p", "energy", "momentum", "work",
+                                                              "load_work"))))
         super().finish(job_id, status, error=error, progress=1.0 if status == "completed" else progress, also=row,
                        summary=summary, failed_step=failed_step)
 
@@ -113,14 +124,15 @@ class JobStore(TaskStore[JobRecord], FileStore):
         n, dim, m = row["points"], row["dim"], row["momenta"]
         return TrajectoryArrays(t=_array(row["t"], n), q=_array(row["q"], n, dim), p=_array(row["p"], n, dim),
                                 energy=_array(row["energy"], n), momentum=_array(row["momentum"], n, m),
-                                work=_array(row["work"], n))
+                                work=_array(row["work"], n), load_work=_array(row["load_work"], n))
 
     def open_trajectory(self, job_id: str) -> tuple[sqlite3.Connection, StoredTrajectory] | None:
         """A read-only connection holding a snapshot in which the job's trajectory exists, and where it is.
         The caller reads the blobs through it (incremental I/O) and closes it."""
-        found = self.db.snapshot("SELECT rowid, points, dim, momenta, work IS NOT NULL FROM trajectories "
-                                 "WHERE job_id = ?", (job_id,))
-        return (found[0], StoredTrajectory(*found[1][:4], has_work=bool(found[1][4]))) if found else None
+        found = self.db.snapshot("SELECT rowid, points, dim, momenta, work IS NOT NULL, load_work IS NOT NULL "
+                                 "FROM trajectories WHERE job_id = ?", (job_id,))
+        return (found[0], StoredTrajectory(*found[1][:4], has_work=bool(found[1][4]),
+                                           has_load_work=bool(found[1][5]))) if found else None
 
 
 class JobWork:
@@ -135,7 +147,7 @@ class JobWork:
         solution = call.run(progress=run.report, cancel=run.token)
         result = {"summary": solution.summary(), "trajectory": TrajectoryArrays(
             t=solution.t, q=solution.q, p=solution.p, energy=solution.energy, momentum=solution.momentum,
-            work=solution.work)}
+            work=solution.work, load_work=solution.load_work)}
         if solution.status == "completed" and not math.isfinite(float(solution.t[-1])):
             # Refused at submission (step_size x steps must be finite); kept as a last guard, since a
             # run whose times overflowed has not computed what was asked.

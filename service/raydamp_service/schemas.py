@@ -100,16 +100,29 @@ class Trajectory(BaseModel):
                                             "H(t) - H(0) + W(t) is the energy balance residual (zero for the exact "
                                             "flow, O(h^2) for the order-2 methods); null for jobs stored before "
                                             "it was kept")
+    load_work: list[float | None] | None = Field(None, description="the load's work W_f(t) per point (a job with a "
+                                                 "load or ground motion), so that H(t) - H(0) + W(t) - W_f(t) is the "
+                                                 "energy budget's residual; null for a job without a load")
 
 
 class FileInfo(BaseModel):
-    """An uploaded Matrix Market file, for {"file": id} in place of a structure's M or K."""
+    """An uploaded file: a matrix (Matrix Market, for {"file": id} in place of a structure's M or K) or a
+    record (PEER .AT2, text columns t, value, or .npy: for a load's or ground motion's {"file": {"id": id}};
+    one column of values also serves as an initial state's {"file": id})."""
 
     id: str
     name: str = Field(description="the file name the client sent")
     bytes: int
-    shape: list[int] = Field(description="[rows, cols] of the matrix")
-    nnz: int = Field(description="stored entries (a symmetric file's mirrored entries counted)")
+    kind: Literal["matrix", "record"] = Field("matrix", description="matrix or record")
+    format: Literal["mtx", "at2", "npy", "columns"] = Field("mtx", description="how it was read: Matrix Market, "
+                                                            "PEER .AT2, NumPy .npy, or text columns")
+    shape: list[int] | None = Field(description="a matrix's [rows, cols] (null for a record)")
+    nnz: int | None = Field(description="a matrix's stored entries (a symmetric file's mirrored entries counted)")
+    samples: int | None = Field(None, description="a record's number of values")
+    t_start: float | None = Field(None, description="a record's first time (null: one column of values, whose "
+                                                    "sample interval a job gives as \"dt\")")
+    t_end: float | None = Field(None, description="a record's last time")
+    dt: float | None = Field(None, description="a record's sample interval, when its times are uniform")
     created_at: datetime
 
 

@@ -61,7 +61,8 @@ class Selection:
             yield Selection(first, first + min(rows, n - done) * self.every, self.every)
 
 
-_COLUMNS = ("t", "q", "p", "energy", "momentum", "work")
+_COLUMNS = ("t", "q", "p", "energy", "momentum", "work", "load_work")
+_OPTIONAL = {"work": "has_work", "load_work": "has_load_work"}  # columns NULL for some jobs
 
 
 def _width(stored: StoredTrajectory, column: str) -> int:
@@ -70,7 +71,7 @@ def _width(stored: StoredTrajectory, column: str) -> int:
 
 def read_column(connection: sqlite3.Connection, stored: StoredTrajectory, column: str,
                 selection: Selection) -> np.ndarray:
-    """One array's selected rows, (points,) for t, energy and work, else (points, width); a part of the
+    """One array's selected rows, (points,) for t, energy, work and load work, else (points, width); a part of the
     blob is read, never the whole of it."""
     width, n = _width(stored, column), len(selection)
     if width == 0 or n == 0:
@@ -84,7 +85,7 @@ def read_column(connection: sqlite3.Connection, stored: StoredTrajectory, column
 def read_arrays(connection: sqlite3.Connection, stored: StoredTrajectory, selection: Selection) -> TrajectoryArrays:
     """The selected points of every array (a caller bounds their size: Selection.pieces, a plot's decimation)."""
     arrays = {column: read_column(connection, stored, column, selection)
-              for column in _COLUMNS if column != "work" or stored.has_work}
+              for column in _COLUMNS if column not in _OPTIONAL or getattr(stored, _OPTIONAL[column])}
     return TrajectoryArrays(**arrays)
 
 
@@ -139,13 +140,14 @@ def trajectory_chunks(connection: sqlite3.Connection, stored: StoredTrajectory, 
     retention pass does not change what is being sent) and the lease; both end when the body does."""
     try:
         arrays = [("t", None), ("q", stored.dim), ("p", stored.dim), ("energy", None), ("momentum", stored.momenta)]
-        if stored.has_work:
-            arrays.append(("work", None))
+        arrays += [(column, None) for column, flag in _OPTIONAL.items() if getattr(stored, flag)]
         for i, (column, width) in enumerate(arrays):
             yield f'{"{" if i == 0 else ","}"{column}":'.encode()
             for piece in _array_json(connection, stored, column, width, selection):
                 yield piece.encode()
-        yield b"}" if stored.has_work else b',"work":null}'
+        # A job without them: null, as the Trajectory schema says.
+        yield "".join(f',"{column}":null' for column, flag in _OPTIONAL.items()
+                      if not getattr(stored, flag)).encode() + b"}"
     finally:
         connection.close()
         lease.release()

@@ -297,3 +297,76 @@ def test_a_service_with_a_token(start_server, tmp_path) -> None:
         download.value.save_as(saved)
         assert saved.read_text() == server.client.get(f"/v1/jobs/{job_id}/trajectory?format=csv").text
         assert download.value.suggested_filename == f"{job_id}-trajectory.csv"
+
+
+AT2_RECORD = """PEER NGA STRONG MOTION DATABASE RECORD
+PAGE TEST, 1 JAN 2000, SYNTHETIC, 0
+ACCELERATION TIME SERIES IN UNITS OF G
+NPTS=   400, DT=   .0500 SEC
+""" + "".join(f"{0.05 * math.sin(0.3 * k) * math.exp(-0.01 * k):15.7E}" + ("\n" if k % 5 == 4 else "")
+              for k in range(400))
+
+
+def test_a_harmonic_load_and_a_record_as_ground_motion(module_server) -> None:
+    """The Load controls: a harmonic force on the pendulum, then an uploaded .AT2 record as ground motion (a
+    malformed one refused with its reason); each run plots the energy budget from the service's numbers:
+    W_f, W, H - H0, and the residual H - H0 + W - W_f, small against the energy the load put in."""
+    base = _base(module_server)
+    with open_page(base) as page:
+        _ready(page)
+        page.select_option("#model", "damped_pendulum")
+        assert page.is_hidden("#harmonic-fields") and page.is_hidden("#ground-fields")
+        page.select_option("#load-kind", "harmonic")
+        assert page.input_value("#load-amplitude") == "0.1"  # sized to the model: one coordinate
+        page.fill("#load-omega", "0.8")
+        forced = _run(page)
+        job = module_server.job(forced)
+        assert job["status"] == "completed"
+        assert job["spec"]["load"] == {"harmonic": {"amplitude": [0.1], "omega": 0.8}}
+
+        data = module_server.client.get(f"/v1/jobs/{forced}/trajectory").json()
+        budget = _traces(page, "budget")
+        assert [trace["name"] for trace in budget] == ["W_f (load's work)", "W (damping's work)", "H - H0"]
+        assert budget[0]["y"] == data["load_work"] and budget[1]["y"] == data["work"]
+        assert budget[0]["y"][-1] == pytest.approx(job["summary"]["load_work_final"], rel=1e-12)
+        residual = _traces(page, "balance")
+        assert residual[0]["name"].startswith("H - H0 + W - W_f, damped_pendulum 3s h=0.1 + load")
+        expected = [e - data["energy"][0] + w - f for e, w, f in zip(data["energy"], data["work"], data["load_work"])]
+        assert residual[0]["y"] == pytest.approx(expected, abs=1e-15)
+        # O(h^2) at h = 0.1: 0.17 % of the work the force did.
+        assert max(map(abs, expected)) < 5e-3 * max(map(abs, data["load_work"]))
+        assert max(map(abs, data["load_work"])) > 0.05
+        assert _drawn(page, "budget") and _drawn(page, "balance")
+        assert "load work W_f" in page.inner_text("#summary")
+
+        page.select_option("#load-kind", "ground")
+        bad = AT2_RECORD.replace("NPTS=   400", "NPTS=   401")
+        page.set_input_files("#record-file", files=[{"name": "BAD.AT2", "mimeType": "text/plain",
+                                                      "buffer": bad.encode()}])
+        page.wait_for_function("() => document.body.dataset.uploaded === '1'", timeout=30_000)
+        assert "NPTS=401 but the record has 400 values" in page.inner_text("#record-message")
+        page.set_input_files("#record-file", files=[{"name": "PAGE.AT2", "mimeType": "text/plain",
+                                                      "buffer": AT2_RECORD.encode()}])
+        page.wait_for_function("() => document.body.dataset.uploaded === '2'", timeout=30_000)
+        assert "uploaded PAGE.AT2 (400 samples, dt 0.05" in page.inner_text("#record-message")
+        page.wait_for_function("() => document.getElementById('record').selectedOptions.length === 1", timeout=30_000)
+        record_id = page.input_value("#record")
+        assert module_server.client.get(f"/v1/files/{record_id}").json()["name"] == "PAGE.AT2"
+        assert page.input_value("#record-direction") == "1"
+        # h below the record's dt = 0.05, so that the kicks resolve its samples.
+        page.fill("#step_size", "0.01")
+        page.fill("#t_end", "30")
+        page.fill("#save_every", "10")
+        shaken = _run(page, previous=forced)
+        job = module_server.job(shaken)
+        assert job["status"] == "completed"
+        assert job["spec"]["ground_motion"] == {"acceleration": {"file": {"id": record_id, "factor": 9.81}},
+                                                "direction": [1]}
+        assert "load" not in job["spec"] or job["spec"]["load"] is None
+        data = module_server.client.get(f"/v1/jobs/{shaken}/trajectory").json()
+        budget = _traces(page, "budget")
+        assert budget[0]["y"] == data["load_work"] and max(map(abs, data["load_work"])) > 1e-3
+        expected = [e - data["energy"][0] + w - f for e, w, f in zip(data["energy"], data["work"], data["load_work"])]
+        assert max(map(abs, expected)) < 1e-3 * max(map(abs, data["load_work"]))  # 3.3e-4 at h = 0.01
+        # The record is in use by no queued job any more: it can be deleted.
+        assert module_server.client.delete(f"/v1/files/{record_id}").status_code == 204

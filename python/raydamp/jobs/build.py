@@ -17,7 +17,7 @@ import numpy as np
 from pydantic import ValidationError
 
 from .errors import JobError, head_path
-from .forms import ModeState, RestState
+from .forms import ModeState, RestState, VectorFile
 from .spec import JobSpec, ModelSpec, client_path
 from .system_forms import FileResolver
 
@@ -83,7 +83,7 @@ def _plain(value: Any) -> Any:
     return value
 
 
-def _initial_state(spec: JobSpec, model) -> tuple[Any, Any]:
+def _initial_state(spec: JobSpec, model, files: FileResolver | None = None) -> tuple[Any, Any]:
     state = spec.initial_state
     if isinstance(state, RestState):
         return np.zeros(model.dim), np.zeros(model.dim)
@@ -94,12 +94,40 @@ def _initial_state(spec: JobSpec, model) -> tuple[Any, Any]:
             return model.normal_mode(state.mode, state.amplitude)
         except ValueError as error:
             raise JobError(("initial_state", "mode"), f"initial_state.{error}") from None
+    vectors = {}
     for name in ("q", "p"):
         values = getattr(state, name)
+        if isinstance(values, VectorFile):
+            values = _vector_file(values.file, ("initial_state", name, "file"), files)
         if len(values) != model.dim:
             raise JobError(("initial_state", name), f"initial_state.{name} has length {len(values)}, but the model "
-                           f"has {model.dim} coordinates ({', '.join(model.coordinates)})")
-    return list(state.q), list(state.p)
+                           f"has {model.dim} coordinates ({_coordinates(model)})")
+        vectors[name] = values if isinstance(values, np.ndarray) else list(values)
+    return vectors["q"], vectors["p"]
+
+
+def _coordinates(model, shown: int = 6) -> str:
+    names = list(model.coordinates[:shown + 1])
+    return ", ".join(names[:shown]) + (", ..." if len(names) > shown else "")
+
+
+def _vector_file(file_id: str, loc: tuple, files: FileResolver | None) -> np.ndarray:
+    """The vector of an uploaded one-column file (files(id) gives its parsed (None, values))."""
+    where = ".".join(loc)
+    if files is None:
+        raise JobError(loc, f"{where}: uploaded files are a service's (POST /v1/files); give the numbers inline")
+    try:
+        record = files(file_id)
+    except ValueError as error:
+        raise JobError(loc, f"{where}: {error}") from None
+    if not isinstance(record, tuple):
+        raise JobError(loc, f"{where}: file {file_id} is a matrix (Matrix Market); a vector is a file of one column "
+                            "of numbers (.npy of shape (n,), or text with one number a line)")
+    t, values = record
+    if t is not None:
+        raise JobError(loc, f"{where}: file {file_id} holds two columns (times and values); a vector is one column "
+                            "of numbers")
+    return np.asarray(values, dtype=float)
 
 
 def build_job(spec: JobSpec, files: FileResolver | None = None) -> JobCall:
@@ -125,7 +153,7 @@ def build_job(spec: JobSpec, files: FileResolver | None = None) -> JobCall:
     load = job_load(spec, files)
     if load is not None:
         options["load"] = load
-    q0, p0 = _initial_state(spec, model)
+    q0, p0 = _initial_state(spec, model, files)
     return JobCall(model, q0, p0, options)
 
 

@@ -10,10 +10,10 @@ from __future__ import annotations
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Discriminator, Field, Tag, model_validator
 
 __all__ = ["Input", "FiniteFloat", "Vector", "numbers", "indices", "MAX_ITEM_ERRORS", "InitialState", "ModeState", "RestState", "TableauInput",
-           "MAX_VECTOR", "MAX_CHAIN_SITES", "MAX_EXPRESSION", "Expression", "Name"]
+           "MAX_VECTOR", "MAX_CHAIN_SITES", "MAX_EXPRESSION", "Expression", "Name", "FileId", "VectorFile", "STATE_VECTOR_TAGS"]
 
 # JSON parsing accepts NaN and Infinity (and 1e999 overflows to inf); no run may start from them.
 FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
@@ -74,11 +74,31 @@ class Input(BaseModel):
     model_config = ConfigDict(extra="forbid", strict=True)
 
 
+FileId = Annotated[str, Field(pattern=r"^[0-9a-f]{32}$", description="an id from POST /v1/files")]
+
+
+class VectorFile(Input):
+    """A vector too long to send inline: an uploaded file of one column of n numbers (a .npy array of
+    shape (n,), or text with one number a line), named by its id (a service's POST /v1/files)."""
+
+    file: FileId
+
+
+def _vector_form(value: object) -> str:
+    return "file form" if isinstance(value, (dict, VectorFile)) else "numbers form"
+
+
+_Numbers = Annotated[list[FiniteFloat], Field(min_length=1, max_length=MAX_VECTOR), numbers(MAX_VECTOR)]
+# Inline numbers, or {"file": id}; the tags are dropped from a 422's loc (spec.client_path).
+StateVector = Annotated[Annotated[_Numbers, Tag("numbers form")] | Annotated[VectorFile, Tag("file form")],
+                        Discriminator(_vector_form)]
+STATE_VECTOR_TAGS = frozenset({"numbers form", "file form"})
+
+
 class InitialState(Input):
-    q: Annotated[list[FiniteFloat], numbers(MAX_VECTOR)] = Field(
-        min_length=1, max_length=MAX_VECTOR, description="initial positions, length = the model's dim")
-    p: Annotated[list[FiniteFloat], numbers(MAX_VECTOR)] = Field(
-        min_length=1, max_length=MAX_VECTOR, description="initial momenta, length = the model's dim")
+    q: StateVector = Field(description="initial positions, length = the model's dim: numbers, or {\"file\": id} "
+                                       "of an uploaded one-column file (past the inline limit)")
+    p: StateVector = Field(description="initial momenta, length = the model's dim: numbers, or {\"file\": id}")
 
 
 class ModeState(Input):

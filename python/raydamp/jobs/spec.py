@@ -16,7 +16,8 @@ from pydantic import AfterValidator, AliasChoices, ConfigDict, Discriminator, Fi
 from ..methods.catalogue import compositions, methods
 from ..systems.models import MODELS, make_model
 from .errors import JobError
-from .forms import FiniteFloat, InitialState, Input, MAX_VECTOR, ModeState, RestState, TableauInput, Vector, indices
+from .forms import STATE_VECTOR_TAGS, FiniteFloat, InitialState, Input, MAX_VECTOR, ModeState, RestState, TableauInput, \
+    Vector, indices
 from .system_forms import FORM_TAGS, MATRIX_TAGS, SYSTEM_TAGS, VALUE_TAGS, AnySystemInput, FileResolver
 
 __all__ = ["ModelSpec", "JobSpec", "StateInput", "UNION_TAGS", "STEP_SIZE_ALIAS", "client_path"]
@@ -57,7 +58,7 @@ def _state_form(value: object) -> str:
 StateInput = Annotated[Annotated[InitialState, Tag("q, p form")] | Annotated[ModeState, Tag("mode form")]
                        | Annotated[RestState, Tag("rest form")], Discriminator(_state_form)]
 UNION_TAGS = {"initial_state": frozenset({"q, p form", "mode form", "rest form"}), "system": SYSTEM_TAGS, "M": MATRIX_TAGS,
-              "K": MATRIX_TAGS, **FORM_TAGS}
+              "K": MATRIX_TAGS, "q": STATE_VECTOR_TAGS, "p": STATE_VECTOR_TAGS, **FORM_TAGS}
 GRID_TAGS = frozenset({"range", "values"})  # a sweep's axis forms (sweep_spec.py)
 
 

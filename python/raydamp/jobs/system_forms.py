@@ -14,7 +14,7 @@ from pydantic import BeforeValidator, Discriminator, Field, Tag
 
 from ..systems.system.spec import OUTSIDE_CLASS
 from .errors import JobError, path_error
-from .forms import MAX_CHAIN_SITES, MAX_VECTOR, Expression, FiniteFloat, Input, Name, indices, numbers
+from .forms import MAX_CHAIN_SITES, MAX_VECTOR, Expression, FileId, FiniteFloat, Input, Name, indices, numbers
 
 __all__ = ["SystemInput", "ChainInput", "LinearStructureInput", "CooForm", "DiagonalForm", "FileForm",
            "AnySystemInput", "FileResolver", "MAX_COO_ENTRIES", "MAX_STRUCTURE_DIM", "SYSTEM_TAGS", "MATRIX_TAGS",
@@ -183,7 +183,6 @@ class ChainInput(Input):
 
 MAX_COO_ENTRIES = 1_000_000  # raydamp.structure.MAX_PLAIN_ENTRIES; a service's max_structure_nnz is at most this
 MAX_STRUCTURE_DIM = 10**7  # a service's max_structure_dim is at most this
-FileId = Annotated[str, Field(pattern=r"^[0-9a-f]{32}$", description="an id from POST /v1/files")]
 
 
 class CooMatrix(Input):

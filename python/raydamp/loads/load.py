@@ -259,14 +259,21 @@ class Load:
                 else:
                     if files is None:
                         raise ValueError(f"{where}.id: uploaded files are the service's (POST /v1/files)")
-                    record = files(body["id"])  # a path, or the parsed (t, values)
+                    try:
+                        record = files(body["id"])  # a path, or the parsed (t, values): t None for one column
+                    except ValueError as e:
+                        raise ValueError(f"{where}.id: {e}") from None
                     if isinstance(record, tuple):
-                        load = cls.series(*record, hold=body.get("hold", False)) * real(
+                        t, values = _record_times(record, body.get("dt"), f"{where}.dt", body["id"])
+                        load = cls.series(t, values, hold=body.get("hold", False)) * real(
                             f"{where}.factor", body.get("factor", 1.0))
                         load = cls(load._scaled_terms())
-                    else:
+                    elif isinstance(record, (str, Path)):
                         load = cls.from_file(record, None, body.get("factor", 1.0), dt=body.get("dt"),
                                              hold=body.get("hold", False))
+                    else:
+                        raise ValueError(f"{where}.id: file {body['id']} is a matrix (Matrix Market), not a "
+                                         "record; upload a .AT2, CSV or .npy record")
                 load = cls([replace(load.terms[0], direction=direction)])
         except ValueError as e:
             text = str(e)
@@ -298,6 +305,19 @@ def set_load_parameters(plain: dict[str, Any], values: Mapping[str, Any]) -> dic
             elif "expression" in term and name in term["expression"].get("parameters", {}):
                 term["expression"]["parameters"] = {**term["expression"]["parameters"], name: value}
     return out
+
+
+def _record_times(record, dt, name: str, file_id) -> tuple[np.ndarray, np.ndarray]:
+    """An uploaded record's (t, values): its own times, or one column of values sampled at dt from t = 0."""
+    t, values = record
+    if t is None and dt is None:
+        raise ValueError(f"{name}: file {file_id} holds one column of values (no times); give dt, their sample "
+                         "interval")
+    if t is not None and dt is not None:
+        raise ValueError(f"{name}: file {file_id} has a time column, so dt must not be given")
+    if t is None:
+        t = np.arange(len(values)) * real(name, dt, positive=True)
+    return t, values
 
 
 def _plain_direction(value, name: str):

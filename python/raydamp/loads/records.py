@@ -7,12 +7,29 @@ names the file and what is wrong in it.
 
 from __future__ import annotations
 
+import io
 import re
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["read_record", "parse_at2", "parse_columns"]
+__all__ = ["read_record", "parse_at2", "parse_columns", "from_array", "Record", "record_format", "parse_record",
+           "with_times", "describe_record", "FORMATS"]
+
+# What an uploaded file holds, told apart by its name's suffix and its content (record_format).
+FORMATS = ("mtx", "at2", "npy", "columns")
+_SUFFIXES = {".mtx": "mtx", ".mm": "mtx", ".at2": "at2", ".npy": "npy"}
+_NPY_MAGIC = b"\x93NUMPY"
+
+
+class Record(NamedTuple):
+    """A record as read from a file: ``t`` the sample times, or None for a file of one column of
+    values (sampled at a dt the user gives, or a vector such as an initial state), and ``values``."""
+
+    t: np.ndarray | None
+    values: np.ndarray
+
 
 # "NPTS=  5590, DT=   .0050 SEC" (NGA-West2) or "5590    .0050    NPTS, DT" (the older format).
 _NPTS_DT = re.compile(r"NPTS\s*=\s*([0-9]+)\s*,?\s*DT\s*=\s*([-+0-9.eE]+)", re.IGNORECASE)
@@ -71,9 +88,98 @@ def parse_at2(text: str, *, source: str = "record") -> tuple[np.ndarray, np.ndar
     return np.arange(npts) * dt, array
 
 
-def parse_columns(text: str, *, source: str = "file", dt: float | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Two columns t, value (comma, semicolon or white space between), one header line allowed;
-    or one column of values with ``dt`` given."""
+def record_format(content: bytes, name: str | None = None) -> str:
+    """Which reader a file's bytes are for: "mtx" (Matrix Market), "at2" (PEER NGA), "npy" or "columns"
+    (text). A name's suffix (.mtx, .mm, .AT2, .npy) decides; otherwise (and with no name) the content:
+    the Matrix Market banner, NumPy's magic string, NPTS and DT on line 4, else text columns."""
+    if name is not None:
+        by_name = _SUFFIXES.get(Path(name).suffix.lower())
+        if by_name is not None:
+            return by_name
+    if content[:14].lower() == b"%%matrixmarket":
+        return "mtx"
+    if content.startswith(_NPY_MAGIC):
+        return "npy"
+    lines = content[:4096].decode("utf-8", errors="replace").splitlines()
+    header = lines[_HEADER_LINES - 1] if len(lines) >= _HEADER_LINES else ""
+    if not header.lstrip().startswith("#") and (_NPTS_DT.search(header) or _OLD_NPTS_DT.search(header)):
+        return "at2"  # (a text file's comment line may mention NPTS; an .AT2 header line is no comment)
+    return "columns"
+
+
+def parse_record(content: bytes, *, name: str | None = None, source: str | None = None) -> tuple[Record, str]:
+    """(the record, its format) of a file's bytes: a PEER .AT2 record, a .npy array ((T, 2) of t, value,
+    or (T,) of values) or text columns (t, value, or one column of values). Every check of a load's
+    record is made here (times increasing, values finite, DT > 0, NPTS as announced), so that a file
+    read once serves any job; a ValueError names the file and the problem. A Matrix Market file is
+    refused: read it with raydamp.LinearStructure."""
+    source = source or name or "file"
+    fmt = record_format(content, name)
+    if fmt == "mtx":
+        raise ValueError(f"{source}: a Matrix Market matrix, not a record")
+    if fmt == "at2":
+        t, values = parse_at2(content.decode("utf-8", errors="replace"), source=source)
+    elif fmt == "npy":
+        t, values = _columns(_npy(content, source), source)
+    else:
+        t, values = _columns(_text_columns(content.decode("utf-8", errors="replace"), source), source)
+    if name is not None and record_format(content) != fmt:
+        raise ValueError(f"{source}: read as {fmt} by its name, but its content reads as {record_format(content)}; "
+                         "rename it")
+    from .terms import history, times
+
+    try:
+        values = history("values", values, values.shape[0])
+        t = None if t is None else times("t", t)
+    except ValueError as error:
+        raise ValueError(f"{source}: {error}") from None
+    if values.ndim != 1:
+        raise ValueError(f"{source}: expected one column of values, got shape {values.shape}")
+    return Record(t, values), fmt
+
+
+def describe_record(record: Record) -> dict:
+    """What a listing shows of a record: samples, and for one with times t_start, t_end and dt (the
+    sample interval when the times are uniform to rounding, else None)."""
+    t, values = record
+    out = {"samples": int(values.size), "t_start": None, "t_end": None, "dt": None}
+    if t is not None:
+        out["t_start"], out["t_end"] = float(t[0]), float(t[-1])
+        if t.size > 1:
+            steps = np.diff(t)
+            mean = (t[-1] - t[0]) / (t.size - 1)
+            if np.all(np.abs(steps - mean) <= 1e-9 * mean):
+                out["dt"] = float(mean)
+    return out
+
+
+def _npy(content: bytes, source: str) -> np.ndarray:
+    """A .npy file's array, its header checked against the file's size first: np.load allocates what
+    the header announces, so a 100-byte file claiming 10^12 floats must be refused before it is read."""
+    stream = io.BytesIO(content)
+    try:
+        version = np.lib.format.read_magic(stream)
+        if version == (1, 0):
+            shape, _, dtype = np.lib.format.read_array_header_1_0(stream)
+        elif version == (2, 0):
+            shape, _, dtype = np.lib.format.read_array_header_2_0(stream)
+        else:
+            raise ValueError(f"format version {version} (1.0 and 2.0 are read)")
+    except ValueError as error:
+        raise ValueError(f"{source}: not a NumPy array file ({error})") from None
+    if dtype.hasobject or dtype.kind not in "iuf":
+        raise ValueError(f"{source}: expected numbers, got an array of {dtype}")
+    announced = int(np.prod(shape, dtype=np.int64)) * dtype.itemsize
+    if announced > len(content) - stream.tell():
+        raise ValueError(f"{source}: the header announces shape {tuple(shape)}, more than a file of {len(content)} "
+                         "bytes holds")
+    try:
+        return np.load(io.BytesIO(content), allow_pickle=False)
+    except ValueError as error:
+        raise ValueError(f"{source}: not a NumPy array file ({error})") from None
+
+
+def _text_columns(text: str, source: str) -> np.ndarray:
     rows: list[list[float]] = []
     for number, line in enumerate(text.splitlines(), start=1):
         line = line.split("#", 1)[0].strip()
@@ -91,11 +197,11 @@ def parse_columns(text: str, *, source: str = "file", dt: float | None = None) -
     widths = {len(r) for r in rows}
     if len(widths) != 1:
         raise ValueError(f"{source}: every line needs the same number of columns (found {sorted(widths)})")
-    return from_array(np.asarray(rows, dtype=float), dt=dt, source=source)
+    return np.asarray(rows, dtype=float)
 
 
-def from_array(array: np.ndarray, *, dt: float | None, source: str) -> tuple[np.ndarray, np.ndarray]:
-    """(t, values) of an (T, 2) array of t, value, or of a (T,) array of values sampled at dt."""
+def _columns(array: np.ndarray, source: str) -> tuple[np.ndarray | None, np.ndarray]:
+    """(t, values) of a (T, 2) array, (None, values) of a (T,) or (T, 1) one."""
     array = np.asarray(array)
     if array.dtype.kind not in "iuf":
         raise ValueError(f"{source}: expected numbers, got an array of {array.dtype}")
@@ -103,17 +209,37 @@ def from_array(array: np.ndarray, *, dt: float | None, source: str) -> tuple[np.
     if array.ndim == 2 and array.shape[1] == 1:
         array = array[:, 0]
     if array.ndim == 1:
-        if dt is None:
-            raise ValueError(f"{source}: one column of values needs dt (the sample interval)")
-        if not (np.isfinite(dt) and dt > 0):
-            raise ValueError(f"dt must be > 0, got {dt!r}")
-        t, values = np.arange(array.size) * float(dt), array
+        t, values = None, array
     elif array.ndim == 2 and array.shape[1] == 2:
-        if dt is not None:
-            raise ValueError(f"{source}: has a time column, so dt must not be given")
         t, values = array[:, 0].copy(), array[:, 1].copy()
     else:
         raise ValueError(f"{source}: expected columns t, value (shape (T, 2)) or one column, got shape {array.shape}")
-    if t.size == 0:
+    if values.size == 0:
         raise ValueError(f"{source}: no samples")
+    return t, values
+
+
+def parse_columns(text: str, *, source: str = "file", dt: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Two columns t, value (comma, semicolon or white space between), one header line allowed;
+    or one column of values with ``dt`` given."""
+    return from_array(_text_columns(text, source), dt=dt, source=source)
+
+
+def from_array(array: np.ndarray, *, dt: float | None, source: str) -> tuple[np.ndarray, np.ndarray]:
+    """(t, values) of an (T, 2) array of t, value, or of a (T,) array of values sampled at dt."""
+    return with_times(*_columns(array, source), dt=dt, source=source)
+
+
+def with_times(t: np.ndarray | None, values: np.ndarray, *, dt: float | None, source: str,
+               dt_name: str = "dt") -> tuple[np.ndarray, np.ndarray]:
+    """(t, values): a record's own times, or values sampled at dt from t = 0 (one column)."""
+    if t is None:
+        if dt is None:
+            raise ValueError(f"{source}: one column of values needs {dt_name} (the sample interval)")
+        if isinstance(dt, bool) or not isinstance(dt, (int, float, np.floating, np.integer)) \
+                or not (np.isfinite(dt) and dt > 0):
+            raise ValueError(f"{dt_name} must be > 0, got {dt!r}")
+        return np.arange(values.size) * float(dt), values
+    if dt is not None:
+        raise ValueError(f"{source}: has a time column, so {dt_name} must not be given")
     return t, values

@@ -368,6 +368,9 @@ def _matrix_from_file(key: str, ref, n: int | None, files):
         source = ref if files is None else files(ref)
     except ValueError as error:
         raise ValueError(f"{key}.file: {error}") from None
+    if isinstance(source, tuple):  # the service's parse of an uploaded record: (t, values)
+        raise ValueError(f"{key}.file: file {ref} is a record (a load's history or a vector), not a Matrix Market "
+                         "matrix")
     try:
         matrix = _read_matrix(key, source)
     except ValueError as error:  # "K must be square ..." or "K: cannot read ..."

@@ -1,5 +1,6 @@
-"""/v1/files: upload, list and remove Matrix Market files, which a linear structure's M or K names
-as {"file": id}.
+"""/v1/files: upload, list and remove files: Matrix Market matrices, which a linear structure's M or K
+names as {"file": id}, and records (PEER .AT2, text columns t, value, .npy), which a load or a ground motion
+names as {"file": {"id": id}} (a one-column record also an initial state's q or p, {"file": id}).
 
 An upload is multipart form data with one part named "file" (`curl -F file=@K.mtx`). Its size is
 counted as it arrives (RequestGuard, max_file_bytes): a larger one gets 413 before it is read whole,
@@ -15,7 +16,7 @@ from fastapi import APIRouter, File, HTTPException, Query, Request, Response, Up
 from fastapi.exceptions import RequestValidationError
 
 from ..deps import SettingsDep, StoreDep
-from ..files import FileRecord, MatrixFileError, check_matrix_market
+from ..files import FileRecord, RecordFileInfo, UploadError, check_upload
 from ..schemas import FileInfo, FileList
 
 router = APIRouter(prefix="/v1/files", tags=["files"])
@@ -25,6 +26,10 @@ _MAX_NAME = 200
 
 
 def _info(record: FileRecord) -> FileInfo:
+    if record.kind == "record":
+        return FileInfo(id=record.id, name=record.name, bytes=record.bytes, kind="record", format=record.format,
+                        shape=None, nnz=None, samples=record.shape[0], t_start=record.t_start, t_end=record.t_end,
+                        dt=record.dt, created_at=record.created_at)
     return FileInfo(id=record.id, name=record.name, bytes=record.bytes, shape=list(record.shape), nnz=record.nnz,
                     created_at=record.created_at)
 
@@ -40,13 +45,19 @@ def too_large_detail(limit: int) -> str:
 
 @router.post("", status_code=201, response_model=FileInfo,
              responses={413: {"description": "the file is over max_file_bytes"},
-                        422: {"description": "no file part, or not a Matrix Market file this service can use (a "
-                                             "real square matrix of at most max_structure_dim rows); detail[].msg "
-                                             "says why"},
+                        422: {"description": "no file part, or not a file this service can use: a Matrix Market "
+                                             "file (a real square matrix of at most max_structure_dim rows) or a "
+                                             "record raydamp reads (.AT2 with NPTS values, times increasing, "
+                                             "finite numbers); detail[].msg says why"},
                         507: {"description": "the stored files would exceed max_stored_file_bytes; delete some"}})
-def upload_file(file: Annotated[UploadFile, File(description="a Matrix Market (.mtx) file: a real square matrix")],
+def upload_file(file: Annotated[UploadFile, File(description="a Matrix Market (.mtx) file, a real square matrix; "
+                                                 "or a record: PEER .AT2, CSV/text columns t, value, or .npy")],
                 request: Request, response: Response, store: StoreDep, settings: SettingsDep) -> FileInfo:
-    """Store a Matrix Market file; use its id as {"file": id} for a linear structure's M or K."""
+    """Store a file, read by its name's suffix and its content. A Matrix Market matrix: {"file": id} for a
+    linear structure's M or K. A record (.AT2, two columns t, value as CSV/text, a .npy of shape (T, 2); or
+    one column of values, whose sample interval a job gives as "dt"): {"file": {"id": id, "direction": [...],
+    "factor": 9.81}} as a load, or as a ground motion's acceleration; a one-column record also serves as an
+    initial state's {"file": id}."""
     limit = settings.max_file_bytes
     if file.size is not None and file.size > limit:
         raise HTTPException(413, detail=too_large_detail(limit))
@@ -54,12 +65,16 @@ def upload_file(file: Annotated[UploadFile, File(description="a Matrix Market (.
     if len(content) > limit:
         raise HTTPException(413, detail=too_large_detail(limit))
     try:
-        info = check_matrix_market(content, max_dim=settings.max_structure_dim)
-    except MatrixFileError as error:
+        info = check_upload(content, _name(file.filename), max_dim=settings.max_structure_dim)
+    except UploadError as error:
         raise RequestValidationError([{"type": "value_error", "loc": ("body", "file"), "msg": str(error),
                                        "input": _name(file.filename)}]) from None
-    record = store.add_file(_name(file.filename), content, info.shape, info.nnz,
-                            max_total_bytes=settings.max_stored_file_bytes)
+    if isinstance(info, RecordFileInfo):
+        record = store.add_file(_name(file.filename), content, max_total_bytes=settings.max_stored_file_bytes,
+                                record=info)
+    else:
+        record = store.add_file(_name(file.filename), content, info.shape, info.nnz,
+                                max_total_bytes=settings.max_stored_file_bytes)
     if record is None:
         raise HTTPException(507, detail=f"the stored files would exceed max_stored_file_bytes = "
                             f"{settings.max_stored_file_bytes} bytes; delete files no longer needed")

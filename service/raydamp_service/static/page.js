@@ -93,6 +93,70 @@ function showModel() {
   setNumbers("q", start.q);
   setNumbers("p", start.p);
   for (const key of ["step_size", "t_end", "save_every"]) if (start[key] !== undefined) $(key).value = start[key];
+  loadDefaults(model.dim);
+}
+
+// ---- the load: none, a harmonic force, or an uploaded record as ground motion --------------------
+
+// A force on the first coordinate and the ground moving every coordinate, sized to the system.
+function loadDefaults(dim) {
+  setNumbers("load-amplitude", Array.from({ length: dim }, (_, i) => (i === 0 ? 0.1 : 0)));
+  setNumbers("record-direction", Array(dim).fill(1));
+}
+
+function showLoad() {
+  const kind = $("load-kind").value;
+  $("harmonic-fields").hidden = kind !== "harmonic";
+  $("ground-fields").hidden = kind !== "ground";
+  if (kind === "ground") refreshRecords();
+}
+
+function describeRecord(file) {
+  const dt = file.dt !== null ? `, dt ${file.dt}` : "";
+  return `${file.name} (${file.samples} samples${dt}, t ${file.t_start} to ${file.t_end})`;
+}
+
+// The records a ground motion can name: those with their own times (a one-column file needs a dt).
+async function refreshRecords(select) {
+  let list;
+  try {
+    list = await getJSON("/v1/files?limit=100");
+  } catch (error) {
+    return;
+  }
+  const records = list.files.filter((file) => file.kind === "record" && file.t_start !== null);
+  const chosen = select || $("record").value;
+  $("record").replaceChildren();
+  for (const file of records) option($("record"), file.id, describeRecord(file));
+  if (records.some((file) => file.id === chosen)) $("record").value = chosen;
+}
+
+// The upload is read and checked by the service (raydamp's reader): a bad file gets its reason here.
+async function uploadRecord() {
+  const file = $("record-file").files[0];
+  if (!file) return;
+  const message = $("record-message");
+  message.className = "hint";
+  message.textContent = `uploading ${file.name} ...`;
+  const form = new FormData();
+  form.append("file", file, file.name);
+  let response;
+  try {
+    response = await api("/v1/files", { method: "POST", body: form });
+  } catch (error) {
+    if (!(error instanceof NeedsToken)) throw error;
+    return;
+  }
+  const body = await response.json().catch(() => ({ detail: response.statusText }));
+  if (response.status === 201 && body.kind === "record") {
+    message.textContent = `uploaded ${describeRecord(body)}`;
+    await refreshRecords(body.id);
+  } else {
+    message.className = "error";
+    const detail = Array.isArray(body.detail) ? body.detail.map((d) => d.msg).join("; ") : body.detail;
+    message.textContent = response.ok ? `${file.name} is a matrix, not a record` : `${response.status}: ${detail}`;
+  }
+  document.body.dataset.uploaded = String(Number(document.body.dataset.uploaded || 0) + 1);
 }
 
 function showExample() {
@@ -101,6 +165,7 @@ function showExample() {
   $("system").value = JSON.stringify(example.system, null, 2);
   setNumbers("q", example.q);
   setNumbers("p", example.p);
+  loadDefaults(example.q.length);
   for (const key of ["step_size", "t_end", "save_every"]) $(key).value = example[key];
   $("method").value = example.method;
   showMethod();
@@ -167,6 +232,14 @@ function buildSpec() {
   spec.t_end = numberOr($("t_end").value);
   spec.save_every = numberOr($("save_every").value);
   spec.initial_state = { q: numbers($("q").value), p: numbers($("p").value) };
+  const load = $("load-kind").value;
+  if (load === "harmonic") {
+    spec.load = { harmonic: { amplitude: numbers($("load-amplitude").value), omega: numberOr($("load-omega").value) } };
+  } else if (load === "ground") {
+    if (!$("record").value) throw new FormError(["ground_motion"], "upload a record first (.AT2, CSV or .npy)");
+    spec.ground_motion = { acceleration: { file: { id: $("record").value, factor: numberOr($("record-factor").value) } },
+      direction: numbers($("record-direction").value) };
+  }
   return spec;
 }
 
@@ -180,6 +253,10 @@ function jsonPath(loc) {
 function controlFor(loc) {
   const parts = loc[0] === "body" ? loc.slice(1) : loc;
   if (parts[0] === "initial_state") return $(parts[1] === "p" ? "p" : "q");
+  if (parts[0] === "load") return $(parts.includes("omega") ? "load-omega" : "load-amplitude");
+  if (parts[0] === "ground_motion") {
+    return $(parts[1] === "direction" ? "record-direction" : parts.includes("factor") ? "record-factor" : "record");
+  }
   return $(String(parts[0])) || null;
 }
 
@@ -283,6 +360,8 @@ function showSummary(summary) {
   const rows = [["steps", summary.steps], ["t final", summary.t_final], ["saved points", summary.saved_points],
     ["H initial", summary.energy_initial], ["H final", summary.energy_final],
     ["energy dissipated", summary.energy_dissipated], ["momentum drift", summary.momentum_drift],
+    ...(summary.load_work_final === null || summary.load_work_final === undefined ? [] : [
+      ["load work W_f", summary.load_work_final], ["max |H − H0 + W − W_f|", summary.energy_balance_max]]),
     ["wall time (s)", summary.wall_time]];
   const table = $("summary");
   table.replaceChildren();
@@ -337,7 +416,8 @@ function label(job) {
   const system = spec.model || (spec.system && (spec.system.name || spec.system.kind)) || "system";
   const composed = spec.composition ? ` ∘ ${spec.composition}` : "";
   const tableau = spec.tableau ? "/" + (typeof spec.tableau === "string" ? spec.tableau : "own tableau") : "";
-  return `${system} ${spec.method}${tableau}${composed} h=${spec.h ?? spec.step_size}`;
+  const load = spec.ground_motion ? " + ground motion" : spec.load ? " + load" : "";
+  return `${system} ${spec.method}${tableau}${composed} h=${spec.h ?? spec.step_size}${load}`;
 }
 
 const column = (rows, k) => rows.map((row) => row[k]);
@@ -361,18 +441,38 @@ function draw(job, trajectory) {
     { x: trajectory.t, y: trajectory.energy, mode: "lines", name: label(job) }],
   layout("energy H(t)", "t", "H"), config);
 
-  // H(t) - H(0) + W(t): what the method lost or gained beyond the damping work (zero for the exact
-  // flow, O(h^2) for the order-2 splittings; the paper's measure of dissipating at the right rate).
+  // H(t) - H(0) + W(t) - W_f(t): what the method lost or gained beyond the damping work W and the
+  // load's work W_f (zero for the exact flow, O(h^2) for the order-2 splittings; the paper's measure
+  // of dissipating at the right rate). Without a load W_f is 0.
   const balance = $("plot-balance");
+  const loaded = Array.isArray(trajectory.load_work);
   balance.hidden = !Array.isArray(trajectory.work) || trajectory.energy.length === 0;
   if (balance.hidden) {
     Plotly.purge(balance);
   } else {
     const h0 = trajectory.energy[0];
-    Plotly.newPlot(balance, [{ x: trajectory.t, y: trajectory.energy.map((e, i) => e - h0 + trajectory.work[i]),
-      mode: "lines", name: `H - H0 + W, ${label(job)}` }],
-    layout("energy balance H(t) - H(0) + W(t)", "t", "residual", { yaxis: { title: { text: "residual" },
-      exponentformat: "e" } }), config);
+    const forced = (i) => (loaded ? trajectory.load_work[i] : 0);
+    const what = loaded ? "H - H0 + W - W_f" : "H - H0 + W";
+    Plotly.newPlot(balance, [{ x: trajectory.t,
+      y: trajectory.energy.map((e, i) => e - h0 + trajectory.work[i] - forced(i)), mode: "lines",
+      name: `${what}, ${label(job)}` }],
+    layout(loaded ? "energy balance H(t) - H(0) + W(t) - W_f(t)" : "energy balance H(t) - H(0) + W(t)", "t",
+      "residual", { yaxis: { title: { text: "residual" }, exponentformat: "e" } }), config);
+  }
+
+  // The budget itself, under a load: the energy the load put in (W_f), what the damping took out (W),
+  // and what the system holds (H - H0); the balance above is their difference.
+  const budget = $("plot-budget");
+  budget.hidden = balance.hidden || !loaded;
+  if (budget.hidden) {
+    Plotly.purge(budget);
+  } else {
+    const h0 = trajectory.energy[0];
+    Plotly.newPlot(budget, [
+      { x: trajectory.t, y: trajectory.load_work, mode: "lines", name: "W_f (load's work)" },
+      { x: trajectory.t, y: trajectory.work, mode: "lines", name: "W (damping's work)" },
+      { x: trajectory.t, y: trajectory.energy.map((e) => e - h0), mode: "lines", name: "H - H0" }],
+    layout("energy budget: W_f = H - H0 + W", "t", "energy"), config);
   }
 
   const phase = names.map((name, k) => ({
@@ -471,6 +571,8 @@ function wire() {
   $("model").addEventListener("change", showModel);
   $("example").addEventListener("change", showExample);
   $("method").addEventListener("change", showMethod);
+  $("load-kind").addEventListener("change", showLoad);
+  $("record-file").addEventListener("change", uploadRecord);
   $("tableau").addEventListener("change", showComposition);
   for (const radio of document.querySelectorAll("input[name=source]")) radio.addEventListener("change", showSource);
   $("job-form").addEventListener("submit", submit);
