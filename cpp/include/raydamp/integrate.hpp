@@ -126,6 +126,11 @@ double momentum_decay_rate(const Model& model) {
   else return 0.0;
 }
 
+template <class D, class = void>
+struct has_noise_check : std::false_type {};
+template <class D>
+struct has_noise_check<D, std::void_t<decltype(std::declval<const D&>().has_noise())>> : std::true_type {};
+
 // Refuses, naming the reason, a temperature that Method, composition or the model's damping cannot take.
 template <class Method, class Model>
 void check_temperature(const Model& model, const Composition& composition, double temperature) {
@@ -143,9 +148,14 @@ void check_temperature(const Model& model, const Composition& composition, doubl
   if (model.eps == 0.0)
     throw std::invalid_argument("temperature: this model has no damping (eps = 0); thermal noise is the damping's "
                                 "fluctuation-dissipation partner");
-  if constexpr (!flows::has_thermal_noise<Model>::value)
+  if constexpr (!flows::has_thermal_noise<Model>::value) {
     throw std::invalid_argument("temperature: this system's damping has no exact noise flow yet (isotropic, "
-                                "radial and constant-matrix damping have)");
+                                "radial and constant-matrix damping have, and a LinearStructure's alpha M)");
+  } else if constexpr (has_noise_check<decltype(model.damping)>::value) {
+    if (!model.damping.has_noise())
+      throw std::invalid_argument("temperature: a LinearStructure with beta K damping has no exact noise flow yet "
+                                  "(with beta = 0, alpha M damping, it has)");
+  }
 }
 
 namespace detail {

@@ -138,6 +138,8 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
     if not isinstance(model, Model):
         raise ValueError(f"model must be a raydamp model (e.g. raydamp.models.DampedPendulum()), got {model!r}")
     names, with_tableau = _catalogue()
+    if method is None and temperature is not None and temperature != 0:
+        method = "3s"  # at a temperature the choice is among the methods with exact noise flows: 3s (OABAO)
     method, tableau, method_reason = choose_method(model, method, tableau, composition, h)
     if not isinstance(method, str) or method not in names:
         raise ValueError(f"method: unknown method {method!r} (known: {', '.join(names)})")

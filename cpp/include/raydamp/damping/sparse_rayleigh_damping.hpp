@@ -14,6 +14,7 @@
 // one sparse Cholesky factorisation per distinct c (per run: h a_ii, and the last step's).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -90,6 +91,15 @@ class SparseRayleighDamping {
     apply(f.series->exp, p, y);
     apply(f.series->t_phi1, g, z);
     p = y - z;
+  }
+
+  // Thermal noise: with alpha M damping alone (beta = 0) A = alpha I, so the OU flow's noise is
+  // sqrt(kT (1 - e^{-2 alpha t})) M^{1/2} xi (a root of M: sqrt of a lumped one, the Cholesky factor of a
+  // consistent one). beta K damping needs (I - e^{-2tS})^{1/2} of the whole spectrum: not yet.
+  bool has_noise() const { return beta_ == 0.0; }
+  template <class Q, class M, class X, class P>
+  void add_noise(const Q&, const Factors& f, const M& mass, double sigma, const X& xi, P& p) const {
+    mass.add_root_product(sigma * std::sqrt(std::max(0.0, -std::expm1(-2.0 * alpha_ * f.t))), xi, p);
   }
 
   // out = A p = alpha p + beta K M^{-1} p (out must not alias p).

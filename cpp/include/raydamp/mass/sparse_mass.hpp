@@ -44,6 +44,16 @@ class SparseCholesky {
 
   Eigen::Index nonzeros() const { return llt_.matrixL().nestedExpression().nonZeros(); }
 
+  // out += c P^{-1} L x: with A = P^{-1} L L^T P^{-T}, noise of covariance c^2 A from a standard normal x.
+  template <class X, class Out>
+  void add_root_product(double c, const X& x, Out& out) const {
+    Eigen::VectorXd& y = thread_scratch(kScratchSolve, x.size());
+    y.noalias() = llt_.matrixL() * x;
+    Eigen::VectorXd& z = thread_scratch(kScratchProduct, x.size());
+    z.noalias() = llt_.permutationPinv() * y;
+    out += c * z;
+  }
+
  private:
   Eigen::SimplicialLLT<SparseColMajor, Eigen::Lower, Eigen::AMDOrdering<int>> llt_;
 };
@@ -52,6 +62,8 @@ struct LumpedMass {
   static constexpr const char* kind = "lumped";
   Eigen::VectorXd m, inverse;  // the diagonal of M and its reciprocals
 
+  Eigen::VectorXd root;  // sqrt(M[i, i]): thermal noise
+
   explicit LumpedMass(const Eigen::VectorXd& diagonal, const std::string& argument = "M") : m(diagonal) {
     if (diagonal.size() == 0) throw std::invalid_argument(argument + ": empty");
     for (Eigen::Index i = 0; i < diagonal.size(); ++i)
@@ -59,7 +71,12 @@ struct LumpedMass {
         throw std::invalid_argument(argument + ": a lumped (diagonal) mass needs every M[i, i] > 0 and finite; M[" +
                                     std::to_string(i) + ", " + std::to_string(i) + "] = " + std::to_string(diagonal[i]));
     inverse = m.cwiseInverse();
+    root = m.cwiseSqrt();
   }
+
+  // p += c M^{1/2} x.
+  template <class X, class P>
+  void add_root_product(double c, const X& x, P& p) const { p += c * root.cwiseProduct(x); }
 
   Eigen::Index size() const { return m.size(); }
   template <class P, class V>
@@ -98,6 +115,10 @@ struct ConsistentMass {
     return 0.5 * p.dot(v);
   }
   SparseColMajor matrix() const { return SparseColMajor(*m); }
+
+  // p += c L x, L L^T = M (the Cholesky factor, permuted back).
+  template <class X, class P>
+  void add_root_product(double c, const X& x, P& p) const { cholesky->add_root_product(c, x, p); }
 };
 
 }  // namespace raydamp
