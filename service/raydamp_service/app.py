@@ -37,10 +37,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         store, sweeps = JobStore(database), SweepStore(database)
         store.open()
         sweeps.open()
-        runner, sweep_runner = Runner(store, settings), Runner(sweeps, settings)
+        # The check processes compile users' systems, for the submissions and for the job runs.
+        app.state.checks = checks = CheckPool(settings)
+        runner = Runner(store, settings, store.work(settings, checks))
+        sweep_runner = Runner(sweeps, settings)
         app.state.store, app.state.runner = store, runner
         app.state.sweeps, app.state.sweep_runner = sweeps, sweep_runner
-        app.state.checks = checks = CheckPool(settings)
         checks.start()
         runner.start()
         sweep_runner.start()

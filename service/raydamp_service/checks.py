@@ -8,8 +8,14 @@ memory budget (check_memory_bytes: address space its process may add to what it 
 RLIMIT_AS); past either the process is killed and replaced, and the submission gets 422 on `system` naming
 the budget. At most max_pending_checks run or wait for a process at once; more get 429.
 
-What the checks compile stays in their processes (raydamp builds a System from its spec only): a job that
-passes is compiled again when it runs, once, cached there by the system's canonical JSON (raydamp.jobs).
+The server never compiles a user's system itself. A check answers with the functions it compiled, as
+bytes (System.compiled_form: SymEngine's LLVM object code, a few kB per function), which the server loads
+(raydamp.systems.system.load_compiled, a fraction of a millisecond) into raydamp's cache of compiled
+functions by the system's canonical form; the job's run then builds its System from that cache, within
+compiled_elsewhere(), which refuses to compile. A run that finds nothing there (evicted, or queued before a
+restart) asks a check process to compile it (CheckPool.compile). The bytes carry machine code that the
+server will run: they are loaded only from this pool's own processes, over the pipes the server made with
+them; nothing a client sends reaches load_compiled.
 A built-in model's check costs microseconds and runs in the server itself.
 """
 
@@ -25,6 +31,9 @@ import sqlite3
 import threading
 from pathlib import Path
 from typing import Any
+
+from raydamp.jobs import SystemInput
+from raydamp.systems.system import load_compiled
 
 from .config import Settings
 from .files import ParsedFiles
@@ -113,11 +122,20 @@ def _warm_up(settings: Settings) -> None:
             log.warning("check warm-up: %s", spec, exc_info=True)
 
 
+def _compiled(spec: JobSpec) -> tuple[str, bytes] | None:
+    """(key, bytes) of the compiled functions of a job's expression system (built once by the check before:
+    raydamp.jobs caches it), for the server to load; None for other kinds."""
+    return spec.system.build().compiled_form() if isinstance(spec.system, SystemInput) else None
+
+
 def _check(kind: str, spec: Any, settings: Settings, files: ParsedFiles) -> Any:
     if kind == "job":
         check_spec(spec, settings, files=files)
-        return None
-    return check_sweep_spec(spec, settings).members  # the plan holds the compiled model: only its size travels
+        return _compiled(spec)
+    if kind == "compile":
+        return _compiled(spec)
+    # The plan holds the compiled model: its size travels, and the base system's functions.
+    return check_sweep_spec(spec, settings).members, _compiled(spec.job)
 
 
 def _serve(connection, settings: Settings) -> None:
@@ -146,6 +164,12 @@ def _serve(connection, settings: Settings) -> None:
 
 
 # ---- in the server ----
+
+
+def _load(compiled: tuple[str, bytes] | None) -> None:
+    """Load what a check process compiled (its answer, over our pipe: never from a client)."""
+    if compiled is not None:
+        load_compiled(*compiled)
 
 
 class _Process:
@@ -181,6 +205,11 @@ class CheckPool:
         threading.Thread(target=self._add, args=(self._settings.check_workers,), name="raydamp-checks-start",
                          daemon=True).start()
 
+    @property
+    def closed(self) -> bool:
+        """stop() was called: the processes are ended."""
+        return self._closed
+
     def stop(self) -> None:
         with self._lock:
             self._closed = True
@@ -189,17 +218,27 @@ class CheckPool:
             process.end()
 
     def job(self, spec: JobSpec, files=None) -> None:
-        """Every check of a job (problems.check_spec); raises JobError naming the field, or ChecksBusy."""
+        """Every check of a job (problems.check_spec); raises JobError naming the field, or ChecksBusy. The
+        functions the check compiled are loaded here, for the run."""
         if not isolated(spec):
             check_spec(spec, self._settings, files=files)
             return
-        self._run("job", spec, ("system",))
+        _load(self._run("job", spec, ("system",)))
 
     def sweep(self, spec: SweepSpec) -> int:
         """Every check of a sweep (problems.check_sweep_spec); its number of members."""
         if not isolated(spec.job):
             return check_sweep_spec(spec, self._settings).members
-        return self._run("sweep", spec, ("job", "system"))
+        members, compiled = self._run("sweep", spec, ("job", "system"))
+        _load(compiled)
+        return members
+
+    def compile(self, spec: JobSpec) -> None:
+        """Compile a job's expression system in a check process, within the budgets, and load its functions
+        here: for a run that did not find them loaded (raydamp.systems.system.NotCompiled). Waits for a
+        place among the pending checks (a run is not refused); raises JobError past a budget, ChecksBusy
+        if no process came free within the time budget."""
+        _load(self._run("compile", spec, ("system",), wait=True))
 
     # ----
 
@@ -223,8 +262,8 @@ class CheckPool:
         process.end()
         threading.Thread(target=self._add, name="raydamp-checks-replace", daemon=True).start()
 
-    def _run(self, kind: str, spec: Any, where: tuple[str, ...]) -> Any:
-        if not self._pending.acquire(blocking=False):
+    def _run(self, kind: str, spec: Any, where: tuple[str, ...], wait: bool = False) -> Any:
+        if not self._pending.acquire(blocking=wait, timeout=self._settings.check_seconds if wait else None):
             raise ChecksBusy
         try:
             status, value = self._answer(kind, spec)

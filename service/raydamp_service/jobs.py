@@ -10,9 +10,12 @@ from typing import Any
 
 import numpy as np
 
+from raydamp.systems.system import NotCompiled, compiled_elsewhere
+
+from .checks import CheckPool, ChecksBusy
 from .config import Settings
 from .files import FILE_COLUMNS_ADDED, FILES_TABLE, FileStore, file_resolver
-from .problems import build_call
+from .problems import JobError, RaydampCall, build_call
 from .runner import Outcome, Run
 from .schemas import JobSpec
 from .store import TaskRecord, TaskStore
@@ -101,8 +104,8 @@ class JobStore(TaskStore[JobRecord], FileStore):
             if column not in present:
                 db.execute(f"ALTER TABLE files ADD COLUMN {column} {declaration}")
 
-    def work(self, settings: Settings) -> JobWork:
-        return JobWork(self, settings)
+    def work(self, settings: Settings, checks: CheckPool | None = None) -> JobWork:
+        return JobWork(self, settings, checks)
 
     def finish(self, job_id: str, status: str, *, summary: dict[str, Any] | None = None, error: str | None = None,
                failed_step: int | None = None, trajectory: TrajectoryArrays | None = None,
@@ -136,14 +139,50 @@ class JobStore(TaskStore[JobRecord], FileStore):
 
 
 class JobWork:
-    """A job's run: raydamp.integrate on a worker thread (the C++ loop releases the GIL), `workers` at once."""
+    """A job's run: raydamp.integrate on a worker thread (the C++ loop releases the GIL), `workers` at once.
 
-    def __init__(self, store: JobStore, settings: Settings):
+    With the check processes (checks), a system's functions are never compiled here: the check at submission
+    loaded them (checks.py), and a run that does not find them asks a check process for them."""
+
+    def __init__(self, store: JobStore, settings: Settings, checks: CheckPool | None = None):
         self._store = store
+        self._checks = checks
         self.threads, self.fraction = settings.workers, True
 
+    def _call(self, spec: JobSpec, run: Run) -> RaydampCall | None:
+        """The job's call, its system from the compiled functions loaded; None if the service is stopping."""
+        files = file_resolver(self._store)
+        if self._checks is None:
+            return build_call(spec, files=files)
+        try:
+            with compiled_elsewhere():
+                return build_call(spec, files=files)
+        except NotCompiled:
+            pass
+        if not self._compile_elsewhere(spec, run):
+            return None
+        with compiled_elsewhere():  # NotCompiled now would be a bug, reported as an internal error
+            return build_call(spec, files=files)
+
+    def _compile_elsewhere(self, spec: JobSpec, run: Run) -> bool:
+        """A check process compiles the job's system and the functions are loaded here (a JobError past a
+        budget: the run fails with its message); False if the service stops meanwhile."""
+        while not (run.stopping.is_set() or self._checks.closed):
+            try:
+                self._checks.compile(spec)
+                return True
+            except ChecksBusy:
+                continue
+            except JobError:
+                if self._checks.closed:  # its process was ended by the shutdown, not by a budget
+                    return False
+                raise
+        return False
+
     def run(self, record: JobRecord, run: Run) -> Outcome:
-        call = build_call(JobSpec.model_validate(record.spec), files=file_resolver(self._store))
+        call = self._call(JobSpec.model_validate(record.spec), run)
+        if call is None:
+            return Outcome("cancelled", None, run.progress)
         solution = call.run(progress=run.report, cancel=run.token)
         result = {"summary": solution.summary(), "trajectory": TrajectoryArrays(
             t=solution.t, q=solution.q, p=solution.p, energy=solution.energy, momentum=solution.momentum,

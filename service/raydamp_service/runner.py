@@ -79,10 +79,10 @@ class Work(Protocol):
 
 
 class Runner:
-    def __init__(self, store: TaskStore, settings: Settings):
+    def __init__(self, store: TaskStore, settings: Settings, work: Work | None = None):
         self._store = store
         self._settings = settings
-        self._work: Work = store.work(settings)
+        self._work: Work = work if work is not None else store.work(settings)
         self._queue: queue.Queue[str | None] = queue.Queue()
         self._threads: list[threading.Thread] = []
         self._active: dict[str, Run] = {}

@@ -7,7 +7,16 @@ released.
 
 from __future__ import annotations
 
+import collections
+import contextlib
+import contextvars
 import ctypes
+import hashlib
+import io
+import json
+import pickle
+import threading
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -19,7 +28,8 @@ from .dashpot_norm import constant_dashpot_norm
 from .errors import SpecError
 from .spec import SystemSpec
 
-__all__ = ["CompiledSystemFunctions", "compile_system", "fused_body", "number"]
+__all__ = ["CompiledSystemFunctions", "NotCompiled", "compile_key", "compile_system", "compiled_elsewhere",
+           "fused_body", "load_compiled", "number"]
 
 
 def number(value: float) -> se.Basic:
@@ -51,6 +61,63 @@ class CompiledSystemFunctions:
     damper_norm: float | None = None
     damper_projection: Any | None = None
     damp_then_3s_body: Any | None = None
+
+    @classmethod
+    def of(cls, potential: Any, gradient: Any, hessian_product: Any, damper_gradients: Any | None = None,
+           momenta: Any | None = None, damper_norm: float | None = None, damper_projection: Any | None = None,
+           damp_then_3s_body: Any | None = None) -> CompiledSystemFunctions:
+        """The functions with their addresses, taken from the functions themselves: after a compile, and
+        after loading them in another process (an address is of this process's copy of the code)."""
+        functions = (potential, gradient, hessian_product, damper_gradients, momenta, damper_projection,
+                     damp_then_3s_body)
+        addresses = tuple(a for fn in functions for a in _address(fn))
+        return cls(addresses, potential, gradient, hessian_product, damper_gradients, momenta, damper_norm,
+                   damper_projection, damp_then_3s_body)
+
+    def to_bytes(self) -> bytes:
+        """The compiled functions as bytes (their object code, as SymEngine pickles an LLVM Lambdify: a few kB
+        each) for another process of this machine to load with :meth:`from_bytes`, without compiling again."""
+        functions = [getattr(self, name) for name in _FUNCTIONS]
+        return pickle.dumps((_FORMAT, functions, self.damper_norm), protocol=pickle.HIGHEST_PROTOCOL)
+
+    @classmethod
+    def from_bytes(cls, data: bytes) -> CompiledSystemFunctions:
+        """What :meth:`to_bytes` wrote, loaded into this process, the addresses derived again.
+
+        Only for bytes that a process of our own wrote: loading maps the object code they carry into this
+        process and runs it when the model is stepped. The unpickler admits nothing but SymEngine's loader
+        of LLVM functions and NumPy's float64 (no other callable is reachable), but the machine code itself
+        cannot be checked: bytes from a client, a file or the network must never come here.
+        """
+        found = _TrustedUnpickler(io.BytesIO(data)).load()
+        if not (isinstance(found, tuple) and len(found) == 3 and found[0] == _FORMAT
+                and isinstance(found[1], list) and len(found[1]) == len(_FUNCTIONS)):
+            raise ValueError("compiled system functions: not what CompiledSystemFunctions.to_bytes writes")
+        _, functions, damper_norm = found
+        return cls.of(*functions[:5], damper_norm, *functions[5:])
+
+
+# The order of the functions in to_bytes, and that form's version.
+_FUNCTIONS = ("potential", "gradient", "hessian_product", "damper_gradients", "momenta", "damper_projection",
+              "damp_then_3s_body")
+_FORMAT = "raydamp.compiled_system.1"
+# What an LLVM Lambdify's pickle names (SymEngine's llvm_loading_func rebuilds it from its object code).
+_LOADABLE = {("symengine.lib.symengine_wrapper", "llvm_loading_func"), ("numpy", "float64"), ("numpy", "dtype")}
+
+
+class _TrustedUnpickler(pickle.Unpickler):
+    def find_class(self, module: str, name: str) -> Any:
+        if (module, name) not in _LOADABLE:
+            raise pickle.UnpicklingError(f"compiled system functions: {module}.{name} is not loadable here")
+        return super().find_class(module, name)
+
+
+def _address(fn: Any | None) -> tuple[int, int]:
+    """(function, data) of a compiled function as the C++ bindings call it; (0, 0) where absent."""
+    if fn is None:
+        return 0, 0
+    cfunc, data = fn.as_ctypes()
+    return ctypes.cast(cfunc, ctypes.c_void_p).value, data.value or 0
 
 
 _HALF = se.Rational(1, 2)
@@ -117,11 +184,86 @@ def _jit(inputs: list[se.Symbol], outputs: list[se.Basic], what: tuple[str, ...]
                               "function; write it with fewer couplings, or use a Chain or LinearStructure for a "
                               "large system")
     fn = se.Lambdify(inputs, outputs, backend="llvm", cse=True, real=True)
-    cfunc, data = fn.as_ctypes()
-    return fn, ctypes.cast(cfunc, ctypes.c_void_p).value, data.value or 0
+    return (fn, *_address(fn))
+
+
+class NotCompiled(LookupError):
+    """Within compiled_elsewhere(): a system whose functions were not loaded (load_compiled) is not compiled."""
+
+    def __init__(self, key: str):
+        super().__init__(f"the functions of this system (key {key[:12]}) were not compiled in this process's stead")
+        self.key = key
+
+
+# Compiled functions by compile_key, the most recently used last: a System built again with the same
+# expressions (another eps, damping coefficient or initial state; the same system in another job) shares
+# them, and functions compiled in another process (load_compiled) are found here.
+_CACHE_SIZE = 64
+_cache: collections.OrderedDict[str, CompiledSystemFunctions] = collections.OrderedDict()
+_cache_lock = threading.Lock()
+_elsewhere = contextvars.ContextVar("raydamp_compiled_elsewhere", default=False)
+
+
+def compile_key(spec: SystemSpec) -> str:
+    """What the compiled functions depend on (names, expressions as written, parameters, M, and the table
+    the fused body is read from), hashed: two specs with one key compile to the same functions. eps, the
+    damping's coefficients and the name are not compiled in."""
+    plain = {"coordinates": list(spec.coordinates), "potential": spec.potential.text,
+             "parameters": sorted(spec.parameters.items()), "mass": spec.mass.tolist(),
+             "dampers": [d.on.text for d in spec.dampers],
+             "momenta": [(name, e.text) for name, e in spec.momenta.items()],
+             "fused_table": [list(row) for row in _core.splitting(FUSED_METHOD)] if len(spec.dampers) == 1 else None}
+    return hashlib.sha256(json.dumps(plain, separators=(",", ":")).encode()).hexdigest()
+
+
+def _remember(key: str, compiled: CompiledSystemFunctions) -> None:
+    with _cache_lock:
+        _cache[key] = compiled
+        _cache.move_to_end(key)
+        while len(_cache) > _CACHE_SIZE:
+            _cache.popitem(last=False)
+
+
+def load_compiled(key: str, data: bytes) -> None:
+    """Functions another process of ours compiled (CompiledSystemFunctions.to_bytes), for the systems of
+    this key built from now on (already there: kept, not loaded again). Trusted bytes only: see
+    CompiledSystemFunctions.from_bytes."""
+    with _cache_lock:
+        if key in _cache:
+            _cache.move_to_end(key)
+            return
+    _remember(key, CompiledSystemFunctions.from_bytes(data))
+
+
+@contextlib.contextmanager
+def compiled_elsewhere() -> Iterator[None]:
+    """Within it (in this thread), a System whose functions are not loaded or cached raises NotCompiled
+    instead of compiling: for a process that must not hold its interpreter lock for a compile."""
+    token = _elsewhere.set(True)
+    try:
+        yield
+    finally:
+        _elsewhere.reset(token)
 
 
 def compile_system(spec: SystemSpec) -> CompiledSystemFunctions:
+    """The compiled functions of spec: from the cache by compile_key, or compiled (and then cached)."""
+    key = compile_key(spec)
+    with _cache_lock:
+        found = _cache.get(key)
+        if found is not None:
+            _cache.move_to_end(key)
+            return found
+    if _elsewhere.get():
+        raise NotCompiled(key)
+    # Kept as its object code reloaded: the same machine code, without the compiler's state that a freshly
+    # compiled LLVM function holds on to (3 MB for a two-coordinate system; 0.3 MB reloaded).
+    compiled = CompiledSystemFunctions.from_bytes(_compile(spec).to_bytes())
+    _remember(key, compiled)
+    return compiled
+
+
+def _compile(spec: SystemSpec) -> CompiledSystemFunctions:
     n = spec.n
     # Internal symbol names, so a user's coordinate called, say, "I" or "E" never
     # meets a SymEngine built-in.
@@ -137,45 +279,35 @@ def compile_system(spec: SystemSpec) -> CompiledSystemFunctions:
     directional = sum((g * vi for g, vi in zip(gradient, v)), se.Integer(0))
     hessian_product = [se.diff(directional, qi) for qi in q]
 
-    pot_fn, pot_f, pot_d = _jit(q, [potential], ("potential",))
-    grad_fn, grad_f, grad_d = _jit(q, gradient, ("potential",))
-    hv_fn, hv_f, hv_d = _jit(q + v, hessian_product, ("potential",))
-    addresses = [pot_f, pot_d, grad_f, grad_d, hv_f, hv_d]
+    pot_fn = _jit(q, [potential], ("potential",))[0]
+    grad_fn = _jit(q, gradient, ("potential",))[0]
+    hv_fn = _jit(q + v, hessian_product, ("potential",))[0]
 
     damper_fn = damper_norm = projection_fn = fused_fn = None
-    projection_address = [0, 0, 0, 0]
     if spec.dampers:
         # k rows of n: the gradient of each dashpot's function, row-major.
         rows = []
         functions = [damper.on.to_symengine(symbols) for damper in spec.dampers]
         for g in functions:
             rows.extend(se.diff(g, qi) for qi in q)
-        damper_fn, f, d = _jit(q, rows, ("damping", "dampers"))
-        addresses += [f, d]
+        damper_fn = _jit(q, rows, ("damping", "dampers"))[0]
         if len(spec.dampers) == 1:
             inverse = np.linalg.inv(spec.mass)
             damper_norm = constant_dashpot_norm(rows, inverse, lambda x: evaluate(damper_fn, x))
             if damper_norm is not None:
                 projection = _projection(functions[0], rows, q, p, inverse)
-                projection_fn, f, d = _jit(q + p, projection, ("damping", "dampers"))
+                projection_fn = _jit(q + p, projection, ("damping", "dampers"))[0]
                 scalars, fused = fused_body(_fused_table(), projection, gradient, q, p, inverse)
-                fused_fn, f2, d2 = _jit(q + p + scalars, fused, ("damping", "dampers"))
-                projection_address = [f, d, f2, d2]
-    else:
-        addresses += [0, 0]
+                fused_fn = _jit(q + p + scalars, fused, ("damping", "dampers"))[0]
 
     momenta_fn = None
     if spec.momenta:
         with_p = dict(symbols)
         with_p.update({f"p_{name}": pi for name, pi in zip(spec.coordinates, p)})
         outputs = [expr.to_symengine(with_p) for expr in spec.momenta.values()]
-        momenta_fn, f, d = _jit(q + p, outputs, ("momenta",))
-        addresses += [f, d]
-    else:
-        addresses += [0, 0]
-    addresses += projection_address
-    return CompiledSystemFunctions(tuple(addresses), pot_fn, grad_fn, hv_fn, damper_fn, momenta_fn, damper_norm,
-                                   projection_fn, fused_fn)
+        momenta_fn = _jit(q + p, outputs, ("momenta",))[0]
+    return CompiledSystemFunctions.of(pot_fn, grad_fn, hv_fn, damper_fn, momenta_fn, damper_norm, projection_fn,
+                                      fused_fn)
 
 
 # The method whose merged steps a System with one constant-norm dashpot runs in one

@@ -15,7 +15,7 @@ from ... import _core
 from ..._validation import real
 from ..kinds import MemberModels
 from ..models import Model
-from .compile import compile_system, evaluate
+from .compile import compile_key, compile_system, evaluate
 from .errors import SpecError
 from .spec import KEYS, SystemSpec, normalise
 
@@ -175,6 +175,15 @@ class System(Model):
                                                              self._compiled, self._compiled.damper_norm))
         other._freeze()
         return other
+
+    def compiled_form(self) -> tuple[str, bytes]:
+        """(key, bytes): this system's compiled functions as bytes, for another process of ours on this
+        machine to load (``raydamp.systems.system.load_compiled(key, bytes)``) so that a System built there
+        from the same expressions needs no compile: the service's check processes compile, the server loads.
+        The bytes carry machine code: load them only from a process you started."""
+        if self._compiled is None:
+            raise ValueError("compiled_form: a System built from Python functions has no compiled functions")
+        return compile_key(self._spec), self._compiled.to_bytes()
 
     # -- the kind protocol (kinds.SystemKind) ---------------------------------
     def describe(self) -> dict[str, Any]:
