@@ -1,8 +1,11 @@
 // Thermal noise: Philox-4x32-10 against the published known-answer vectors (Salmon et al. 2011,
 // Random123's kat_vectors), the normal stream's moments, and one exact OU damping flow's noise
-// (isotropic damping, unit mass: p1 = e^{-at} p0 + sqrt(kT (1 - e^{-2at})) xi) drawn from the stream.
+// (isotropic damping, unit mass: p1 = e^{-at} p0 + sqrt(kT (1 - e^{-2at})) xi) drawn from the stream;
+// the ziggurat's normals against the normal distribution function (Kolmogorov-Smirnov, tails).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <vector>
 
 #include "check.hpp"
 #include "raydamp/raydamp.hpp"
@@ -35,6 +38,26 @@ int main() {
   CHECK_NEAR(s2 / N, 1.0, 5.0 * std::sqrt(2.0 / N));
   CHECK_NEAR(s4 / N, 3.0, 5.0 * std::sqrt(96.0 / N));
   CHECK_NEAR(cross / N, 0.0, 5.0 / std::sqrt(N));
+  // Kolmogorov-Smirnov against the normal distribution: the largest gap of the empirical CDF of 10^6 draws
+  // below 1.95 / sqrt(N) (the 0.1% level), and the tails beyond 3 and 4 (ziggurat's base layer) as often as
+  // they should be, within 5 standard errors.
+  {
+    NormalStream s(2025, 7);
+    std::vector<double> x(N);
+    for (double& v : x) v = s.next();
+    std::sort(x.begin(), x.end());
+    double gap = 0.0;
+    for (int i = 0; i < N; ++i) {
+      const double cdf = 0.5 * std::erfc(-x[i] / std::sqrt(2.0));
+      gap = std::max({gap, std::abs(cdf - double(i) / N), std::abs(cdf - double(i + 1) / N)});
+    }
+    CHECK(gap < 1.95 / std::sqrt(double(N)));
+    for (const double cut : {3.0, 4.0}) {
+      const double p = std::erfc(cut / std::sqrt(2.0));  // P(|X| > cut)
+      const double seen = double(std::count_if(x.begin(), x.end(), [&](double v) { return std::abs(v) > cut; })) / N;
+      CHECK_NEAR(seen, p, 5.0 * std::sqrt(p * (1 - p) / N));
+    }
+  }
   // restoring a state replays the same numbers
   NormalStream c(7, 3);
   c.next();
