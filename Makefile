@@ -66,6 +66,7 @@ bench: setup
 	$(PY) benchmarks/bench_system.py
 	$(PY) benchmarks/bench_service_load.py
 	$(PY) benchmarks/bench_large.py
+	$(PY) benchmarks/bench_chain_friction.py
 	$(PY) benchmarks/bench_ensemble.py
 	$(PY) benchmarks/work_precision.py --out build/work_precision.png
 

@@ -7,7 +7,11 @@
   H - H0 + W = O(h^2);
 - a periodic chain with damped bonds (adjacent ones too) conserves sum p to rounding;
 - save_dofs keeps chosen columns, the same numbers as a full run;
-- the expression bond equals the built-in family it spells out; bad input names its path.
+- the expression bond equals the built-in family it spells out; bad input names its path;
+- friction on every site (one coefficient, or one per site; issue 25 point 4: per-site factors,
+  a fused 3s pass, a one-pass kick+damp) equals a NumPy 3s / 2s of the same steps, its damping
+  work is the trapezoid of sum a_i p_i^2 / m, and on a periodic chain with one coefficient sum p
+  decays as e^{-eps c t / m} to rounding.
 """
 
 from __future__ import annotations
@@ -280,3 +284,103 @@ def test_on_site_json_round_trip():
     plain = Chain(16, bond="toda", eps=0.0)
     assert chain.energy(q, q) - plain.energy(q, q) == pytest.approx(np.sum(-0.5 * q**2 + 0.25 * q**4), rel=1e-13)
     assert "on_site" not in plain.to_dict()
+
+
+def _fput_gradient(q, alpha, beta):
+    """dV/dq of an FPUT chain with fixed ends (walls at q_{-1} = q_n = 0)."""
+    r = np.diff(np.concatenate([[0.0], q, [0.0]]))
+    f = r * (1.0 + r * (alpha + r * beta))
+    return f[:-1] - f[1:]
+
+
+def _phi1(x):
+    return np.expm1(x) / x
+
+
+@pytest.mark.parametrize("coefficients", ["one", "each"])
+def test_friction_on_every_site_equals_numpy_3s_and_2s(coefficients):
+    n, mass, eps, h, steps = 700, 1.3, 0.8, 0.05, 300  # 700 sites: several tiles of the fused 3s pass
+    rng = np.random.default_rng(7)
+    c = 0.4 if coefficients == "one" else rng.uniform(0.1, 0.6, n)
+    chain = Chain(n, bond="fput", parameters={"alpha": 0.25, "beta": 1.0}, mass=mass, eps=eps,
+                  dampers={"sites": list(range(n)), "c": c if coefficients == "one" else list(c)})
+    assert chain.damping_blocks == n
+    a = eps * np.broadcast_to(c, n) / mass  # A = eps D M^{-1}: a rate per site
+    q0, p0 = _state(n, seed=11, scale=0.3)
+    grad = lambda q: _fput_gradient(q, 0.25, 1.0)  # noqa: E731
+    # 3s: damp h/2, drift h/2, kick h, drift h/2, damp h/2 (merged between saves: the fused pass).
+    q, p = q0.copy(), p0.copy()
+    rows3 = []
+    for k in range(steps):
+        p *= np.exp(-0.5 * h * a)
+        q += 0.5 * h * p / mass
+        p -= h * grad(q)
+        q += 0.5 * h * p / mass
+        p *= np.exp(-0.5 * h * a)
+        if (k + 1) % 100 == 0:
+            rows3.append((q.copy(), p.copy()))
+    # 2s: drift h/2, the exact kick+damp e^{-ha} p - h phi1(-ha) grad V, drift h/2.
+    q, p = q0.copy(), p0.copy()
+    rows2 = []
+    for k in range(steps):
+        q += 0.5 * h * p / mass
+        p = np.exp(-h * a) * p - h * _phi1(-h * a) * grad(q)
+        q += 0.5 * h * p / mass
+        if (k + 1) % 100 == 0:
+            rows2.append((q.copy(), p.copy()))
+    for method, rows in (("3s", rows3), ("2s", rows2)):
+        sol = raydamp.integrate(chain, q0, p0, method=method, h=h, n_steps=steps, save_every=100)
+        assert sol.success
+        for row, (q_ref, p_ref) in enumerate(rows, start=1):
+            assert np.abs(sol.q[row] - q_ref).max() < 1e-12, (method, row)
+            assert np.abs(sol.p[row] - p_ref).max() < 1e-12, (method, row)
+    # The damping work by the trapezoidal rule on the dissipated power sum a_i p_i^2 / m at each step.
+    sol = raydamp.integrate(chain, q0, p0, method="3s", h=h, n_steps=200, save_every=1, work=True)
+    power = (a * sol.p**2).sum(axis=1) / mass
+    work = np.concatenate([[0.0], np.cumsum(0.5 * h * (power[1:] + power[:-1]))])
+    assert np.abs(sol.work - work).max() < 1e-12 * work[-1]
+    assert abs(sol.energy_balance).max() < 0.01 * sol.energy[0]  # H - H0 + W = O(h^2): 0.2% here
+
+
+@pytest.mark.parametrize("method", ["3s", "2s"])
+def test_uniform_friction_takes_total_momentum_down_exactly(method):
+    # A periodic chain's bond forces sum to zero, so with A = a I: d(sum p)/dt = -a sum p.
+    n, mass, eps, c = 600, 1.5, 0.7, 0.3
+    chain = Chain(n, bond="toda", boundary="periodic", mass=mass, eps=eps,
+                  dampers={"sites": list(range(n)), "c": c})
+    q0, p0 = _state(n, seed=4, scale=0.4)
+    p0 += 0.5
+    sol = raydamp.integrate(chain, q0, p0, method=method, h=0.05, n_steps=3000, save_every=500)
+    assert sol.success
+    expected = p0.sum() * np.exp(-eps * c / mass * sol.t)
+    assert np.abs(sol.p.sum(axis=1) - expected).max() < 1e-12 * np.abs(p0).sum()
+
+
+@pytest.mark.parametrize("method", ["3s", "2s"])
+def test_friction_on_every_site_under_a_load_equals_numpy(method):
+    # A load takes the general flows (its force enters the kick, and 2s's phi1): the same steps
+    # as NumPy, the load seen at the time the drifts have reached (t + h/2 in each step).
+    n, mass, eps, h, steps, omega = 130, 1.2, 0.6, 0.05, 200, 1.3
+    c = np.linspace(0.1, 0.5, n)
+    amplitude = np.sin(0.1 * np.arange(n))
+    chain = Chain(n, bond="fput", parameters={"alpha": 0.25, "beta": 1.0}, mass=mass, eps=eps,
+                  dampers={"sites": list(range(n)), "c": list(c)})
+    a = eps * c / mass
+    q0, p0 = _state(n, seed=9, scale=0.2)
+    q, p = q0.copy(), p0.copy()
+    for k in range(steps):
+        force = lambda: _fput_gradient(q, 0.25, 1.0) - amplitude * np.sin(omega * (k + 0.5) * h)  # noqa: E731
+        if method == "3s":
+            p *= np.exp(-0.5 * h * a)
+            q += 0.5 * h * p / mass
+            p -= h * force()
+            q += 0.5 * h * p / mass
+            p *= np.exp(-0.5 * h * a)
+        else:
+            q += 0.5 * h * p / mass
+            p = np.exp(-h * a) * p - h * _phi1(-h * a) * force()
+            q += 0.5 * h * p / mass
+    sol = raydamp.integrate(chain, q0, p0, method=method, h=h, n_steps=steps, save_every=50,
+                            load=raydamp.Load.harmonic(amplitude, omega))
+    assert sol.success
+    assert np.abs(sol.q[-1] - q).max() < 1e-12 and np.abs(sol.p[-1] - p).max() < 1e-12

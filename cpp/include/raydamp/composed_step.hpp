@@ -132,8 +132,7 @@ class ComposedStepper {
   void join_then_body(const Model& model, const Tab& tab, State<Dim>& z, long i, Workspace<Dim, DF>& ws) const {
     if constexpr (std::is_same_v<Method, ThreeTermSplitting> && fuses_3s<Model>::value) {
       if (single_ && i + 1 != last_step_ && model.fuses_3s() && !ws.load && ws.sigma == 0.0) {  // its body has no load, no noise
-        if (ws.damp_factors.t != join_regular_) ws.damp_factors = model.damping.factors(join_regular_);
-        model.damp_then_3s_body(z.q, z.p, ws.damp_factors, inner_regular_.data());
+        model.damp_then_3s_body(z.q, z.p, flows::damp_factors(model, join_regular_, ws), inner_regular_.data());
         return;
       }
     }

@@ -16,7 +16,9 @@ Damping: D = sum_b c_b g_b g_b^T (a dashpot on bond b resists the rate of its st
 so D is constant; damped sites fall into blocks (disjoint dashpots: 2x2; adjacent damped
 bonds: one tridiagonal block; a site: 1x1) whose exact flows come from each block's own
 eigendecomposition. Blocks are capped at 256 sites: damping every bond of a long chain
-is refused (use on-site friction, or a few dashpots). Dashpots on bonds alone conserve
+is refused (use on-site friction, or a few dashpots). Friction alone (every block one site)
+is a factor e^{-t eps c_i / m} per site, formed once per sub-step length: on every site the
+damping costs one multiply-add per site inside 3s's single pass over the state. Dashpots on bonds alone conserve
 the total momentum sum p of a periodic or free chain (the momentum map "P").
 
 Bond families and their parameters (defaults):

@@ -26,6 +26,16 @@ struct has_kick<M, std::void_t<decltype(std::declval<const M&>().kick(
                        std::declval<const typename M::Vec&>(), std::declval<typename M::Vec&>(), 0.0))>>
     : std::true_type {};
 
+// And the exact kick+damp flow in one pass, model.kick_damp(q, p, factors, g) (g: scratch
+// it may use), where the damping's factors allow it (a lattice's site friction).
+template <class M, class = void>
+struct has_kick_damp : std::false_type {};
+template <class M>
+struct has_kick_damp<M, std::void_t<decltype(std::declval<const M&>().kick_damp(
+                            std::declval<const typename M::Vec&>(), std::declval<typename M::Vec&>(),
+                            std::declval<const damping_factors_t<M>&>(), std::declval<typename M::Vec&>()))>>
+    : std::true_type {};
+
 // exp(t X_T): q <- q + t M^{-1} p, and the clock: t is the coordinate the drift advances
 // with unit speed, so that a load seen by the kicks is f at the time the drifts left.
 template <class Model, int Dim, class DF>
@@ -79,20 +89,36 @@ inline void thermal_noise(const Model& model, State<Dim>& z, const F& factors, W
   }
 }
 
+// The damping's factors for a damp of length t, computed once per length (the last two kept).
+template <class Model, int Dim, class DF>
+inline const DF& damp_factors(const Model& model, double t, Workspace<Dim, DF>& ws) {
+  if (ws.damp_factors.t != t) {
+    std::swap(ws.damp_factors, ws.previous_damp_factors);
+    if (ws.damp_factors.t != t) ws.damp_factors = model.damping.factors(t);
+  }
+  return ws.damp_factors;
+}
+
 // exp(t eps Y): p <- exp(-t eps D(q) M^{-1}) p (and, at a temperature, the OU flow's noise).
 template <class Model, int Dim, class DF>
 inline void damp(const Model& model, State<Dim>& z, double t, Workspace<Dim, DF>& ws) {
-  if (ws.damp_factors.t != t) ws.damp_factors = model.damping.factors(t);
-  model.damping.decay(z.q, ws.damp_factors, z.p);
-  if (ws.sigma > 0.0) thermal_noise(model, z, ws.damp_factors, ws);
+  const DF& factors = damp_factors(model, t, ws);
+  model.damping.decay(z.q, factors, z.p);
+  if (ws.sigma > 0.0) thermal_noise(model, z, factors, ws);
 }
 
 // exp(t (X_V + eps Y)): the exact solution of the affine ODE p' = -grad V(q) + f - A p
 // (q and the load's time frozen), p(t) = e^{-tA} p - t phi1(-tA) (grad V(q) - f).
 template <class Model, int Dim, class DF>
 inline void kick_damp(const Model& model, State<Dim>& z, double t, Workspace<Dim, DF>& ws) {
-  loaded_gradient(model, z.q, ws.time, ws);
   if (ws.kick_damp_factors.t != t) ws.kick_damp_factors = model.damping.factors(t);
+  if constexpr (has_kick_damp<Model>::value) {
+    if (!ws.load && ws.sigma == 0.0) {  // a load enters through phi1, noise after: the general path below
+      model.kick_damp(z.q, z.p, ws.kick_damp_factors, ws.g);
+      return;
+    }
+  }
+  loaded_gradient(model, z.q, ws.time, ws);
   model.damping.decay_affine(z.q, ws.kick_damp_factors, ws.g, z.p);
   if (ws.sigma > 0.0) thermal_noise(model, z, ws.kick_damp_factors, ws);
 }
