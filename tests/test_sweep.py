@@ -251,3 +251,12 @@ def test_frequency_response_is_one_sweep_over_load_omega(client):
         coef, *_ = np.linalg.lstsq(basis, ds["q"].values[i, tail, 0], rcond=None)
         exact = F0 / np.hypot(k - m * w ** 2, c * w)
         assert abs(np.hypot(*coef) - exact) / exact < 2e-5, w
+
+
+def test_a_job_without_a_method_sweeps_with_the_chosen_one():
+    """JobSpec.method may be null (raydamp chooses); a sweep of such a job chooses as integrate does
+    (found in review: it said "unknown method None")."""
+    job = {"model": "damped_pendulum", "h": 0.1, "t_end": 1.0, "initial_state": {"q": [0.5], "p": [0.0]},
+           "work": False}
+    plan = raydamp.check_sweep(job, {"eps": [0.0, 0.1]})
+    assert plan.members == 2

@@ -261,3 +261,19 @@ def test_linear_structure_with_alpha_damping_reaches_equipartition(lumped):
     with pytest.raises(ValueError, match=r"temperature: a LinearStructure with beta K damping"):
         raydamp.integrate(raydamp.LinearStructure(M, K, alpha=0.5, beta=0.01), np.zeros(n), np.zeros(n), h=0.05,
                           n_steps=2, temperature=kT)
+
+
+def test_3s_at_a_temperature_draws_one_path_whatever_is_saved():
+    """3s's join of two damping flows would be one OU draw over h where an unmerged step draws two over h/2
+    (found in review): at a temperature 3s runs whole steps, so save_every and work do not change the path."""
+    model = DampedPendulum(eps=0.3)
+    runs = [raydamp.integrate(model, [0.5], [0.0], method="3s", h=0.05, n_steps=600, temperature=0.5, seed=3,
+                              save_every=every, work=work) for every, work in ((1, False), (50, False), (600, True))]
+    np.testing.assert_array_equal(runs[0].q[::50], runs[1].q)
+    np.testing.assert_array_equal(runs[0].q[-1], runs[2].q[-1])
+
+
+def test_a_load_history_of_one_column_on_a_one_coordinate_model():
+    model = DampedPendulum()
+    rows = raydamp.Load.series([0.0, 1.0], [[0.0], [2.0]])
+    np.testing.assert_allclose(rows.values(model, [0.25])[0], [0.5])

@@ -53,8 +53,17 @@ class ChecksBusy(Exception):
 
 def isolated(spec: JobSpec) -> bool:
     """Whether a job's check runs in a check process: every user-defined system (an expression compiles,
-    a chain of expression bonds too, a structure parses its files and factorises M)."""
-    return spec.system is not None
+    a chain of expression bonds too, a structure parses its files and factorises M), and every job whose load
+    has an expression (compiled like a system's)."""
+    return spec.system is not None or _has_expression(spec.load) or _has_expression(spec.ground_motion)
+
+
+def _has_expression(value) -> bool:
+    if isinstance(value, dict):
+        return "expression" in value or any(_has_expression(v) for v in value.values())
+    if isinstance(value, list):
+        return any(_has_expression(v) for v in value)
+    return False
 
 
 # ---- in a check process ----

@@ -91,8 +91,36 @@ def _check_sizes(spec: JobSpec, settings: Settings) -> None:
                            f"max_structure_dim = {settings.max_structure_dim} coordinates")
 
 
+def refuse_paths(spec: JobSpec) -> None:
+    """A load's {"file": {"path": ...}} reads a file of the machine it runs on: the service takes uploaded
+    files by id only (POST /v1/files), whatever the route (a job, a sweep's job, a check process)."""
+    for field in ("load", "ground_motion"):
+        found = _path_in(getattr(spec, field), (field,))
+        if found is not None:
+            raise JobError(found, ".".join(str(p) for p in found) + ": the service reads no paths; upload the "
+                           "file (POST /v1/files) and give its id")
+
+
+def _path_in(value, at: tuple):
+    """The JSON path of the first "path" key under a "file" form, or None."""
+    if isinstance(value, dict):
+        if at and at[-1] == "file" and "path" in value:
+            return (*at, "path")
+        for key, item in value.items():
+            found = _path_in(item, (*at, key))
+            if found is not None:
+                return found
+    elif isinstance(value, list):
+        for i, item in enumerate(value):
+            found = _path_in(item, (*at, i))
+            if found is not None:
+                return found
+    return None
+
+
 def check_spec(spec: JobSpec, settings: Settings, files=None) -> RaydampCall:
     """Every check a job must pass before it is queued; raises JobError naming the field."""
+    refuse_paths(spec)
     _check_sizes(spec, settings)
     steps = planned_steps(spec)
     if steps > settings.max_steps:

@@ -341,3 +341,27 @@ def test_a_files_table_from_before_records_gains_its_columns(tmp_path):
         assert old.kind == "matrix" and old.format == "mtx" and old.shape == (2, 2) and old.dt is None
     finally:
         store.close()
+
+
+def test_a_sweep_reads_no_paths_either(module_server, tmp_path):
+    """A sweep's job runs without the file resolver: a "path" there must still be refused, before the
+    service (or its workers) opens the file (found in review: it would have read any file)."""
+    secret = tmp_path / "secret.csv"
+    secret.write_text("0,1\n1,2\n")
+    for body in ({"load": {"file": {"path": str(secret), "direction": [1.0]}}},
+                 {"ground_motion": {"acceleration": {"terms": [{"file": {"path": str(secret)}}]}, "direction": [1.0]}}):
+        response = module_server.client.post("/v1/sweeps", json={"job": job(**body, work=False),
+                                                                  "grid": {"h": [1e-3, 2e-3]}})
+        assert response.status_code == 422, response.text
+        detail = response.json()["detail"][0]
+        assert detail["loc"][:3] == ["body", "job", next(iter(body))] and detail["loc"][-1] == "path", detail
+        assert "reads no paths" in detail["msg"]
+
+
+def test_a_temperature_without_a_seed_gets_one_stored_with_the_job(module_server):
+    spec = {"model": "damped_pendulum", "parameters": {"eps": 0.3}, "method": "baoab", "h": 0.05, "n_steps": 40,
+            "initial_state": {"q": [0.5], "p": [0.0]}, "temperature": 0.5}
+    response = module_server.client.post("/v1/jobs", json=spec)
+    assert response.status_code == 202, response.text
+    stored = module_server.client.get(response.headers["location"]).json()["spec"]
+    assert isinstance(stored["seed"], int) and stored["temperature"] == 0.5

@@ -443,7 +443,12 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
   // known factor (paper section 5; `law` below). The damping work needs the step's
   // end points: with work tracked, steps run whole.
   constexpr bool mergeable = is_mergeable<Method>();
-  const bool merge = mergeable && spec.merge_steps && !spec.track_work;
+  // At a temperature a merged damping flow (3s's join: one OU draw over h) and the two it stands for (two
+  // draws over h/2) are equal in law, not sample by sample: steps then run whole, so that a seed gives one
+  // path whatever save_every, progress or a replay do.
+  bool noisy_join = false;
+  if constexpr (mergeable) noisy_join = spec.temperature > 0.0 && is_damping_flow(Method::stages[0].flow);
+  const bool merge = mergeable && spec.merge_steps && !spec.track_work && !noisy_join;
   // The momentum maps' drift from their law J(0) e^{-a t} (see momentum_decay_rate), after
   // step i or, merged, before its last sub-flow: when that is a damping flow (3s's damp),
   // the state has then been damped for t_{i+1} minus its duration.

@@ -114,6 +114,9 @@ class Series:
                 step = dt  # a record sampled at dt: located by one division in the step loop
         out = {"shape": "series", "times": t, "values": self.values.ravel(), "scale": self.scale,
                "width": 1 if self.values.ndim == 1 else int(self.values.shape[1]), "hold": self.hold, "step": step}
+        if self.values.ndim == 2 and self.values.shape[1] == 1:  # one coordinate: a scalar history along it
+            out["width"] = 1
+            return _with_direction(out, np.ones(1))
         return out if self.values.ndim == 2 else _with_direction(out, vector)
 
     def plain(self) -> dict:

@@ -27,6 +27,7 @@ from ..systems.kinds import describe_model
 from ..systems.models import MODELS, Model
 from ..systems.system import System
 from .ensemble import integrate_ensemble
+from .choose_method import choose_method
 from .integrate import _catalogue, steps_for
 
 __all__ = ["sweep", "check_sweep", "SweepPlan", "parse_grid_item", "SPEC_KEYS", "RUN_ARGUMENTS"]
@@ -82,7 +83,9 @@ def _base(spec: Mapping[str, Any]) -> tuple[Model, np.ndarray, np.ndarray, dict[
         kT, seed, _ = thermal(options["temperature"], options.get("seed"))
         options.update({"temperature": kT, "seed": seed})
     options.pop("stream", None)
-    options.setdefault("method", "3s")
+    if options.get("method") is None:  # a job without a method: chosen as integrate chooses (3s at a temperature)
+        options["method"] = "3s" if options.get("temperature") else choose_method(
+            model, None, options.get("tableau"), options.get("composition"), float(options["h"]))[0]
     options.setdefault("save_every", 1)
     if isinstance(model, System) and model._python is not None:
         raise ValueError("spec.system: a System built from Python functions cannot be sent to workers; "

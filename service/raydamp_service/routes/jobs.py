@@ -62,6 +62,16 @@ def _model_label(spec: dict[str, Any]) -> str:
     return system.get("name") or system.get("kind") or "system"
 
 
+
+def with_seed(spec: JobSpec) -> JobSpec:
+    """A job at a temperature without a seed gets one now, stored with it: a rerun (after a restart) then
+    draws the same noise."""
+    if spec.temperature and spec.seed is None:
+        import secrets
+
+        return spec.model_copy(update={"seed": secrets.randbits(64)})
+    return spec
+
 @router.post("", status_code=202, response_model=JobCreated,
              responses={422: {"description": "the spec is invalid; detail[].loc names the field"},
                         429: {"description": "max_queued jobs are waiting, or max_pending_checks checks of "
@@ -70,6 +80,7 @@ def submit_job(spec: JobSpec, request: Request, response: Response, store: Store
                settings: SettingsDep, checks: ChecksDep) -> JobCreated:
     """Queue an integration; poll the Location for its status. A system is checked (compiled, one trial
     step) in a check process within check_seconds and check_memory_bytes: past either, 422 on system."""
+    spec = with_seed(spec)
     try:
         checks.job(spec, files=file_resolver(store))
     except JobError as error:

@@ -8,6 +8,7 @@ from typing import Annotated, Literal
 from fastapi import APIRouter, HTTPException, Query, Request, Response
 from fastapi.responses import StreamingResponse
 
+from .jobs import with_seed
 from ..checks import ChecksBusy
 from ..deps import ChecksDep, SettingsDep
 from ..problems import JobError
@@ -62,6 +63,7 @@ def submit_sweep(spec: SweepSpec, request: Request, response: Response, settings
     except ImportError:
         raise HTTPException(503, detail="sweeps need dask[distributed] and xarray: install raydamp with the "
                                         "sweep extra (pip install 'raydamp[sweep]')") from None
+    spec = spec.model_copy(update={"job": with_seed(spec.job)})
     try:
         members = checks.sweep(spec)
     except JobError as error:

@@ -38,7 +38,8 @@ struct RadialDamping {
   // scalar mass m: one normal number along u.
   template <class Q, class Mass, class X, class P>
   void add_noise(const Q& q, const DecayFactors& f, const Mass& mass, double sigma, const X& xi, P& p) const {
-    p += (sigma * f.noise * std::sqrt(mass.m) * xi[0] / q.norm()) * q;
+    const double r = q.norm();
+    if (r > 0.0) p += (sigma * f.noise * std::sqrt(mass.m) * xi[0] / r) * q;  // D(0) is undefined: no noise there
   }
 
   template <class Q, class P, class O>
