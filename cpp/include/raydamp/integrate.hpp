@@ -469,7 +469,7 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
     else return momentum_drift(model, x, mb, law(i, before_trail));
   };
   auto advance = [&](State<Dim>& x, long i) {
-    ws.time = time_at(i);
+    if (ws.load) ws.time = time_at(i);
     stepper.step(model, tab, x, i, ws);
     if constexpr (trapezoid) {
       if (spec.track_work) {

@@ -46,7 +46,7 @@ inline void drift(const Model& model, State<Dim>& z, double t, Workspace<Dim, DF
     model.mass.velocity(z.p, ws.v);
     z.q += t * ws.v;
   }
-  ws.time += t;
+  if (ws.load) ws.time += t;  // only a load reads the clock: no store per drift without one
 }
 
 // exp(t X_V): p <- p - t (grad V(q) - f(time)), time frozen.

@@ -85,7 +85,7 @@ inline void drift_damp_rk(const Model& model, const Tab& tab, State<Dim>& z, dou
     model.damping.rate(q, p, dp);
     dp = -dp;
   });
-  ws.time += h;  // a drift of the clock as of q
+  if (ws.load) ws.time += h;  // a drift of the clock as of q
 }
 
 // The load at the stage times t + c_i h.
