@@ -18,6 +18,16 @@
 
 #include "raydamp/system/compiled_function.hpp"
 
+// Out of line: the step loop of a small model is flattened (integrate.hpp), and inlined there a load's
+// evaluation (and the noise's generator) would enlarge every step's code, loaded or not.
+#ifndef RAYDAMP_OUT_OF_LINE
+#if defined(__GNUC__) || defined(__clang__)
+#define RAYDAMP_OUT_OF_LINE __attribute__((noinline))
+#else
+#define RAYDAMP_OUT_OF_LINE
+#endif
+#endif
+
 namespace raydamp {
 
 // A sparse direction: f gets s(t) * value at each index.
@@ -82,7 +92,7 @@ class Load {
   const std::vector<LoadTerm>& terms() const { return terms_; }
 
   // out[i] += c * f_i(t).
-  void add(double t, double c, double* out) const {
+  RAYDAMP_OUT_OF_LINE void add(double t, double c, double* out) const {
     for (const LoadTerm& term : terms_) {
       if (term.shape == LoadTerm::Shape::series && term.series->width > 1) {
         add_rows(*term.series, term.time_scale * t, c * term.scale, out);
@@ -96,7 +106,7 @@ class Load {
   }
 
   // f(t) . v.
-  double dot(double t, const double* v) const {
+  RAYDAMP_OUT_OF_LINE double dot(double t, const double* v) const {
     double sum = 0.0;
     for (const LoadTerm& term : terms_) {
       if (term.shape == LoadTerm::Shape::series && term.series->width > 1) {

@@ -82,7 +82,7 @@ struct has_thermal_noise<Model, std::void_t<decltype(std::declval<const Model&>(
 // E = exp(-t eps D M^{-1}) at the frozen q (fluctuation-dissipation). Independent of the flow's
 // deterministic part, so it is the same for the damping flow and the affine kick-damp flow.
 template <class Model, int Dim, class DF, class F>
-inline void thermal_noise(const Model& model, State<Dim>& z, const F& factors, Workspace<Dim, DF>& ws) {
+RAYDAMP_OUT_OF_LINE void thermal_noise(const Model& model, State<Dim>& z, const F& factors, Workspace<Dim, DF>& ws) {
   if constexpr (has_thermal_noise<Model>::value) {
     ws.noise.fill(ws.xi);
     model.damping.add_noise(z.q, factors, model.mass, ws.sigma, ws.xi, z.p);
