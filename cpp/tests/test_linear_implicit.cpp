@@ -20,17 +20,10 @@
 #include <new>
 
 #include "check.hpp"
+#include "counting_new.hpp"
 #include "raydamp/implicit/linear_implicit_step.hpp"
 #include "raydamp/raydamp.hpp"
 
-static std::atomic<long> allocations{0};
-void* operator new(std::size_t size) {
-  ++allocations;
-  if (void* p = std::malloc(size)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 using namespace raydamp;
 using raydamp::test::throws;

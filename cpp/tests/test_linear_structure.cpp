@@ -8,7 +8,7 @@
 // - once warmed up, the flows allocate nothing (a counting operator new).
 // GCC 12 false positives: "may be used uninitialized" inside Eigen's dense generalised
 // eigensolver (the test's reference), "null argument" in Eigen's copy of an empty
-// vector, and free() after the counting operator new below (which does call malloc).
+// vector, and free() after the counting operator new of counting_new.hpp (which does call malloc).
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #pragma GCC diagnostic ignored "-Wnonnull"
 #pragma GCC diagnostic ignored "-Wmismatched-new-delete"
@@ -20,17 +20,10 @@
 #include <new>
 
 #include "check.hpp"
+#include "counting_new.hpp"
 #include "raydamp/raydamp.hpp"
 #include "raydamp/models/linear_structure.hpp"
 
-static std::atomic<long> allocations{0};
-void* operator new(std::size_t size) {
-  ++allocations;
-  if (void* p = std::malloc(size)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 using namespace raydamp;
 using raydamp::test::throws;

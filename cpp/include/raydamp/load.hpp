@@ -67,6 +67,22 @@ struct LoadSeries {
     w = (t - times[k]) / (times[k + 1] - times[k]);
     return true;
   }
+
+  // The row k and weight w of row k + 1 that the load takes at t: locate()'s inside the range, the end
+  // row (w = 0) outside it when held; false when the load is zero there.
+  bool row(double t, std::size_t& k, double& w) const {
+    if (locate(t, k, w)) return true;
+    if (!hold) return false;
+    k = t < times.front() ? 0 : times.size() - 1;
+    w = 0.0;
+    return true;
+  }
+
+  // Component i of the interpolated row (width values a row).
+  double at(std::size_t k, double w, int i) const {
+    const double a = values[k * width + i];
+    return w == 0.0 ? a : (1.0 - w) * a + w * values[(k + 1) * width + i];
+  }
 };
 
 struct LoadTerm {
@@ -113,15 +129,9 @@ class Load {
         const LoadSeries& s = *term.series;
         std::size_t k;
         double w;
-        const double tt = term.time_scale * t;
-        if (!s.locate(tt, k, w)) {
-          if (!s.hold) continue;
-          k = tt < s.times.front() ? 0 : s.times.size() - 1;
-          w = 0.0;
-        }
-        const double* a = s.values.data() + k * s.width;
+        if (!s.row(term.time_scale * t, k, w)) continue;
         double part = 0.0;
-        for (int i = 0; i < s.width; ++i) part += (w == 0.0 ? a[i] : (1.0 - w) * a[i] + w * a[i + s.width]) * v[i];
+        for (int i = 0; i < s.width; ++i) part += s.at(k, w, i) * v[i];
         sum += term.scale * part;
         continue;
       }
@@ -149,9 +159,7 @@ class Load {
         const LoadSeries& s = *term.series;
         std::size_t k;
         double w;
-        const double tt = term.time_scale * t;
-        if (!s.locate(tt, k, w)) return s.hold ? (tt < s.times.front() ? s.values.front() : s.values.back()) : 0.0;
-        return w == 0.0 ? s.values[k] : (1.0 - w) * s.values[k] + w * s.values[k + 1];
+        return s.row(term.time_scale * t, k, w) ? s.at(k, w, 0) : 0.0;
       }
     }
   }
@@ -159,18 +167,8 @@ class Load {
   static void add_rows(const LoadSeries& s, double t, double c, double* out) {
     std::size_t k;
     double w;
-    if (!s.locate(t, k, w)) {
-      if (!s.hold) return;
-      k = t < s.times.front() ? 0 : s.times.size() - 1;
-      w = 0.0;
-    }
-    const double* a = s.values.data() + k * s.width;
-    if (w == 0.0) {
-      for (int i = 0; i < s.width; ++i) out[i] += c * a[i];
-    } else {
-      const double* b = a + s.width;
-      for (int i = 0; i < s.width; ++i) out[i] += c * ((1.0 - w) * a[i] + w * b[i]);
-    }
+    if (!s.row(t, k, w)) return;
+    for (int i = 0; i < s.width; ++i) out[i] += c * s.at(k, w, i);
   }
 
   void check(const LoadTerm& term, const std::string& where) const {
