@@ -89,3 +89,38 @@ def thermal(temperature, seed, stream: int = 0) -> tuple[float, int, int]:
     if isinstance(stream, bool) or not isinstance(stream, (int, np.integer)) or not 0 <= int(stream) <= MAX_SEED:
         raise ValueError(f"stream must be an integer in [0, 2^64), got {_short(stream)}")
     return kT, int(seed), int(stream)
+
+
+# Step counts travel as C++ long; far beyond any run that could finish.
+MAX_STEPS = 2**62
+
+
+def span(h: float, t_end: float | None, n_steps: int | None) -> tuple[int, float]:
+    """(the number of steps, the size of the last) for exactly one of t_end and n_steps."""
+    if (t_end is None) == (n_steps is None):  # the message names the field to remove (both) or to give
+        both = t_end is not None
+        raise ValueError(("n_steps" if both else "t_end") + ": give exactly one of t_end and n_steps"
+                         + (", not both" if both else ""))
+    if n_steps is not None:
+        return integer("n_steps", n_steps, maximum=MAX_STEPS), h
+    return steps_for(t_end, h)
+
+
+def steps_for(t_end: float, h: float) -> tuple[int, float]:
+    """The number of steps of size ``h`` that reach ``t_end``, and the size of the last.
+
+    A ``t_end`` within 1e-9 relative of a whole multiple of ``h`` takes whole steps;
+    otherwise the last step is shortened to land exactly on ``t_end``."""
+    t_end = real("t_end", t_end, positive=True)
+    h = real("h", h, positive=True)
+    ratio = t_end / h
+    if not ratio <= MAX_STEPS:  # also catches ratio = inf
+        raise ValueError(f"t_end: reaching t_end = {t_end:g} with h = {h:g} takes {ratio:.3g} steps, "
+                         f"more than {MAX_STEPS:.3g}")
+    nearest = round(ratio)
+    if nearest >= 1 and abs(ratio - nearest) <= 1e-9 * max(1.0, ratio):
+        n, h_last = nearest, h
+    else:
+        n = max(1, math.ceil(ratio))
+        h_last = t_end - (n - 1) * h
+    return n, h_last

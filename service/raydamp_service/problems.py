@@ -13,7 +13,7 @@ from typing import Any
 
 import raydamp
 from raydamp.jobs import (CooForm, DiagonalForm, JobCall, JobError, JobSpec, LinearStructureInput, SweepSpec,
-                          build_job, error_at)
+                          build_job, error_at, planned_steps)
 
 from .config import Settings
 
@@ -36,20 +36,6 @@ class RaydampCall:
 def build_call(spec: JobSpec, files=None) -> RaydampCall:
     """The run of a job; files(id) opens an uploaded matrix (files.file_resolver)."""
     return RaydampCall(build_job(spec, files))
-
-
-def planned_steps(spec: JobSpec) -> int:
-    """Steps the run will take, counted by raydamp itself."""
-    if (spec.t_end is None) == (spec.n_steps is None):
-        both = spec.t_end is not None
-        field = "n_steps" if both else "t_end"
-        raise JobError((field,), f"{field}: give exactly one of t_end and n_steps" + (", not both" if both else ""))
-    if spec.n_steps is not None:
-        return spec.n_steps
-    try:
-        return raydamp.steps_for(spec.t_end, spec.h)[0]
-    except ValueError as error:
-        raise error_at(spec, error) from None
 
 
 def trajectory_bytes(points: int, saved: int, momenta: int, work: bool = True) -> int:

@@ -9,7 +9,7 @@ into raydamp.integrate's arguments.
 
 from ..systems.kinds import describe_model
 from .build import (PROVENANCE_KEYS, JobCall, build_job, error_at, job_arguments, model_from_spec, parse_job,
-                    validation_error)
+                    planned_steps, validation_error)
 from .errors import JobError
 from .forms import InitialState, ModeState, RestState, TableauInput, VectorFile
 from .spec import STEP_SIZE_ALIAS, UNION_TAGS, JobSpec, ModelSpec, client_path
@@ -17,7 +17,7 @@ from .sweep_spec import GridRange, SweepSpec
 from .system_forms import ChainInput, CooForm, DiagonalForm, FileForm, LinearStructureInput, SystemInput
 
 __all__ = ["JobSpec", "ModelSpec", "SweepSpec", "GridRange", "JobError", "JobCall", "parse_job", "build_job",
-           "error_at", "job_arguments", "validation_error", "client_path", "describe_model", "model_from_spec",
-           "PROVENANCE_KEYS", "STEP_SIZE_ALIAS", "UNION_TAGS", "InitialState", "ModeState", "RestState",
+           "planned_steps", "error_at", "job_arguments", "validation_error", "client_path", "describe_model",
+           "model_from_spec", "PROVENANCE_KEYS", "STEP_SIZE_ALIAS", "UNION_TAGS", "InitialState", "ModeState", "RestState",
            "TableauInput", "SystemInput", "ChainInput", "LinearStructureInput", "CooForm", "DiagonalForm",
            "FileForm", "VectorFile"]

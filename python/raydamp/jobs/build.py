@@ -16,13 +16,14 @@ from typing import Any
 import numpy as np
 from pydantic import ValidationError
 
+from .._validation import span
 from .errors import JobError, head_path
 from .forms import ModeState, RestState, VectorFile
 from .spec import JobSpec, ModelSpec, client_path
 from .system_forms import FileResolver
 
-__all__ = ["JobCall", "parse_job", "build_job", "job_arguments", "model_from_spec", "error_at", "validation_error",
-           "PROVENANCE_KEYS"]
+__all__ = ["JobCall", "parse_job", "build_job", "planned_steps", "job_arguments", "model_from_spec", "error_at",
+           "validation_error", "PROVENANCE_KEYS"]
 
 # What a Solution's provenance adds to the job (a saved result's provenance runs as a job).
 PROVENANCE_KEYS = ("raydamp_version", "job_id", "coordinates", "momentum_names", "method_reason")
@@ -133,11 +134,7 @@ def _vector_file(file_id: str, loc: tuple, files: FileResolver | None) -> np.nda
 def build_job(spec: JobSpec, files: FileResolver | None = None) -> JobCall:
     """The model and arguments of raydamp.integrate; raises JobError for a bad model, system, parameter
     or span. files(id) opens an uploaded matrix file; without it a {"file": id} matrix is refused."""
-    if (spec.t_end is None) == (spec.n_steps is None):
-        both = spec.t_end is not None
-        raise JobError(("n_steps",) if both else ("t_end",),
-                       ("n_steps" if both else "t_end") + ": give exactly one of t_end and n_steps"
-                       + (", not both" if both else ""))
+    planned_steps(spec)  # the span first: a job without one is refused before its model is built
     model = spec.build_model(files)
     options: dict[str, Any] = {"method": spec.method, "h": spec.h, "save_every": spec.save_every, "work": spec.work}
     if spec.tableau is not None:
@@ -155,6 +152,15 @@ def build_job(spec: JobSpec, files: FileResolver | None = None) -> JobCall:
         options["load"] = load
     q0, p0 = _initial_state(spec, model, files)
     return JobCall(model, q0, p0, options)
+
+
+def planned_steps(spec: JobSpec) -> int:
+    """The number of steps the job's run takes, counted as raydamp.integrate counts them (one t_end or
+    n_steps, with h); a JobError names t_end, n_steps or the step size by the key the client gave."""
+    try:
+        return span(spec.h, spec.t_end, spec.n_steps)[0]
+    except ValueError as error:
+        raise error_at(spec, error) from None
 
 
 def job_load(spec: JobSpec, files: FileResolver | None = None):

@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 import functools
-import math
 import time
 from collections.abc import Callable, Mapping
 
 from .. import _core
 import numpy as np
 
-from .._validation import _short, integer, real, thermal, vector
+from .._validation import MAX_STEPS, _short, integer, real, span, steps_for, thermal, vector
 from ..loads import Load
 from ..methods.user_tableau import resolve_user_tableau
 from ..results.solution import Solution
@@ -21,8 +20,6 @@ __all__ = ["integrate", "steps_for", "CancelToken", "MAX_SAVED_BYTES", "MAX_STEP
 
 # Refuse runs whose saved points alone would not fit in memory comfortably.
 MAX_SAVED_BYTES = 4 * 2**30
-# Step counts travel as C++ long; far beyond any run that could finish.
-MAX_STEPS = 2**62
 # The amplification guard's limit for compositions (see integrate's ``composition``), from the core.
 MAX_AMPLIFICATION: float = _core.MAX_AMPLIFICATION
 
@@ -214,32 +211,3 @@ def _save_dofs(save_dofs, dim: int) -> list[int] | None:
     if len(set(out)) != len(out):
         raise ValueError("save_dofs: an index appears twice")
     return out
-
-
-def span(h: float, t_end: float | None, n_steps: int | None) -> tuple[int, float]:
-    """(the number of steps, the size of the last) for exactly one of t_end and n_steps."""
-    if (t_end is None) == (n_steps is None):
-        raise ValueError("give exactly one of t_end and n_steps")
-    if n_steps is not None:
-        return integer("n_steps", n_steps, maximum=MAX_STEPS), h
-    return steps_for(t_end, h)
-
-
-def steps_for(t_end: float, h: float) -> tuple[int, float]:
-    """The number of steps of size ``h`` that reach ``t_end``, and the size of the last.
-
-    A ``t_end`` within 1e-9 relative of a whole multiple of ``h`` takes whole steps;
-    otherwise the last step is shortened to land exactly on ``t_end``."""
-    t_end = real("t_end", t_end, positive=True)
-    h = real("h", h, positive=True)
-    ratio = t_end / h
-    if not ratio <= MAX_STEPS:  # also catches ratio = inf
-        raise ValueError(f"t_end: reaching t_end = {t_end:g} with h = {h:g} takes {ratio:.3g} steps, "
-                         f"more than {MAX_STEPS:.3g}")
-    nearest = round(ratio)
-    if nearest >= 1 and abs(ratio - nearest) <= 1e-9 * max(1.0, ratio):
-        n, h_last = nearest, h
-    else:
-        n = max(1, math.ceil(ratio))
-        h_last = t_end - (n - 1) * h
-    return n, h_last

@@ -28,7 +28,7 @@ from ..systems.models import MODELS, Model
 from ..systems.system import System
 from .ensemble import integrate_ensemble
 from .choose_method import choose_method
-from .integrate import _catalogue, steps_for
+from .integrate import _catalogue, span
 
 __all__ = ["sweep", "check_sweep", "SweepPlan", "parse_grid_item", "SPEC_KEYS", "RUN_ARGUMENTS"]
 
@@ -220,10 +220,7 @@ def _plan(model: Model, options: dict[str, Any], grid: Mapping[str, Any]):
 def _grid_times(run: dict[str, Any]) -> np.ndarray:
     """The save grid of a run, as the core computes it (integrate.hpp's time_at)."""
     h, save_every = run["h"], integer("save_every", run["save_every"])
-    if run.get("n_steps") is not None:
-        n, h_last = integer("n_steps", run["n_steps"]), h
-    else:
-        n, h_last = steps_for(run["t_end"], h)
+    n, h_last = span(h, run.get("t_end"), run.get("n_steps"))
     ks = list(range(0, n + 1, save_every))
     if n % save_every:
         ks.append(n)
