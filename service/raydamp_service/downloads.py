@@ -35,10 +35,11 @@ MEDIA_TYPES = {"csv": "text/csv", "npz": "application/octet-stream", "netcdf": "
 SUFFIXES = {"csv": ".csv", "npz": ".npz", "netcdf": ".nc"}
 
 
-def stored_solution(record: JobRecord, arrays: TrajectoryArrays) -> raydamp.Solution:
-    """The stored run as a Solution; its provenance is the job spec as submitted."""
+def stored_solution(record: JobRecord, arrays: TrajectoryArrays, spec: JobSpec | None = None) -> raydamp.Solution:
+    """The stored run as a Solution; its provenance is the job spec as submitted (spec: it validated, when the
+    caller has it already)."""
     summary = record.summary or {}
-    spec = JobSpec.model_validate(record.spec)
+    spec = spec or JobSpec.model_validate(record.spec)
     coordinates, momentum_names = spec.names(arrays.q.shape[1], arrays.momentum.shape[1], spec.save_dofs)
     provenance = {**record.spec, "raydamp_version": raydamp.__version__, "job_id": record.id,
                   "coordinates": coordinates, "momentum_names": momentum_names}
@@ -60,7 +61,8 @@ def write_file(record: JobRecord, connection: sqlite3.Connection, stored: Stored
     rows = max(1, SLICE_BYTES // stored.row_bytes)
     pieces = selection.pieces(rows)
     first = next(pieces)
-    head = stored_solution(record, read_arrays(connection, stored, first))
+    spec = JobSpec.model_validate(record.spec)  # once for the file, not once per slice
+    head = stored_solution(record, read_arrays(connection, stored, first), spec)
     path = directory / f"trajectory{SUFFIXES[fmt]}"
     if fmt == "npz":
         _write_npz(head, connection, stored, selection, rows, path)
@@ -69,7 +71,7 @@ def write_file(record: JobRecord, connection: sqlite3.Connection, stored: Stored
         part = directory / "part.csv"
         with path.open("ab") as out:
             for piece in pieces:
-                stored_solution(record, read_arrays(connection, stored, piece)).save(part)
+                stored_solution(record, read_arrays(connection, stored, piece), spec).save(part)
                 with part.open("rb") as text:
                     text.readline()  # the header, written once
                     while block := text.read(1 << 20):

@@ -17,7 +17,7 @@ from .config import Settings
 from .files import FILE_COLUMNS_ADDED, FILES_TABLE, FileStore, file_resolver
 from .problems import JobError, RaydampCall, build_call
 from .runner import Outcome, Run
-from .schemas import JobSpec
+from .schemas import JobSpec, normalise_stored
 from .store import TaskRecord, TaskStore
 
 __all__ = ["JobStore", "JobRecord", "JobWork", "TrajectoryArrays", "StoredTrajectory"]
@@ -84,6 +84,17 @@ def _array(blob: bytes | None, *shape: int) -> np.ndarray | None:
     return np.frombuffer(blob, dtype=_FLOAT).reshape(shape) if blob is not None else None
 
 
+def _first_given(*paths: str, otherwise: str = "NULL") -> str:
+    """SQL: the first of these JSON values that is given and not "" (as Python's `a or b`), else otherwise."""
+    return "COALESCE(" + ", ".join([*(f"NULLIF(json_extract({path}), '')" for path in paths), otherwise]) + ")"
+
+
+# A list's label (a built-in model's name, else the system's name or kind) and method (the one run, else
+# the one asked for), read by SQLite from the stored JSON.
+_LABEL = _first_given("spec, '$.model'", "spec, '$.system.name'", "spec, '$.system.kind'", otherwise="'system'")
+_METHOD = _first_given("summary, '$.method'", "spec, '$.method'")
+
+
 class JobStore(TaskStore[JobRecord], FileStore):
     """The jobs, their trajectories, and the uploaded files their systems name."""
 
@@ -103,6 +114,17 @@ class JobStore(TaskStore[JobRecord], FileStore):
         for column, declaration in FILE_COLUMNS_ADDED.items():  # from before records were uploaded
             if column not in present:
                 db.execute(f"ALTER TABLE files ADD COLUMN {column} {declaration}")
+        normalise_stored(db, self.TABLE, JobSpec)
+
+    def listing(self, limit: int, status: str | None = None) -> list[sqlite3.Row]:
+        """Newest first, what a list shows of each job: id, status, progress, label (a built-in model's name,
+        else its system's name or kind), method (the one run, else the one asked for), created_at, finished_at.
+        SQLite reads the label and method from the stored JSON: a spec carrying a structure's matrices is
+        not parsed in Python for one line of a list."""
+        where, args = ("WHERE status = ?", (status,)) if status else ("", ())
+        return self.db.connection().execute(
+            f"SELECT id, status, progress, created_at, finished_at, {_LABEL} AS label, {_METHOD} AS method "
+            f"FROM jobs {where} ORDER BY seq DESC LIMIT ?", (*args, limit)).fetchall()
 
     def work(self, settings: Settings, checks: CheckPool | None = None) -> JobWork:
         return JobWork(self, settings, checks)

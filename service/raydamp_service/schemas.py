@@ -3,20 +3,63 @@ definition for the service, `raydamp run` and a Solution's provenance)."""
 
 from __future__ import annotations
 
+import hashlib
+import json
+import sqlite3
 from datetime import datetime
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic_core import core_schema
 from raydamp.jobs import JobSpec, SweepSpec
 
 __all__ = [
-    "JobSpec", "SweepSpec", "FileInfo", "FileList",
+    "JobSpec", "SweepSpec", "normalise_stored", "FileInfo", "FileList",
     "JobStatus", "JobCreated", "JobSummary", "JobView", "JobListItem", "JobList", "Trajectory",
     "SweepCreated", "SweepView", "SweepListItem", "SweepList",
     "ParameterInfo", "ModelInfo", "MethodInfo", "CompositionInfo", "Health",
 ]
 
 JobStatus = Literal["queued", "running", "completed", "failed", "cancelled"]
+
+
+class _Stored:
+    """A spec as the store holds it: validated once, at submission, and kept as the model's normalised JSON
+    (model_dump), so a view sends it as it is rather than validating it again; described in /openapi.json
+    as the model itself."""
+
+    def __init__(self, model: type[BaseModel]):
+        self.model = model
+
+    def __get_pydantic_core_schema__(self, source: Any, handler: Any) -> core_schema.CoreSchema:
+        return core_schema.dict_schema(core_schema.str_schema(), core_schema.any_schema())
+
+    def __get_pydantic_json_schema__(self, schema: core_schema.CoreSchema, handler: Any) -> dict[str, Any]:
+        return handler(self.model.__pydantic_core_schema__)
+
+
+def normalise_stored(db: sqlite3.Connection, table: str, model: type[BaseModel]) -> None:
+    """Bring the specs a table holds to the model's JSON of today (views send them as stored: _Stored), once
+    per change of the model's schema: a spec stored before a field was added then shows the field's default,
+    as it did when every view validated it again. One that no longer validates is left as it was."""
+    key = f"{table}.spec schema"
+    schema = hashlib.sha256(json.dumps(model.model_json_schema(), sort_keys=True).encode()).hexdigest()
+    if db.execute("SELECT 1 FROM service WHERE key = ? AND value = ?", (key, schema)).fetchone():
+        return
+    for (task_id,) in db.execute(f"SELECT id FROM {table}").fetchall():
+        text = db.execute(f"SELECT spec FROM {table} WHERE id = ?", (task_id,)).fetchone()[0]
+        try:
+            normal = json.dumps(model.model_validate(json.loads(text)).model_dump(mode="json"))
+        except (ValidationError, ValueError):
+            continue
+        if normal != text:
+            db.execute(f"UPDATE {table} SET spec = ? WHERE id = ?", (normal, task_id))
+    db.execute("INSERT OR REPLACE INTO service (key, value) VALUES (?, ?)", (key, schema))
+
+
+def _spec_as_model(schema: dict[str, Any]) -> None:
+    """The view's spec described as a field typed by the model is: a bare reference, without a title."""
+    schema["properties"]["spec"].pop("title", None)
 
 
 # ---- output -----------------------------------------------------------------------------------
@@ -58,6 +101,8 @@ class JobSummary(BaseModel):
 
 
 class JobView(BaseModel):
+    model_config = ConfigDict(json_schema_extra=_spec_as_model)
+
     id: str
     status: JobStatus
     progress: float = Field(description="fraction of the steps done, 0 to 1")
@@ -67,7 +112,7 @@ class JobView(BaseModel):
     failed_step: int | None = Field(description="the first step whose result was not finite")
     summary: JobSummary | None
     trajectory: str | None = Field(description="URL of the saved points, once there are any")
-    spec: JobSpec
+    spec: Annotated[dict[str, Any], _Stored(JobSpec)]
     created_at: datetime
     started_at: datetime | None
     finished_at: datetime | None
@@ -176,6 +221,8 @@ class SweepCreated(BaseModel):
 
 
 class SweepView(BaseModel):
+    model_config = ConfigDict(json_schema_extra=_spec_as_model)
+
     id: str
     status: JobStatus
     members: int
@@ -188,7 +235,7 @@ class SweepView(BaseModel):
                                                         "...), once finished")
     result: str | None = Field(description="URL of the NetCDF result, once stored")
     result_bytes: int | None
-    spec: SweepSpec
+    spec: Annotated[dict[str, Any], _Stored(SweepSpec)]
     created_at: datetime
     started_at: datetime | None
     finished_at: datetime | None

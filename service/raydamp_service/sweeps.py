@@ -20,7 +20,7 @@ from .config import Settings
 from .runner import Outcome, Run
 from .store import TaskRecord, TaskStore
 from .problems import sweep_arguments
-from .schemas import SweepSpec
+from .schemas import SweepSpec, normalise_stored
 
 __all__ = ["SweepStore", "SweepRecord", "SweepWork"]
 
@@ -41,6 +41,9 @@ class SweepStore(TaskStore[SweepRecord]):
     COLUMNS = "members INTEGER NOT NULL, members_done INTEGER NOT NULL DEFAULT 0, outcomes TEXT, result BLOB"
     COMPUTED = {"result_bytes": "length(result)"}
     BYTES = "length(result)"
+
+    def _upgrade(self, db: sqlite3.Connection) -> None:
+        normalise_stored(db, self.TABLE, SweepSpec)
 
     def work(self, settings: Settings) -> SweepWork:
         return SweepWork(self, settings)

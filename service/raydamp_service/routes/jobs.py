@@ -10,7 +10,7 @@ import shutil
 import tempfile
 import threading
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Literal
 
 from fastapi import APIRouter, HTTPException, Query, Request, Response
 from fastapi.exceptions import RequestValidationError
@@ -35,32 +35,22 @@ router = APIRouter(prefix="/v1/jobs", tags=["jobs"])
 _NOT_FOUND = {404: {"description": "no job with this id"}}
 
 
-def _progress(record: JobRecord, runner: Runner) -> float:
-    if record.status == "running":
-        live = runner.progress(record.id)
-        return live if live is not None else record.progress
-    return record.progress
+def _progress(job_id: str, status: str, stored: float, runner: Runner) -> float:
+    live = runner.progress(job_id) if status == "running" else None
+    return live if live is not None else stored
 
 
 def _view(record: JobRecord, runner: Runner) -> JobView:
     return JobView(
-        id=record.id, status=record.status, progress=_progress(record, runner), attempts=record.attempts,
+        id=record.id, status=record.status, progress=_progress(record.id, record.status, record.progress, runner),
+        attempts=record.attempts,
         cancel_requested=record.cancel_requested, error=record.error, failed_step=record.failed_step,
         summary=record.summary, trajectory=JOBS.url(record.id) + "/trajectory" if record.has_trajectory else None,
-        spec=JobSpec.model_validate(record.spec), created_at=record.created_at, started_at=record.started_at,
+        spec=record.spec, created_at=record.created_at, started_at=record.started_at,
         finished_at=record.finished_at)
 
 
 JOBS = Tasks("job", "/v1/jobs", _view)
-
-
-def _model_label(spec: dict[str, Any]) -> str:
-    """A built-in model's name, or a system's label (its kind, such as "chain", or "system" when it has none)."""
-    if spec.get("model"):
-        return spec["model"]
-    system = spec.get("system") or {}
-    return system.get("name") or system.get("kind") or "system"
-
 
 
 def with_seed(spec: JobSpec) -> JobSpec:
@@ -97,10 +87,10 @@ def list_jobs(store: StoreDep, runner: RunnerDep, settings: SettingsDep,
               status: Annotated[JobStatus | None, Query(description="only jobs in this state")] = None) -> JobList:
     check_limit(limit, settings)
     return JobList(jobs=[
-        JobListItem(id=r.id, status=r.status, progress=_progress(r, runner), model=_model_label(r.spec),
-                    method=(r.summary or {}).get("method") or r.spec.get("method") or "chosen by raydamp",
-                    created_at=r.created_at, finished_at=r.finished_at, url=JOBS.url(r.id))
-        for r in store.recent(limit, status)])
+        JobListItem(id=r["id"], status=r["status"], progress=_progress(r["id"], r["status"], r["progress"], runner),
+                    model=r["label"], method=r["method"] or "chosen by raydamp", created_at=r["created_at"],
+                    finished_at=r["finished_at"], url=JOBS.url(r["id"]))
+        for r in store.listing(limit, status)])
 
 
 @router.get("/{job_id}", response_model=JobView, responses=_NOT_FOUND)

@@ -42,7 +42,7 @@ def _view(record: SweepRecord, runner: Runner) -> SweepView:
                      progress=1.0 if record.status == "completed" else done / record.members,
                      cancel_requested=record.cancel_requested, attempts=record.attempts, error=record.error,
                      outcomes=record.outcomes, result=SWEEPS.url(record.id) + "/result" if record.result_bytes else None,
-                     result_bytes=record.result_bytes, spec=SweepSpec.model_validate(record.spec),
+                     result_bytes=record.result_bytes, spec=record.spec,
                      created_at=record.created_at, started_at=record.started_at, finished_at=record.finished_at)
 
 
