@@ -46,8 +46,7 @@ import numpy as np
 
 from .. import _core
 from .._validation import _short, integer, real
-from .kinds import MemberModels
-from .models import Model
+from .models import SharedModel
 
 __all__ = ["Chain", "BOND_FAMILIES", "chain_mode_energies", "MAX_SITES"]
 
@@ -73,7 +72,7 @@ def _bond_range(boundary: str, n: int) -> range:
     return range(1 if boundary == "free" else 0, n + 1 if boundary == "fixed" else n)
 
 
-class Chain(Model):
+class Chain(SharedModel):
     """A one-dimensional lattice with damped bonds or sites (see the module docstring).
 
     >>> c = Chain(32, bond="fput", parameters={"alpha": 0.25}, dampers={"bonds": [9, 19, 29], "c": 0.1})
@@ -150,18 +149,6 @@ class Chain(Model):
         if "n" not in spec:
             raise ValueError("n: missing (the number of sites)")
         return cls(**{k: v for k, v in spec.items() if k != "kind"})
-
-    # -- the kind protocol (kinds.SystemKind) ---------------------------------------------------
-    def describe(self) -> dict[str, Any]:
-        return {"system": self.to_dict()}
-
-    def member_parameters(self) -> dict[str, int]:
-        # Members differ by initial state only (and, in a sweep, by run arguments): another eps or
-        # bond parameter is another model (its damping blocks' flows are built with them).
-        return {}
-
-    def member_models(self, parameters: Mapping[str, np.ndarray], members: int) -> MemberModels:
-        return MemberModels.shared(self, members)
 
     def mass_product(self, r) -> np.ndarray:
         """M r: every site has mass ``mass``."""

@@ -19,7 +19,7 @@ from .. import _core
 from .._validation import real, vector
 from .kinds import MemberModels, plain
 
-__all__ = ["Model", "BuiltinModel", "DampedPendulum", "ElasticPendulum", "MODELS", "describe_models", "make_model"]
+__all__ = ["Model", "SharedModel", "BuiltinModel", "DampedPendulum", "ElasticPendulum", "MODELS", "describe_models", "make_model"]
 
 # The core's catalogue of built-in models, by name (cpp/include/raydamp/models/*.hpp, each
 # struct's `parameters` table).
@@ -132,6 +132,28 @@ class Model:
     def __repr__(self) -> str:
         args = ", ".join(f"{k}={v!r}" for k, v in self.parameters.items())
         return f"{type(self).__name__}({args})"
+
+
+class SharedModel(Model):
+    """A kind given as data, with a JSON form of its own (``to_dict``, the job's ``system``), whose ensemble
+    members share one model and differ by initial state only (and, in a sweep, by run arguments): another
+    value of one of its parameters is another model, because the model builds its compiled parts with them
+    (a Chain's damping blocks with eps and the bond's parameters, a LinearStructure's Chebyshev bounds with
+    alpha and beta). Chain and LinearStructure."""
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON form, ``{"kind": ..., ...}``."""
+        raise NotImplementedError
+
+    # -- the kind protocol (kinds.SystemKind) ---------------------------------------------------
+    def describe(self) -> dict[str, Any]:
+        return {"system": self.to_dict()}
+
+    def member_parameters(self) -> dict[str, int]:
+        return {}
+
+    def member_models(self, parameters: Mapping[str, np.ndarray], members: int) -> MemberModels:
+        return MemberModels.shared(self, members)
 
 
 def _checked(parameter: Mapping[str, Any], value) -> float | tuple[float, ...]:

@@ -46,15 +46,13 @@ Which method when (rho = alpha + beta L, the largest damping rate):
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
 from .. import _core
 from .._validation import real
-from .kinds import MemberModels
-from .models import Model
+from .models import SharedModel
 
 __all__ = ["LinearStructure", "MAX_PLAIN_ENTRIES", "read_matrix"]
 
@@ -127,7 +125,7 @@ def _is_diagonal(matrix) -> bool:
     return bool(np.all(coo.row[coo.data != 0] == coo.col[coo.data != 0]))
 
 
-class LinearStructure(Model):
+class LinearStructure(SharedModel):
     """A linear structure M q'' + (alpha M + beta K) q' + K q = f, sparse, run by every method.
 
     Parameters
@@ -285,18 +283,6 @@ class LinearStructure(Model):
         args = {"M": self._mass, "K": self._stiffness, "alpha": self.alpha, "beta": self.beta,
                 "f": self._load, "allow_indefinite_stiffness": self.allow_indefinite_stiffness, **changes}
         return LinearStructure(args.pop("M"), args.pop("K"), **args)
-
-    # -- the kind protocol (kinds.SystemKind) ---------------------------------------------------
-    def describe(self) -> dict[str, Any]:
-        return {"system": self.to_dict()}
-
-    def member_parameters(self) -> dict[str, int]:
-        # Members differ by initial state only (and, in a sweep, by run arguments): another alpha or
-        # beta is another model (its damping's Chebyshev bounds are computed with them).
-        return {}
-
-    def member_models(self, parameters: Mapping[str, np.ndarray], members: int) -> MemberModels:
-        return MemberModels.shared(self, members)
 
     def __repr__(self) -> str:
         return (f"LinearStructure(n={self.dim}, mass={self.mass_kind}, nnz(K)={self._stiffness.nnz}, "
