@@ -25,12 +25,10 @@ from raydamp.jobs import JobSpec
 from .jobs import JobRecord, StoredTrajectory, TrajectoryArrays
 from .trajectory_stream import Selection, read_arrays, read_column
 
-__all__ = ["FORMATS", "PLOTS", "SLICE_BYTES", "stored_solution", "write_file", "plot_png"]
+__all__ = ["SLICE_BYTES", "stored_solution", "write_file", "plot_png"]
 
 SLICE_BYTES = 4 << 20  # stored floats read and written at once
 
-FORMATS = ("json", "csv", "npz", "netcdf")
-PLOTS = ("energy", "phase", "projection")
 MEDIA_TYPES = {"csv": "text/csv", "npz": "application/octet-stream", "netcdf": "application/x-netcdf"}
 SUFFIXES = {"csv": ".csv", "npz": ".npz", "netcdf": ".nc"}
 

@@ -27,7 +27,7 @@ from raydamp.systems.structure import read_matrix
 
 from .store import UNFINISHED_SQL, Database, now
 
-__all__ = ["FILES_TABLE", "FILE_COLUMNS_ADDED", "FileRecord", "FileStore", "UploadError", "MatrixFileError",
+__all__ = ["FILES_TABLE", "FILE_COLUMNS_ADDED", "FileRecord", "FileStore", "UploadError",
            "MatrixFileInfo", "RecordFileInfo", "check_matrix_market", "check_record", "check_upload", "file_resolver",
            "ParsedFiles"]
 
@@ -84,9 +84,6 @@ class UploadError(ValueError):
     """An upload that is not a file this service can use; the message says why."""
 
 
-MatrixFileError = UploadError  # its name when uploads were matrices only
-
-
 @dataclass(frozen=True)
 class MatrixFileInfo:
     shape: tuple[int, int]
@@ -126,7 +123,7 @@ def check_upload(content: bytes, name: str, *, max_dim: int) -> MatrixFileInfo |
 
 def check_matrix_market(content: bytes, *, max_dim: int) -> MatrixFileInfo:
     """Read the upload as Matrix Market: a real (or integer, or pattern) square matrix of at most max_dim
-    rows with finite entries. Raises MatrixFileError saying what is wrong."""
+    rows with finite entries. Raises UploadError saying what is wrong."""
     import numpy as np
     import scipy.io
     import scipy.sparse
@@ -134,26 +131,26 @@ def check_matrix_market(content: bytes, *, max_dim: int) -> MatrixFileInfo:
     try:
         rows, cols, entries, layout, field, _ = scipy.io.mminfo(io.BytesIO(content))
     except Exception as error:  # noqa: BLE001 - the reader's own words: "Missing banner", ...
-        raise MatrixFileError(f"not a Matrix Market file: {error}") from None
+        raise UploadError(f"not a Matrix Market file: {error}") from None
     if field == "complex":
-        raise MatrixFileError("a complex matrix; M and K must be real")
+        raise UploadError("a complex matrix; M and K must be real")
     if rows != cols:
-        raise MatrixFileError(f"the matrix is {rows} x {cols}; M and K must be square")
+        raise UploadError(f"the matrix is {rows} x {cols}; M and K must be square")
     if rows > max_dim:
-        raise MatrixFileError(f"the matrix is {rows} x {cols}; this service runs structures of at most "
+        raise UploadError(f"the matrix is {rows} x {cols}; this service runs structures of at most "
                               f"max_structure_dim = {max_dim} coordinates")
     announced = entries if layout == "coordinate" else rows * cols
     shortest = _MIN_COORDINATE_LINE if layout == "coordinate" else _MIN_ARRAY_LINE
     if announced > len(content) // shortest:
-        raise MatrixFileError(f"the header announces {announced} entries, more than a file of {len(content)} "
+        raise UploadError(f"the header announces {announced} entries, more than a file of {len(content)} "
                               "bytes can hold")
     try:
         matrix = scipy.io.mmread(io.BytesIO(content))
     except Exception as error:  # noqa: BLE001
-        raise MatrixFileError(f"cannot read it as Matrix Market: {error}") from None
+        raise UploadError(f"cannot read it as Matrix Market: {error}") from None
     values = matrix.data if scipy.sparse.issparse(matrix) else np.asarray(matrix)
     if values.dtype.kind not in "biuf" or not np.isfinite(values).all():
-        raise MatrixFileError("the entries must be finite real numbers")
+        raise UploadError("the entries must be finite real numbers")
     nnz = int(matrix.nnz) if scipy.sparse.issparse(matrix) else int(np.count_nonzero(values))
     return MatrixFileInfo(shape=(int(rows), int(cols)), nnz=nnz)
 

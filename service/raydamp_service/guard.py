@@ -13,7 +13,7 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from .config import Settings
 
-__all__ = ["RequestGuard", "UNGUARDED_PATHS", "needs_token"]
+__all__ = ["RequestGuard", "UNGUARDED_PATHS", "file_too_large", "needs_token"]
 
 # Paths that answer without the token. Liveness probes (the answer says only "ok", the version and
 # the worker count); the page shell, its scripts and the API description, which hold no job data
@@ -27,6 +27,11 @@ MULTIPART_ALLOWANCE = 64 * 1024
 
 def needs_token(path: str) -> bool:
     return path not in UNGUARDED_PATHS and not path.startswith(UNGUARDED_PREFIXES)
+
+
+def file_too_large(limit: int) -> str:
+    """The 413's detail for an upload over max_file_bytes (here, or from the route that counts the file part)."""
+    return f"the file is larger than max_file_bytes = {limit} bytes (RAYDAMP_MAX_FILE_BYTES)"
 
 
 class _BodyTooLarge(Exception):
@@ -85,8 +90,7 @@ class RequestGuard:
 
     def _too_large(self, scope: Scope) -> JSONResponse:
         if self._is_upload(scope):
-            return JSONResponse({"detail": f"the file is larger than max_file_bytes = {self.max_file} bytes "
-                                           "(RAYDAMP_MAX_FILE_BYTES)"}, status_code=413)
+            return JSONResponse({"detail": file_too_large(self.max_file)}, status_code=413)
         return JSONResponse({"detail": f"the request body is larger than max_body_bytes = {self.max_body} bytes "
                                        "(RAYDAMP_MAX_BODY_BYTES)"}, status_code=413)
 

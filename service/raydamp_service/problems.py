@@ -18,7 +18,7 @@ from raydamp.jobs import (CooForm, DiagonalForm, JobCall, JobError, JobSpec, Lin
 from .config import Settings
 
 __all__ = ["JobError", "RaydampCall", "build_call", "check_spec", "check_sweep_spec", "planned_steps",
-           "sweep_arguments", "trajectory_bytes"]
+           "trajectory_bytes"]
 
 
 @dataclass(frozen=True)
@@ -80,28 +80,10 @@ def _check_sizes(spec: JobSpec, settings: Settings) -> None:
 def refuse_paths(spec: JobSpec) -> None:
     """A load's {"file": {"path": ...}} reads a file of the machine it runs on: the service takes uploaded
     files by id only (POST /v1/files), whatever the route (a job, a sweep's job, a check process)."""
-    for field in ("load", "ground_motion"):
-        found = _path_in(getattr(spec, field), (field,))
-        if found is not None:
-            raise JobError(found, ".".join(str(p) for p in found) + ": the service reads no paths; upload the "
-                           "file (POST /v1/files) and give its id")
-
-
-def _path_in(value, at: tuple):
-    """The JSON path of the first "path" key under a "file" form, or None."""
-    if isinstance(value, dict):
-        if at and at[-1] == "file" and "path" in value:
-            return (*at, "path")
-        for key, item in value.items():
-            found = _path_in(item, (*at, key))
-            if found is not None:
-                return found
-    elif isinstance(value, list):
-        for i, item in enumerate(value):
-            found = _path_in(item, (*at, i))
-            if found is not None:
-                return found
-    return None
+    found = spec.local_path()
+    if found is not None:
+        raise JobError(found, ".".join(map(str, found)) + ": the service reads no paths; upload the file (POST "
+                       "/v1/files) and give its id")
 
 
 def check_spec(spec: JobSpec, settings: Settings, files=None) -> RaydampCall:
@@ -138,36 +120,18 @@ def check_spec(spec: JobSpec, settings: Settings, files=None) -> RaydampCall:
     return call
 
 
-def sweep_arguments(spec: SweepSpec) -> tuple[dict[str, Any], dict[str, Any]]:
-    """(the base point as raydamp.sweep takes a job, the grid)."""
-    return spec.job_form(), spec.grid_arguments()
-
-
-def _sweep_error(spec: SweepSpec, error: ValueError) -> JobError:
-    """A raydamp.sweep message starts with what it is about: a grid axis, chunk_size, a member, or the job."""
-    message = str(error)
-    head = message.replace(":", " ").split(" ", 1)[0]
-    if head.startswith("grid."):
-        return JobError(("grid", *head.split(".")[1:]), message)
-    if head in spec.grid or head == "member":  # a member's run (e.g. the amplification bound): the grid made it
-        return JobError(("grid", head) if head in spec.grid else ("grid",), message)
-    if head == "chunk_size":
-        return JobError(("chunk_size",), message)
-    return error_at(spec.job, error).within("job")
-
-
 def check_sweep_spec(spec: SweepSpec, settings: Settings) -> raydamp.SweepPlan:
     """Every check a sweep must pass before it is queued: the job's, raydamp.check_sweep's (grid names and
     values, one step of the first member), then the service's size bounds."""
     try:
         check_spec(spec.job, settings)
-        job, grid = sweep_arguments(spec)
+        job, grid = spec.job_form(), spec.grid_arguments()
     except JobError as error:
         raise error.within("job") if error.loc[:1] != ("job",) else error from None
     try:
         plan = raydamp.check_sweep(job, grid, chunk_size=spec.chunk_size)
     except ValueError as error:
-        raise _sweep_error(spec, error) from None
+        raise spec.error_at(error) from None
     if plan.members > settings.max_sweep_members:
         raise JobError(("grid",), f"grid: {plan.members} members (the product of the axes' lengths); this service "
                        f"runs at most max_sweep_members = {settings.max_sweep_members}")

@@ -19,7 +19,6 @@ from raydamp.results.io.sweep import save_sweep
 from .config import Settings
 from .runner import Outcome, Run
 from .store import TaskRecord, TaskStore
-from .problems import sweep_arguments
 from .schemas import SweepSpec, normalise_stored
 
 __all__ = ["SweepStore", "SweepRecord", "SweepWork"]
@@ -90,7 +89,7 @@ class SweepWork:
 
     def run(self, record: SweepRecord, run: Run) -> Outcome:
         spec = SweepSpec.model_validate(record.spec)
-        job, grid = sweep_arguments(spec)
+        job, grid = spec.job_form(), spec.grid_arguments()
         ds = raydamp.sweep(job, grid, client=self._dask_client(), chunk_size=spec.chunk_size,
                            progress=run.report, cancel=run.token)  # once per chunk
         cancelled = bool(ds.attrs.get("cancelled"))

@@ -179,6 +179,18 @@ class JobSpec(ModelSpec):
             spec._h_key = STEP_SIZE_ALIAS
         return spec
 
+    def local_path(self) -> tuple[str | int, ...] | None:
+        """The JSON path of the first {"file": {"path": ...}} in the load or the ground motion (a file of the
+        machine the job runs on, which a service refuses), or None."""
+        def find(value: Any, at: tuple) -> tuple | None:
+            if isinstance(value, dict) and at and at[-1] == "file" and "path" in value:
+                return (*at, "path")
+            items = value.items() if isinstance(value, dict) else enumerate(value) if isinstance(value, list) else ()
+            return next((found for key, item in items if (found := find(item, (*at, key))) is not None), None)
+
+        return next((found for field in ("load", "ground_motion")
+                     if (found := find(getattr(self, field), (field,))) is not None), None)
+
     @property
     def h_key(self) -> str:
         """The key the client gave the step size by: "h", or "step_size" (the former name)."""

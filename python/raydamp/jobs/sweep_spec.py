@@ -8,6 +8,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import Discriminator, Field, Tag, model_validator
 
+from .build import error_at
 from .errors import JobError
 from .forms import FiniteFloat, Input
 from .spec import JobSpec
@@ -76,3 +77,16 @@ class SweepSpec(Input):
         if self.job.system is not None:  # as the client wrote it: the compile cache's key
             job["system"] = self.job.system.model_dump(mode="json", exclude_unset=True)
         return job
+
+    def error_at(self, error: ValueError) -> JobError:
+        """A ValueError of raydamp.sweep or raydamp.check_sweep for this sweep, at the JSON path of what its
+        message starts with: a grid axis, a member (the grid made it), chunk_size, else the job."""
+        message = str(error)
+        head = message.replace(":", " ").split(" ", 1)[0]
+        if head.startswith("grid."):
+            return JobError(("grid", *head.split(".")[1:]), message)
+        if head in self.grid or head == "member":  # a member's run (e.g. the amplification bound)
+            return JobError(("grid", head) if head in self.grid else ("grid",), message)
+        if head == "chunk_size":
+            return JobError(("chunk_size",), message)
+        return error_at(self.job, error).within("job")

@@ -17,7 +17,9 @@ from fastapi.exceptions import RequestValidationError
 
 from ..deps import SettingsDep, StoreDep
 from ..files import FileRecord, RecordFileInfo, UploadError, check_upload
+from ..guard import file_too_large
 from ..schemas import FileInfo, FileList
+from .tasks import check_limit
 
 router = APIRouter(prefix="/v1/files", tags=["files"])
 
@@ -39,10 +41,6 @@ def _name(filename: str | None) -> str:
     return name[:_MAX_NAME]
 
 
-def too_large_detail(limit: int) -> str:
-    return f"the file is larger than max_file_bytes = {limit} bytes (RAYDAMP_MAX_FILE_BYTES)"
-
-
 @router.post("", status_code=201, response_model=FileInfo,
              responses={413: {"description": "the file is over max_file_bytes"},
                         422: {"description": "no file part, or not a file this service can use: a Matrix Market "
@@ -60,10 +58,10 @@ def upload_file(file: Annotated[UploadFile, File(description="a Matrix Market (.
     initial state's {"file": id}."""
     limit = settings.max_file_bytes
     if file.size is not None and file.size > limit:
-        raise HTTPException(413, detail=too_large_detail(limit))
+        raise HTTPException(413, detail=file_too_large(limit))
     content = file.file.read(limit + 1)
     if len(content) > limit:
-        raise HTTPException(413, detail=too_large_detail(limit))
+        raise HTTPException(413, detail=file_too_large(limit))
     try:
         info = check_upload(content, _name(file.filename), max_dim=settings.max_structure_dim)
     except UploadError as error:
@@ -86,9 +84,7 @@ def upload_file(file: Annotated[UploadFile, File(description="a Matrix Market (.
 def list_files(store: StoreDep, settings: SettingsDep,
                limit: Annotated[int, Query(ge=1, description="at most this many files, newest first")] = 100
                ) -> FileList:
-    if limit > settings.max_list_limit:
-        raise RequestValidationError([{"type": "less_than_equal", "loc": ("query", "limit"), "input": limit,
-                                       "msg": f"limit must be <= {settings.max_list_limit}"}])
+    check_limit(limit, settings)
     return FileList(files=[_info(record) for record in store.files(limit)])
 
 
