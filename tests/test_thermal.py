@@ -183,6 +183,9 @@ def test_bad_input_names_the_argument():
         raydamp.integrate(model, [0.1], [0.0], temperature=-1.0, **run)
     with pytest.raises(ValueError, match=r"seed must be an integer"):
         raydamp.integrate(model, [0.1], [0.0], temperature=1.0, seed=1.5, **run)
+    with pytest.raises(ValueError, match=r"first_stream: members draw streams first_stream \+ i for i < 3"):
+        raydamp.integrate_ensemble(model, np.full((3, 1), 0.1), np.zeros((3, 1)), temperature=1.0, seed=1,
+                                   first_stream=2**64 - 2, **run)  # stream 2^64 - 2 + 2 would wrap to 0
     with pytest.raises(ValueError, match=r"temperature: method 'rks' has no exact noise flow"):
         raydamp.integrate(model, [0.1], [0.0], method="rks", temperature=1.0, **run)
     with pytest.raises(ValueError, match=r"temperature: composition 'yoshida4' runs sub-steps backward"):
