@@ -6,8 +6,8 @@ noise under a build-up/decay envelope, seeded, peak about 4 m/s^2), applied as u
 excitation: raydamp.GroundMotion (the load -M r a_g(t), r = 1) and, in OpenSees, a Path timeSeries
 (-dt, -values) in pattern UniformExcitation. Both give the roof displacement relative to the
 ground, compared at the record's sample times with the exact response to the piecewise-linear
-record (the Nigam-Jennings solution: one matrix exponential of the system augmented with the
-segment's linear forcing, applied sample by sample).
+record (raydamp.analysis.piecewise_linear_response: the Nigam-Jennings solution, one matrix
+exponential of the system augmented with the segment's linear forcing, applied sample by sample).
 
 For each step size (dt, dt/2, ... dt/16) it prints, side by side, each tool's error
 max |u - u_exact| / max |u_exact| and its time (the analysis only: raydamp.integrate; OpenSees'
@@ -22,6 +22,7 @@ import numpy as np
 import scipy.linalg
 
 import raydamp
+from raydamp.analysis import piecewise_linear_response
 
 STOREYS, MASS, STIFFNESS, ZETA = 10, 1.0e5, 2.0e8, 0.05
 
@@ -48,23 +49,9 @@ def frame():
 
 
 def exact_roof(M, C, K, t, a_g) -> np.ndarray:
-    """u_roof at the sample times: x' = A x + [0; M^-1 (-M r)] a_g(t), a_g linear on each interval."""
-    n = M.shape[0]
-    dt = t[1] - t[0]
-    Minv = np.linalg.inv(M)
-    aug = np.zeros((2 * n + 2, 2 * n + 2))
-    aug[:n, n:2 * n] = np.eye(n)
-    aug[n:2 * n, :n] = -Minv @ K
-    aug[n:2 * n, n:2 * n] = -Minv @ C
-    aug[n:2 * n, 2 * n] = -np.ones(n)   # M^-1 (-M r), r = 1
-    aug[2 * n, 2 * n + 1] = 1.0
-    E = scipy.linalg.expm(dt * aug)
-    x = np.zeros(2 * n)
-    roof = [0.0]
-    for k in range(t.size - 1):
-        x = (E @ np.concatenate([x, [a_g[k], (a_g[k + 1] - a_g[k]) / dt]]))[:2 * n]
-        roof.append(x[n - 1])
-    return np.array(roof)
+    """u_roof at the sample times: the load -M r a_g(t), r = 1, a_g linear on each interval."""
+    q, _ = piecewise_linear_response(M, C, K, -M @ np.ones(M.shape[0]), t, a_g)
+    return q[:, -1]
 
 
 def raydamp_roof(M, K, alpha, beta, t, a_g, method: str, h_factor: int):

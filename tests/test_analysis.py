@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import scipy.linalg
 
 import raydamp
 from paper import ELASTIC_P0, ELASTIC_Q0, PENDULUM_P0, PENDULUM_Q0
@@ -109,3 +110,87 @@ def test_modified_relative_equilibrium_is_a_fixed_point_of_the_step():
     offsets = [modified_relative_equilibrium(undamped, m, 0.2, mu).reduced for m in ("3s", "2s", "rks")]
     np.testing.assert_allclose(offsets[1], offsets[0], atol=1e-12)
     np.testing.assert_allclose(offsets[2], offsets[0], atol=1e-12)
+
+
+# --- the exact response to a piecewise-linear load --------------------------------------------------
+
+def _ramp_response(m: float, c: float, k: float, t: np.ndarray, derivative: bool = False) -> np.ndarray:
+    """u(t) (or u'(t)) of m u'' + c u' + k u = t (t >= 0), from rest, underdamped: the particular
+    solution (t - c/k)/k plus the free vibration that starts it at rest (0 for t < 0)."""
+    tau = np.maximum(t, 0.0)
+    sigma, wd = c / (2 * m), np.sqrt(k / m - (c / (2 * m)) ** 2)
+    A = c / k ** 2
+    B = (sigma * A - 1 / k) / wd
+    decay, cos, sin = np.exp(-sigma * tau), np.cos(wd * tau), np.sin(wd * tau)
+    if derivative:
+        value = 1 / k + decay * ((wd * B - sigma * A) * cos - (sigma * B + wd * A) * sin)
+    else:
+        value = (tau - c / k) / k + decay * (A * cos + B * sin)
+    return np.where(t > 0, value, 0.0)
+
+
+def _piecewise_linear_closed_form(m, c, k, knots, values, t, derivative: bool = False):
+    """A piecewise-linear a(t) from a(0) = 0 is a sum of ramps starting at the knots, each with the change
+    of slope there: the response is the same sum of ramp responses (superposition)."""
+    slopes = np.diff(values) / np.diff(knots)
+    changes = np.diff(np.concatenate([[0.0], slopes, [0.0]]))
+    return sum(dk * _ramp_response(m, c, k, t - tk, derivative) for tk, dk in zip(knots, changes))
+
+
+def test_piecewise_linear_response_of_an_sdof_matches_the_closed_form():
+    """Uneven samples, a triangle pulse then a return to zero and free vibration: to 1e-12 of the peak."""
+    from raydamp.analysis import piecewise_linear_response
+
+    m, c, k = 2.0, 0.3, 5.0
+    knots = np.array([0.0, 0.3, 0.5, 1.2, 2.0, 2.05, 3.0, 7.5, 9.0])
+    values = np.array([0.0, 1.0, -0.5, 0.2, 0.0, 0.4, 0.0, 0.0, 0.0])
+    q, p = piecewise_linear_response(m, c, k, [1.7], knots, values)
+    exact = 1.7 * _piecewise_linear_closed_form(m, c, k, knots, values, knots)
+    peak = np.max(np.abs(exact))
+    assert np.max(np.abs(q[:, 0] - exact)) <= 1e-12 * peak and peak > 0.05
+    velocity = 1.7 * _piecewise_linear_closed_form(m, c, k, knots, values, knots, derivative=True)
+    assert np.max(np.abs(p[:, 0] - m * velocity)) <= 1e-12 * np.max(np.abs(m * velocity))  # p = m u'
+
+
+def test_piecewise_linear_response_of_a_rayleigh_damped_system_is_its_modes():
+    """Two coordinates, C = alpha M + beta K: the modes decouple (Phi^T M Phi = I), each mode an SDOF
+    under (Phi^T d) a(t) with damping alpha + beta w^2, whose closed form gives q = Phi eta; and a start
+    from (q0, p0) adds the free vibration, expm(t A) of the state."""
+    from raydamp.analysis import piecewise_linear_response
+
+    M = np.array([[2.0, 0.3], [0.3, 1.0]])
+    K = np.array([[6.0, -2.0], [-2.0, 3.0]])
+    alpha, beta = 0.1, 0.02
+    C = alpha * M + beta * K
+    d = np.array([0.5, -1.0])
+    knots = np.linspace(0.0, 6.0, 61)
+    values = np.sin(1.3 * knots) * np.exp(-0.2 * knots) * (knots < 4.0)
+    values[0] = 0.0
+    q, _ = piecewise_linear_response(M, C, K, d, knots, values)
+    w2, Phi = scipy.linalg.eigh(K, M)
+    eta = np.column_stack([(Phi[:, j] @ d) * _piecewise_linear_closed_form(1.0, alpha + beta * w2[j], w2[j], knots,
+                                                                          values, knots) for j in range(2)])
+    exact = eta @ Phi.T
+    assert np.max(np.abs(q - exact)) <= 1e-12 * np.max(np.abs(exact))
+    q0, p0 = np.array([0.2, -0.1]), np.array([0.0, 0.4])
+    started, momenta = piecewise_linear_response(M, C, K, d, knots, values, q0=q0, p0=p0)
+    A = np.block([[np.zeros((2, 2)), np.eye(2)], [-np.linalg.solve(M, K), -np.linalg.solve(M, C)]])
+    free = np.array([scipy.linalg.expm(tk * A) @ np.concatenate([q0, np.linalg.solve(M, p0)]) for tk in knots])
+    np.testing.assert_allclose(started, exact + free[:, :2], atol=1e-12)
+    np.testing.assert_allclose(momenta[0], p0, atol=1e-15)
+
+
+@pytest.mark.parametrize(("arguments", "message"), [
+    (dict(M=np.eye(2), C=np.eye(3)), r"C must be an 2 x 2 matrix"),
+    (dict(direction=[1.0]), r"direction must be 2 finite numbers"),
+    (dict(t=[0.0, 1.0, 1.0], values=[0.0, 1.0, 2.0]), r"t must increase: t\[2\]"),
+    (dict(values=[0.0, 1.0]), r"values must be 3 finite numbers"),
+    (dict(M=np.zeros((2, 2))), r"M must be invertible"),
+])
+def test_piecewise_linear_response_names_a_bad_argument(arguments, message):
+    from raydamp.analysis import piecewise_linear_response
+
+    given = dict(M=np.eye(2), C=np.zeros((2, 2)), K=np.eye(2), direction=[1.0, 0.0], t=[0.0, 0.5, 1.0],
+                 values=[0.0, 1.0, 0.0]) | arguments
+    with pytest.raises(ValueError, match=message):
+        piecewise_linear_response(**given)

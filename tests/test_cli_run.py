@@ -93,3 +93,76 @@ def test_methods_and_models_listings():
     assert {line.split()[0] for line in methods.stdout.splitlines()} >= {"3s", "2s", "rks", "sv", "heun"}
     models = subprocess.run([*RAYDAMP, "models"], capture_output=True, text=True, timeout=60)
     assert "damped_pendulum" in models.stdout and "elastic_pendulum" in models.stdout
+
+
+OSCILLATOR = {"model": "damped_pendulum", "parameters": {"eps": 0.5}, "method": "baoab", "h": 0.1, "n_steps": 400,
+              "save_every": 20, "initial_state": {"q": [0.3], "p": [0.0]}}
+
+
+def _run(tmp_path: Path, spec: dict, *args: str) -> subprocess.CompletedProcess:
+    (tmp_path / "spec.json").write_text(json.dumps(spec))
+    return subprocess.run([*RAYDAMP, "run", "spec.json", "--no-progress", *args], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=120)
+
+
+def _table(stdout: str) -> dict[str, str]:
+    return dict(line.split(None, 1) for line in stdout.splitlines() if len(line.split(None, 1)) == 2)
+
+
+def test_temperature_and_seed_flags_repeat_a_run_bit_for_bit(tmp_path):
+    runs = [_run(tmp_path, OSCILLATOR, "--temperature", "0.5", "--seed", "7", "--out", f"{name}.npz")
+            for name in ("a", "b")]
+    assert all(done.returncode == 0 for done in runs), runs[0].stderr
+    a, b = (raydamp.load(tmp_path / f"{name}.npz") for name in ("a", "b"))
+    np.testing.assert_array_equal(a.q, b.q)
+    np.testing.assert_array_equal(a.p, b.p)
+    assert a.provenance["temperature"] == 0.5 and a.provenance["seed"] == 7
+    assert _table(runs[0].stdout)["seed"] == "7" and _table(runs[0].stdout)["temperature"] == "0.5"
+    direct = raydamp.integrate(raydamp.models.DampedPendulum(eps=0.5), [0.3], [0.0], method="baoab", h=0.1,
+                               n_steps=400, save_every=20, temperature=0.5, seed=7, work=True)  # the job's default
+    np.testing.assert_array_equal(a.q, direct.q)
+    assert np.std(a.p) > 0.1  # noise was drawn: a noiseless run from rest at q = 0.3 decays to |p| < 1e-3
+    # --stream picks another stream of the seed: integrate(..., stream=3) exactly, and not stream 0's path
+    streamed = _run(tmp_path, OSCILLATOR, "--temperature", "0.5", "--seed", "7", "--stream", "3", "--out", "c.npz")
+    assert streamed.returncode == 0, streamed.stderr
+    c = raydamp.load(tmp_path / "c.npz")
+    third = raydamp.integrate(raydamp.models.DampedPendulum(eps=0.5), [0.3], [0.0], method="baoab", h=0.1,
+                              n_steps=400, save_every=20, temperature=0.5, seed=7, stream=3, work=True)
+    np.testing.assert_array_equal(c.q, third.q)
+    assert c.provenance["stream"] == 3 and not np.array_equal(c.q, a.q)
+
+
+def test_a_drawn_seed_is_printed_and_repeats_the_run(tmp_path):
+    first = _run(tmp_path, {**OSCILLATOR, "temperature": 0.2}, "--out", "a.npz")  # the file's temperature, no seed
+    assert first.returncode == 0, first.stderr
+    seed = _table(first.stdout)["seed"]
+    a = raydamp.load(tmp_path / "a.npz")
+    assert a.provenance["seed"] == int(seed) and a.provenance["temperature"] == 0.2
+    again = _run(tmp_path, {**OSCILLATOR, "temperature": 0.2}, "--seed", seed, "--out", "b.npz")
+    np.testing.assert_array_equal(raydamp.load(tmp_path / "b.npz").q, a.q)
+    # the flag wins over the file's temperature
+    over = _run(tmp_path, {**OSCILLATOR, "temperature": 0.2}, "--temperature", "0.8", "--seed", seed, "--out", "c.npz")
+    assert again.returncode == over.returncode == 0
+    assert raydamp.load(tmp_path / "c.npz").provenance["temperature"] == 0.8
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--temperature", "-1"], "argument --temperature: must be a finite number >= 0 (kT), got '-1'"),
+    (["--temperature", "inf"], "argument --temperature: must be a finite number >= 0"),
+    (["--temperature", "warm"], "argument --temperature: expected a number"),
+    (["--temperature", "1", "--seed", "1.5"], "argument --seed: expected an integer in [0, 2^64), got '1.5'"),
+    (["--temperature", "1", "--seed", "18446744073709551616"], "argument --seed: expected an integer in [0, 2^64)"),
+    (["--temperature", "1", "--stream", "-2"], "argument --stream: expected an integer"),
+    (["--seed", "3"], "--seed: there is no temperature to draw noise at"),
+    (["--temperature", "0", "--stream", "3"], "--stream: there is no temperature to draw noise at"),
+])
+def test_bad_thermal_flags_exit_2_naming_the_flag(tmp_path, args, message):
+    done = _run(tmp_path, OSCILLATOR, *args)
+    assert done.returncode == 2, done.stdout
+    assert message in done.stderr and "Traceback" not in done.stderr, done.stderr
+
+
+def test_a_temperature_flag_on_a_method_without_noise_flows_exits_2(tmp_path):
+    done = _run(tmp_path, {**OSCILLATOR, "method": "rks"}, "--temperature", "1")
+    assert done.returncode == 2
+    assert "temperature: method 'rks' has no exact noise flow" in done.stderr and "Traceback" not in done.stderr

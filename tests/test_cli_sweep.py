@@ -86,3 +86,22 @@ def test_scheduler_address_from_the_environment(tmp_path):
 def test_bad_input_exits_2_naming_it(tmp_path, args, message):
     done = sweep(tmp_path, ELASTIC, *args)
     assert done.returncode == 2 and message in done.stderr, done.stderr
+
+
+def test_thermal_flags_of_a_sweep_seed_every_member_from_the_stream(tmp_path):
+    oscillator = {"model": "damped_pendulum", "parameters": {"eps": 0.5}, "method": "baoab", "h": 0.1,
+                  "n_steps": 100, "save_every": 25, "initial_state": {"q": [0.3], "p": [0.0]}}
+    done = sweep(tmp_path, oscillator, "--grid", "eps=0.2,0.5,0.8", "--temperature", "0.5", "--seed", "21",
+                 "--stream", "4", "--out", "thermal.nc", "--workers", "1", "--no-progress")
+    assert done.returncode == 0, done.stderr
+    assert "seed         21" in done.stdout and "stream       4" in done.stdout
+    ds = xr.open_dataset(tmp_path / "thermal.nc")
+    provenance = json.loads(ds.attrs["provenance"])
+    assert (provenance["temperature"], provenance["seed"], provenance["stream"]) == (0.5, 21, 4)
+    for k, eps in enumerate(ds["eps"].values):
+        single = raydamp.integrate(raydamp.models.DampedPendulum(float(eps)), [0.3], [0.0], method="baoab", h=0.1,
+                                   n_steps=100, save_every=25, temperature=0.5, seed=21, stream=4 + k)
+        assert np.array_equal(ds["q"].values[k], single.q), k
+    ds.close()
+    refused = sweep(tmp_path, oscillator, "--grid", "eps=0.2,0.5", "--temperature", "-0.5")
+    assert refused.returncode == 2 and "argument --temperature: must be a finite number >= 0" in refused.stderr

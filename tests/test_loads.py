@@ -1,9 +1,9 @@
 """Time-dependent loads and ground motion: the numbers of issue 26's "done means".
 
 References are exact and independent of raydamp's step loop: the steady state of a harmonic
-load from (K - w^2 M + i w C)^{-1}, and the exact response to a piecewise-linear load from the
-matrix exponential of the linear system augmented with the load's segment (the Nigam-Jennings
-solution, written as one expm per sample interval).
+load from (K - w^2 M + i w C)^{-1}, and the exact response to a piecewise-linear load,
+raydamp.analysis.piecewise_linear_response (the Nigam-Jennings solution: one matrix exponential of
+the system augmented with the load's segment; checked against closed forms in test_analysis.py).
 """
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ import scipy.linalg
 import scipy.sparse as sp
 
 import raydamp
+from raydamp.analysis import piecewise_linear_response
 from raydamp.models import ElasticPendulum
 
 
@@ -26,30 +27,6 @@ def fitted_amplitude(t: np.ndarray, q: np.ndarray, omega: float) -> np.ndarray:
     basis = np.column_stack([np.sin(omega * t), np.cos(omega * t)])
     coef, *_ = np.linalg.lstsq(basis, q, rcond=None)
     return np.hypot(coef[0], coef[1])
-
-
-def exact_piecewise_linear(M, C, K, d, t_samples, a_samples, t_out):
-    """u(t_out) of M u'' + C u' + K u = d a(t), a piecewise linear through the samples, from rest.
-    t_out must be sample times (every sample interval has the same length)."""
-    n = M.shape[0]
-    dt = t_samples[1] - t_samples[0]
-    Minv = np.linalg.inv(M)
-    aug = np.zeros((2 * n + 2, 2 * n + 2))
-    aug[:n, n:2 * n] = np.eye(n)
-    aug[n:2 * n, :n] = -Minv @ K
-    aug[n:2 * n, n:2 * n] = -Minv @ C
-    aug[n:2 * n, 2 * n] = Minv @ d        # forcing s0(tau) d
-    aug[2 * n, 2 * n + 1] = 1.0           # s0' = s1 (the slope)
-    E = scipy.linalg.expm(dt * aug)
-    x = np.zeros(2 * n)
-    out = {0: x[:n].copy()}
-    for k in range(len(t_samples) - 1):
-        slope = (a_samples[k + 1] - a_samples[k]) / dt
-        y = E @ np.concatenate([x, [a_samples[k], slope]])
-        x = y[:2 * n]
-        out[k + 1] = x[:n].copy()
-    index = np.rint(np.asarray(t_out) / dt).astype(int)
-    return np.array([out[i] for i in index])
 
 
 # --- harmonic loads: the steady state -------------------------------------------------------------
@@ -107,8 +84,7 @@ def sdof_error(period: float, zeta: float, h_factor: int, method: str = "3s") ->
                             save_every=h_factor, load=motion)
     assert sol.success
     np.testing.assert_allclose(sol.t, t_rec, atol=1e-9)
-    exact = exact_piecewise_linear(np.array([[m]]), np.array([[c]]), np.array([[k]]), np.array([-m]), t_rec,
-                                   a_g, t_rec)[:, 0]
+    exact = piecewise_linear_response(m, c, k, [-m], t_rec, a_g)[0][:, 0]
     return float(np.max(np.abs(sol.q[:, 0] - exact)) / np.max(np.abs(exact)))
 
 
@@ -229,7 +205,7 @@ def test_ground_motion_on_a_ten_storey_frame_matches_the_exact_response():
     motion = raydamp.GroundMotion((t_rec, a_g), r)
     sol = raydamp.integrate(model, np.zeros(10), np.zeros(10), method="gauss4", h=0.0025, t_end=5.0, save_every=4,
                             load=motion)
-    exact = exact_piecewise_linear(M, alpha * M + beta * K, K, -M @ r, t_rec, a_g, t_rec)
+    exact = piecewise_linear_response(M, alpha * M + beta * K, K, -M @ r, t_rec, a_g)[0]
     roof = exact[:, -1]
     assert np.max(np.abs(sol.q[:, -1] - roof)) / np.max(np.abs(roof)) < 1e-6
     # absolute acceleration = relative + a_g: at rest before the record starts moving it equals a_g(0) = 0,

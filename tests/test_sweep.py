@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import subprocess
@@ -260,3 +261,29 @@ def test_a_job_without_a_method_sweeps_with_the_chosen_one():
            "work": False}
     plan = raydamp.check_sweep(job, {"eps": [0.0, 0.1]})
     assert plan.members == 2
+
+
+def test_a_thermal_sweep_starts_its_members_streams_at_the_jobs_stream(client):
+    """Review finding: a sweep dropped the job's "stream" (every sweep drew streams 0, 1, ...). Member k
+    (index in the Dataset) draws stream job_stream + k, across chunks and run groups."""
+    job = {"model": "damped_pendulum", "parameters": {"eps": 0.3}, "method": "baoab", "h": 0.05, "n_steps": 40,
+           "save_every": 10, "initial_state": {"q": [0.5], "p": [0.0]}, "temperature": 0.5, "seed": 1234,
+           "stream": 7, "work": False}
+    ds = raydamp.sweep(job, grid={"h": [0.05, 0.04], "eps": [0.1, 0.3], "q0[0]": [0.2, 0.6, 1.0]}, client=client,
+                       chunk_size=4)
+    members = ds.sizes["member"]
+    provenance = json.loads(ds.attrs["provenance"])
+    assert members == 12 and provenance["stream"] == 7 and provenance["seed"] == 1234
+    for k in range(members):
+        single = raydamp.integrate(DampedPendulum(float(ds["eps"].values[k])), [float(ds["q0[0]"].values[k])], [0.0],
+                                   method="baoab", h=float(ds["h"].values[k]), n_steps=40, save_every=10,
+                                   temperature=0.5, seed=1234, stream=7 + k)
+        assert np.array_equal(ds["q"].values[k], single.q) and np.array_equal(ds["p"].values[k], single.p), k
+    # stream 0 (the former behaviour) gives a different path: the test sees the stream
+    first = raydamp.integrate(DampedPendulum(float(ds["eps"].values[0])), [float(ds["q0[0]"].values[0])], [0.0],
+                              method="baoab", h=float(ds["h"].values[0]), n_steps=40, save_every=10, temperature=0.5,
+                              seed=1234, stream=0)
+    assert not np.array_equal(ds["q"].values[0], first.q)
+    with pytest.raises(ValueError, match=r"stream: members draw streams stream \+ k for k < 12"):
+        raydamp.check_sweep({**job, "stream": 2**64 - 5}, {"h": [0.05, 0.04], "eps": [0.1, 0.3],
+                                                            "q0[0]": [0.2, 0.6, 1.0]})

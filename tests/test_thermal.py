@@ -10,6 +10,7 @@ import pytest
 import scipy.linalg
 
 import raydamp
+from raydamp.analysis import kinetic_temperature
 from raydamp.models import DampedPendulum
 
 
@@ -183,6 +184,9 @@ def test_bad_input_names_the_argument():
         raydamp.integrate(model, [0.1], [0.0], temperature=-1.0, **run)
     with pytest.raises(ValueError, match=r"seed must be an integer"):
         raydamp.integrate(model, [0.1], [0.0], temperature=1.0, seed=1.5, **run)
+    with pytest.raises(ValueError, match=r"first_stream: members draw streams first_stream \+ i for i < 3"):
+        raydamp.integrate_ensemble(model, np.full((3, 1), 0.1), np.zeros((3, 1)), temperature=1.0, seed=1,
+                                   first_stream=2**64 - 2, **run)  # stream 2^64 - 2 + 2 would wrap to 0
     with pytest.raises(ValueError, match=r"temperature: method 'rks' has no exact noise flow"):
         raydamp.integrate(model, [0.1], [0.0], method="rks", temperature=1.0, **run)
     with pytest.raises(ValueError, match=r"temperature: composition 'yoshida4' runs sub-steps backward"):
@@ -277,3 +281,27 @@ def test_a_load_history_of_one_column_on_a_one_coordinate_model():
     model = DampedPendulum()
     rows = raydamp.Load.series([0.0, 1.0], [[0.0], [2.0]])
     np.testing.assert_allclose(rows.values(model, [0.25])[0], [0.5])
+
+
+def test_the_summary_reports_the_kinetic_temperature_of_a_run_at_a_temperature():
+    """3s's saved momentum is sampled at kT exactly (its last sub-flow is the OU flow); saved points 20
+    time units apart (25 relaxation times of p) are independent, so the summary's mean of p^2/m over
+    the 2000 points of the second half lies within 4 standard errors, 4 sqrt(2 / 2000) kT, of kT."""
+    m, k, c, kT = 2.0, 3.0, 0.8, 0.4
+    system = raydamp.System(["x"], f"{k}*x^2/2", mass=m, damping={"scalar": c}, eps=1.0)
+    h = 0.5
+    sol = raydamp.integrate(system, [0.0], [0.0], method="3s", h=h, t_end=80_000.0, save_every=40, temperature=kT,
+                            seed=17)
+    summary = sol.summary()
+    assert abs(summary["kinetic_temperature"] - kT) <= 4 * np.sqrt(2 / 2000) * kT
+    # the same estimate as raydamp.analysis's over the second half (2001 points: one thinned away)
+    half = kinetic_temperature(sol, burn_in=40_000.0)
+    assert summary["kinetic_temperature"] == pytest.approx(half, rel=5e-3)
+    short = raydamp.integrate(system, [0.0], [0.0], method="3s", h=h, t_end=400.0, save_every=40, temperature=kT,
+                              seed=17)
+    assert short.summary()["kinetic_temperature"] == pytest.approx(
+        kinetic_temperature(short, burn_in=200.0), rel=1e-15)
+    assert raydamp.integrate(system, [0.0], [0.0], method="3s", h=h, t_end=400.0).summary()["kinetic_temperature"] \
+        is None
+    assert raydamp.integrate(system, [0.0], [0.0], method="3s", h=h, t_end=400.0, temperature=kT, seed=1,
+                             save_dofs=[0]).summary()["kinetic_temperature"] is None

@@ -97,6 +97,9 @@ class JobSummary(BaseModel):
     load_work_final: float | None = Field(None, description="the load's work W_f at the end (jobs with work)")
     energy_balance_max: float | None = Field(None, description="max |H - H0 + W - W_f| over the saved points: the "
                                                                "energy budget's error (jobs with work)")
+    kinetic_temperature: float | None = Field(
+        None, description="<p^T M^-1 p> / n over the second half of the saved points (at most 2000, evenly "
+                          "spaced), to compare with the job's temperature kT (jobs at a temperature)")
     wall_time: float
 
 

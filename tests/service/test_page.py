@@ -370,3 +370,48 @@ def test_a_harmonic_load_and_a_record_as_ground_motion(module_server) -> None:
         assert max(map(abs, expected)) < 1e-3 * max(map(abs, data["load_work"]))  # 3.3e-4 at h = 0.01
         # The record is in use by no queued job any more: it can be deleted.
         assert module_server.client.delete(f"/v1/files/{record_id}").status_code == 204
+
+
+def test_a_run_at_a_temperature(module_server) -> None:
+    """The Thermal noise controls: kT and a seed typed in reach the service exactly (a seed near 2^64, beyond
+    a JavaScript number's 2^53); a run without a seed shows the seed the service drew, digit for digit; the
+    summary shows the kinetic temperature of a long damped pendulum run at kT = 0.5 (3s, h = 0.1, eps = 0.5:
+    p relaxes in 2 time units): over 2000 points 5 apart (about 1700 independent ones), 4 standard errors are
+    4 sqrt(2 / 1700) kT = 14 % of kT."""
+    base = _base(module_server)
+    kT = 0.5
+    with open_page(base) as page:
+        _ready(page)
+        page.select_option("#model", "damped_pendulum")
+        page.fill("#parameters", '{"eps": 0.5}')
+        page.fill("#step_size", "0.1")
+        page.fill("#t_end", "20000")
+        page.fill("#save_every", "10")
+        assert page.is_hidden("#job-thermal") or page.is_hidden("#job")
+        page.fill("#temperature", "0.5")
+        page.fill("#seed", "18446744073709551557")
+        given = _run(page)
+        job = module_server.job(given)
+        assert job["status"] == "completed"
+        assert job["spec"]["temperature"] == kT and job["spec"]["seed"] == 18446744073709551557
+        assert page.inner_text("#job-seed") == "18446744073709551557"
+        kinetic = job["summary"]["kinetic_temperature"]
+        assert abs(kinetic - kT) <= 4 * math.sqrt(2 / 1700) * kT, kinetic
+        # H - H0 + W leaves out the energy the noise brings: no balance to plot at a temperature
+        assert page.is_hidden("#plot-balance") and _drawn(page, "energy")
+        rows = dict(line.split("\t") for line in page.inner_text("#summary").splitlines())
+        assert float(rows["kinetic temperature"]) == pytest.approx(kinetic, rel=1e-5)  # shown to 6 digits
+
+        page.fill("#seed", "")
+        page.fill("#t_end", "100")
+        drawn = _run(page, previous=given)
+        job = module_server.job(drawn)
+        seed = job["spec"]["seed"]  # drawn at submission from [0, 2^64), kept with the job
+        assert isinstance(seed, int) and page.inner_text("#job-seed") == str(seed)
+        assert page.inner_text("#job-temperature") == "0.5"
+
+        page.fill("#temperature", "-1")
+        page.click("#submit")
+        page.wait_for_selector("#errors:not([hidden])", timeout=30_000)
+        assert page.inner_text("#errors").startswith("temperature")
+        assert page.eval_on_selector("#temperature", "input => input.classList.contains('invalid')")

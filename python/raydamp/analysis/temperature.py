@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..results.temperature import kinetic_temperature_of
+
 __all__ = ["kinetic_temperature", "configurational_temperature"]
 
 
@@ -34,9 +36,7 @@ def kinetic_temperature(solution, burn_in: float = 0.0) -> float:
     """<p^T M^{-1} p> / n over the saved rows at t >= t0 + burn_in."""
     model = _model(solution)
     _, p = _rows(solution, burn_in)
-    core = model._core_model
-    twice_kinetic = np.array([2.0 * core.kinetic(row) for row in p])
-    return float(np.mean(twice_kinetic) / model.dim)
+    return kinetic_temperature_of(model, p)
 
 
 def configurational_temperature(solution, burn_in: float = 0.0) -> float:

@@ -6,6 +6,7 @@ import argparse
 import sys
 
 from .external import add_external_commands, run_external
+from .thermal_options import add_thermal_options
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -21,6 +22,7 @@ def main(argv: list[str] | None = None) -> int:
     run.add_argument("--out", help="write the solution: .nc (NetCDF), .npz or .csv")
     run.add_argument("--plot", help="draw the energy (and H - H0 + W when recorded) to this PNG")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_thermal_options(run, "an ensemble member i of the same seed draws stream i")
     swp = commands.add_parser("sweep", help="run a grid of jobs over a spec file through Dask; write NetCDF or Zarr")
     swp.add_argument("spec", help="a job JSON file (as for run): the grid's base point")
     swp.add_argument("--grid", action="append", default=[], metavar="NAME=VALUES",
@@ -33,6 +35,7 @@ def main(argv: list[str] | None = None) -> int:
                                          "LocalCluster on this machine)")
     swp.add_argument("--workers", type=int, default=2, help="worker processes of the LocalCluster (default 2)")
     swp.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_thermal_options(swp, "member k of the sweep draws stream K + k")
     adv = commands.add_parser("advise", help="for a job file's linear structure: each method's stability limit, "
                                              "step and predicted time to reach a tolerance")
     adv.add_argument("spec", help="a job JSON file (as for run) whose system is a linear structure")
@@ -57,7 +60,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "run":
         from .run_command import run_file
 
-        return run_file(args.spec, out=args.out, plot=args.plot, progress=not args.no_progress)
+        return run_file(args.spec, out=args.out, plot=args.plot, progress=not args.no_progress,
+                        temperature=args.temperature, seed=args.seed, stream=args.stream)
     if args.command == "advise":
         from .advise_command import advise_file
 
@@ -70,7 +74,8 @@ def main(argv: list[str] | None = None) -> int:
             print(f"raydamp sweep needs the sweep extra (pip install 'raydamp[sweep]'): {exc}", file=sys.stderr)
             return 2
         return sweep_file(args.spec, args.grid, out=args.out, chunk_size=args.chunk_size, scheduler=args.scheduler,
-                          workers=args.workers, progress=not args.no_progress)
+                          workers=args.workers, progress=not args.no_progress, temperature=args.temperature,
+                          seed=args.seed, stream=args.stream)
     if args.command in ("jobs", "sweeps"):
         from .service_client import client_command
 

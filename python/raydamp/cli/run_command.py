@@ -13,6 +13,7 @@ from pathlib import Path
 from ..jobs import job_arguments
 from ..results.io.solution import FORMATS
 from ..run.integrate import integrate
+from .thermal_options import THERMAL_KEYS, with_thermal_options
 
 __all__ = ["run_file", "read_spec"]
 
@@ -59,13 +60,16 @@ def read_spec(spec_path: str):
         raise ValueError(f"{spec_path}: not JSON ({error})") from None
 
 
-def run_file(spec_path: str, *, out: str | None = None, plot: str | None = None, progress: bool = True) -> int:
+def run_file(spec_path: str, *, out: str | None = None, plot: str | None = None, progress: bool = True,
+             temperature: float | None = None, seed: int | None = None, stream: int | None = None) -> int:
+    """Run the job file; ``temperature``, ``seed`` and ``stream`` (the flags), when given, replace the
+    file's. Returns the exit code."""
     if out is not None and Path(out).suffix.lower() not in FORMATS:
         return _fail(f"--out: unknown format {Path(out).suffix!r} (known: {', '.join(FORMATS)})")
     if plot is not None and Path(plot).suffix.lower() != ".png":
         return _fail("--plot: give a .png path")
     try:
-        spec = read_spec(spec_path)
+        spec = with_thermal_options(read_spec(spec_path), temperature, seed, stream)
     except ValueError as error:
         return _fail(str(error))
     callback, close = _progress_bar(progress)
@@ -76,7 +80,10 @@ def run_file(spec_path: str, *, out: str | None = None, plot: str | None = None,
         return _fail(f"{spec_path}: {error}")
     finally:
         close()
-    print(_summary_table(sol.summary()))
+    provenance = sol.provenance or {}
+    # the noise's temperature, seed and stream: what repeats this run (a seed drawn here is shown only here)
+    thermal = {key: provenance[key] for key in THERMAL_KEYS if key in provenance}
+    print(_summary_table({**sol.summary(), **thermal}))
     if out is not None:
         sol.save(out)
         print(f"wrote {out}")

@@ -19,6 +19,7 @@ from ..results.io.ensemble import ENSEMBLE_FORMATS
 from ..results.io.sweep import save_sweep
 from ..run.sweep import check_sweep, parse_grid_item, sweep
 from .run_command import read_spec
+from .thermal_options import THERMAL_KEYS, with_thermal_options
 
 __all__ = ["sweep_file"]
 
@@ -45,6 +46,9 @@ def _summary(ds, seconds: float) -> str:
     grid = json.loads(ds.attrs["grid"])
     lines = [f"{'members':<12} {status.size}", f"{'grid':<12} " + " x ".join(
         f"{name} ({np.unique(ds[name].values).size})" for name in grid), f"{'wall time':<12} {seconds:.3g} s"]
+    provenance = json.loads(ds.attrs["provenance"])
+    if provenance.get("temperature"):  # what repeats the sweep's noise (a seed drawn here is shown only here)
+        lines += [f"{key:<12} {provenance[key]}" for key in THERMAL_KEYS if key in provenance]
     for code, name in enumerate(STATUSES):
         count = int((status == code).sum())
         if count:
@@ -53,7 +57,10 @@ def _summary(ds, seconds: float) -> str:
 
 
 def sweep_file(spec_path: str, grid_items: list[str], *, out: str | None = None, chunk_size: int = 1000,
-               scheduler: str | None = None, workers: int = 2, progress: bool = True) -> int:
+               scheduler: str | None = None, workers: int = 2, progress: bool = True,
+               temperature: float | None = None, seed: int | None = None, stream: int | None = None) -> int:
+    """Run the sweep; ``temperature``, ``seed`` and ``stream`` (the flags), when given, replace the
+    spec file's. Returns the exit code."""
     if out is not None and Path(out).suffix.lower() not in ENSEMBLE_FORMATS:
         return _fail(f"--out: unknown format {Path(out).suffix!r} (known: {', '.join(ENSEMBLE_FORMATS)})")
     if not grid_items:
@@ -61,7 +68,7 @@ def sweep_file(spec_path: str, grid_items: list[str], *, out: str | None = None,
     if workers < 1:
         return _fail(f"--workers must be >= 1, got {workers}")
     try:
-        spec = read_spec(spec_path)
+        spec = with_thermal_options(read_spec(spec_path), temperature, seed, stream)
         grid = dict(parse_grid_item(item) for item in grid_items)
     except ValueError as error:
         return _fail(str(error))

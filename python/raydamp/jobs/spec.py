@@ -168,7 +168,8 @@ class JobSpec(ModelSpec):
                                 "Ornstein-Uhlenbeck flow (null or 0: none)")
     seed: int | None = Field(None, ge=0, le=2**64 - 1, description="the noise's seed (null: a fresh one, kept in the "
                                                                   "result's provenance)")
-    stream: int = Field(0, ge=0, le=2**64 - 1, description="which stream of the seed: ensemble member i draws stream i")
+    stream: int = Field(0, ge=0, le=2**64 - 1, description="which stream of the seed; a sweep's member k draws stream "
+                                                              "stream + k")
     _h_key: str = PrivateAttr("h")
 
     @model_validator(mode="wrap")

@@ -191,7 +191,11 @@ class Solution:
 
     def summary(self) -> dict[str, Any]:
         """The scalar results as plain JSON-ready values (non-finite numbers as None);
-        ``momentum_drift`` is ``max_momentum_drift`` (None for a model without momentum maps)."""
+        ``momentum_drift`` is ``max_momentum_drift`` (None for a model without momentum maps);
+        ``kinetic_temperature`` is <p^T M^-1 p> / n over the second half of the saved points (at most
+        2000 of them, evenly spaced) for a run at a temperature, to compare with its kT (None otherwise,
+        and for a run that saved only some coordinates)."""
+        from .temperature import summary_kinetic_temperature
 
         def num(x: float) -> float | None:
             return float(x) if math.isfinite(x) else None
@@ -217,6 +221,7 @@ class Solution:
             "work_final": num(float(self.work[-1])) if self.work is not None else None,
             "load_work_final": num(float(self.load_work[-1])) if self.load_work is not None else None,
             "energy_balance_max": num(float(np.max(np.abs(self.energy_balance)))) if self.work is not None else None,
+            "kinetic_temperature": None if (kinetic := summary_kinetic_temperature(self)) is None else num(kinetic),
             "wall_time": self.wall_time,
         }
 

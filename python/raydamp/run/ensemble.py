@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from .. import _core
-from .._validation import integer, real, thermal
+from .._validation import MAX_SEED, integer, real, thermal
 from ..loads import Load
 from ..results.ensemble_solution import EnsembleSolution
 from ..systems.models import Model
@@ -155,6 +155,9 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
     params = _parameter_arrays(system, parameters, members)
     loads, load_index, load_arrays = _member_loads(system, load, load_parameters, members)
     kT, seed, first_stream = thermal(temperature, seed, first_stream)
+    if kT > 0 and first_stream + members - 1 > MAX_SEED:  # the core's stream counter would wrap to stream 0
+        raise ValueError(f"first_stream: members draw streams first_stream + i for i < {members}, which passes "
+                         f"2^64 - 1 from first_stream = {first_stream}")
     save_every = integer("save_every", save_every, maximum=MAX_STEPS)
     n_steps, h_last = span(h, t_end, n_steps)
     if threads is None:

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from .._core import __version__
-from .._validation import integer, real, thermal, vector
+from .._validation import MAX_SEED, integer, real, thermal, vector
 from ..results.ensemble_solution import STATUSES
 from ..jobs import STEP_SIZE_ALIAS, JobSpec, job_arguments, model_from_spec
 from ..loads import Load
@@ -34,8 +34,7 @@ __all__ = ["sweep", "check_sweep", "SweepPlan", "parse_grid_item", "SPEC_KEYS", 
 
 # The Python form of a sweep's spec: integrate's arguments and the model.
 SPEC_KEYS = ("model", "system", "parameters", "q0", "p0", "method", "tableau", "composition", "h", "t_end", "load",
-             "temperature", "seed",
-             "n_steps", "save_every")
+             "temperature", "seed", "stream", "n_steps", "save_every")
 # The integrate arguments a grid may vary; members differing in them run in different ensembles.
 RUN_ARGUMENTS = ("method", "tableau", "composition", "h")
 _STATE_COMPONENT = re.compile(r"^(q0|p0)\[(\d+)\]$")
@@ -74,15 +73,16 @@ def _base(spec: Mapping[str, Any]) -> tuple[Model, np.ndarray, np.ndarray, dict[
                 raise ValueError(f"spec.{key}: missing")
         q0, p0 = spec["q0"], spec["p0"]
         options = {k: spec[k] for k in ("method", "tableau", "composition", "h", "t_end", "n_steps", "save_every",
-                                        "load", "temperature", "seed") if spec.get(k) is not None}
+                                        "load", "temperature", "seed", "stream") if spec.get(k) is not None}
         if "load" in options and not isinstance(options["load"], Load):
             raise ValueError(f"spec.load must be a raydamp.Load, got {type(options['load']).__name__}")
     if options.get("load") is not None:
         options["load"] = options["load"].to_dict()  # plain data: the workers rebuild it
-    if options.get("temperature"):  # one seed for the whole grid: member k draws its stream k
-        kT, seed, _ = thermal(options["temperature"], options.get("seed"))
-        options.update({"temperature": kT, "seed": seed})
-    options.pop("stream", None)
+    if options.get("temperature"):  # one seed for the whole grid: member k draws stream `stream + k`
+        kT, seed, stream = thermal(options["temperature"], options.get("seed"), options.get("stream", 0))
+        options.update({"temperature": kT, "seed": seed, "stream": stream})
+    else:
+        options.pop("stream", None)  # no noise: nothing is drawn
     if options.get("method") is None:  # a job without a method: chosen as integrate chooses (3s at a temperature)
         options["method"] = "3s" if options.get("temperature") else choose_method(
             model, None, options.get("tableau"), options.get("composition"), float(options["h"]))[0]
@@ -237,7 +237,7 @@ def _run_chunk(task: dict[str, Any]) -> dict[str, Any]:
                              save_every=run["save_every"], threads=task["threads"],
                              load=Load.from_dict(run["load"]) if run.get("load") is not None else None,
                              temperature=run.get("temperature"), seed=run.get("seed"),
-                             first_stream=task["start"] if run.get("temperature") else 0)
+                             first_stream=run.get("stream", 0) + task["start"] if run.get("temperature") else 0)
     return {"start": task["start"], "t": ens.t, "q": ens.q, "p": ens.p, "energy": ens.energy,
             "momentum": ens.momentum, "rows": ens.rows, "t_final": ens.t_final, "q_final": ens.q_final,
             "p_final": ens.p_final, "energy_final": ens.energy_final, "momentum_final": ens.momentum_final,
@@ -330,6 +330,9 @@ def check_sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, chunk_size:
     chunk_size = integer("chunk_size", chunk_size)
     columns, groups = _plan(model, options, grid)
     members = groups[-1][2]
+    if options.get("temperature") and options["stream"] + members - 1 > MAX_SEED:
+        raise ValueError(f"stream: members draw streams stream + k for k < {members}, which passes 2^64 - 1 from "
+                         f"stream = {options['stream']}; give a smaller stream")
     Q0, P0 = np.tile(q0, (members, 1)), np.tile(p0, (members, 1))
     parameters = {}
     for name, values in columns.items():
@@ -409,8 +412,13 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
     ----------
     spec : integrate's arguments as a dict: ``model`` (a built-in model's name with
         ``parameters``, a model object or a System) or ``system``, ``q0``, ``p0``, ``method``,
-        ``h``, ``t_end`` or ``n_steps``, ``save_every``, ``tableau``, ``composition``; or the
-        service's job JSON (``model``/``system``, ``initial_state``, ``h`` ...).
+        ``h``, ``t_end`` or ``n_steps``, ``save_every``, ``tableau``, ``composition``, ``load``,
+        ``temperature``, ``seed``, ``stream``; or the service's job JSON (``model``/``system``,
+        ``initial_state``, ``h`` ...). At a temperature every member uses the one seed (drawn
+        here when not given, and kept in the provenance) and member k (its index in the
+        Dataset's ``member`` dimension, ordered as described under ``chunk_size``) draws stream
+        ``stream + k`` (``stream`` 0 when not given), so it equals
+        ``raydamp.integrate(..., seed=seed, stream=stream + k)``.
     grid : {name: values}. A name is a model parameter (``eps``, ``k``, ... or a System's
         parameter: the model is rebuilt per member), a run argument (``h``, ``method``,
         ``composition``, ``tableau``) or an initial-state component (``"q0[1]"``, ``"p0[0]"``).

@@ -38,6 +38,40 @@ async function getJSON(url) {
   return response.json();
 }
 
+// ---- seeds: 64-bit integers ----------------------------------------------------------------------
+
+// A JavaScript number holds integers exactly only up to 2^53, and a seed goes up to 2^64 - 1 (the
+// service draws its seeds from the whole range): a seed travels as its digits, both ways.
+const SEED_MARK = "\u0000raydamp seed\u0000";
+
+class SeedDigits {
+  constructor(digits) { this.digits = digits; }
+  toJSON() { return SEED_MARK; }
+}
+
+// The JSON text of a spec, a SeedDigits seed written as the number it spells.
+function specText(spec) {
+  const text = JSON.stringify(spec);
+  return spec.seed instanceof SeedDigits ? text.replace(JSON.stringify(SEED_MARK), spec.seed.digits) : text;
+}
+
+// A job view parsed, with job.spec.seedDigits the seed's digits exactly as the service wrote them (the
+// reviver sees each number's source text; a browser without that falls back to the rounded number).
+async function getJob(id) {
+  const url = `/v1/jobs/${id}`;
+  const response = await api(url);
+  if (!response.ok) throw new Error(`${url}: ${response.status} ${await response.text()}`);
+  const digits = new Map();
+  const job = JSON.parse(await response.text(), function keepSeedDigits(key, value, context) {
+    if (key === "seed" && context && typeof context.source === "string") digits.set(this, context.source);
+    return value;
+  });
+  if (job.spec && job.spec.seed !== null && job.spec.seed !== undefined) {
+    job.spec.seedDigits = digits.get(job.spec) || String(job.spec.seed);
+  }
+  return job;
+}
+
 function askForToken(message) {
   $("token-form").hidden = false;
   $("token-message").textContent = message;
@@ -240,6 +274,12 @@ function buildSpec() {
     spec.ground_motion = { acceleration: { file: { id: $("record").value, factor: numberOr($("record-factor").value) } },
       direction: numbers($("record-direction").value) };
   }
+  // Thermal noise: sent only when asked for; a value that is not a number goes as typed, so that the
+  // service's 422 names the field.
+  const temperature = $("temperature").value.trim();
+  if (temperature !== "") spec.temperature = numberOr(temperature);
+  const seed = $("seed").value.trim();
+  if (seed !== "") spec.seed = /^[0-9]+$/.test(seed) ? new SeedDigits(seed) : numberOr(seed);
   return spec;
 }
 
@@ -297,7 +337,7 @@ async function submit(event) {
   $("submit").disabled = true;
   try {
     const response = await api("/v1/jobs", {
-      method: "POST", headers: { "content-type": "application/json" }, body: JSON.stringify(spec) });
+      method: "POST", headers: { "content-type": "application/json" }, body: specText(spec) });
     const body = await response.json().catch(() => ({ detail: response.statusText }));
     if (response.status === 422 && Array.isArray(body.detail)) {
       showErrors(body.detail);
@@ -327,6 +367,7 @@ function follow(id) {
   $("plots").dataset.job = id;
   $("downloads").hidden = true;
   $("job-error").hidden = true;
+  $("job-thermal").hidden = true;
   $("summary").replaceChildren();
   state.followed += 1;
   poll(id, state.followed);
@@ -336,12 +377,13 @@ async function poll(id, followed) {
   if (followed !== state.followed) return; // another job (or this one again) was opened meanwhile
   let job;
   try {
-    job = await getJSON(`/v1/jobs/${id}`);
+    job = await getJob(id);
   } catch (error) {
     $("job-status").textContent = String(error.message);
     return;
   }
   if (followed !== state.followed) return;
+  showThermal(job);
   $("job-status").textContent = job.status;
   $("job-status").className = `status-${job.status}`;
   $("progress").value = job.progress;
@@ -356,12 +398,24 @@ async function poll(id, followed) {
   refreshJobs();
 }
 
+// The job's temperature and seed, from the service's copy of the spec: the seed given, or the one the
+// service drew at submission when none was (either repeats the run).
+function showThermal(job) {
+  const spec = job.spec;
+  $("job-thermal").hidden = !spec.temperature;
+  if (!spec.temperature) return;
+  $("job-temperature").textContent = spec.temperature;
+  $("job-seed").textContent = spec.seedDigits;
+}
+
 function showSummary(summary) {
   const rows = [["steps", summary.steps], ["t final", summary.t_final], ["saved points", summary.saved_points],
     ["H initial", summary.energy_initial], ["H final", summary.energy_final],
     ["energy dissipated", summary.energy_dissipated], ["momentum drift", summary.momentum_drift],
     ...(summary.load_work_final === null || summary.load_work_final === undefined ? [] : [
       ["load work W_f", summary.load_work_final], ["max |H − H0 + W − W_f|", summary.energy_balance_max]]),
+    // at a temperature: ⟨pᵀ M⁻¹ p⟩ / n over the run's second half, to compare with kT
+    ["kinetic temperature", summary.kinetic_temperature],
     ["wall time (s)", summary.wall_time]];
   const table = $("summary");
   table.replaceChildren();
@@ -446,7 +500,8 @@ function draw(job, trajectory) {
   // of dissipating at the right rate). Without a load W_f is 0.
   const balance = $("plot-balance");
   const loaded = Array.isArray(trajectory.load_work);
-  balance.hidden = !Array.isArray(trajectory.work) || trajectory.energy.length === 0;
+  // At a temperature the noise brings energy that W does not count: there is no balance to show.
+  balance.hidden = !Array.isArray(trajectory.work) || trajectory.energy.length === 0 || Boolean(job.spec.temperature);
   if (balance.hidden) {
     Plotly.purge(balance);
   } else {
