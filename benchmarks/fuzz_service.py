@@ -94,7 +94,7 @@ def main() -> int:
                        "--checks", "all", "--phases", "examples,coverage,fuzzing,stateful",
                        "--max-time", str(args.seconds), "--workers", args.workers, "--continue-on-failure",
                        "--request-timeout", "60", "--report", "ndjson,junit", "--report-dir", str(out),
-                       "--no-color", "--suppress-health-check", "all"]
+                       "--no-color", "--suppress-health-check", "all", "--generation-database", ":memory:"]
             if args.seed is not None:
                 command += ["--seed", str(args.seed)]
             began = time.monotonic()
