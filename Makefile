@@ -16,7 +16,7 @@ HOST ?= 127.0.0.1
 PORT ?= 8000
 export RAYDAMP_DB ?= $(CURDIR)/var/raydamp.sqlite3
 
-.PHONY: all setup system-deps serve test ctest layers pytest bench reproduce wheel stubs clean
+.PHONY: all setup system-deps serve test ctest layers pytest bench fuzz reproduce wheel stubs clean
 
 all: test
 
@@ -69,6 +69,13 @@ bench: setup
 	$(PY) benchmarks/bench_chain_friction.py
 	$(PY) benchmarks/bench_ensemble.py
 	$(PY) benchmarks/work_precision.py --out build/work_precision.png
+
+# A hostile run against a real server: Schemathesis with every check and all phases, stateful included,
+# for FUZZ_SECONDS (10 minutes by default); prints the server errors and schema violations it found.
+# Not part of `make test` (tests/service/test_fuzz_openapi.py is its short, fixed-size sibling).
+FUZZ_SECONDS ?= 600
+fuzz: setup
+	$(PY) benchmarks/fuzz_service.py --seconds $(FUZZ_SECONDS)
 
 # A binary wheel in dist/ that installs with no compiler, Eigen or build tools: built from
 # the same build/ tree as the installed package (an incremental build: nothing recompiles

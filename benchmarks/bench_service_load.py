@@ -13,6 +13,8 @@
    cap is retried after its Retry-After) while /healthz is polled every 50 ms; prints the /healthz
    latency p50 / p99 / max (target: within 100 ms), the fetches served and refused, and the server's
    RSS before and at its peak (target: growth < 100 MB per large fetch served at once).
+Between the two, the floor: the server's CPU per GET /healthz under the same closed loop (uvicorn, FastAPI,
+the middleware and a SQLite read; no job's CPU can be below it).
 
 It prints figures and exits 0 whatever they are (a benchmark, not a test).
 
@@ -98,13 +100,15 @@ def _report(jobs: int, wall: float, latencies: list[float], accepted: int, refus
 
 
 async def _raw_posts(host: str, port: int, jobs: int, concurrency: int, ids: list[str],
-                     latencies: list[float]) -> tuple[int, int]:
+                     latencies: list[float], probe: bool = False) -> tuple[int, int]:
     """`concurrency` keep-alive HTTP/1.1 connections on one event loop, each posting its next job as soon
     as the last is answered (a closed loop, like wrk): the client's own cost per request is tens of
-    microseconds, so the latency measured is the server's."""
+    microseconds, so the latency measured is the server's. probe: GET /healthz instead (the floor)."""
     body = json.dumps(SMALL).encode()
     request = (f"POST /v1/jobs HTTP/1.1\r\nHost: {host}:{port}\r\nContent-Type: application/json\r\n"
                f"Content-Length: {len(body)}\r\n\r\n").encode() + body
+    if probe:
+        request = f"GET /healthz HTTP/1.1\r\nHost: {host}:{port}\r\n\r\n".encode()
     left, refused, errors = [jobs], [0], [0]
 
     async def read_body(reader: asyncio.StreamReader, head: bytes) -> bytes:
@@ -137,7 +141,9 @@ async def _raw_posts(host: str, port: int, jobs: int, concurrency: int, ids: lis
                 reader = writer = None
                 continue
             status = int(head.split(b" ", 2)[1])
-            if status == 202:
+            if probe and status == 200:
+                ids.append("")
+            elif status == 202:
                 ids.append(json.loads(answer)["id"])
             elif status == 429:
                 refused[0] += 1
@@ -162,6 +168,17 @@ def submission_raw(base: str, jobs: int, concurrency: int) -> list[str]:
     refused, errors = asyncio.run(_raw_posts(host, int(port), jobs, concurrency, ids, latencies))
     _report(jobs, time.perf_counter() - began, latencies, len(ids), refused, errors, concurrency, "asyncio")
     return ids
+
+
+def http_floor(base: str, pid: int, requests: int, concurrency: int) -> None:
+    """The server's CPU per GET /healthz under the same closed loop: what uvicorn, FastAPI, the middleware and
+    one SQLite read cost per request, whatever the route does. A job's CPU cannot go below it."""
+    host, port = base.removeprefix("http://").rsplit(":", 1)
+    answered: list[str] = []
+    cpu = cpu_seconds(pid)
+    asyncio.run(_raw_posts(host, int(port), requests, concurrency, answered, [], probe=True))
+    print(f"HTTP floor: {1000 * (cpu_seconds(pid) - cpu) / max(1, len(answered)):.2f} ms of server CPU per "
+          f"GET /healthz ({len(answered)} answered at concurrency {concurrency})")
 
 
 def submission_httpx(base: str, jobs: int, concurrency: int) -> list[str]:
@@ -286,6 +303,7 @@ def main() -> None:
             # (much): it bounds the throughput one GIL can give, and so the latency at concurrency 16.
             print(f"server CPU: {1000 * (cpu_seconds(process.pid) - cpu) / max(1, len(ids)):.2f} ms per job "
                   f"(submission and run, all threads)")
+            http_floor(base, process.pid, args.jobs, args.concurrency)
             if args.fetch_seconds > 0:
                 large_fetches(base, process.pid, args.fetch_clients, args.fetch_seconds)
         finally:

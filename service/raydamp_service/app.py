@@ -11,10 +11,11 @@ from typing import Any
 import raydamp
 from fastapi import FastAPI
 from fastapi.exceptions import RequestValidationError
+from starlette.exceptions import HTTPException
 
 from .checks import CheckPool
 from .config import Settings
-from .errors import validation_error_handler
+from .errors import http_error_handler, validation_error_handler
 from .guard import RequestGuard, needs_token
 from .jobs import JobStore
 from .routes import catalogue, files, health, jobs, page, sweeps
@@ -65,6 +66,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.large_fetches = threading.Semaphore(settings.max_large_fetches)
     app.add_middleware(RequestGuard, settings=settings)
     app.add_exception_handler(RequestValidationError, validation_error_handler)
+    app.add_exception_handler(HTTPException, http_error_handler)
     for router in ROUTERS:
         app.include_router(router)
     page.mount_assets(app)

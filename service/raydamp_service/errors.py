@@ -1,24 +1,31 @@
-"""422 responses that survive the input they complain about.
+"""422 responses that survive the input they complain about; 405 responses whose Allow header is right.
 
 FastAPI echoes the offending input in each error; a request carrying NaN or Infinity (which
 Python's JSON parser accepts) or a lone surrogate (valid JSON escape, invalid UTF-8) would make
 that echo unencodable and turn the 422 into a 500, and a megabyte-long expression would come
 back whole. The echo is made encodable and cut short.
+
+A 405 names in Allow every method the path takes: Starlette's names only those of the first route whose
+path matched (OPTIONS /v1/jobs answered "Allow: POST", though GET lists the jobs).
 """
 
 from __future__ import annotations
 
 import math
+import re
 from typing import Any
 
 from fastapi import Request
 from fastapi.encoders import jsonable_encoder
+from fastapi.exception_handlers import http_exception_handler
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
+from starlette.exceptions import HTTPException
+from starlette.responses import Response
 
 from raydamp.jobs import client_path
 
-__all__ = ["validation_error_handler"]
+__all__ = ["validation_error_handler", "http_error_handler"]
 
 
 MAX_ECHO = 200  # characters of an echoed string; items of an echoed list or object
@@ -59,3 +66,26 @@ def _error(item: dict[str, Any]) -> dict[str, Any]:
 async def validation_error_handler(request: Request, error: RequestValidationError) -> JSONResponse:
     errors = jsonable_encoder(error.errors()[:MAX_ECHO])
     return JSONResponse(status_code=422, content={"detail": [_error(item) for item in errors]})
+
+
+async def http_error_handler(request: Request, error: HTTPException) -> Response:
+    """FastAPI's own answer to an HTTPException, with a 405's Allow listing the methods /openapi.json
+    documents for the path (a path it does not document, as the page's, keeps Starlette's)."""
+    if error.status_code == 405:
+        path = request.scope["path"]
+        methods = {method.upper() for pattern, operations in _documented_paths(request.app)
+                   if pattern.fullmatch(path) for method in operations}
+        if methods:
+            error = HTTPException(405, detail=error.detail, headers={**(error.headers or {}),
+                                                                   "Allow": ", ".join(sorted(methods))})
+    return await http_exception_handler(request, error)
+
+
+def _documented_paths(app: Any) -> list[tuple[re.Pattern, list[str]]]:
+    """The paths of /openapi.json as patterns ({job_id} matches one segment), with their methods."""
+    found = getattr(app.state, "documented_paths", None)
+    if found is None:
+        found = app.state.documented_paths = [
+            (re.compile(re.sub(r"\\{[^/]+?\\}", "[^/]+", re.escape(path))), list(operations))
+            for path, operations in app.openapi()["paths"].items()]
+    return found

@@ -259,8 +259,9 @@ class TaskStore(Generic[Record]):
                 f"INSERT INTO {self.TABLE} ({', '.join(values)}) SELECT {', '.join('?' * len(values))} "
                 f"WHERE ? IS NULL OR (SELECT COUNT(*) FROM {self.TABLE} WHERE status = 'queued') < ?",
                 (*values.values(), max_queued, max_queued)).rowcount
-        # The row as written, without reading it back (one query fewer on the submission path).
-        return self.RECORD(**{**values, "spec": json.loads(values["spec"])}) if inserted else None
+        # The row as written, without reading it back (one query fewer on the submission path) nor parsing
+        # the JSON just written.
+        return self.RECORD(**{**values, "spec": spec}) if inserted else None
 
     def _change(self, task_id: str, expected: str, changes: str, *args: Any,
                 also: tuple[str, tuple] | None = None) -> bool:
@@ -275,10 +276,17 @@ class TaskStore(Generic[Record]):
         return bool(changed)
 
     def claim(self, task_id: str) -> Record | None:
-        """queued -> running; None if the task is no longer queued (cancelled meanwhile)."""
-        claimed = self._change(task_id, "('queued')", f"status = 'running', started_at = ?, {self.PROGRESS} = 0, "
-                               "attempts = attempts + 1", now())
-        return self.get(task_id) if claimed else None
+        """queued -> running; None if the task is no longer queued (cancelled meanwhile). One statement, which
+        returns the row it changed (a claim per job: a second query was a tenth of a small job's server time)."""
+        if sqlite3.sqlite_version_info < (3, 35):  # before RETURNING: the UPDATE, then the row read back
+            claimed = self._change(task_id, "('queued')", f"status = 'running', started_at = ?, {self.PROGRESS} = 0, "
+                                   "attempts = attempts + 1", now())
+            return self.get(task_id) if claimed else None
+        with self.db.transaction() as db:
+            rows = db.execute(f"UPDATE {self.TABLE} SET status = 'running', started_at = ?, {self.PROGRESS} = 0, "
+                              f"attempts = attempts + 1 WHERE id = ? AND status = 'queued' RETURNING {self._columns}",
+                              (now(), task_id)).fetchall()  # every row read before the commit: none in progress
+        return self._record(rows[0]) if rows else None
 
     def set_progress(self, task_id: str, progress: float) -> None:
         self._change(task_id, "('running')", f"{self.PROGRESS} = ?", progress)

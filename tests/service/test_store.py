@@ -154,3 +154,20 @@ def test_delete_finished_refuses_a_running_job(store):
 def test_create_returns_the_row_as_stored(store):
     created = store.create({**SPEC, "n_steps": 10})
     assert created == store.get(created.id)
+
+
+@pytest.mark.parametrize("returning", [True, False], ids=["RETURNING", "before SQLite 3.35"])
+def test_claim_gives_the_row_it_changed(tmp_path, monkeypatch, returning):
+    # The claim is one UPDATE ... RETURNING where SQLite has it, an UPDATE and a read before 3.35: the same record.
+    if not returning:
+        monkeypatch.setattr(sqlite3, "sqlite_version_info", (3, 34, 1))
+    store = JobStore(tmp_path / "jobs.sqlite3")
+    store.open()
+    job = store.create(SPEC)
+    claimed = store.claim(job.id)
+    assert (claimed.status, claimed.attempts, claimed.progress, claimed.spec, claimed.has_trajectory) == (
+        "running", 1, 0.0, SPEC, False)
+    assert claimed == store.get(job.id)
+    assert store.claim(job.id) is None  # no longer queued
+    store.requeue(job.id)
+    assert store.claim(job.id).attempts == 2

@@ -16,8 +16,9 @@ from fastapi import APIRouter, HTTPException, Query, Request, Response
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse, StreamingResponse
 from starlette.background import BackgroundTask
+from starlette.concurrency import run_in_threadpool
 
-from ..checks import ChecksBusy
+from ..checks import CheckPool, ChecksBusy
 from ..deps import ChecksDep, RunnerDep, SettingsDep, StoreDep
 from ..files import file_resolver
 from ..problems import JobError
@@ -62,14 +63,23 @@ def with_seed(spec: JobSpec) -> JobSpec:
         return spec.model_copy(update={"seed": secrets.randbits(64)})
     return spec
 
+
 @router.post("", status_code=202, response_model=JobCreated,
              responses={422: {"description": "the spec is invalid; detail[].loc names the field"},
                         429: {"description": "max_queued jobs are waiting, or max_pending_checks checks of "
                                              "systems are under way; retry after Retry-After seconds"}})
-def submit_job(spec: JobSpec, request: Request, response: Response, store: StoreDep, runner: RunnerDep,
-               settings: SettingsDep, checks: ChecksDep) -> JobCreated:
+async def submit_job(spec: JobSpec, request: Request, response: Response, store: StoreDep, runner: RunnerDep,
+                     settings: SettingsDep, checks: ChecksDep) -> JobCreated:
     """Queue an integration; poll the Location for its status. A system is checked (compiled, one trial
     step) in a check process within check_seconds and check_memory_bytes: past either, 422 on system."""
+    # A coroutine whose blocking part (the checks, the insert) goes to the thread pool in one hop: as a plain
+    # function with a response_model, FastAPI would hop there a second time only to validate JobCreated.
+    record = await run_in_threadpool(_queue_job, spec, request, response, store, runner, settings, checks)
+    return JobCreated(id=record.id, status=record.status)
+
+
+def _queue_job(spec: JobSpec, request: Request, response: Response, store: JobStore, runner: Runner,
+               settings: Settings, checks: CheckPool) -> JobRecord:
     spec = with_seed(spec)
     try:
         checks.job(spec, files=file_resolver(store))
@@ -77,8 +87,7 @@ def submit_job(spec: JobSpec, request: Request, response: Response, store: Store
         raise invalid(error, spec.model_dump()) from None
     except ChecksBusy:
         raise checks_busy(settings) from None
-    record = JOBS.queue(request, response, store, runner, spec, settings.max_queued, "max_queued", settings)
-    return JobCreated(id=record.id, status=record.status)
+    return JOBS.queue(request, response, store, runner, spec, settings.max_queued, "max_queued", settings)
 
 
 @router.get("", response_model=JobList)
