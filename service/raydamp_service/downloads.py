@@ -1,33 +1,27 @@
-"""A finished job's trajectory as a file (CSV, NPZ, NetCDF) or a plot (PNG).
+"""A finished job's trajectory as a raydamp.Solution, and as a file (CSV, NPZ, NetCDF).
 
-No numerics here: the stored arrays become a raydamp.Solution carrying the job's spec as its
-provenance, and raydamp writes the file (raydamp.results.io) or draws the plot (raydamp.results.plotting).
-A file is written in slices of about SLICE_BYTES of stored floats, whatever the trajectory's length (four
-downloads of a 960 MB trajectory, each read whole and written whole, took the service past 6 GB: issue 27,
-F3): raydamp writes the first slice, which fixes the file's layout, names and attributes; the rest follow
-in the same layout (CSV rows as raydamp writes them; NPZ members as .npy data; NetCDF along time, unlimited).
-Plots use matplotlib's object API on a fresh Figure per request (no pyplot state), so requests
-served on different threads do not share a figure.
+No numerics or formats here: the stored arrays become a raydamp.Solution carrying the job's spec as its
+provenance, and raydamp writes the file (raydamp.results.io.write_solution) or draws the plot
+(sol.plot.png). The file is written a slice of rows at a time, raydamp asking for each slice and this
+module reading it from the stored blobs, so a download holds a bounded part of the trajectory whatever
+its length (issue 27, F3: four downloads of a 960 MB trajectory read whole took the service past 6 GB).
 """
 
 from __future__ import annotations
 
-import io
 import sqlite3
-import zipfile
 from pathlib import Path
 from typing import Literal
 
 import numpy as np
 import raydamp
 from raydamp.jobs import JobSpec
+from raydamp.results.io import write_solution
 
 from .jobs import JobRecord, StoredTrajectory, TrajectoryArrays
 from .trajectory_stream import Selection, read_arrays, read_column
 
-__all__ = ["SLICE_BYTES", "stored_solution", "write_file", "plot_png"]
-
-SLICE_BYTES = 4 << 20  # stored floats read and written at once
+__all__ = ["stored_solution", "write_file"]
 
 MEDIA_TYPES = {"csv": "text/csv", "npz": "application/octet-stream", "netcdf": "application/x-netcdf"}
 SUFFIXES = {"csv": ".csv", "npz": ".npz", "netcdf": ".nc"}
@@ -55,90 +49,17 @@ def stored_solution(record: JobRecord, arrays: TrajectoryArrays, spec: JobSpec |
 
 def write_file(record: JobRecord, connection: sqlite3.Connection, stored: StoredTrajectory, selection: Selection,
                fmt: Literal["csv", "npz", "netcdf"], directory: Path) -> tuple[Path, str]:
-    """(path, media type) of the selected points written in directory as raydamp writes them, a slice at a time."""
-    rows = max(1, SLICE_BYTES // stored.row_bytes)
-    pieces = selection.pieces(rows)
-    first = next(pieces)
+    """(path, media type) of the selected points written in directory by raydamp, which asks for them a slice
+    at a time: rows [start, stop) of the selection are read from their blobs, never the whole of them."""
     spec = JobSpec.model_validate(record.spec)  # once for the file, not once per slice
-    head = stored_solution(record, read_arrays(connection, stored, first), spec)
+    head = stored_solution(record, read_arrays(connection, stored, Selection(selection.start, selection.start + 1,
+                                                                             selection.every)), spec)
+
+    def read(column: str, start: int, stop: int) -> np.ndarray:
+        first = selection.start + start * selection.every
+        return read_column(connection, stored, column, Selection(first, selection.start + stop * selection.every,
+                                                                 selection.every))
+
     path = directory / f"trajectory{SUFFIXES[fmt]}"
-    if fmt == "npz":
-        _write_npz(head, connection, stored, selection, rows, path)
-    elif fmt == "csv":
-        head.save(path)
-        part = directory / "part.csv"
-        with path.open("ab") as out:
-            for piece in pieces:
-                stored_solution(record, read_arrays(connection, stored, piece), spec).save(part)
-                with part.open("rb") as text:
-                    text.readline()  # the header, written once
-                    while block := text.read(1 << 20):
-                        out.write(block)
-        part.unlink(missing_ok=True)
-    else:
-        _write_netcdf(head, connection, stored, selection, pieces, path)
+    write_solution(path, fmt, head, read, len(selection))
     return path, MEDIA_TYPES[fmt]
-
-
-def _write_npz(head: raydamp.Solution, connection: sqlite3.Connection, stored: StoredTrajectory,
-               selection: Selection, rows: int, path: Path) -> None:
-    """raydamp's .npz (np.savez: a zip of .npy members), each member's data copied a slice at a time."""
-    sample = path.with_name("head.npz")
-    head.save(sample)
-    columns = (["t", "q", "p", "energy", "momentum"] + (["work"] if stored.has_work else [])
-               + (["load_work"] if stored.has_load_work else []))
-    n = len(selection)
-    with zipfile.ZipFile(sample) as written, zipfile.ZipFile(path, "w", zipfile.ZIP_STORED, allowZip64=True) as out:
-        for column in columns:
-            width = {"q": stored.dim, "p": stored.dim, "momentum": stored.momenta}.get(column)
-            with out.open(f"{column}.npy", "w", force_zip64=True) as member:
-                np.lib.format.write_array_header_1_0(member, {"descr": np.lib.format.dtype_to_descr(np.dtype("<f8")),
-                                                             "fortran_order": False,
-                                                             "shape": (n,) if width is None else (n, width)})
-                for piece in selection.pieces(rows):
-                    member.write(np.ascontiguousarray(read_column(connection, stored, column, piece),
-                                                      dtype="<f8").tobytes())
-        for name in written.namelist():  # raydamp's attributes (the provenance), as it wrote them
-            if name.removesuffix(".npy") not in columns:
-                out.writestr(name, written.read(name))
-    sample.unlink()
-
-
-def _write_netcdf(head: raydamp.Solution, connection: sqlite3.Connection, stored: StoredTrajectory,
-                  selection: Selection, pieces, path: Path) -> None:
-    """raydamp's Dataset of the first slice with time unlimited, then each further slice appended along it."""
-    import h5netcdf
-
-    head.to_xarray().to_netcdf(path, engine="h5netcdf", unlimited_dims=["time"])
-    done = head.t.size
-    with h5netcdf.File(path, "a") as out:
-        for piece in pieces:
-            arrays = read_arrays(connection, stored, piece)
-            end = done + arrays.t.size
-            out.resize_dimension("time", end)
-            for name in ("t", "q", "p", "energy", "momentum", "work", "load_work"):
-                values = getattr(arrays, name)
-                if values is not None and values.size and name in out.variables:
-                    out.variables[name][done:end, ...] = values
-            done = end
-
-
-def plot_png(sol: raydamp.Solution, kind: Literal["energy", "phase", "projection"], *, width: int, height: int,
-             coordinate: str | None = None, x: str | None = None, y: str | None = None) -> bytes:
-    """A PNG of width x height pixels; ValueError (naming the argument) for an impossible plot."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    dpi = 100
-    figure = Figure(figsize=(width / dpi, height / dpi), dpi=dpi, layout="constrained")
-    FigureCanvasAgg(figure)
-    ax = figure.add_subplot()
-    if kind == "energy":
-        sol.plot.energy(ax=ax)
-    elif kind == "phase":
-        sol.plot.phase(coordinate if coordinate is not None else 0, ax=ax)
-    else:
-        sol.plot.projection(x if x is not None else 0, y if y is not None else 1, ax=ax)
-    out = io.BytesIO()
-    figure.savefig(out, format="png", dpi=dpi)
-    return out.getvalue()

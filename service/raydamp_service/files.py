@@ -1,10 +1,10 @@
 """Uploaded files: checking an upload, storing it, and handing stored ones to raydamp.
 
-Two kinds. A matrix (Matrix Market, for a linear structure's M or K) is read by scipy (what
-raydamp.LinearStructure reads too), after its header has been checked against the file's size: the
-reader allocates what the header announces, so a 100-byte file claiming 10^9 entries must be refused
-before it is read, not after. A record (a PEER .AT2 record, text columns t, value, or a .npy array; one
-column of values serves as a vector too, for an initial state) is read by raydamp's own reader
+Two kinds. A matrix (Matrix Market, for a linear structure's M or K) is read by raydamp's reader
+(raydamp.systems.structure.read_matrix), which checks the header against the file's size before it reads
+(raydamp.systems.matrix_market); the service adds only its limit on the matrix's size. A record (a PEER
+.AT2 record, text columns t, value, or a .npy array; one column of values serves as a vector too, for an
+initial state) is read by raydamp's own reader
 (raydamp.loads.records.parse_record), which checks everything a load needs of it. The kind and format
 come from the name's suffix and the content (records.record_format); a stored file is read again by its
 content alone, which the upload made sure agrees.
@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from raydamp.loads.records import describe_record, parse_record, record_format
+from raydamp.systems.matrix_market import read_header
 from raydamp.systems.structure import read_matrix
 
 from .store import UNFINISHED_SQL, Database, now
@@ -48,10 +49,6 @@ CREATE TABLE IF NOT EXISTS files (          -- uploads: a structure's {"file": i
 # Columns a files table from before records lacks (JobStore._upgrade adds them).
 FILE_COLUMNS_ADDED = {"kind": "TEXT NOT NULL DEFAULT 'matrix'", "format": "TEXT NOT NULL DEFAULT 'mtx'",
                       "t_start": "REAL", "t_end": "REAL", "dt": "REAL"}
-
-# The shortest line an entry can take: "1 1\n" (pattern), and "1\n" for a dense (array) file.
-_MIN_COORDINATE_LINE = 4
-_MIN_ARRAY_LINE = 2
 
 
 @dataclass(frozen=True)
@@ -117,42 +114,25 @@ def check_record(content: bytes, name: str) -> RecordFileInfo:
 def check_upload(content: bytes, name: str, *, max_dim: int) -> MatrixFileInfo | RecordFileInfo:
     """A matrix or a record, told apart by the name's suffix (.mtx, .AT2, .npy) and the content."""
     if record_format(content, name) == "mtx":
-        return check_matrix_market(content, max_dim=max_dim)
+        return check_matrix_market(content, max_dim=max_dim, name=name)
     return check_record(content, name)
 
 
-def check_matrix_market(content: bytes, *, max_dim: int) -> MatrixFileInfo:
-    """Read the upload as Matrix Market: a real (or integer, or pattern) square matrix of at most max_dim
-    rows with finite entries. Raises UploadError saying what is wrong."""
-    import numpy as np
-    import scipy.io
-    import scipy.sparse
-
+def check_matrix_market(content: bytes, *, max_dim: int, name: str = "the matrix") -> MatrixFileInfo:
+    """Read the upload as raydamp reads a structure's M or K (a real square matrix with finite entries, its
+    header first checked against the file's size), once the header shows at most max_dim rows. Raises
+    UploadError with raydamp's reason or the limit."""
     try:
-        rows, cols, entries, layout, field, _ = scipy.io.mminfo(io.BytesIO(content))
-    except Exception as error:  # noqa: BLE001 - the reader's own words: "Missing banner", ...
-        raise UploadError(f"not a Matrix Market file: {error}") from None
-    if field == "complex":
-        raise UploadError("a complex matrix; M and K must be real")
-    if rows != cols:
-        raise UploadError(f"the matrix is {rows} x {cols}; M and K must be square")
-    if rows > max_dim:
-        raise UploadError(f"the matrix is {rows} x {cols}; this service runs structures of at most "
+        rows, cols = read_header(content, name).shape
+        if max(rows, cols) > max_dim:
+            raise UploadError(f"the matrix is {rows} x {cols}; this service runs structures of at most "
                               f"max_structure_dim = {max_dim} coordinates")
-    announced = entries if layout == "coordinate" else rows * cols
-    shortest = _MIN_COORDINATE_LINE if layout == "coordinate" else _MIN_ARRAY_LINE
-    if announced > len(content) // shortest:
-        raise UploadError(f"the header announces {announced} entries, more than a file of {len(content)} "
-                              "bytes can hold")
-    try:
-        matrix = scipy.io.mmread(io.BytesIO(content))
-    except Exception as error:  # noqa: BLE001
-        raise UploadError(f"cannot read it as Matrix Market: {error}") from None
-    values = matrix.data if scipy.sparse.issparse(matrix) else np.asarray(matrix)
-    if values.dtype.kind not in "biuf" or not np.isfinite(values).all():
-        raise UploadError("the entries must be finite real numbers")
-    nnz = int(matrix.nnz) if scipy.sparse.issparse(matrix) else int(np.count_nonzero(values))
-    return MatrixFileInfo(shape=(int(rows), int(cols)), nnz=nnz)
+        matrix = read_matrix(io.BytesIO(content), name)
+    except UploadError:
+        raise
+    except ValueError as error:
+        raise UploadError(str(error)) from None
+    return MatrixFileInfo(shape=matrix.shape, nnz=int(matrix.nnz))
 
 
 class FileStore:

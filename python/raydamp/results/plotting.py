@@ -1,11 +1,15 @@
 """Plots of a Solution (matplotlib): ``sol.plot.energy()``, ``.phase()``, ``.projection()``.
 
 Each returns the matplotlib Axes it drew on (a new figure's unless ``ax`` is given), so plots
-compose: ``ax = a.plot.energy(); b.plot.energy(ax=ax)`` overlays two runs.
+compose: ``ax = a.plot.energy(); b.plot.energy(ax=ax)`` overlays two runs. ``.png(kind, width=,
+height=)`` gives one of them as PNG bytes of that many pixels (what the service's plot route sends):
+drawn with matplotlib's object API on a Figure of its own (no pyplot state), so calls on different
+threads share no figure.
 """
 
 from __future__ import annotations
 
+import io
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -13,7 +17,9 @@ import numpy as np
 if TYPE_CHECKING:
     from .solution import Solution
 
-__all__ = ["SolutionPlots"]
+__all__ = ["SolutionPlots", "PLOT_KINDS"]
+
+PLOT_KINDS = ("energy", "phase", "projection")
 
 
 def _axes(ax):
@@ -90,3 +96,29 @@ class SolutionPlots:
         ax.set_title(f"{sol.coordinates[i]}-{sol.coordinates[j]} projection")
         ax.legend()
         return ax
+
+    def png(self, kind: str, *, width: int = 800, height: int = 500, coordinate=None, x=None, y=None) -> bytes:
+        """The plot ``kind`` ("energy", "phase" of ``coordinate``, "projection" on ``x``, ``y``; each a name or
+        an index, by default the first coordinates) as a PNG of width x height pixels. ValueError names the
+        argument (kind, width, height, coordinate, or projection for a system of one coordinate)."""
+        if kind not in PLOT_KINDS:
+            raise ValueError(f"kind: unknown plot {kind!r} (known: {', '.join(PLOT_KINDS)})")
+        for name, pixels in (("width", width), ("height", height)):
+            if isinstance(pixels, bool) or not isinstance(pixels, (int, np.integer)) or pixels < 1:
+                raise ValueError(f"{name}: a positive number of pixels, got {pixels!r}")
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+
+        dpi = 100
+        figure = Figure(figsize=(width / dpi, height / dpi), dpi=dpi, layout="constrained")
+        FigureCanvasAgg(figure)
+        ax = figure.add_subplot()
+        if kind == "energy":
+            self.energy(ax=ax)
+        elif kind == "phase":
+            self.phase(coordinate if coordinate is not None else 0, ax=ax)
+        else:
+            self.projection(x if x is not None else 0, y if y is not None else 1, ax=ax)
+        out = io.BytesIO()
+        figure.savefig(out, format="png", dpi=dpi)
+        return out.getvalue()

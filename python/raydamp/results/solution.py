@@ -122,7 +122,8 @@ class Solution:
         return to_xarray(self)
 
     def save(self, path) -> None:
-        """Write to ``path``: .nc (NetCDF, via xarray), .npz or .csv, by its suffix."""
+        """Write to ``path``: .nc (NetCDF, via xarray), .npz or .csv, by its suffix
+        (``raydamp.results.io.write_solution``, which also writes rows read a slice at a time)."""
         from .io.solution import save
 
         save(self, path)

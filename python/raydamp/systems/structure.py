@@ -45,6 +45,7 @@ Which method when (rho = alpha + beta L, the largest damping rate):
 
 from __future__ import annotations
 
+import io
 import os
 from typing import Any
 
@@ -52,6 +53,7 @@ import numpy as np
 
 from .. import _core
 from .._validation import real
+from .matrix_market import read_header
 from .models import SharedModel
 
 __all__ = ["LinearStructure", "MAX_PLAIN_ENTRIES", "read_matrix"]
@@ -83,6 +85,9 @@ def _read_matrix(name: str, value):
     if hasattr(value, "read"):  # an open Matrix Market file (the service hands over uploaded bytes)
         import scipy.io
 
+        if not (hasattr(value, "seekable") and value.seekable()):
+            value = io.BytesIO(value.read())
+        read_header(value, name)  # before the reader allocates what the header announces
         try:
             value = scipy.io.mmread(value)
         except Exception as error:  # noqa: BLE001 - say what the reader said
@@ -91,8 +96,7 @@ def _read_matrix(name: str, value):
         import scipy.io
 
         path = os.fspath(value)
-        if not os.path.isfile(path):
-            raise ValueError(f"{name}: no Matrix Market file at {path!r}")
+        read_header(path, name)
         try:
             value = scipy.io.mmread(path)
         except Exception as error:  # noqa: BLE001 - say what the reader said

@@ -25,7 +25,7 @@ from ..problems import JobError
 from ..runner import Runner
 from ..schemas import JobCreated, JobList, JobListItem, JobSpec, JobStatus, JobView, Trajectory
 from ..config import Settings
-from ..downloads import plot_png, stored_solution, write_file
+from ..downloads import stored_solution, write_file
 from ..jobs import JobRecord, JobStore
 from ..store import FINAL_STATUSES
 from .tasks import Tasks, check_limit, checks_busy, invalid
@@ -241,7 +241,7 @@ def get_plot(job_id: str, kind: Literal["energy", "phase", "projection"], reques
         return int(value) if value is not None and value.isdigit() else value
 
     try:
-        png = plot_png(sol, kind, width=width, height=height, coordinate=pick(coordinate), x=pick(x), y=pick(y))
+        png = sol.plot.png(kind, width=width, height=height, coordinate=pick(coordinate), x=pick(x), y=pick(y))
     except ValueError as error:
         field = str(error).partition(": ")[0]
         loc = ("query", "coordinate" if kind == "phase" else "x") if field == "coordinate" else ("path", "kind")

@@ -1,4 +1,5 @@
-"""Results as files, each kind in its module: a Solution (solution.py: NetCDF, NPZ, CSV), an
+"""Results as files, each kind in its module: a Solution (solution.py: NetCDF, NPZ, CSV, written by
+writer.py's ``write_solution`` a slice of rows at a time, also from rows read piecewise), an
 EnsembleSolution (ensemble.py: NetCDF, Zarr) and a sweep's Dataset (sweep.py: NetCDF, Zarr);
 ``load`` reads any of them back by its suffix and the file's ``kind`` attribute."""
 
@@ -10,8 +11,9 @@ from ..ensemble_solution import EnsembleSolution
 from ..solution import Solution
 from .ensemble import ensemble_from_xarray
 from .solution import from_npz, from_xarray
+from .writer import write_solution
 
-__all__ = ["load"]
+__all__ = ["load", "write_solution"]
 
 
 def load(path) -> Solution | EnsembleSolution:

@@ -20,6 +20,7 @@ from ..solution import Solution
 __all__ = ["to_xarray", "from_xarray", "save", "from_npz", "FORMATS"]
 
 FORMATS = (".nc", ".npz", ".csv")
+_FORMAT_OF_SUFFIX = dict(zip(FORMATS, ("netcdf", "npz", "csv")))
 _SCALARS = ("status", "steps", "failed_step", "message", "method", "tableau", "composition", "h", "max_momentum_drift",
             "wall_time")
 
@@ -94,24 +95,15 @@ def _csv_table(sol: Solution) -> tuple[list[str], np.ndarray]:
 
 
 def save(sol: Solution, path) -> None:
-    """Write ``sol`` to ``path``, the format chosen by the suffix (.nc, .npz, .csv)."""
+    """Write ``sol`` to ``path``, the format chosen by the suffix (.nc, .npz, .csv), a slice of rows at a
+    time (writer.write_solution, which the service's downloads use too)."""
+    from .writer import write_solution
+
     path = Path(path)
-    suffix = path.suffix.lower()
-    if suffix == ".nc":
-        to_xarray(sol).to_netcdf(path, engine="h5netcdf")
-    elif suffix == ".npz":
-        arrays = {"t": sol.t, "q": sol.q, "p": sol.p, "energy": sol.energy, "momentum": sol.momentum}
-        if sol.work is not None:
-            arrays["work"] = sol.work
-        if sol.load_work is not None:
-            arrays["load_work"] = sol.load_work
-        attrs = _attributes(sol)
-        np.savez(path, **arrays, attrs=np.array(json.dumps(attrs, allow_nan=True)))
-    elif suffix == ".csv":
-        names, table = _csv_table(sol)
-        np.savetxt(path, table, delimiter=",", header=",".join(names), comments="", fmt="%.17g")
-    else:
+    fmt = _FORMAT_OF_SUFFIX.get(path.suffix.lower())
+    if fmt is None:
         raise ValueError(f"path: unknown format {path.suffix!r} (known: {', '.join(FORMATS)})")
+    write_solution(path, fmt, sol)
 
 
 def from_npz(path) -> Solution:
