@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.io
-import scipy.sparse as sparse
+import scipy.sparse
 import scipy.sparse.linalg as sla
 
 import raydamp

@@ -169,6 +169,11 @@ def _checked(parameter: Mapping[str, Any], value) -> float | tuple[float, ...]:
     return components
 
 
+def _annotation(size: int) -> Any:
+    """A parameter's annotation in the signature: a float, or a tuple of ``size`` floats."""
+    return float if size == 1 else tuple[(float,) * size]
+
+
 class BuiltinModel(Model):
     """A model compiled into the core. Its parameters (names, sizes, defaults, rules and
     descriptions) are the core's table for the model named ``name`` (``_core.models()``): the
@@ -193,7 +198,7 @@ class BuiltinModel(Model):
         signature = inspect.Signature([
             inspect.Parameter(p["name"], inspect.Parameter.POSITIONAL_OR_KEYWORD,
                               default=p["default"] if p["size"] == 1 else tuple(p["default"]),
-                              annotation=float if p["size"] == 1 else tuple[(float,) * p["size"]])
+                              annotation=_annotation(p["size"]))
             for p in cls._parameter_table])
         cls.__signature__ = signature
 
