@@ -195,9 +195,7 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
         throw std::invalid_argument("vector_sine: only the damped pendulum's 3s, 2s and sv ensembles run their "
                                     "sines as SIMD lanes");
       if (vector_sine && loaded) throw std::invalid_argument("vector_sine: the SIMD lanes take no load");
-      if (vector_sine && temperature != 0.0)
-        throw std::invalid_argument("vector_sine: the SIMD lanes take no temperature");
-      if (lanes && (loaded || temperature != 0.0)) {  // the lanes' step has no clock and no noise: one by one
+      if (lanes && loaded) {  // the lanes' step has no clock: one by one
         for_each_member(members, threads, run_member, control);
       } else if constexpr (lanes) {
         // Runs of members sharing eps go as the lanes of one run (run_lanes.hpp).
@@ -212,8 +210,8 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
           if (batch.end - batch.begin < kMinLanes && !vector_sine) {
             for (long i = batch.begin; i < batch.end; ++i) run_member(i);
           } else {
-            run_lanes<Method>(*member_model[batch.begin], batch, tab, comp, q0d, p0d, spec, member_control,
-                              vector_sine, store, run_member);
+            run_lanes<Method>(*member_model[batch.begin], batch, tab, comp, q0d, p0d, spec, first_stream,
+                              member_control, vector_sine, store, run_member);
           }
           finished.fetch_add(batch.end - batch.begin);
         }, batch_control);

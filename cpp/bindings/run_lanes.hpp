@@ -58,7 +58,8 @@ inline std::vector<LaneBatch> lane_batches(const std::vector<const DampedPendulu
 template <class Method, class Store, class RunMember>
 void run_lanes(const DampedPendulum& member, const LaneBatch& batch, const ButcherTableau& tab,
                const Composition& comp, const double* q0, const double* p0, const RunSpec& spec,
-               const Control& control, bool vector_sine, Store& store, RunMember& run_member) {
+               std::uint64_t first_stream, const Control& control, bool vector_sine, Store& store,
+               RunMember& run_member) {
   const int lanes = static_cast<int>(batch.end - batch.begin);
   // integrate's own check, per member, as a single run makes it.
   for (long i = batch.begin; i < batch.end; ++i) {
@@ -71,14 +72,19 @@ void run_lanes(const DampedPendulum& member, const LaneBatch& batch, const Butch
   const PendulumLanes model(member, lanes, vector_sine);
   State<Eigen::Dynamic> z{Eigen::Map<const Eigen::VectorXd>(q0 + batch.begin, lanes),
                           Eigen::Map<const Eigen::VectorXd>(p0 + batch.begin, lanes)};
-  RunResult r = detail::run_steps<Method>(model, tab, comp, std::move(z), spec, control);
+  // At a temperature lane k draws member (begin + k)'s stream, as that member's single run does.
+  RunSpec lane_spec = spec;
+  lane_spec.stream = first_stream + static_cast<std::uint64_t>(batch.begin);
+  lane_spec.stream_per_coordinate = true;
+  RunResult r = detail::run_steps<Method>(model, tab, comp, std::move(z), lane_spec, control);
   if (r.status != Status::completed && !vector_sine) {
     for (long i = batch.begin; i < batch.end; ++i) run_member(i);
     return;
   }
   if (r.status != Status::completed && lanes > 1) {
     for (long i = batch.begin; i < batch.end; ++i)
-      run_lanes<Method>(member, LaneBatch{i, i + 1}, tab, comp, q0, p0, spec, control, true, store, run_member);
+      run_lanes<Method>(member, LaneBatch{i, i + 1}, tab, comp, q0, p0, spec, first_stream, control, true, store,
+                        run_member);
     return;
   }
   const Trajectory& tr = r.trajectory;

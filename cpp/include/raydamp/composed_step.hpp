@@ -71,8 +71,8 @@ struct fuses_3s<M, std::void_t<decltype(std::declval<const M&>().fuses_3s())>> :
 
 namespace detail {
 
-template <class Method, class Model, class Tab, int Dim, class DF, std::size_t... I>
-inline void inner_stages(const Model& model, const Tab& tab, State<Dim>& z, const double* t, Workspace<Dim, DF>& ws,
+template <class Method, class Model, class Tab, int Dim, class WS, std::size_t... I>
+inline void inner_stages(const Model& model, const Tab& tab, State<Dim>& z, const double* t, WS& ws,
                          std::index_sequence<I...>) {
   (apply_flow<Method::stages[I + 1].flow>(model, tab, z, t[I], ws), ...);
 }
@@ -96,8 +96,8 @@ class ComposedStepper {
   const StepDurations<Method>& durations(long i) const { return i == last_step_ ? last_ : regular_; }
 
   // The whole step i, unmerged at both ends.
-  template <class Model, class Tab, int Dim, class DF>
-  void step(const Model& model, const Tab& tab, State<Dim>& z, long i, Workspace<Dim, DF>& ws) const {
+  template <class Model, class Tab, int Dim, class WS>
+  void step(const Model& model, const Tab& tab, State<Dim>& z, long i, WS& ws) const {
     const StepDurations<Method>& d = durations(i);
     apply_flow<Method::stages[0].flow>(model, tab, z, d.lead, ws);
     body(model, tab, z, d, ws);
@@ -106,12 +106,12 @@ class ComposedStepper {
 
   // Step i without its first sub-flow (run by lead() or the previous join()) and
   // without its last (run by join() or trail()).
-  template <class Model, class Tab, int Dim, class DF>
-  void lead(const Model& model, const Tab& tab, State<Dim>& z, long i, Workspace<Dim, DF>& ws) const {
+  template <class Model, class Tab, int Dim, class WS>
+  void lead(const Model& model, const Tab& tab, State<Dim>& z, long i, WS& ws) const {
     apply_flow<Method::stages[0].flow>(model, tab, z, durations(i).lead, ws);
   }
-  template <class Model, class Tab, int Dim, class DF>
-  void body(const Model& model, const Tab& tab, State<Dim>& z, long i, Workspace<Dim, DF>& ws) const {
+  template <class Model, class Tab, int Dim, class WS>
+  void body(const Model& model, const Tab& tab, State<Dim>& z, long i, WS& ws) const {
     // The uncomposed method's regular step reads its durations from this object,
     // a local of the step loop that nothing else can write, so the compiler keeps
     // them in registers across the model's calls (heap data it must reload).
@@ -121,17 +121,17 @@ class ComposedStepper {
       body(model, tab, z, durations(i), ws);
   }
   // The last sub-flow of step i and the first of step i + 1, as one flow.
-  template <class Model, class Tab, int Dim, class DF>
-  void join(const Model& model, const Tab& tab, State<Dim>& z, long i, Workspace<Dim, DF>& ws) const {
+  template <class Model, class Tab, int Dim, class WS>
+  void join(const Model& model, const Tab& tab, State<Dim>& z, long i, WS& ws) const {
     const double t = i + 1 == last_step_ ? regular_.trail + last_.lead : join_regular_;
     apply_flow<Method::stages[0].flow>(model, tab, z, t, ws);
   }
   // join(i) then body(i + 1); one call of the model where it fuses them (3s between
   // two regular steps of the uncomposed method), the same sub-flows otherwise.
-  template <class Model, class Tab, int Dim, class DF>
-  void join_then_body(const Model& model, const Tab& tab, State<Dim>& z, long i, Workspace<Dim, DF>& ws) const {
+  template <class Model, class Tab, int Dim, class WS>
+  void join_then_body(const Model& model, const Tab& tab, State<Dim>& z, long i, WS& ws) const {
     if constexpr (std::is_same_v<Method, ThreeTermSplitting> && fuses_3s<Model>::value) {
-      if (single_ && i + 1 != last_step_ && model.fuses_3s() && !ws.load && ws.sigma == 0.0) {  // its body has no load, no noise
+      if (single_ && i + 1 != last_step_ && model.fuses_3s() && !load_of(ws) && !noisy(ws)) {  // its body has no load, no noise
         model.damp_then_3s_body(z.q, z.p, flows::damp_factors(model, join_regular_, ws), inner_regular_.data());
         return;
       }
@@ -139,15 +139,15 @@ class ComposedStepper {
     join(model, tab, z, i, ws);
     body(model, tab, z, i + 1, ws);
   }
-  template <class Model, class Tab, int Dim, class DF>
-  void trail(const Model& model, const Tab& tab, State<Dim>& z, long i, Workspace<Dim, DF>& ws) const {
+  template <class Model, class Tab, int Dim, class WS>
+  void trail(const Model& model, const Tab& tab, State<Dim>& z, long i, WS& ws) const {
     apply_flow<Method::stages[S - 1].flow>(model, tab, z, durations(i).trail, ws);
   }
 
  private:
-  template <class Model, class Tab, int Dim, class DF>
+  template <class Model, class Tab, int Dim, class WS>
   static void body(const Model& model, const Tab& tab, State<Dim>& z, const StepDurations<Method>& d,
-                   Workspace<Dim, DF>& ws) {
+                   WS& ws) {
     const double* t = d.body.data();
     for (int s = 0; s < d.m; ++s, t += StepDurations<Method>::stride) {
       detail::inner_stages<Method>(model, tab, z, t, ws, std::make_index_sequence<S - 2>{});

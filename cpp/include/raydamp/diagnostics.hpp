@@ -22,8 +22,8 @@ struct has_dissipated_power<M, std::void_t<decltype(std::declval<const M&>().dis
                                    std::declval<const typename M::Vec&>(), std::declval<const typename M::Vec&>()))>>
     : std::true_type {};
 
-template <class Model, int Dim, class DF>
-double dissipated_power(const Model& model, const State<Dim>& z, Workspace<Dim, DF>& ws) {
+template <class Model, int Dim, class WS>
+double dissipated_power(const Model& model, const State<Dim>& z, WS& ws) {
   if constexpr (has_dissipated_power<Model>::value) return model.dissipated_power(z.q, z.p);
   model.mass.velocity(z.p, ws.v);
   model.damping.rate(z.q, z.p, ws.f);
@@ -39,8 +39,8 @@ double dissipated_power(const Model& model, const State<Dim>& z, Workspace<Dim, 
 //   H_h = T + V + h^2 ( grad V^T M^{-1} grad V / 12 - v^T V''(q) v / 24 ) + O(h^4).
 // (For the harmonic oscillator this is the invariant (1 - h^2/4) p^2/2 + q^2/2 up to
 // a factor 1 + O(h^2); the tests check the O(h^4) conservation numerically.)
-template <class Model, int Dim, class DF>
-double modified_energy_sv(const Model& model, const State<Dim>& z, double h, Workspace<Dim, DF>& ws) {
+template <class Model, int Dim, class WS>
+double modified_energy_sv(const Model& model, const State<Dim>& z, double h, WS& ws) {
   model.gradient(z.q, ws.g);
   model.mass.velocity(ws.g, ws.f);
   const double force_term = ws.g.dot(ws.f);

@@ -22,7 +22,7 @@
 
 #ifndef RAYDAMP_FLATTEN
 #if defined(__GNUC__) || defined(__clang__)
-#define RAYDAMP_FLATTEN __attribute__((flatten))
+#define RAYDAMP_FLATTEN __attribute__((flatten, noinline))
 #else
 #define RAYDAMP_FLATTEN
 #endif
@@ -73,6 +73,9 @@ struct RunSpec {
   // its normal numbers from the Philox stream (seed, stream) (random/philox.hpp).
   double temperature = 0.0;
   std::uint64_t seed = 0, stream = 0;
+  // A run whose coordinates are the lanes of independent members (the pendulum ensemble's lanes):
+  // coordinate i draws its own stream, stream + i, so that lane i's noise is member i's single run's.
+  bool stream_per_coordinate = false;
 };
 
 struct Control {
@@ -167,8 +170,8 @@ struct MomentumBuffers {
   int count() const { return static_cast<int>(j0.size()); }
 };
 
-template <class Model, int Dim, class DF>
-void save_point(const Model& model, const State<Dim>& z, double t, const Workspace<Dim, DF>& ws,
+template <class Model, int Dim, class WS>
+void save_point(const Model& model, const State<Dim>& z, double t, const WS& ws,
                 MomentumBuffers& mb, const std::vector<int>& dofs, Trajectory& out) {
   out.t.push_back(t);
   if (ws.track_work) out.work.push_back(ws.work);
@@ -229,8 +232,8 @@ template <class Method>
 struct WholeStepper {
   double h, h_last;
   long last_step;
-  template <class Model, class Tab, int Dim, class DF>
-  void step(const Model& model, const Tab& tab, State<Dim>& z, long i, Workspace<Dim, DF>& ws) const {
+  template <class Model, class Tab, int Dim, class WS>
+  void step(const Model& model, const Tab& tab, State<Dim>& z, long i, WS& ws) const {
     raydamp::step<Method>(model, tab, z, i == last_step ? h_last : h, ws);
   }
 };
@@ -260,8 +263,8 @@ auto make_stepper(const Model& model, const Composition& composition, const RunS
 // momentum-map drift seen, step_drift(y, i, before_trail) after step i (before_trail:
 // without its last sub-flow, which the merged loop runs joined to the next step's first).
 // (run_block below decides whether it is flattened.)
-template <bool Mergeable, class Model, class Tab, class Stepper, int Dim, class DF, class Advance, class Drift>
-inline double run_block_body(const Model& model, const Tab& shared_tab, const Stepper& stepper, Workspace<Dim, DF>& ws,
+template <bool Mergeable, class Model, class Tab, class Stepper, int Dim, class WS, class Advance, class Drift>
+inline double run_block_body(const Model& model, const Tab& shared_tab, const Stepper& stepper, WS& ws,
                              State<Dim>& state, long k, long end, bool merge, bool track_momenta,
                              const Advance& advance, const Drift& step_drift) {
   // Stepped on local copies (state and durations) that no opaque call (sin, exp)
@@ -309,7 +312,7 @@ inline double run_block_body(const Model& model, const Tab& shared_tab, const St
     }
   }
   for (long i = k; i < end; ++i) {
-    advance(y, i);
+    advance(ws, y, i);
     if (track_momenta) block_drift = std::max(block_drift, step_drift(y, i, false));
   }
   if constexpr (!in_place) state = y;
@@ -319,16 +322,18 @@ inline double run_block_body(const Model& model, const Tab& shared_tab, const St
 // The same, flattened: every call in it (sub-flows, the model, Eigen) is inlined,
 // whatever the compiler's budget in a translation unit that instantiates every
 // method for every model (without it the elastic pendulum's 3s took 43 ns/step
-// instead of 30).
-template <bool Mergeable, class Model, class Tab, class Stepper, int Dim, class DF, class Advance, class Drift>
-RAYDAMP_FLATTEN double run_block_flat(const Model& model, const Tab& tab, const Stepper& stepper, Workspace<Dim, DF>& ws,
+// instead of 30). And not inlined itself: whether run_steps took it in depended on the
+// translation unit, and the loop's registers with it (the damped pendulum's 2s: 12.5 ns/step
+// in a small program, 17.6 in the module until this made both the same code).
+template <bool Mergeable, class Model, class Tab, class Stepper, int Dim, class WS, class Advance, class Drift>
+RAYDAMP_FLATTEN double run_block_flat(const Model& model, const Tab& tab, const Stepper& stepper, WS& ws,
                                       State<Dim>& state, long k, long end, bool merge, bool track_momenta,
                                       const Advance& advance, const Drift& step_drift) {
   return run_block_body<Mergeable>(model, tab, stepper, ws, state, k, end, merge, track_momenta, advance, step_drift);
 }
 
-template <bool Mergeable, class Model, class Tab, class Stepper, int Dim, class DF, class Advance, class Drift>
-inline double run_block(const Model& model, const Tab& tab, const Stepper& stepper, Workspace<Dim, DF>& ws,
+template <bool Mergeable, class Model, class Tab, class Stepper, int Dim, class WS, class Advance, class Drift>
+inline double run_block(const Model& model, const Tab& tab, const Stepper& stepper, WS& ws,
                         State<Dim>& state, long k, long end, bool merge, bool track_momenta, const Advance& advance,
                         const Drift& step_drift) {
   if constexpr (flattens_step_loop<Model>::value)
@@ -366,7 +371,9 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
   out.energy.reserve(rows);
   out.momentum.reserve(rows * mb.count());
 
-  WorkspaceFor<Model> ws(n, tab.stages());
+  // One workspace; the flattened loop runs on it as Unhooked (no load, no noise) when it can.
+  Unhooked<WorkspaceFor<Model>> unhooked(n, tab.stages());
+  WorkspaceFor<Model>& ws = unhooked;
   ws.track_work = spec.track_work;
   if (spec.track_work) out.work.reserve(rows);
   if (spec.load && !spec.load->empty()) {
@@ -379,6 +386,10 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
   if (spec.temperature > 0.0) {
     ws.sigma = std::sqrt(spec.temperature);
     ws.noise = NormalStream(spec.seed, spec.stream);
+    if (spec.stream_per_coordinate) {
+      ws.lane_noise.clear();
+      for (int i = 0; i < n; ++i) ws.lane_noise.emplace_back(spec.seed, spec.stream + static_cast<std::uint64_t>(i));
+    }
   }
   // Copies made now, so the loop never allocates. The block loop steps y, a local
   // that only inlined code sees, so the compiler can keep it in registers.
@@ -468,9 +479,9 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
     if constexpr (Model::n_momenta > 0) return fixed(model, x, law(i, before_trail));
     else return momentum_drift(model, x, mb, law(i, before_trail));
   };
-  auto advance = [&](State<Dim>& x, long i) {
+  auto advance = [&](auto& w, State<Dim>& x, long i) {  // w: ws, or the same as Unhooked
     if (ws.load) ws.time = time_at(i);
-    stepper.step(model, tab, x, i, ws);
+    stepper.step(model, tab, x, i, w);
     if constexpr (trapezoid) {
       if (spec.track_work) {
         const double next = dissipated_power(model, x, ws);
@@ -496,13 +507,21 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
     const double checkpoint_work = ws.work, checkpoint_power = power, checkpoint_load_work = ws.load_work,
                  checkpoint_power_f = power_f;
     ws.time = time_at(k);  // the merged loop's clock; advance() sets it per step
-    const NormalStream::State checkpoint_noise = ws.noise.state();  // a replay draws the same noise
+    ws.save_noise();  // a replay draws the same noise
     double block_drift = 0.0;
     if constexpr (Dim == Eigen::Dynamic) {  // stepped in place (see run_block)
       block_drift = run_block<mergeable>(model, tab, stepper, ws, z, k, end, merge, track_momenta, advance, step_drift);
     } else {
       y = z;
-      block_drift = run_block<mergeable>(model, tab, stepper, ws, y, k, end, merge, track_momenta, advance, step_drift);
+      bool plain = false;  // a flattened loop without load or noise runs Unhooked (workspace.hpp)
+      if constexpr (flattens_step_loop<Model>::value) plain = !ws.load && ws.sigma == 0.0;
+      if constexpr (flattens_step_loop<Model>::value) {
+        if (plain)
+          block_drift =
+              run_block<mergeable>(model, tab, stepper, unhooked, y, k, end, merge, track_momenta, advance, step_drift);
+      }
+      if (!plain)
+        block_drift = run_block<mergeable>(model, tab, stepper, ws, y, k, end, merge, track_momenta, advance, step_drift);
       z = y;
     }
     if (!z.all_finite()) {
@@ -512,12 +531,12 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
       power = checkpoint_power;
       ws.load_work = checkpoint_load_work;
       power_f = checkpoint_power_f;
-      ws.noise.restore(checkpoint_noise);
+      ws.restore_noise();
       long i = k;
       for (; i < end; ++i) {
         before = z;
         const double work_before = ws.work, load_work_before = ws.load_work;
-        advance(z, i);
+        advance(ws, z, i);
         if (!z.all_finite()) {
           z = before;
           ws.work = work_before;

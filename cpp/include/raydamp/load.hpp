@@ -16,17 +16,8 @@
 #include <string>
 #include <vector>
 
+#include "raydamp/attributes.hpp"
 #include "raydamp/system/compiled_function.hpp"
-
-// Out of line: the step loop of a small model is flattened (integrate.hpp), and inlined there a load's
-// evaluation (and the noise's generator) would enlarge every step's code, loaded or not.
-#ifndef RAYDAMP_OUT_OF_LINE
-#if defined(__GNUC__) || defined(__clang__)
-#define RAYDAMP_OUT_OF_LINE __attribute__((noinline))
-#else
-#define RAYDAMP_OUT_OF_LINE
-#endif
-#endif
 
 namespace raydamp {
 

@@ -11,8 +11,8 @@
 
 namespace raydamp {
 
-template <Flow F, class Model, class Tab, int Dim, class DF>
-inline void apply_flow(const Model& model, const Tab& tab, State<Dim>& z, double t, Workspace<Dim, DF>& ws) {
+template <Flow F, class Model, class Tab, int Dim, class WS>
+inline void apply_flow(const Model& model, const Tab& tab, State<Dim>& z, double t, WS& ws) {
   if constexpr (F == Flow::drift) flows::drift(model, z, t, ws);
   else if constexpr (F == Flow::kick) flows::kick(model, z, t, ws);
   else if constexpr (F == Flow::damp) flows::damp(model, z, t, ws);
@@ -22,16 +22,16 @@ inline void apply_flow(const Model& model, const Tab& tab, State<Dim>& z, double
   else flows::full_rk(model, tab, z, t, ws);
 }
 
-template <class Method, class Model, class Tab, int Dim, class DF, std::size_t... I>
-inline void step_stages(const Model& model, const Tab& tab, State<Dim>& z, double h, Workspace<Dim, DF>& ws,
+template <class Method, class Model, class Tab, int Dim, class WS, std::size_t... I>
+inline void step_stages(const Model& model, const Tab& tab, State<Dim>& z, double h, WS& ws,
                         std::index_sequence<I...>) {
   (apply_flow<Method::stages[I].flow>(model, tab, z, Method::stages[I].fraction * h, ws), ...);
 }
 
 // z <- Phi^h(z) for Method (tab, a ButcherTableau or FixedTableau, is ignored by
 // methods without a Runge-Kutta stage).
-template <class Method, class Model, class Tab, int Dim, class DF>
-inline void step(const Model& model, const Tab& tab, State<Dim>& z, double h, Workspace<Dim, DF>& ws) {
+template <class Method, class Model, class Tab, int Dim, class WS>
+inline void step(const Model& model, const Tab& tab, State<Dim>& z, double h, WS& ws) {
   step_stages<Method>(model, tab, z, h, ws, std::make_index_sequence<Method::stages.size()>{});
 }
 

@@ -21,8 +21,8 @@ namespace raydamp::flows {
 // is Stormer-Verlet to the last bit, whatever the tableau.
 // Tab is a ButcherTableau or a FixedTableau<S> (same accessors, stage count known
 // to the compiler, so the stage loops unroll).
-template <class Model, class Tab, int Dim, class DF>
-inline void kick_damp_rk(const Model& model, const Tab& tab, State<Dim>& z, double h, Workspace<Dim, DF>& ws) {
+template <class Model, class Tab, int Dim, class WS>
+inline void kick_damp_rk(const Model& model, const Tab& tab, State<Dim>& z, double h, WS& ws) {
   const int s = tab.stages();
   loaded_gradient(model, z.q, ws.time, ws);  // constant over the stages: q and the load's time are frozen
   for (int i = 0; i < s; ++i) {
@@ -50,8 +50,8 @@ namespace detail {
 
 // Generic explicit Runge-Kutta step of (q, p)' = field(q, p); field(i, q, p, dq, dp)
 // writes the slopes of stage i.
-template <class Tab, class Field, int Dim, class DF>
-inline void explicit_rk(const Tab& tab, State<Dim>& z, double h, Workspace<Dim, DF>& ws, Field field) {
+template <class Tab, class Field, int Dim, class WS>
+inline void explicit_rk(const Tab& tab, State<Dim>& z, double h, WS& ws, Field field) {
   const int s = tab.stages();
   for (int i = 0; i < s; ++i) {
     ws.stage_q = z.q;
@@ -78,19 +78,19 @@ inline void explicit_rk(const Tab& tab, State<Dim>& z, double h, Workspace<Dim, 
 
 }  // namespace detail
 
-template <class Model, class Tab, int Dim, class DF>
-inline void drift_damp_rk(const Model& model, const Tab& tab, State<Dim>& z, double h, Workspace<Dim, DF>& ws) {
+template <class Model, class Tab, int Dim, class WS>
+inline void drift_damp_rk(const Model& model, const Tab& tab, State<Dim>& z, double h, WS& ws) {
   detail::explicit_rk(tab, z, h, ws, [&](int, const Vector<Dim>& q, const Vector<Dim>& p, Vector<Dim>& dq, Vector<Dim>& dp) {
     model.mass.velocity(p, dq);
     model.damping.rate(q, p, dp);
     dp = -dp;
   });
-  if (ws.load) ws.time += h;  // a drift of the clock as of q
+  if (load_of(ws)) ws.time += h;  // a drift of the clock as of q
 }
 
 // The load at the stage times t + c_i h.
-template <class Model, class Tab, int Dim, class DF>
-inline void full_rk(const Model& model, const Tab& tab, State<Dim>& z, double h, Workspace<Dim, DF>& ws) {
+template <class Model, class Tab, int Dim, class WS>
+inline void full_rk(const Model& model, const Tab& tab, State<Dim>& z, double h, WS& ws) {
   const double t0 = ws.time;
   detail::explicit_rk(tab, z, h, ws, [&](int i, const Vector<Dim>& q, const Vector<Dim>& p, Vector<Dim>& dq, Vector<Dim>& dp) {
     model.mass.velocity(p, dq);
@@ -100,13 +100,13 @@ inline void full_rk(const Model& model, const Tab& tab, State<Dim>& z, double h,
     // components of the system, by the same tableau, so their quadrature has the method's order.
     if (ws.track_work) ws.work += h * tab.b(i) * dq.dot(dp);
     dp = -dp - ws.g;
-    if (ws.load) {
+    if (load_of(ws)) {
       const double t = t0 + tab.c(i) * h;
       ws.load->add(t, 1.0, dp.data());
       if (ws.track_work) ws.load_work += h * tab.b(i) * ws.load->dot(t, dq.data());
     }
   });
-  ws.time = t0 + h;
+  if (load_of(ws)) ws.time = t0 + h;
 }
 
 }  // namespace raydamp::flows

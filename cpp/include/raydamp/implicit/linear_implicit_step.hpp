@@ -257,8 +257,8 @@ class LinearImplicitStepper {
     }
   }
 
-  template <class Model, class Tab, int Dim, class DF>
-  void step(const Model&, const Tab&, State<Dim>& z, long i, Workspace<Dim, DF>& ws) const {
+  template <class Model, class Tab, int Dim, class WS>
+  void step(const Model&, const Tab&, State<Dim>& z, long i, WS& ws) const {
     const auto& sub = i == last_step_ ? last_ : regular_;
     double* work = ws.track_work ? &ws.work : nullptr;
     double* load_work = ws.track_work ? &ws.load_work : nullptr;
