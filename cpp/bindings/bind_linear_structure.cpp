@@ -48,10 +48,13 @@ void bind_structure_kind(py::module_& m, const char* name) {
              return p;
            },
            py::arg("t"), py::arg("xi"))
-      .def("noise_chebyshev_degree", [](const Model& s, double t) {
-        if (s.damping.beta() == 0.0) return 0;
-        return s.damping.noise_series(*s.damping.series(t)).degree();
-      });
+      .def(
+          "noise_chebyshev_degree",
+          [](const Model& s, double t) {
+            if (s.damping.beta() == 0.0) return 0;
+            return s.damping.noise_series(*s.damping.series(t)).degree();
+          },
+          py::arg("t"));
   add_model_functions<Model>(cls);
   def_integrate<Model>(m);
   def_integrate_ensemble<Model>(m);
