@@ -19,8 +19,9 @@
 // with no branch point at x = 0: the symmetric factor L (I - e^{-2tS})^{1/2} (S = L^{-1} C L^{-T})
 // has one there, where polynomial or Lanczos approximations converge only like the square root of
 // S's condition number (alpha = 0, a 200-DOF chain: Lanczos needs all 200 iterations for 1e-10
-// where this series needs 9 products; tests/test_thermal_structure.py). R needs C positive definite: alpha > 0 or K
-// positive definite (a supported structure); with alpha = 0 and a singular K there is no noise.
+// where this series needs 9 products; tests/test_thermal_structure.py). R needs C positive
+// definite: alpha > 0 or K positive definite (a supported structure); with alpha = 0 and a
+// singular K there is no noise factor and a temperature is refused.
 // solve_shifted (rks with a diagonally implicit tableau) is
 //   (I + cA)^{-1} x = M ((1 + c alpha) M + c beta K)^{-1} x,
 // one sparse Cholesky factorisation per distinct c (per run: h a_ii, and the last step's).
@@ -31,8 +32,8 @@
 #include <limits>
 #include <memory>
 #include <mutex>
-#include <string>
 #include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
