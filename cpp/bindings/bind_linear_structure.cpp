@@ -35,7 +35,26 @@ void bind_structure_kind(py::module_& m, const char* name) {
       .def("chebyshev_degrees", [](const Model& s, double t) {
         const auto series = s.damping.series(t);
         return py::make_tuple(series->exp.degree(), series->t_phi1.degree());
-      });
+      })
+      // One noise sub-flow at kT = 1 from p = 0: N xi, N N^T = M - E M E^T, E = exp(-t C M^{-1}) (a testing
+      // hook: tests compare N against a dense reference), and the degree of its Chebyshev series.
+      .def("thermal_noise",
+           [](const Model& s, double t, const Eigen::VectorXd& xi) {
+             if (!(t >= 0.0) || !std::isfinite(t)) throw std::invalid_argument("t: must be finite and >= 0");
+             if (xi.size() != s.n) throw std::invalid_argument("xi: expected " + std::to_string(s.n) + " entries");
+             if (!s.damping.has_noise()) throw std::invalid_argument(s.damping.kNoNoise);
+             Eigen::VectorXd p = Eigen::VectorXd::Zero(s.n);
+             s.damping.add_noise(p, s.damping.factors(t), s.mass, 1.0, xi, p);
+             return p;
+           },
+           py::arg("t"), py::arg("xi"))
+      .def(
+          "noise_chebyshev_degree",
+          [](const Model& s, double t) {
+            if (s.damping.beta() == 0.0) return 0;
+            return s.damping.noise_series(*s.damping.series(t)).degree();
+          },
+          py::arg("t"));
   add_model_functions<Model>(cls);
   def_integrate<Model>(m);
   def_integrate_ensemble<Model>(m);

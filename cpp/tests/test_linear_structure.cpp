@@ -152,12 +152,16 @@ void flows_do_not_allocate(const Mass& mass, const SparseColMajor& k) {
     s.damping.solve_shifted(z.q, 0.025, ws.f);
     (void)energy(s, z);
   };
-  round();  // first use: factors, shifted factorisation, scratch
-  const long before = allocations.load();
-  for (int i = 0; i < 10; ++i) round();
-  const long made = allocations.load() - before;
-  if (made != 0) std::printf("%s: %ld allocations in 10 rounds of flows\n", Mass::kind, made);
-  CHECK(made == 0);
+  for (const double sigma : {0.0, 0.5}) {  // and at a temperature: beta K's noise (R xi, then psi's series)
+    ws.sigma = sigma;
+    ws.noise = NormalStream(7, 0);
+    round();  // first use: factors, shifted factorisation, noise factor and series, scratch
+    const long before = allocations.load();
+    for (int i = 0; i < 10; ++i) round();
+    const long made = allocations.load() - before;
+    if (made != 0) std::printf("%s, sigma %g: %ld allocations in 10 rounds of flows\n", Mass::kind, sigma, made);
+    CHECK(made == 0);
+  }
 }
 
 template <class Mass>

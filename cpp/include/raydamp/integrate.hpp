@@ -153,11 +153,9 @@ void check_temperature(const Model& model, const Composition& composition, doubl
                                 "fluctuation-dissipation partner");
   if constexpr (!flows::has_thermal_noise<Model>::value) {
     throw std::invalid_argument("temperature: this system's damping has no exact noise flow yet (isotropic, "
-                                "radial and constant-matrix damping have, and a LinearStructure's alpha M)");
+                                "radial and constant-matrix damping have, a Chain's, and a LinearStructure's alpha M + beta K)");
   } else if constexpr (has_noise_check<decltype(model.damping)>::value) {
-    if (!model.damping.has_noise())
-      throw std::invalid_argument("temperature: a LinearStructure with beta K damping has no exact noise flow yet "
-                                  "(with beta = 0, alpha M damping, it has)");
+    if (!model.damping.has_noise()) throw std::invalid_argument(model.damping.kNoNoise);
   }
 }
 

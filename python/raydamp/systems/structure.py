@@ -16,6 +16,16 @@ frequency (Lanczos, with a 5% margin; for a lumped M also the Gershgorin bound),
 lowest degree that leaves out less than 1e-13 of the function (about sqrt(35 t beta L) + 10
 products with K and solves with M per flow), coefficients cached per sub-step length.
 
+Thermal noise (``temperature=kT`` with 3s, 2s, baoab): each damping flow over t gets the noise of its
+exact Ornstein-Uhlenbeck flow, covariance kT (M - E M E^T) = kT (I - e^{-2tA}) M = 2t kT phi1(-2tA) C
+(A = C M^{-1}). The noise is sqrt(kT) psi(A) R xi with C = R R^T (a sparse Cholesky factor of C, once
+per run), psi(x) = sqrt((1 - e^{-2tx}) / x) and xi standard normal: psi is smooth and bounded on
+[0, rho] (no square-root branch point at 0, unlike the symmetric root M^{1/2} (I - e^{-2tS})^{1/2}),
+so its Chebyshev series costs about what the damping flow's does, and the noise is within 1e-10
+(relative, in the M^{-1} norm) of the exact one. With beta = 0 it is sqrt(kT (1 - e^{-2 alpha t}))
+times a root of M. With alpha = 0, C = beta K must be positive definite (a supported structure); a
+free one (rigid-body modes) refuses a temperature unless alpha > 0.
+
 Which method when (rho = alpha + beta L, the largest damping rate):
 
 - h rho small (weak damping of every mode that the step resolves): 3s and 2s are explicit,

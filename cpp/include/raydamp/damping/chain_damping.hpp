@@ -10,6 +10,11 @@
 // each exact from the block's eigendecomposition (formed once here); undamped
 // sites are left alone. Blocks are dense, so their size is capped (kMaxChainBlock).
 //
+// Thermal noise: with M = m I and A symmetric, the OU flow's covariance is
+// kT (M - E M E^T) = kT m (I - e^{-2tA}), so a noise factor is sqrt(m) V diag(sqrt(1 - e^{-2t lambda})) V^T
+// per block (a symmetric root: a block of dashpots alone, lambda = 0 along (1, ..., 1), gets noise that
+// sums to zero, keeping sum p), and sqrt(m (1 - e^{-2ta})) per site of a diagonal A.
+//
 // When every block is a single site (friction, a lone wall dashpot), A is diagonal and
 // exp(-tA) is a factor per site: the flows are then one loop over the damped sites, or
 // over p itself when every site is damped (one factor per site, or one scalar when the
@@ -67,6 +72,9 @@ class ChainDamping {
     // conserves sum p to rounding instead of drifting by the rounding of V V^T each step.
     // A diagonal A: one value per damped site (one in all for Shape::uniform).
     std::vector<double> exp_m1, t_phi1_m1;
+    // The noise factor over sqrt(m): sqrt(1 - e^{-2ta}) per damped site, or per block
+    // V diag(sqrt(1 - e^{-2t lambda})) V^T (s x s, column-major, at the block's matrix offset).
+    std::vector<double> noise;
     mutable std::vector<double> scratch;  // one value per damped site (kick+damp keeps results here)
   };
 
@@ -200,41 +208,48 @@ class ChainDamping {
       const std::size_t m = rates_.size();
       f.exp_m1.resize(m);
       f.t_phi1_m1.resize(m);
+      f.noise.resize(m);
       if (shape_ == Shape::sites) f.scratch.resize(m);
       for (std::size_t k = 0; k < m; ++k) {
         if (k > 0 && rates_[k] == rates_[k - 1]) {  // runs of one coefficient: no exp to recompute
           f.exp_m1[k] = f.exp_m1[k - 1];
           f.t_phi1_m1[k] = f.t_phi1_m1[k - 1];
+          f.noise[k] = f.noise[k - 1];
           continue;
         }
         const double x = -t * rates_[k];
         f.exp_m1[k] = std::expm1(x);
         f.t_phi1_m1[k] = t * (phi1(x) - 1.0);
+        f.noise[k] = std::sqrt(std::max(0.0, -std::expm1(2.0 * x)));
       }
       return f;
     }
     f.exp_m1.resize(matrices_.size());
     f.t_phi1_m1.resize(matrices_.size());
+    f.noise.resize(matrices_.size());
     f.scratch.resize(sites_.size());
     for (const Block& b : blocks_) {
       const int s = b.size;
       const double* v = &vectors_[b.matrix];
-      std::array<double, kMaxChainBlock> decay, t_phi1s;
+      std::array<double, kMaxChainBlock> decay, t_phi1s, roots;
       for (int m = 0; m < s; ++m) {
         const double x = -t * lambda_[b.site + m];
         decay[m] = std::expm1(x);
         t_phi1s[m] = t * (phi1(x) - 1.0);
+        roots[m] = std::sqrt(std::max(0.0, -std::expm1(2.0 * x)));
       }
       for (int j = 0; j < s; ++j)
         for (int i = 0; i < s; ++i) {
-          double e = 0.0, p1 = 0.0;
+          double e = 0.0, p1 = 0.0, r = 0.0;
           for (int m = 0; m < s; ++m) {
             const double vv = v[i + m * s] * v[j + m * s];
             e += vv * decay[m];
             p1 += vv * t_phi1s[m];
+            r += vv * roots[m];
           }
           f.exp_m1[b.matrix + i + j * s] = e;
           f.t_phi1_m1[b.matrix + i + j * s] = p1;
+          f.noise[b.matrix + i + j * s] = r;
         }
     }
     return f;
@@ -263,6 +278,38 @@ class ChainDamping {
     for (const Block& b : blocks_) {  // a lone dashpot's 2x2 block unrolled: the same operations
       if (b.size == 2) decay_block<2>(b, &f.exp_m1[b.matrix], p);
       else decay_block<0>(b, &f.exp_m1[b.matrix], p);
+    }
+  }
+
+  // p += sigma sqrt(m) N xi: the noise of the exact OU flow (header comment); the undamped sites get none.
+  template <class Q, class Mass, class X, class P>
+  void add_noise(const Q&, const Factors& f, const Mass& mass, double sigma, const X& xi, P& p) const {
+    const double c = sigma * std::sqrt(mass.m);
+    const double* r = f.noise.data();
+    switch (shape_) {
+      case Shape::uniform:
+        p += (c * r[0]) * xi;
+        return;
+      case Shape::every_site:
+        for (int i = 0; i < n_; ++i) p[i] += c * r[i] * xi[i];
+        return;
+      case Shape::sites:
+        for (std::size_t k = 0; k < sites_.size(); ++k) p[sites_[k]] += c * r[k] * xi[sites_[k]];
+        return;
+      case Shape::blocks:
+        break;
+    }
+    std::array<double, kMaxChainBlock> y;
+    for (const Block& b : blocks_) {
+      const int s = b.size;
+      const double* root = &f.noise[b.matrix];
+      for (int i = 0; i < s; ++i) {
+        double sum = 0.0;
+        for (int j = 0; j < s; ++j) sum += root[i + j * s] * xi[sites_[b.site + j]];
+        y[i] = sum;
+      }
+      if (b.conserving) remove_mean(s, y.data());  // the exact noise sums to zero there: keep sum p to rounding
+      for (int i = 0; i < s; ++i) p[sites_[b.site + i]] += c * y[i];
     }
   }
 

@@ -60,8 +60,9 @@ inline std::vector<double> chebyshev_interpolant(const std::vector<double>& valu
 // of the interpolant's coefficients is below the tolerance (then aliasing is too,
 // the true coefficients falling faster than geometrically), and the series is cut
 // at the lowest degree whose dropped tail stays below kChebyshevTolerance max |g|.
+// tolerance: the dropped tail relative to max |g| (kChebyshevTolerance unless a caller needs less).
 template <class G>
-ChebyshevSeries chebyshev_series(G g, const char* what) {
+ChebyshevSeries chebyshev_series(G g, const char* what, double tolerance = kChebyshevTolerance) {
   for (int n = 32;; n *= 2) {
     std::vector<double> values(n);
     double scale = 0.0;
@@ -88,7 +89,7 @@ ChebyshevSeries chebyshev_series(G g, const char* what) {
       upper += std::abs(c[k]);
       upper_max = std::max(upper_max, std::abs(c[k]));
     }
-    const bool below_tolerance = upper <= 0.5 * kChebyshevTolerance * scale;
+    const bool below_tolerance = upper <= 0.5 * tolerance * scale;
     if (!below_tolerance && upper_max > noise) {
       if (n > kMaxChebyshevDegree)
         throw std::invalid_argument(std::string(what) + ": needs a Chebyshev degree above " +
@@ -100,7 +101,7 @@ ChebyshevSeries chebyshev_series(G g, const char* what) {
     double dropped = 0.0;
     while (degree > 0) {
       const double excess = std::max(0.0, std::abs(c[degree]) - floor);
-      if (dropped + excess > kChebyshevTolerance * scale) break;
+      if (dropped + excess > tolerance * scale) break;
       dropped += excess;
       --degree;
     }

@@ -9,6 +9,19 @@
 // evaluated by Chebyshev expansions on [0, L] (chebyshev.hpp), L an upper bound of
 // lambda_max (spectral_bound.hpp): only products with K and solves with M, never a
 // dense matrix. Coefficients are cached per sub-step length t (a run uses two or three).
+// Thermal noise (the OU flow of damp, covariance kT (M - E M E^T), E = exp(-tA)): with
+// A = C M^{-1} and A^T = M^{-1} C, M - E M E^T = (I - e^{-2tA}) M = 2t phi1(-2tA) C, so with
+// C = R R^T (a sparse Cholesky factor, once per run) a noise factor is
+//   N = psi(A) R,  psi(x) = sqrt(2t phi1(-2tx)) = sqrt((1 - e^{-2tx}) / x)
+// (N N^T = psi(A) C psi(A)^T = psi(A)^2 C, as f(A) C = C f(A)^T). psi is analytic near [0, inf)
+// (its branch points are at x = +-i pi k / t, k >= 1) and bounded by sqrt(2t), so its Chebyshev
+// series in B converges like exp's (degree equal for t beta L <~ 1, about 1.7x for 10^2 .. 10^4),
+// with no branch point at x = 0: the symmetric factor L (I - e^{-2tS})^{1/2} (S = L^{-1} C L^{-T})
+// has one there, where polynomial or Lanczos approximations converge only like the square root of
+// S's condition number (alpha = 0, a 200-DOF chain: Lanczos needs all 200 iterations for 1e-10
+// where this series needs 9 products; tests/test_thermal_structure.py). R needs C positive
+// definite: alpha > 0 or K positive definite (a supported structure); with alpha = 0 and a
+// singular K there is no noise factor and a temperature is refused.
 // solve_shifted (rks with a diagonally implicit tableau) is
 //   (I + cA)^{-1} x = M ((1 + c alpha) M + c beta K)^{-1} x,
 // one sparse Cholesky factorisation per distinct c (per run: h a_ii, and the last step's).
@@ -20,6 +33,7 @@
 #include <memory>
 #include <mutex>
 #include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -33,15 +47,24 @@ namespace raydamp {
 template <class Mass>
 class SparseRayleighDamping {
  public:
+  // The noise N xi is within this of the exact one, relative, in the M^{-1} norm (the kinetic
+  // energy's): the noise series leaves out at most kNoiseTolerance / sqrt(1 + 2 t rho) of max psi,
+  // and max psi / min psi <= sqrt(1 + 2 t rho) on [alpha, rho] (rho = rate_bound()).
+  static constexpr double kNoiseTolerance = 1e-10;
+
   // The series of one sub-step length t, in the variable of B's spectrum.
   struct Series {
-    double t;
+    double t = 0.0;
     ChebyshevSeries exp;     // exp(-t (alpha + beta lambda))
     ChebyshevSeries t_phi1;  // t phi1(-t (alpha + beta lambda))
+    // psi(alpha + beta lambda) of the noise factor, made at the first noisy flow of this length.
+    mutable std::once_flag noise_once;
+    mutable ChebyshevSeries noise;
   };
   struct Factors {
     double t = std::numeric_limits<double>::quiet_NaN();
     std::shared_ptr<const Series> series;
+    double noise_scale = 0.0;  // beta = 0: sqrt(1 - e^{-2 alpha t}), N = noise_scale M^{1/2}
   };
 
   // bound: an upper bound of the spectrum of B (the caller estimates it once).
@@ -58,7 +81,7 @@ class SparseRayleighDamping {
   double spectral_bound() const { return bound_; }           // L >= lambda_max(K M^{-1})
   double rate_bound() const { return alpha_ + beta_ * bound_; }  // >= the spectral radius of A
 
-  Factors factors(double t) const { return {t, series(t)}; }
+  Factors factors(double t) const { return {t, series(t), std::sqrt(std::max(0.0, -std::expm1(-2.0 * alpha_ * t)))}; }
 
   std::shared_ptr<const Series> series(double t) const {
     std::lock_guard<std::mutex> lock(caches_->mutex);
@@ -67,9 +90,11 @@ class SparseRayleighDamping {
     // lambda = L (1 + y) / 2 maps [-1, 1] onto [0, L].
     const double half = 0.5 * bound_, a = alpha_, b = beta_;
     auto rate = [=](double y) { return a + b * half * (1.0 + y); };
-    auto made = std::make_shared<const Series>(Series{
-        t, chebyshev_series([&](double y) { return std::exp(-t * rate(y)); }, "damping flow"),
-        chebyshev_series([&](double y) { return t * phi1(-t * rate(y)); }, "kick+damp flow")});
+    auto fresh = std::make_shared<Series>();
+    fresh->t = t;
+    fresh->exp = chebyshev_series([&](double y) { return std::exp(-t * rate(y)); }, "damping flow");
+    fresh->t_phi1 = chebyshev_series([&](double y) { return t * phi1(-t * rate(y)); }, "kick+damp flow");
+    std::shared_ptr<const Series> made = std::move(fresh);
     if (caches_->series.size() >= kCachedLengths) caches_->series.erase(caches_->series.begin());
     caches_->series.push_back(made);
     return made;
@@ -95,12 +120,41 @@ class SparseRayleighDamping {
 
   // Thermal noise: with alpha M damping alone (beta = 0) A = alpha I, so the OU flow's noise is
   // sqrt(kT (1 - e^{-2 alpha t})) M^{1/2} xi (a root of M: sqrt of a lumped one, the Cholesky factor of a
-  // consistent one). beta K damping needs (I - e^{-2tS})^{1/2} of the whole spectrum: not yet.
-  bool has_noise() const { return beta_ == 0.0; }
+  // consistent one). With beta K, N xi = psi(A) R xi (the header's comment), which needs C = alpha M + beta K
+  // positive definite; has_noise() factorises C on its first call (check_temperature's, before a run).
+  bool has_noise() const { return beta_ == 0.0 || noise_root() != nullptr; }
   template <class Q, class M, class X, class P>
   void add_noise(const Q&, const Factors& f, const M& mass, double sigma, const X& xi, P& p) const {
-    mass.add_root_product(sigma * std::sqrt(std::max(0.0, -std::expm1(-2.0 * alpha_ * f.t))), xi, p);
+    if (beta_ == 0.0) {
+      mass.add_root_product(sigma * f.noise_scale, xi, p);
+      return;
+    }
+    const SparseCholesky* root = noise_root();
+    if (!root) throw std::invalid_argument(kNoNoise);
+    Eigen::VectorXd& y = thread_scratch(kScratchSum, p.size());
+    y.setZero();
+    root->add_root_product(1.0, xi, y);  // R xi, covariance C
+    Eigen::VectorXd& z = thread_scratch(kScratchSum2, p.size());
+    apply(noise_series(*f.series), y, z);
+    p += sigma * z;
   }
+
+  // The Chebyshev series of psi for the length of s (made once per length).
+  const ChebyshevSeries& noise_series(const Series& s) const {
+    std::call_once(s.noise_once, [&] {
+      const double half = 0.5 * bound_, a = alpha_, b = beta_, t = s.t;
+      // 2t phi1(-2tx) = (1 - e^{-2tx}) / x, at most 2t, at x = alpha + beta lambda in [alpha, rho].
+      auto psi = [=](double y) { return std::sqrt(2.0 * t * phi1(-2.0 * t * (a + b * half * (1.0 + y)))); };
+      const double tolerance = std::min(kChebyshevTolerance, kNoiseTolerance / std::sqrt(1.0 + 2.0 * t * rate_bound()));
+      s.noise = chebyshev_series(psi, "thermal noise", tolerance);
+    });
+    return s.noise;
+  }
+
+  static constexpr const char* kNoNoise =
+      "temperature: a LinearStructure with beta K damping and alpha = 0 has thermal noise only for a positive "
+      "definite K (a supported structure; the noise factor is a Cholesky factor of C = beta K); add alpha M "
+      "damping or supports";
 
   // out = A p = alpha p + beta K M^{-1} p (out must not alias p).
   template <class Q, class P, class O>
@@ -130,7 +184,22 @@ class SparseRayleighDamping {
     std::mutex mutex;
     std::vector<std::shared_ptr<const Series>> series;
     std::vector<std::pair<double, std::shared_ptr<const SparseCholesky>>> shifted;
+    std::once_flag root_once;
+    std::unique_ptr<const SparseCholesky> root;  // C = R R^T (beta > 0 and C positive definite), else null
   };
+
+  // R, C = alpha M + beta K = R R^T, factorised on the first call; null when C is not positive definite.
+  const SparseCholesky* noise_root() const {
+    std::call_once(caches_->root_once, [&] {
+      const SparseColMajor c = alpha_ * mass_.matrix() + beta_ * SparseColMajor(*k_);
+      try {
+        caches_->root = std::make_unique<const SparseCholesky>(c, "C");
+      } catch (const std::invalid_argument&) {
+        caches_->root.reset();
+      }
+    });
+    return caches_->root.get();
+  }
 
   // y = sum_k c_k T_k(Y) x with B x = K M^{-1} x.
   template <class X>
