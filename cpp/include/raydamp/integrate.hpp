@@ -152,8 +152,7 @@ void check_temperature(const Model& model, const Composition& composition, doubl
     throw std::invalid_argument("temperature: this model has no damping (eps = 0); thermal noise is the damping's "
                                 "fluctuation-dissipation partner");
   if constexpr (!flows::has_thermal_noise<Model>::value) {
-    throw std::invalid_argument("temperature: this system's damping has no exact noise flow yet (isotropic, "
-                                "radial and constant-matrix damping have, a Chain's, and a LinearStructure's alpha M + beta K)");
+    throw std::invalid_argument("temperature: this system's damping has no exact noise flow");
   } else if constexpr (has_noise_check<decltype(model.damping)>::value) {
     if (!model.damping.has_noise()) throw std::invalid_argument(model.damping.kNoNoise);
   }

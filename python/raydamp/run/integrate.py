@@ -124,8 +124,8 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
         E = exp(-t eps D(q) M^{-1}) at the frozen q (fluctuation-dissipation: the Boltzmann density
         exp(-H/kT) is what the exact flow keeps). Isotropic (D = c M), radial and constant-matrix
         damping take it, and a LinearStructure's alpha M + beta K (with alpha = 0 only for a
-        positive definite K: ``help(raydamp.systems.structure)``) and a Chain's friction and
-        dashpots; q-dependent dashpots of a System, Runge-Kutta and
+        positive definite K: ``help(raydamp.systems.structure)``), a Chain's friction and
+        dashpots and a System's dashpots (the noise at the frozen q); Runge-Kutta and
         implicit methods and compositions refuse it with the reason.
     seed : the noise's seed, an integer in [0, 2^64); None draws one from the operating system.
         Either way ``Solution.provenance`` keeps it, so the run repeats bit for bit.

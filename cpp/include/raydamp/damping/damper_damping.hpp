@@ -58,7 +58,7 @@ class DamperDamping {
     bool has_k2 = false;
     // Several: exp(-tA) = L V diag(decay) V^T L^{-1}; t phi1(-tA) likewise with t_phi1s.
     SmallMatrix vectors;
-    SmallVector decay, t_phi1s;
+    SmallVector decay, t_phi1s, rates;  // rates: the eigenvalues of S, for the noise
   };
 
   // What a workspace keeps per sub-flow length t: t, and the dashpots at the last q a
@@ -155,6 +155,27 @@ class DamperDamping {
       return;
     }
     modal_apply(at, p, &grad_v, p);
+  }
+
+  // p += sigma N xi, N N^T = M - E M E^T (E = exp(-tA) at the frozen q): the noise of the exact
+  // Ornstein-Uhlenbeck flow. M - E M E^T = L (I - e^{-2tS}) L^T with S = L^{-1} eps D L^{-T}.
+  // One dashpot: S = lambda v v^T, v = L^{-1} grad g / sqrt(a), lambda = eps c a, so
+  //   M - E M E^T = (1 - e^{-2 t lambda}) / a grad g grad g^T = 2 t eps c phi1(-2 t lambda) grad g grad g^T,
+  // one normal along grad g (exact at a = 0, where grad g = 0). Several: N = L V diag(sqrt(1 - e^{-2t lambda_i})).
+  template <class Q, class Mass, class X, class P>
+  void add_noise(const Q& q, const Factors& f, const Mass&, double sigma, const X& xi, P& p) const {
+    constexpr int N = P::RowsAtCompileTime;
+    const AtConfiguration& at = evaluate(q, f);
+    if (c_.size() == 1) {
+      const auto grad = map<N>(at.grad);
+      const double a = scalar_inverse_ != 0.0 ? scalar_inverse_ * grad.squaredNorm() : map<N>(at.w).dot(grad);
+      const double x = -2.0 * f.t * eps_c_ * a;
+      p += (sigma * std::sqrt(2.0 * f.t * eps_c_ * phi1(x)) * xi[0]) * grad;
+      return;
+    }
+    SmallVector y(n_);
+    for (int i = 0; i < n_; ++i) y[i] = std::sqrt(-std::expm1(-2.0 * f.t * at.rates[i])) * xi[i];
+    p += sigma * (lower_ * (at.vectors * y));
   }
 
   // out = A p = eps sum_i c_i grad g_i (grad g_i . M^{-1} p).
@@ -286,6 +307,7 @@ class DamperDamping {
     eigen(g, lambda, at.vectors);
     at.decay.resize(n_);
     at.t_phi1s.resize(n_);
+    at.rates = lambda;
     for (int i = 0; i < n_; ++i) {
       const double x = -t * lambda[i];
       at.decay[i] = std::exp(x);
