@@ -40,7 +40,7 @@ from .files import ParsedFiles
 from .problems import JobError, check_spec, check_sweep_spec
 from .schemas import JobSpec, SweepSpec
 
-__all__ = ["CheckPool", "ChecksBusy", "isolated"]
+__all__ = ["CheckPool", "ChecksBusy", "checked_inline", "isolated"]
 
 log = logging.getLogger("raydamp_service.checks")
 
@@ -56,6 +56,12 @@ def isolated(spec: JobSpec) -> bool:
     a chain of expression bonds too, a structure parses its files and factorises M), and every job whose load
     has an expression (compiled like a system's)."""
     return spec.system is not None or _has_expression(spec.load) or _has_expression(spec.ground_motion)
+
+
+def checked_inline(spec: JobSpec) -> bool:
+    """Whether a job's check is light enough for the event loop: a built-in model without a load, whose check
+    (sizes, one trial step) is arithmetic on at most max_dim coordinates and reads no file."""
+    return spec.system is None and spec.load is None and spec.ground_motion is None
 
 
 def _has_expression(value) -> bool:

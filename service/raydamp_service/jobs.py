@@ -15,14 +15,16 @@ from raydamp.systems.system import NotCompiled, compiled_elsewhere
 from .checks import CheckPool, ChecksBusy
 from .config import Settings
 from .files import FILE_COLUMNS_ADDED, FILES_TABLE, FileStore, file_resolver
-from .problems import JobError, RaydampCall, build_call
+from .problems import JobError, RaydampCall, build_call, planned_steps
 from .runner import Outcome, Run
 from .schemas import JobSpec, normalise_stored
 from .store import TaskRecord, TaskStore
 
 __all__ = ["JobStore", "JobRecord", "JobWork", "TrajectoryArrays", "StoredTrajectory"]
 
-_FLOAT = np.dtype("<f8")  # the blob format: little-endian float64, row-major
+_FLOAT = np.dtype("<f8")
+# Steps x coordinates below which a run reports no live progress (milliseconds of work for a built-in model).
+_LIVE_PROGRESS_WORK = 100_000  # the blob format: little-endian float64, row-major
 _TABLES = """
 CREATE TABLE IF NOT EXISTS trajectories (
     job_id TEXT PRIMARY KEY REFERENCES jobs(id) ON DELETE CASCADE,
@@ -202,10 +204,15 @@ class JobWork:
         return False
 
     def run(self, record: JobRecord, run: Run) -> Outcome:
-        call = self._call(JobSpec.model_validate(record.spec), run)
+        spec = JobSpec.model_validate(record.spec)
+        call = self._call(spec, run)
         if call is None:
             return Outcome("cancelled", None, run.progress)
-        solution = call.run(progress=run.report, cancel=run.token)
+        # raydamp calls progress about 100 times a run, each call taking the interpreter lock from the C++ loop:
+        # for a run of milliseconds that was a fifth of the server's CPU per job, for a progress nobody sees.
+        # Such a run reports only its end (a cancel still stops it: the token is read without the lock).
+        small = planned_steps(spec) * call.model.dim < _LIVE_PROGRESS_WORK
+        solution = call.run(progress=None if small else run.report, cancel=run.token)
         result = {"summary": solution.summary(), "trajectory": TrajectoryArrays(
             t=solution.t, q=solution.q, p=solution.p, energy=solution.energy, momentum=solution.momentum,
             work=solution.work, load_work=solution.load_work)}

@@ -60,3 +60,24 @@ def test_shutdown_hands_running_and_queued_jobs_back(store, tmp_path):
         assert job.status == "queued" and not job.has_trajectory and job.summary is None
     assert store.get(running.id).attempts == 1
     assert store.recover() == [running.id, waiting.id]
+
+
+@pytest.mark.parametrize(("n_steps", "calls"), [(99_999, 0), (100_000, 100)])
+def test_a_run_of_milliseconds_reports_only_its_end(store, tmp_path, monkeypatch, n_steps, calls):
+    """raydamp calls progress about 100 times a run, each taking the interpreter lock from the C++ loop; below
+    10^5 steps x coordinates (a pendulum: 10^5 steps) the run gets no callback and reports 1.0 at its end."""
+    from raydamp_service.runner import Run
+
+    reports = []
+    report = Run.report
+    monkeypatch.setattr(Run, "report", lambda self, done, total: (reports.append(done), report(self, done, total)))
+    runner = Runner(store, Settings(db=tmp_path / "jobs.sqlite3", workers=1))
+    runner.start()
+    try:
+        job = store.create({**LONG_RUN, "n_steps": n_steps, "save_every": 1000})
+        runner.submit(job.id)
+        finished = wait_until(lambda: (record := store.get(job.id)).status == "completed" and record)
+    finally:
+        runner.stop()
+    assert finished.progress == 1.0 and finished.summary["steps"] == n_steps
+    assert len(reports) == calls and (calls == 0 or reports[-1] == n_steps)

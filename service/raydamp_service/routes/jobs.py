@@ -1,7 +1,9 @@
 """/v1/jobs: submit, list, inspect and cancel integration jobs, and fetch their trajectories.
 
 Handlers are plain functions (FastAPI runs them in its thread pool), so SQLite calls never
-hold up the event loop; no handler waits for a run.
+hold up the event loop; no handler waits for a run. The submission is the exception: a coroutine whose
+insert goes to the store's group commit (group_commit.py), and whose check runs on the loop when it is
+a built-in model's (microseconds), else in the thread pool.
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ from fastapi.responses import FileResponse, StreamingResponse
 from starlette.background import BackgroundTask
 from starlette.concurrency import run_in_threadpool
 
-from ..checks import CheckPool, ChecksBusy
+from ..checks import CheckPool, ChecksBusy, checked_inline
 from ..deps import ChecksDep, RunnerDep, SettingsDep, StoreDep
 from ..files import file_resolver
 from ..problems import JobError
@@ -72,22 +74,24 @@ async def submit_job(spec: JobSpec, request: Request, response: Response, store:
                      settings: SettingsDep, checks: ChecksDep) -> JobCreated:
     """Queue an integration; poll the Location for its status. A system is checked (compiled, one trial
     step) in a check process within check_seconds and check_memory_bytes: past either, 422 on system."""
-    # A coroutine whose blocking part (the checks, the insert) goes to the thread pool in one hop: as a plain
-    # function with a response_model, FastAPI would hop there a second time only to validate JobCreated.
-    record = await run_in_threadpool(_queue_job, spec, request, response, store, runner, settings, checks)
+    spec = with_seed(spec)
+    if checked_inline(spec):  # microseconds: a hop to the thread pool would cost more than the check
+        _check(spec, store, settings, checks)
+    else:  # waits for a check process, or reads uploaded files
+        await run_in_threadpool(_check, spec, store, settings, checks)
+    # The insert goes to the store's group commit (no thread pool hop either); the answer once it is committed.
+    record = await JOBS.queue_committed(request, response, store, runner, spec, settings.max_queued, "max_queued",
+                                        settings)
     return JobCreated(id=record.id, status=record.status)
 
 
-def _queue_job(spec: JobSpec, request: Request, response: Response, store: JobStore, runner: Runner,
-               settings: Settings, checks: CheckPool) -> JobRecord:
-    spec = with_seed(spec)
+def _check(spec: JobSpec, store: JobStore, settings: Settings, checks: CheckPool) -> None:
     try:
         checks.job(spec, files=file_resolver(store))
     except JobError as error:
         raise invalid(error, spec.model_dump()) from None
     except ChecksBusy:
         raise checks_busy(settings) from None
-    return JOBS.queue(request, response, store, runner, spec, settings.max_queued, "max_queued", settings)
 
 
 @router.get("", response_model=JobList)

@@ -1,0 +1,123 @@
+"""Group commit: the inserts of concurrent submissions written by one thread and committed together.
+
+A submission on the event loop hands its insert to this thread and awaits it; the thread takes every insert
+waiting at that moment, writes them in one transaction and commits once, then answers them all with one
+wake-up of the event loop. A POST is answered only after that commit (WAL with synchronous=NORMAL: its row
+survives a crash of the process), so a 202 still means a stored job. Under load one commit serves tens of
+submissions, and a submission costs no hop to the thread pool and no turn on the store's write lock of its
+own (together they were about half of the server's CPU per small job, benchmarks/bench_service_load.py).
+
+What must happen once a row is stored (handing its id to the runner) runs here after the commit, not in the
+awaiting coroutine: a client that disconnects cancels its coroutine, and its stored job must still run.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import queue
+import sqlite3
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .store import Database
+
+__all__ = ["GroupCommit", "Write"]
+
+log = logging.getLogger("raydamp_service.group_commit")
+
+# A write: given the transaction's connection and the batch's scratch (what one write may leave for the next
+# in the same transaction, as the count of queued tasks), it writes and returns its result.
+Write = Callable[[sqlite3.Connection, dict[Any, Any]], Any]
+_MOST = 256  # writes per transaction at most: a commit's latency stays that of a few hundred small inserts
+
+
+@dataclass(frozen=True)
+class _Pending:
+    write: Write
+    after: Callable[[Any], None] | None
+    loop: asyncio.AbstractEventLoop
+    future: asyncio.Future
+
+
+class GroupCommit:
+    """The writer thread of one Database, started at its first write and ended by stop()."""
+
+    def __init__(self, database: Database):
+        self._db = database
+        self._queue: queue.SimpleQueue[_Pending | None] = queue.SimpleQueue()
+        self._thread = threading.Thread(target=self._serve, name="raydamp-group-commit", daemon=True)
+        self._thread.start()
+
+    async def write(self, write: Write, after: Callable[[Any], None] | None = None) -> Any:
+        """write's result once committed (its exception if it raised); then after(result) has run, on this
+        thread, whether or not the caller is still waiting."""
+        loop = asyncio.get_running_loop()
+        future = loop.create_future()
+        self._queue.put(_Pending(write, after, loop, future))
+        return await future
+
+    def stop(self) -> None:
+        """Commit what is waiting, then end the thread."""
+        self._queue.put(None)
+        self._thread.join(timeout=30)
+
+    def _serve(self) -> None:
+        stopping = False
+        while not stopping:
+            first = self._queue.get()
+            if first is None:
+                return
+            batch = [first]
+            while len(batch) < _MOST:
+                try:
+                    pending = self._queue.get_nowait()
+                except queue.Empty:
+                    break
+                if pending is None:
+                    stopping = True
+                    break
+                batch.append(pending)
+            self._commit(batch)
+
+    def _commit(self, batch: list[_Pending]) -> None:
+        try:
+            with self._db.transaction() as db:
+                scratch: dict[Any, Any] = {}
+                outcomes = [(pending, pending.write(db, scratch), None) for pending in batch]
+        except Exception:  # noqa: BLE001 - one failing write must not fail the others: each alone, then
+            outcomes = [self._alone(pending) for pending in batch]
+        for pending, result, error in outcomes:
+            if error is None and pending.after is not None:
+                try:
+                    pending.after(result)
+                except Exception:  # noqa: BLE001 - the row is stored; recovery at the next start runs it
+                    log.exception("after a group commit")
+        by_loop: dict[asyncio.AbstractEventLoop, list] = {}
+        for pending, result, error in outcomes:
+            by_loop.setdefault(pending.loop, []).append((pending.future, result, error))
+        for loop, settled in by_loop.items():
+            try:
+                loop.call_soon_threadsafe(_settle, settled)  # one wake-up of the loop per commit
+            except RuntimeError:  # the loop has closed: nobody waits any more
+                pass
+
+    def _alone(self, pending: _Pending) -> tuple[_Pending, Any, BaseException | None]:
+        try:
+            with self._db.transaction() as db:
+                return pending, pending.write(db, {}), None
+        except Exception as error:  # noqa: BLE001 - handed to the caller, which raises it
+            return pending, None, error
+
+
+def _settle(settled: list[tuple[asyncio.Future, Any, BaseException | None]]) -> None:
+    for future, result, error in settled:
+        if future.done():  # cancelled: its client went away
+            continue
+        if error is not None:
+            future.set_exception(error)
+        else:
+            future.set_result(result)

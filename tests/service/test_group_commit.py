@@ -1,0 +1,125 @@
+"""The store's group commit in-process: concurrent submissions' inserts committed together, each returned once
+committed, the queue bound exact within and across transactions, one failing write failing only itself."""
+
+from __future__ import annotations
+
+import asyncio
+import sqlite3
+
+import pytest
+from raydamp_service.jobs import JobStore
+
+SPEC = {"model": "damped_pendulum", "method": "3s"}
+
+
+@pytest.fixture
+def store(tmp_path):
+    store = JobStore(tmp_path / "jobs.sqlite3")
+    store.open()
+    yield store
+    store.close()
+
+
+def committed(store: JobStore) -> dict[str, str]:
+    """id -> status as another connection sees the file: what has been committed, not only written."""
+    with sqlite3.connect(store.path) as db:
+        return dict(db.execute("SELECT id, status FROM jobs").fetchall())
+
+
+def submit_at_once(store: JobStore, count: int, max_queued: int | None, handed: list[str]) -> list:
+    async def both():
+        return await asyncio.gather(*(store.create_committed({**SPEC, "n_steps": i}, max_queued, handed.append)
+                                      for i in range(count)))
+    return asyncio.run(both())
+
+
+def test_concurrent_submissions_are_committed_together_and_each_answered_once_stored(store, monkeypatch):
+    commits = []
+    transaction = store.db.transaction
+
+    def counted():
+        commits.append(1)
+        return transaction()
+
+    monkeypatch.setattr(store.db, "transaction", counted)
+    handed: list[str] = []
+    records = submit_at_once(store, 50, None, handed)
+    assert len({record.id for record in records}) == 50
+    assert [record.spec["n_steps"] for record in records] == list(range(50))  # each caller gets its own row
+    assert committed(store) == {record.id: "queued" for record in records}
+    assert sorted(handed) == sorted(record.id for record in records)  # each handed to the runner once
+    # 50 awaited inserts queued before the writer's first turn: far fewer transactions than inserts (one
+    # commit per insert before; the first batch may hold only the first insert).
+    assert 1 <= len(commits) <= 5, len(commits)
+    assert all(record == store.get(record.id) for record in records)
+
+
+def test_the_queue_bound_is_exact_within_one_transaction(store):
+    handed: list[str] = []
+    store.create(SPEC)  # one queued already, counted once by the transaction
+    records = submit_at_once(store, 30, 7, handed)
+    accepted = [record for record in records if record is not None]
+    assert len(accepted) == 6 and records.count(None) == 24
+    assert len(committed(store)) == 7 and sorted(handed) == sorted(record.id for record in accepted)
+
+
+def test_the_queue_bound_counts_afresh_after_a_cancel_and_a_restart(store, tmp_path):
+    handed: list[str] = []
+    first = submit_at_once(store, 3, 3, handed)
+    assert None not in first
+    assert submit_at_once(store, 1, 3, handed) == [None]  # full
+    store.request_cancel(first[0].id)
+    second = submit_at_once(store, 2, 3, handed)
+    assert second[0] is not None and second[1] is None  # the cancelled one's place, and no more
+    store.claim(first[1].id)  # running: no longer queued
+    store.close()
+
+    again = JobStore(tmp_path / "jobs.sqlite3")  # a restart: the count comes from the file, not from memory
+    again.open()
+    try:
+        assert again.recover() == [first[1].id, first[2].id, second[0].id]  # the running one queued again
+        assert submit_at_once(again, 1, 3, handed) == [None]
+        assert submit_at_once(again, 2, 4, handed)[1] is None
+        assert sum(status == "queued" for status in committed(again).values()) == 4
+    finally:
+        again.close()
+
+
+def test_a_failing_write_fails_alone_and_a_gone_caller_still_gets_its_job_run(store):
+    handed: list[str] = []
+
+    def broken(db, batch):
+        db.execute("INSERT INTO no_such_table VALUES (1)")
+
+    async def mixed():
+        writer = store.db.writer
+        good = [store.create_committed({**SPEC, "n_steps": i}, None, handed.append) for i in range(5)]
+        results = await asyncio.gather(*good[:2], writer.write(broken), *good[2:], return_exceptions=True)
+        # A caller cancelled while its insert waits (its client went away): the row is still stored and run.
+        gone = asyncio.ensure_future(store.create_committed({**SPEC, "n_steps": 99}, None, handed.append))
+        await asyncio.sleep(0)
+        gone.cancel()
+        await asyncio.gather(gone, return_exceptions=True)
+        await store.create_committed({**SPEC, "n_steps": 100}, None, handed.append)  # after the gone one
+        return results
+
+    results = asyncio.run(mixed())
+    assert isinstance(results[2], sqlite3.OperationalError) and "no_such_table" in str(results[2])
+    good = [results[i] for i in (0, 1, 3, 4, 5)]
+    stored = committed(store)
+    assert all(record.id in stored for record in good)
+    assert len(stored) == 7 and len(handed) == 7  # the five, the gone caller's, the last
+    assert sorted(job.spec["n_steps"] for job in store.recent(10)) == [0, 1, 2, 3, 4, 99, 100]
+
+
+def test_closing_the_store_commits_what_waits(store):
+    handed: list[str] = []
+
+    async def then_close():
+        pending = [asyncio.ensure_future(store.create_committed(SPEC, None, handed.append)) for _ in range(20)]
+        await asyncio.sleep(0)  # all handed to the writer
+        await asyncio.get_running_loop().run_in_executor(None, store.db.close)
+        return await asyncio.gather(*pending)
+
+    records = asyncio.run(then_close())
+    assert len(committed(store)) == 20 and len(handed) == 20 and None not in records
