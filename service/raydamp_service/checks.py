@@ -59,9 +59,12 @@ def isolated(spec: JobSpec) -> bool:
 
 
 def checked_inline(spec: JobSpec) -> bool:
-    """Whether a job's check is light enough for the event loop: a built-in model without a load, whose check
-    (sizes, one trial step) is arithmetic on at most max_dim coordinates and reads no file."""
-    return spec.system is None and spec.load is None and spec.ground_motion is None
+    """Whether a job's check is light enough for the event loop: a built-in model without a load, its initial
+    state given as numbers (not files): its check (sizes, one trial step) is arithmetic on at most max_dim
+    coordinates, and reads no file."""
+    state = spec.initial_state
+    return (spec.system is None and spec.load is None and spec.ground_motion is None
+            and isinstance(getattr(state, "q", None), list) and isinstance(getattr(state, "p", None), list))
 
 
 def _has_expression(value) -> bool:

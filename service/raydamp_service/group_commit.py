@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from .store import Database
 
-__all__ = ["GroupCommit", "Write"]
+__all__ = ["GroupCommit", "Waiter", "Write"]
 
 log = logging.getLogger("raydamp_service.group_commit")
 
@@ -35,12 +35,32 @@ Write = Callable[[sqlite3.Connection, dict[Any, Any]], Any]
 _MOST = 256  # writes per transaction at most: a commit's latency stays that of a few hundred small inserts
 
 
+class Waiter:
+    """A thread's wait for its write (GroupCommit.post)."""
+
+    def __init__(self):
+        self._done = threading.Event()
+        self._outcome: tuple[Any, BaseException | None] = (None, None)
+
+    def settle(self, result: Any, error: BaseException | None) -> None:
+        self._outcome = (result, error)
+        self._done.set()
+
+    def wait(self) -> Any:
+        """The write's result once committed; its exception if it raised."""
+        self._done.wait()
+        result, error = self._outcome
+        if error is not None:
+            raise error
+        return result
+
+
 @dataclass(frozen=True)
 class _Pending:
     write: Write
     after: Callable[[Any], None] | None
-    loop: asyncio.AbstractEventLoop
-    future: asyncio.Future
+    loop: asyncio.AbstractEventLoop | None  # None: a thread's write, settled through its Waiter
+    future: asyncio.Future | Waiter
 
 
 class GroupCommit:
@@ -59,6 +79,13 @@ class GroupCommit:
         future = loop.create_future()
         self._queue.put(_Pending(write, after, loop, future))
         return await future
+
+    def post(self, write: Write) -> Waiter:
+        """Hand a write over from a thread without waiting for it (a runner's record of a quick run, committed
+        with the submissions of the moment while the runner goes on to the next)."""
+        waiter = Waiter()
+        self._queue.put(_Pending(write, None, None, waiter))
+        return waiter
 
     def stop(self) -> None:
         """Commit what is waiting, then end the thread."""
@@ -98,7 +125,10 @@ class GroupCommit:
                     log.exception("after a group commit")
         by_loop: dict[asyncio.AbstractEventLoop, list] = {}
         for pending, result, error in outcomes:
-            by_loop.setdefault(pending.loop, []).append((pending.future, result, error))
+            if pending.loop is None:
+                pending.future.settle(result, error)
+            else:
+                by_loop.setdefault(pending.loop, []).append((pending.future, result, error))
         for loop, settled in by_loop.items():
             try:
                 loop.call_soon_threadsafe(_settle, settled)  # one wake-up of the loop per commit

@@ -12,19 +12,20 @@ import numpy as np
 
 from raydamp.systems.system import NotCompiled, compiled_elsewhere
 
-from .checks import CheckPool, ChecksBusy
+from .checks import CheckPool, ChecksBusy, checked_inline
 from .config import Settings
 from .files import FILE_COLUMNS_ADDED, FILES_TABLE, FileStore, file_resolver
 from .problems import JobError, RaydampCall, build_call, planned_steps
 from .runner import Outcome, Run
 from .schemas import JobSpec, normalise_stored
+from .group_commit import Waiter
 from .store import TaskRecord, TaskStore
 
 __all__ = ["JobStore", "JobRecord", "JobWork", "TrajectoryArrays", "StoredTrajectory"]
 
 _FLOAT = np.dtype("<f8")
-# Steps x coordinates below which a run reports no live progress (milliseconds of work for a built-in model).
-_LIVE_PROGRESS_WORK = 100_000  # the blob format: little-endian float64, row-major
+# Steps x coordinates of a built-in model's run below which it is quick (JobWork.quick): milliseconds of work.
+_QUICK_WORK = 100_000  # the blob format: little-endian float64, row-major
 _TABLES = """
 CREATE TABLE IF NOT EXISTS trajectories (
     job_id TEXT PRIMARY KEY REFERENCES jobs(id) ON DELETE CASCADE,
@@ -133,16 +134,17 @@ class JobStore(TaskStore[JobRecord], FileStore):
 
     def finish(self, job_id: str, status: str, *, summary: dict[str, Any] | None = None, error: str | None = None,
                failed_step: int | None = None, trajectory: TrajectoryArrays | None = None,
-               progress: float | None = None) -> None:
-        """Record the end of a run and its saved points in one transaction: all of it or none."""
+               progress: float | None = None, unclaimed_since: str | None = None) -> Waiter | None:
+        """Record the end of a run and its saved points in one transaction: all of it or none (unclaimed_since:
+        TaskStore.finish)."""
         row = None if trajectory is None else (
             "INSERT OR REPLACE INTO trajectories (job_id, points, dim, momenta, t, q, p, energy, momentum, work, "
             "load_work) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
             (job_id, *trajectory.q.shape, trajectory.momentum.shape[1],
              *(_blob(getattr(trajectory, name)) for name in ("t", "q", "p", "energy", "momentum", "work",
                                                               "load_work"))))
-        super().finish(job_id, status, error=error, progress=1.0 if status == "completed" else progress, also=row,
-                       summary=summary, failed_step=failed_step)
+        return super().finish(job_id, status, error=error, progress=1.0 if status == "completed" else progress,
+                              also=row, unclaimed_since=unclaimed_since, summary=summary, failed_step=failed_step)
 
     def trajectory(self, job_id: str) -> TrajectoryArrays | None:
         row = self.db.connection().execute("SELECT * FROM trajectories WHERE job_id = ?", (job_id,)).fetchone()
@@ -160,6 +162,11 @@ class JobStore(TaskStore[JobRecord], FileStore):
                                  "FROM trajectories WHERE job_id = ?", (job_id,))
         return (found[0], StoredTrajectory(*found[1][:4], has_work=bool(found[1][4]),
                                            has_load_work=bool(found[1][5]))) if found else None
+
+
+def _dim(spec: JobSpec) -> int:
+    """A built-in model's coordinates, read from its initial state (numbers: checks.checked_inline)."""
+    return max(len(spec.initial_state.q), len(spec.initial_state.p), 1)
 
 
 class JobWork:
@@ -203,16 +210,22 @@ class JobWork:
                 raise
         return False
 
+    def quick(self, record: JobRecord) -> bool:
+        """A run of milliseconds: a built-in model without a load (nothing to compile or read) and fewer than
+        10^5 steps x coordinates. It reports no live progress (raydamp calls progress about 100 times a run,
+        each call taking the interpreter lock from the C++ loop: a fifth of the server's CPU per small job, for
+        a progress nobody sees; a cancel still stops it, the token being read without the lock), and the
+        runner records it without a claim (Runner._run_quick)."""
+        spec = JobSpec.model_validate(record.spec)
+        return checked_inline(spec) and planned_steps(spec) * _dim(spec) < _QUICK_WORK
+
     def run(self, record: JobRecord, run: Run) -> Outcome:
         spec = JobSpec.model_validate(record.spec)
         call = self._call(spec, run)
         if call is None:
             return Outcome("cancelled", None, run.progress)
-        # raydamp calls progress about 100 times a run, each call taking the interpreter lock from the C++ loop:
-        # for a run of milliseconds that was a fifth of the server's CPU per job, for a progress nobody sees.
-        # Such a run reports only its end (a cancel still stops it: the token is read without the lock).
-        small = planned_steps(spec) * call.model.dim < _LIVE_PROGRESS_WORK
-        solution = call.run(progress=None if small else run.report, cancel=run.token)
+        quick = checked_inline(spec) and planned_steps(spec) * call.model.dim < _QUICK_WORK
+        solution = call.run(progress=None if quick else run.report, cancel=run.token)
         result = {"summary": solution.summary(), "trajectory": TrajectoryArrays(
             t=solution.t, q=solution.q, p=solution.p, energy=solution.energy, momentum=solution.momentum,
             work=solution.work, load_work=solution.load_work)}

@@ -20,8 +20,10 @@ from typing import TYPE_CHECKING, Any, Protocol
 import raydamp
 
 from .config import Settings
+from .store import now
 
 if TYPE_CHECKING:
+    from .group_commit import Waiter
     from .store import TaskRecord, TaskStore
 
 __all__ = ["Runner", "Run", "Outcome", "Work"]
@@ -72,6 +74,10 @@ class Work(Protocol):
 
     threads: int
     fraction: bool  # progress is done / total (a job's steps); else the count done (a sweep's members)
+
+    def quick(self, record: TaskRecord) -> bool:
+        """A run of milliseconds, recorded without a claim (Runner._run_quick)."""
+        ...
 
     def run(self, record: TaskRecord, run: Run) -> Outcome: ...
 
@@ -140,12 +146,14 @@ class Runner:
     # ---- worker threads ----
 
     def _serve(self) -> None:
+        committing: Waiter | None = None  # this thread's last quick run, its record being committed
         while True:
             task_id = self._queue.get()
             if task_id is None or self._stopping.is_set():
+                self._settle(committing)
                 return  # a task still queued stays "queued" in the store and is recovered at the next start
             try:
-                self._run(task_id)
+                committing = self._run(task_id, committing)
             except Exception as error:  # a worker outlives any one task
                 log.exception("%s %s: internal error", self._store.TABLE, task_id)
                 try:
@@ -153,6 +161,14 @@ class Runner:
                 except sqlite3.Error:
                     log.exception("%s %s: could not record the failure; it is re-run at the next start",
                                   self._store.TABLE, task_id)
+
+    def _settle(self, committing: Waiter | None) -> None:
+        if committing is None:
+            return
+        try:
+            committing.wait()
+        except sqlite3.Error:  # still queued in the store: run again at the next start
+            log.exception("%s: could not record a quick run; it is run again at the next start", self._store.TABLE)
 
     def _retain(self) -> None:
         """The retention pass: at start, after runs finish (at most once a second), and periodically."""
@@ -176,32 +192,58 @@ class Runner:
         except sqlite3.Error:  # the stored progress is advisory; never stop a run for it
             log.warning("%s %s: could not save progress", self._store.TABLE, task_id, exc_info=True)
 
-    def _run(self, task_id: str) -> None:
+    def _run(self, task_id: str, committing: Waiter | None) -> Waiter | None:
+        """Run the task; returns the Waiter of the record of a quick run still being committed (else the one
+        given, or None once it is settled)."""
         run = Run(save=lambda progress: self._save_progress(task_id, progress),
                   every=self._settings.progress_save_seconds, fraction=self._work.fraction, stopping=self._stopping)
         # Registered before the claim, so a cancel arriving once the task is "running" always finds the token.
         with self._lock:
             self._active[task_id] = run
         try:
+            record = self._store.get(task_id)
+            if record is None or record.status != "queued":
+                return committing  # cancelled while queued (or removed)
+            if self._work.quick(record):
+                return self._run_quick(record, run, committing)
             record = self._store.claim(task_id)
             if record is None:
-                return  # cancelled while queued
+                return committing  # cancelled while queued
             if record.cancel_requested:
                 run.cancelled_by_user = True
                 run.token.cancel()
             if self._stopping.is_set():
                 self._store.requeue(task_id)
-                return
-            try:
-                outcome = self._work.run(record, run)
-            except ValueError as error:  # the spec passed the checks at submission (a file named has gone since)
-                outcome = Outcome("failed", str(error))
+                return committing
+            outcome = self._outcome(record, run)
             if outcome.status == "cancelled" and run.interrupted:
                 self._store.requeue(task_id)
             else:
                 self._store.finish(task_id, outcome.status, error=outcome.error, progress=outcome.progress,
                                    **outcome.result)
+            return committing
         finally:
             with self._lock:
                 self._active.pop(task_id, None)
             self._retention_wake.set()
+
+    def _run_quick(self, record: TaskRecord, run: Run, committing: Waiter | None) -> Waiter | None:
+        """A run of milliseconds, made while its task is still "queued" in the store and recorded as it ends:
+        queued -> completed (or failed) and its result in one write, which the group commit adds to the
+        submissions' next transaction, while this thread goes on. A claim and a finish were two transactions of
+        their own, each more than the run. A cancel meanwhile wins (the task is then cancelled in the store, and
+        the write changes nothing); a crash before the commit leaves the task queued, to run at the next start.
+        At most one such record per worker is uncommitted (it holds the run's arrays)."""
+        started = now()
+        outcome = self._outcome(record, run)
+        if outcome.status == "cancelled" and run.interrupted:
+            return committing  # still queued in the store: it runs at the next start
+        self._settle(committing)
+        return self._store.finish(record.id, outcome.status, error=outcome.error, progress=outcome.progress,
+                                  unclaimed_since=started, **outcome.result)
+
+    def _outcome(self, record: TaskRecord, run: Run) -> Outcome:
+        try:
+            return self._work.run(record, run)
+        except ValueError as error:  # the spec passed the checks at submission (a file named has gone since)
+            return Outcome("failed", str(error))

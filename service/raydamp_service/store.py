@@ -22,7 +22,7 @@ from datetime import datetime, timezone
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar, Generic, TypeVar
 
-from .group_commit import GroupCommit
+from .group_commit import GroupCommit, Waiter
 
 if TYPE_CHECKING:
     from .config import Settings
@@ -329,14 +329,32 @@ class TaskStore(Generic[Record]):
         self._change(task_id, "('running')", f"{self.PROGRESS} = ?", progress)
 
     def finish(self, task_id: str, status: str, *, error: str | None = None, progress: float | None = None,
-               also: tuple[str, tuple] | None = None, **columns: Any) -> None:
+               also: tuple[str, tuple] | None = None, unclaimed_since: str | None = None, **columns: Any
+               ) -> Waiter | None:
         """Record the end of a run: its result in the kind's columns (a dict as JSON), and one more statement
-        (a row of the kind's other table); all of it or none."""
+        (a row of the kind's other table); all of it or none.
+
+        unclaimed_since: the run was made without a claim (a quick one: Runner), begun at that time. Then the
+        task goes from queued straight to its end (attempts + 1), unless a cancel came first (nothing is
+        written), through the group commit: returns its Waiter at once."""
         assert status in FINAL_STATUSES
-        values = (json.dumps(value) if isinstance(value, dict) else value for value in columns.values())
-        self._change(task_id, UNFINISHED_SQL, f"status = ?, error = ?, finished_at = ?, {self.PROGRESS} = "
-                     f"COALESCE(?, {self.PROGRESS}){''.join(f', {name} = ?' for name in columns)}",
-                     status, error, now(), progress, *values, also=also)
+        values = tuple(json.dumps(value) if isinstance(value, dict) else value for value in columns.values())
+        changes = (f"status = ?, error = ?, finished_at = ?, {self.PROGRESS} = COALESCE(?, {self.PROGRESS})"
+                   f"{''.join(f', {name} = ?' for name in columns)}")
+        if unclaimed_since is None:
+            self._change(task_id, UNFINISHED_SQL, changes, status, error, now(), progress, *values, also=also)
+            return None
+        update = (f"UPDATE {self.TABLE} SET {changes}, started_at = ?, attempts = attempts + 1 "
+                  "WHERE id = ? AND status = 'queued'")
+        args = (status, error, now(), progress, *values, unclaimed_since, task_id)
+
+        def write(db: sqlite3.Connection, batch: dict) -> bool:
+            changed = db.execute(update, args).rowcount
+            if changed and also is not None:
+                db.execute(*also)
+            return bool(changed)
+
+        return self.db.writer.post(write)
 
     def request_cancel(self, task_id: str) -> Record | None:
         """A queued task is cancelled at once; a running one is flagged (the runner stops it)."""

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import asyncio
 import sqlite3
+import time
 
 import pytest
 from raydamp_service.jobs import JobStore
@@ -123,3 +124,72 @@ def test_closing_the_store_commits_what_waits(store):
 
     records = asyncio.run(then_close())
     assert len(committed(store)) == 20 and len(handed) == 20 and None not in records
+
+
+def test_a_quick_run_goes_from_queued_to_its_end_in_one_write_unless_cancelled_first(store):
+    """Runner._run_quick: a run of milliseconds is recorded without a claim, by one guarded write through the
+    group commit: queued -> completed with attempts 1 and its start time; a cancel that came first wins."""
+    import numpy as np
+    from raydamp_service.jobs import TrajectoryArrays
+    from raydamp_service.store import now
+
+    arrays = TrajectoryArrays(t=np.arange(3.0), q=np.ones((3, 1)), p=np.zeros((3, 1)), energy=np.full(3, 2.0),
+                              momentum=np.empty((3, 0)), work=np.zeros(3))
+    ran, cancelled = store.create(SPEC), store.create(SPEC)
+    started = now()
+    assert store.finish(ran.id, "completed", summary={"steps": 2}, trajectory=arrays, unclaimed_since=started).wait()
+    record = store.get(ran.id)
+    assert (record.status, record.attempts, record.started_at, record.progress, record.summary) == (
+        "completed", 1, started, 1.0, {"steps": 2})
+    assert record.started_at <= record.finished_at and committed(store)[ran.id] == "completed"
+    np.testing.assert_array_equal(store.trajectory(ran.id).q, arrays.q)
+
+    store.request_cancel(cancelled.id)  # while it ran: cancelled in the store at once
+    assert not store.finish(cancelled.id, "completed", summary={"steps": 2}, trajectory=arrays,
+                            unclaimed_since=now()).wait()
+    record = store.get(cancelled.id)
+    assert (record.status, record.attempts, record.summary, record.has_trajectory) == ("cancelled", 0, None, False)
+
+
+def test_a_worker_holds_at_most_one_uncommitted_quick_record(store, tmp_path, monkeypatch):
+    """Runner._run_quick waits for its previous record's commit before handing over the next (each holds a
+    run's arrays): with the writer stalled, the second quick run's record is not handed over."""
+    import math
+    import threading
+
+    from raydamp_service.config import Settings
+    from raydamp_service.runner import Runner
+
+    stall = threading.Event()
+    transaction = store.db.transaction
+
+    def stalled():
+        stall.wait(30)
+        return transaction()
+
+    small = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "step_size": 0.01,
+             "n_steps": 100, "initial_state": {"q": [0.9 * math.pi], "p": [0.0]}}
+    runner = Runner(store, Settings(db=tmp_path / "jobs.sqlite3", workers=1))
+    handed = []
+    finish = store.finish
+    monkeypatch.setattr(store, "finish", lambda *args, **kw: (handed.append(args[0]), finish(*args, **kw))[1])
+    first, second, third = (store.create(small) for _ in range(3))
+    runner.start()
+    try:
+        monkeypatch.setattr(store.db, "transaction", stalled)
+        for job in (first, second, third):
+            runner.submit(job.id)
+        deadline = time.monotonic() + 30
+        while runner.progress(second.id) is None and time.monotonic() < deadline:
+            time.sleep(0.01)  # the second run is under way (its record waits for the first's commit)
+        time.sleep(0.2)
+        assert handed == [first.id]
+        assert committed(store) == {job.id: "queued" for job in (first, second, third)}
+        stall.set()
+        while not all(status == "completed" for status in committed(store).values()):
+            assert time.monotonic() < deadline
+            time.sleep(0.01)
+        assert handed == [first.id, second.id, third.id]
+    finally:
+        stall.set()
+        runner.stop()
