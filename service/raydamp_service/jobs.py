@@ -3,6 +3,7 @@ blobs in a table of their own), the uploaded Matrix Market files its system may 
 
 from __future__ import annotations
 
+import functools
 import math
 import sqlite3
 from dataclasses import dataclass
@@ -45,6 +46,11 @@ class JobRecord(TaskRecord):
     summary: dict[str, Any] | None = None
     failed_step: int | None = None
     has_trajectory: bool = False
+
+    @functools.cached_property
+    def job_spec(self) -> JobSpec:
+        """The stored spec as a JobSpec, validated once per record (a quick run asks twice: JobWork)."""
+        return JobSpec.model_validate(self.spec)
 
 
 @dataclass(frozen=True)
@@ -216,11 +222,11 @@ class JobWork:
         each call taking the interpreter lock from the C++ loop: a fifth of the server's CPU per small job, for
         a progress nobody sees; a cancel still stops it, the token being read without the lock), and the
         runner records it without a claim (Runner._run_quick)."""
-        spec = JobSpec.model_validate(record.spec)
+        spec = record.job_spec
         return checked_inline(spec) and planned_steps(spec) * _dim(spec) < _QUICK_WORK
 
     def run(self, record: JobRecord, run: Run) -> Outcome:
-        spec = JobSpec.model_validate(record.spec)
+        spec = record.job_spec
         call = self._call(spec, run)
         if call is None:
             return Outcome("cancelled", None, run.progress)

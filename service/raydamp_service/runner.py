@@ -89,7 +89,8 @@ class Runner:
         self._store = store
         self._settings = settings
         self._work: Work = work if work is not None else store.work(settings)
-        self._queue: queue.Queue[str | None] = queue.Queue()
+        # (id, the row as just stored by a submission, or None: read it from the store), or None: stop.
+        self._queue: queue.Queue[tuple[str, TaskRecord | None] | None] = queue.Queue()
         self._threads: list[threading.Thread] = []
         self._active: dict[str, Run] = {}
         self._lock = threading.Lock()
@@ -111,7 +112,7 @@ class Runner:
         if recovered:
             log.info("re-queued %d %s left queued or running by a previous process", len(recovered), self._store.TABLE)
         for task_id in recovered:
-            self._queue.put(task_id)
+            self._queue.put((task_id, None))
 
     def stop(self) -> None:
         """Interrupt the runs; their tasks go back to "queued" and run again at the next start."""
@@ -128,8 +129,9 @@ class Runner:
         self._threads.clear()
         self._work.close()
 
-    def submit(self, task_id: str) -> None:
-        self._queue.put(task_id)
+    def submit(self, task_id: str, record: TaskRecord | None = None) -> None:
+        """Queue a task; record, its row as just stored (a submission), spares a quick run reading it back."""
+        self._queue.put((task_id, record))
 
     def cancel(self, task_id: str) -> None:
         with self._lock:
@@ -148,12 +150,13 @@ class Runner:
     def _serve(self) -> None:
         committing: Waiter | None = None  # this thread's last quick run, its record being committed
         while True:
-            task_id = self._queue.get()
-            if task_id is None or self._stopping.is_set():
+            task = self._queue.get()
+            if task is None or self._stopping.is_set():
                 self._settle(committing)
                 return  # a task still queued stays "queued" in the store and is recovered at the next start
+            task_id, stored = task
             try:
-                committing = self._run(task_id, committing)
+                committing = self._run(task_id, stored, committing)
             except Exception as error:  # a worker outlives any one task
                 log.exception("%s %s: internal error", self._store.TABLE, task_id)
                 try:
@@ -192,16 +195,18 @@ class Runner:
         except sqlite3.Error:  # the stored progress is advisory; never stop a run for it
             log.warning("%s %s: could not save progress", self._store.TABLE, task_id, exc_info=True)
 
-    def _run(self, task_id: str, committing: Waiter | None) -> Waiter | None:
-        """Run the task; returns the Waiter of the record of a quick run still being committed (else the one
-        given, or None once it is settled)."""
+    def _run(self, task_id: str, stored: TaskRecord | None, committing: Waiter | None) -> Waiter | None:
+        """Run the task (stored: its row as submitted, else read here); returns the Waiter of the record of a
+        quick run still being committed (else the one given)."""
         run = Run(save=lambda progress: self._save_progress(task_id, progress),
                   every=self._settings.progress_save_seconds, fraction=self._work.fraction, stopping=self._stopping)
         # Registered before the claim, so a cancel arriving once the task is "running" always finds the token.
         with self._lock:
             self._active[task_id] = run
         try:
-            record = self._store.get(task_id)
+            # A row handed over by its submission may have been cancelled since: a quick run of it then records
+            # nothing (its write expects "queued"), and a claim fails.
+            record = stored if stored is not None else self._store.get(task_id)
             if record is None or record.status != "queued":
                 return committing  # cancelled while queued (or removed)
             if self._work.quick(record):

@@ -269,12 +269,12 @@ class TaskStore(Generic[Record]):
         with self.db.transaction() as db:
             return self._insert(spec, max_queued, columns)(db, {})
 
-    async def create_committed(self, spec: dict[str, Any], max_queued: int | None, then: Callable[[str], None],
+    async def create_committed(self, spec: dict[str, Any], max_queued: int | None, then: Callable[[Record], None],
                                **columns: Any) -> Record | None:
         """create() through the database's group commit: written with the other submissions of the moment and
-        returned once committed; then(id) runs after the commit, even if the caller has gone meanwhile."""
+        returned once committed; then(record) runs after the commit, even if the caller has gone meanwhile."""
         return await self.db.writer.write(self._insert(spec, max_queued, columns),
-                                          after=lambda record: record is not None and then(record.id))
+                                          after=lambda record: record is not None and then(record))
 
     def _insert(self, spec: dict[str, Any], max_queued: int | None, columns: dict[str, Any]
                 ) -> Callable[[sqlite3.Connection, dict], Record | None]:

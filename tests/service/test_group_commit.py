@@ -27,9 +27,14 @@ def committed(store: JobStore) -> dict[str, str]:
         return dict(db.execute("SELECT id, status FROM jobs").fetchall())
 
 
+def ids_to(handed: list[str]):
+    """The runner's part (then): note the id of each row handed over."""
+    return lambda record: handed.append(record.id)
+
+
 def submit_at_once(store: JobStore, count: int, max_queued: int | None, handed: list[str]) -> list:
     async def both():
-        return await asyncio.gather(*(store.create_committed({**SPEC, "n_steps": i}, max_queued, handed.append)
+        return await asyncio.gather(*(store.create_committed({**SPEC, "n_steps": i}, max_queued, ids_to(handed))
                                       for i in range(count)))
     return asyncio.run(both())
 
@@ -94,14 +99,14 @@ def test_a_failing_write_fails_alone_and_a_gone_caller_still_gets_its_job_run(st
 
     async def mixed():
         writer = store.db.writer
-        good = [store.create_committed({**SPEC, "n_steps": i}, None, handed.append) for i in range(5)]
+        good = [store.create_committed({**SPEC, "n_steps": i}, None, ids_to(handed)) for i in range(5)]
         results = await asyncio.gather(*good[:2], writer.write(broken), *good[2:], return_exceptions=True)
         # A caller cancelled while its insert waits (its client went away): the row is still stored and run.
-        gone = asyncio.ensure_future(store.create_committed({**SPEC, "n_steps": 99}, None, handed.append))
+        gone = asyncio.ensure_future(store.create_committed({**SPEC, "n_steps": 99}, None, ids_to(handed)))
         await asyncio.sleep(0)
         gone.cancel()
         await asyncio.gather(gone, return_exceptions=True)
-        await store.create_committed({**SPEC, "n_steps": 100}, None, handed.append)  # after the gone one
+        await store.create_committed({**SPEC, "n_steps": 100}, None, ids_to(handed))  # after the gone one
         return results
 
     results = asyncio.run(mixed())
@@ -117,7 +122,7 @@ def test_closing_the_store_commits_what_waits(store):
     handed: list[str] = []
 
     async def then_close():
-        pending = [asyncio.ensure_future(store.create_committed(SPEC, None, handed.append)) for _ in range(20)]
+        pending = [asyncio.ensure_future(store.create_committed(SPEC, None, ids_to(handed))) for _ in range(20)]
         await asyncio.sleep(0)  # all handed to the writer
         await asyncio.get_running_loop().run_in_executor(None, store.db.close)
         return await asyncio.gather(*pending)

@@ -81,3 +81,23 @@ def test_a_run_of_milliseconds_reports_only_its_end(store, tmp_path, monkeypatch
         runner.stop()
     assert finished.progress == 1.0 and finished.summary["steps"] == n_steps
     assert len(reports) == calls and (calls == 0 or reports[-1] == n_steps)
+
+
+def test_a_row_handed_over_by_its_submission_and_cancelled_since_records_nothing(store, tmp_path):
+    """A submission hands the runner the row it stored (no read back); cancelled before the run, the quick run's
+    write expects "queued" and changes nothing: still cancelled, never attempted, no result. The same row not
+    cancelled completes, attempted once."""
+    small = {**LONG_RUN, "n_steps": 100, "save_every": 1}
+    cancelled, kept = store.create(small), store.create(small)
+    store.request_cancel(cancelled.id)
+    runner = Runner(store, Settings(db=tmp_path / "jobs.sqlite3", workers=1))
+    runner.start()
+    try:
+        runner.submit(cancelled.id, cancelled)  # the row as it was stored: "queued"
+        runner.submit(kept.id, kept)
+        done = wait_until(lambda: (record := store.get(kept.id)).status == "completed" and record)
+    finally:
+        runner.stop()
+    assert (done.attempts, done.summary["steps"], done.has_trajectory) == (1, 100, True)
+    record = store.get(cancelled.id)
+    assert (record.status, record.attempts, record.summary, record.has_trajectory) == ("cancelled", 0, None, False)

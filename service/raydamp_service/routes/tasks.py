@@ -77,7 +77,8 @@ class Tasks:
                               spec: Any, limit: int, setting: str, settings: Settings, **columns: Any) -> Any:
         """queue() through the store's group commit, from the event loop: answered once the row is committed
         with the other submissions of the moment; the runner has it even if the client has gone."""
-        record = await store.create_committed(spec.model_dump(mode="json"), limit, runner.submit, **columns)
+        record = await store.create_committed(spec.model_dump(mode="json"), limit,
+                                              lambda stored: runner.submit(stored.id, stored), **columns)
         return self._queued(request, response, record, limit, setting, settings)
 
     def _queued(self, request: Request, response: Response, record: Any, limit: int, setting: str,
