@@ -156,14 +156,15 @@ def test_a_quick_run_goes_from_queued_to_its_end_in_one_write_unless_cancelled_f
     assert (record.status, record.attempts, record.summary, record.has_trajectory) == ("cancelled", 0, None, False)
 
 
-def test_a_worker_holds_at_most_one_uncommitted_quick_record(store, tmp_path, monkeypatch):
-    """Runner._run_quick waits for its previous record's commit before handing over the next (each holds a
-    run's arrays): with the writer stalled, the second quick run's record is not handed over."""
+def test_a_worker_holds_a_bounded_number_of_uncommitted_quick_records(store, tmp_path, monkeypatch):
+    """Runner._run_quick hands its records to the group commit without waiting, up to _UNCOMMITTED per worker
+    (each holds a run's arrays); then it waits for the oldest. With the writer stalled, a worker hands over
+    exactly _UNCOMMITTED records and the next run waits; released, all are committed."""
     import math
     import threading
 
     from raydamp_service.config import Settings
-    from raydamp_service.runner import Runner
+    from raydamp_service.runner import _UNCOMMITTED, Runner
 
     stall = threading.Event()
     transaction = store.db.transaction
@@ -178,23 +179,24 @@ def test_a_worker_holds_at_most_one_uncommitted_quick_record(store, tmp_path, mo
     handed = []
     finish = store.finish
     monkeypatch.setattr(store, "finish", lambda *args, **kw: (handed.append(args[0]), finish(*args, **kw))[1])
-    first, second, third = (store.create(small) for _ in range(3))
+    jobs = [store.create(small) for _ in range(_UNCOMMITTED + 3)]
     runner.start()
     try:
         monkeypatch.setattr(store.db, "transaction", stalled)
-        for job in (first, second, third):
+        for job in jobs:
             runner.submit(job.id)
+        waiting = jobs[_UNCOMMITTED]  # run, its record waiting for the oldest one's commit
         deadline = time.monotonic() + 30
-        while runner.progress(second.id) is None and time.monotonic() < deadline:
-            time.sleep(0.01)  # the second run is under way (its record waits for the first's commit)
+        while runner.progress(waiting.id) is None and time.monotonic() < deadline:
+            time.sleep(0.01)
         time.sleep(0.2)
-        assert handed == [first.id]
-        assert committed(store) == {job.id: "queued" for job in (first, second, third)}
+        assert handed == [job.id for job in jobs[:_UNCOMMITTED]]
+        assert committed(store) == {job.id: "queued" for job in jobs}
         stall.set()
         while not all(status == "completed" for status in committed(store).values()):
             assert time.monotonic() < deadline
             time.sleep(0.01)
-        assert handed == [first.id, second.id, third.id]
+        assert handed == [job.id for job in jobs]
     finally:
         stall.set()
         runner.stop()
