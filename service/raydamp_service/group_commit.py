@@ -1,8 +1,9 @@
 """Group commit: the inserts of concurrent submissions written by one thread and committed together.
 
-A submission on the event loop hands its insert to this thread and awaits it; the thread takes every insert
-waiting at that moment, writes them in one transaction and commits once, then answers them all with one
-wake-up of the event loop. A POST is answered only after that commit (WAL with synchronous=NORMAL: its row
+A submission on the event loop hands its insert to this thread and awaits it; the inserts of one turn of the
+loop are handed over together, at the turn's end (one wake-up of this thread for them all). The thread takes
+every write waiting at that moment (runners record their quick runs here too), writes them in one transaction
+and commits once, then answers them all with one wake-up of the event loop. A POST is answered only after that commit (WAL with synchronous=NORMAL: its row
 survives a crash of the process), so a 202 still means a stored job. Under load one commit serves tens of
 submissions, and a submission costs no hop to the thread pool and no turn on the store's write lock of its
 own (together they were about half of the server's CPU per small job, benchmarks/bench_service_load.py).
@@ -68,28 +69,56 @@ class GroupCommit:
 
     def __init__(self, database: Database):
         self._db = database
-        self._queue: queue.SimpleQueue[_Pending | None] = queue.SimpleQueue()
+        self._queue: queue.SimpleQueue[list[_Pending] | None] = queue.SimpleQueue()
+        self._turn: dict[asyncio.AbstractEventLoop, list[_Pending]] = {}  # what a loop's turn has to hand over
+        self._lock = threading.Lock()
+        self._stopped = False
         self._thread = threading.Thread(target=self._serve, name="raydamp-group-commit", daemon=True)
         self._thread.start()
 
     async def write(self, write: Write, after: Callable[[Any], None] | None = None) -> Any:
         """write's result once committed (its exception if it raised); then after(result) has run, on this
-        thread, whether or not the caller is still waiting."""
+        thread, whether or not the caller is still waiting. The writes of one turn of the event loop are
+        handed over together at its end: one wake-up of this thread for the requests the turn served."""
         loop = asyncio.get_running_loop()
         future = loop.create_future()
-        self._queue.put(_Pending(write, after, loop, future))
+        with self._lock:
+            self._refuse_if_stopped()
+            turn = self._turn.get(loop)
+            if turn is None:
+                turn = self._turn[loop] = []
+                loop.call_soon(self._hand_over, loop)
+            turn.append(_Pending(write, after, loop, future))
         return await future
+
+    def _hand_over(self, loop: asyncio.AbstractEventLoop) -> None:
+        with self._lock:
+            turn = self._turn.pop(loop, None)
+            if turn:  # else stop() has handed it over
+                self._queue.put(turn)
 
     def post(self, write: Write) -> Waiter:
         """Hand a write over from a thread without waiting for it (a runner's record of a quick run, committed
         with the submissions of the moment while the runner goes on to the next)."""
         waiter = Waiter()
-        self._queue.put(_Pending(write, None, None, waiter))
+        with self._lock:
+            self._refuse_if_stopped()
+            self._queue.put([_Pending(write, None, None, waiter)])
         return waiter
 
+    def _refuse_if_stopped(self) -> None:
+        if self._stopped:
+            raise sqlite3.ProgrammingError("the job database is closed (the service is stopping)")
+
     def stop(self) -> None:
-        """Commit what is waiting, then end the thread."""
-        self._queue.put(None)
+        """Commit what is waiting (the current turns' writes too), then end the thread; writes handed over
+        later are refused."""
+        with self._lock:
+            self._stopped = True
+            for turn in self._turn.values():
+                self._queue.put(turn)
+            self._turn.clear()
+            self._queue.put(None)
         self._thread.join(timeout=30)
 
     def _serve(self) -> None:
@@ -98,16 +127,16 @@ class GroupCommit:
             first = self._queue.get()
             if first is None:
                 return
-            batch = [first]
+            batch = first
             while len(batch) < _MOST:
                 try:
-                    pending = self._queue.get_nowait()
+                    more = self._queue.get_nowait()
                 except queue.Empty:
                     break
-                if pending is None:
+                if more is None:
                     stopping = True
                     break
-                batch.append(pending)
+                batch.extend(more)
             self._commit(batch)
 
     def _commit(self, batch: list[_Pending]) -> None:
