@@ -37,7 +37,7 @@ from raydamp.systems.system import load_compiled
 
 from .config import Settings
 from .files import ParsedFiles
-from .problems import JobError, check_spec, check_sweep_spec
+from .problems import JobError, RaydampCall, check_spec, check_sweep_spec
 from .schemas import JobSpec, SweepSpec
 
 __all__ = ["CheckPool", "ChecksBusy", "checked_inline", "isolated"]
@@ -235,13 +235,14 @@ class CheckPool:
         for process in processes:
             process.end()
 
-    def job(self, spec: JobSpec, files=None) -> None:
+    def job(self, spec: JobSpec, files=None) -> RaydampCall | None:
         """Every check of a job (problems.check_spec); raises JobError naming the field, or ChecksBusy. The
-        functions the check compiled are loaded here, for the run."""
+        functions the check compiled are loaded here, for the run. Returns the run a check made in this
+        process built (None for a check process's)."""
         if not isolated(spec):
-            check_spec(spec, self._settings, files=files)
-            return
+            return check_spec(spec, self._settings, files=files)
         _load(self._run("job", spec, ("system",)))
+        return None
 
     def sweep(self, spec: SweepSpec) -> int:
         """Every check of a sweep (problems.check_sweep_spec); its number of members."""

@@ -52,6 +52,18 @@ class JobRecord(TaskRecord):
         """The stored spec as a JobSpec, validated once per record (a quick run asks twice: JobWork)."""
         return JobSpec.model_validate(self.spec)
 
+    @functools.cached_property
+    def checked_call(self) -> RaydampCall | None:
+        """The run the submission's check built in this process (checked()), else None: the runner builds it."""
+        return None
+
+    def checked(self, spec: JobSpec, call: RaydampCall | None) -> JobRecord:
+        """This record as just stored, with the spec validated at submission and the run its check built: a
+        quick run then neither validates the spec again nor builds the model (a tenth and more of its CPU)."""
+        self.__dict__["job_spec"] = spec  # the cached properties' values (not fields: no columns of the table)
+        self.__dict__["checked_call"] = call
+        return self
+
 
 @dataclass(frozen=True)
 class TrajectoryArrays:
@@ -227,7 +239,7 @@ class JobWork:
 
     def run(self, record: JobRecord, run: Run) -> Outcome:
         spec = record.job_spec
-        call = self._call(spec, run)
+        call = record.checked_call or self._call(spec, run)
         if call is None:
             return Outcome("cancelled", None, run.progress)
         quick = checked_inline(spec) and planned_steps(spec) * call.model.dim < _QUICK_WORK

@@ -179,9 +179,9 @@ def test_a_worker_holds_a_bounded_number_of_uncommitted_quick_records(store, tmp
     handed = []
     finish = store.finish
     monkeypatch.setattr(store, "finish", lambda *args, **kw: (handed.append(args[0]), finish(*args, **kw))[1])
-    jobs = [store.create(small) for _ in range(_UNCOMMITTED + 3)]
-    runner.start()
+    runner.start()  # before the jobs exist: its recovery at start would queue them too
     try:
+        jobs = [store.create(small) for _ in range(_UNCOMMITTED + 3)]
         monkeypatch.setattr(store.db, "transaction", stalled)
         for job in jobs:
             runner.submit(job.id)

@@ -23,7 +23,7 @@ from starlette.concurrency import run_in_threadpool
 from ..checks import CheckPool, ChecksBusy, checked_inline
 from ..deps import RunnerDep, SettingsDep, StoreDep
 from ..files import file_resolver
-from ..problems import JobError
+from ..problems import JobError, RaydampCall
 from ..runner import Runner
 from ..schemas import JobCreated, JobList, JobListItem, JobSpec, JobStatus, JobView, Trajectory
 from ..config import Settings
@@ -79,18 +79,19 @@ async def submit_job(spec: JobSpec, request: Request, response: Response) -> Job
     store, runner, settings, checks = state.store, state.runner, state.settings, state.checks
     spec = with_seed(spec)
     if checked_inline(spec):  # microseconds: a hop to the thread pool would cost more than the check
-        _check(spec, store, settings, checks)
-    else:  # waits for a check process, or reads uploaded files
-        await run_in_threadpool(_check, spec, store, settings, checks)
+        call = _check(spec, store, settings, checks)
+    else:  # waits for a check process, or reads uploaded files (whose arrays a queued job should not hold)
+        call = await run_in_threadpool(_check, spec, store, settings, checks) and None
     # The insert goes to the store's group commit (no thread pool hop either); the answer once it is committed.
+    # The runner gets the row with the spec validated here and the built-in model's run the check built.
     record = await JOBS.queue_committed(request, response, store, runner, spec, settings.max_queued, "max_queued",
-                                        settings)
+                                        settings, prepare=lambda stored: stored.checked(spec, call))
     return JobCreated(id=record.id, status=record.status)
 
 
-def _check(spec: JobSpec, store: JobStore, settings: Settings, checks: CheckPool) -> None:
+def _check(spec: JobSpec, store: JobStore, settings: Settings, checks: CheckPool) -> RaydampCall | None:
     try:
-        checks.job(spec, files=file_resolver(store))
+        return checks.job(spec, files=file_resolver(store))
     except JobError as error:
         raise invalid(error, spec.model_dump()) from None
     except ChecksBusy:

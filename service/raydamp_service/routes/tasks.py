@@ -74,11 +74,15 @@ class Tasks:
         return self._queued(request, response, record, limit, setting, settings)
 
     async def queue_committed(self, request: Request, response: Response, store: TaskStore, runner: Runner,
-                              spec: Any, limit: int, setting: str, settings: Settings, **columns: Any) -> Any:
+                              spec: Any, limit: int, setting: str, settings: Settings,
+                              prepare: Callable[[Any], Any] | None = None, **columns: Any) -> Any:
         """queue() through the store's group commit, from the event loop: answered once the row is committed
-        with the other submissions of the moment; the runner has it even if the client has gone."""
-        record = await store.create_committed(spec.model_dump(mode="json"), limit,
-                                              lambda stored: runner.submit(stored.id, stored), **columns)
+        with the other submissions of the moment; the runner has it (as prepare(record), if given) even if
+        the client has gone."""
+        def hand_over(stored: Any) -> None:
+            runner.submit(stored.id, prepare(stored) if prepare is not None else stored)
+
+        record = await store.create_committed(spec.model_dump(mode="json"), limit, hand_over, **columns)
         return self._queued(request, response, record, limit, setting, settings)
 
     def _queued(self, request: Request, response: Response, record: Any, limit: int, setting: str,
