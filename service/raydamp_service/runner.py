@@ -1,9 +1,10 @@
 """The runner of one kind of task: worker threads that take queued ids, claim the task in its store, run it
 through the kind's work (jobs.JobWork, sweeps.SweepWork) and record how it ended.
 
-HTTP handlers only write a row and put its id on the queue. A cancel stops the run through its token and
-it ends "cancelled" with what it computed; at shutdown the runs are interrupted and handed back to the
-queue, to run again from the start at the next start (as are those a killed process left running).
+HTTP handlers only write a row and put its id (with the row) on the queue. A cancel stops the run through its
+token and it ends "cancelled" with what it computed; at shutdown the runs are interrupted and handed back to
+the queue, to run again from the start at the next start (as are those a killed process left running). A
+quick run (JobWork.quick) is not claimed: made while its task is still queued, it is recorded by one write.
 """
 
 from __future__ import annotations
@@ -93,7 +94,7 @@ class Runner:
         self._settings = settings
         self._work: Work = work if work is not None else store.work(settings)
         # (id, the row as just stored by a submission, or None: read it from the store), or None: stop.
-        self._queue: queue.Queue[tuple[str, TaskRecord | None] | None] = queue.Queue()
+        self._queue: queue.SimpleQueue[tuple[str, TaskRecord | None] | None] = queue.SimpleQueue()
         self._threads: list[threading.Thread] = []
         self._active: dict[str, Run] = {}
         self._lock = threading.Lock()
