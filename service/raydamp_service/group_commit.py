@@ -3,10 +3,11 @@
 A submission on the event loop hands its insert to this thread and awaits it; the inserts of one turn of the
 loop are handed over together, at the turn's end (one wake-up of this thread for them all). The thread takes
 every write waiting at that moment (runners record their quick runs here too), writes them in one transaction
-and commits once, then answers them all with one wake-up of the event loop. A POST is answered only after that commit (WAL with synchronous=NORMAL: its row
-survives a crash of the process), so a 202 still means a stored job. Under load one commit serves tens of
-submissions, and a submission costs no hop to the thread pool and no turn on the store's write lock of its
-own (together they were about half of the server's CPU per small job, benchmarks/bench_service_load.py).
+and commits once, then answers them all with one wake-up of the event loop. A POST is answered only after
+that commit (WAL with synchronous=NORMAL: its row survives a crash of the process), so a 202 still means a
+stored job. Under load one commit serves several submissions and runs, and a submission costs no hop to the
+thread pool and no turn on the store's write lock of its own (together they were about half of the server's
+CPU per small job, benchmarks/bench_service_load.py).
 
 What must happen once a row is stored (handing its id to the runner) runs here after the commit, not in the
 awaiting coroutine: a client that disconnects cancels its coroutine, and its stored job must still run.
