@@ -6,7 +6,9 @@ kind names its table, its own columns, and how it stores its result.
 
 One connection per thread (sqlite3 connections are not for sharing), WAL so that readers never
 wait for the writer. Every state change is one UPDATE guarded by the state it expects, so a
-cancel and a worker's claim cannot both win.
+cancel and a worker's claim cannot both win. Submissions' inserts (create_committed) and the records
+of quick runs (finish with unclaimed_since) go through the database's group commit (group_commit.py):
+one writer thread commits those of the moment together.
 """
 
 from __future__ import annotations
