@@ -22,6 +22,7 @@ It prints figures and exits 0 whatever they are (a benchmark, not a test).
     .venv/bin/python benchmarks/bench_service_load.py --jobs 500 --fetch-seconds 10
     .venv/bin/python benchmarks/bench_service_load.py --fetch-seconds 0   # submission only
     .venv/bin/python benchmarks/bench_service_load.py --fetch-seconds 0 --client asyncio
+    RAYDAMP_ACCESS_LOG=false .venv/bin/python benchmarks/bench_service_load.py ...  # without the access log
 """
 
 from __future__ import annotations
@@ -301,8 +302,10 @@ def main() -> None:
                 drain(base, ids)
             # Wall-time latency depends on what else the 2 cores run; the server's CPU per job does not
             # (much): it bounds the throughput one GIL can give, and so the latency at concurrency 16.
+            access_log = os.environ.get("RAYDAMP_ACCESS_LOG", "true").lower() not in ("0", "false", "no", "off")
             print(f"server CPU: {1000 * (cpu_seconds(process.pid) - cpu) / max(1, len(ids)):.2f} ms per job "
-                  f"(submission and run, all threads)")
+                  f"(submission and run, all threads; access log {'on' if access_log else 'off'}: "
+                  "RAYDAMP_ACCESS_LOG)")
             http_floor(base, process.pid, args.jobs, args.concurrency)
             if args.fetch_seconds > 0:
                 large_fetches(base, process.pid, args.fetch_clients, args.fetch_seconds)

@@ -65,7 +65,7 @@ def main(argv: list[str] | None = None) -> None:
     sys.setswitchinterval(0.001)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     # One process only: the job queue and the cancel tokens live in it.
-    uvicorn.run(create_app(settings), host=settings.host, port=settings.port)
+    uvicorn.run(create_app(settings), host=settings.host, port=settings.port, access_log=settings.access_log)
 
 
 if __name__ == "__main__":

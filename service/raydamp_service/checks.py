@@ -37,10 +37,10 @@ from raydamp.systems.system import load_compiled
 
 from .config import Settings
 from .files import ParsedFiles
-from .problems import JobError, check_spec, check_sweep_spec
+from .problems import JobError, RaydampCall, check_spec, check_sweep_spec
 from .schemas import JobSpec, SweepSpec
 
-__all__ = ["CheckPool", "ChecksBusy", "isolated"]
+__all__ = ["CheckPool", "ChecksBusy", "checked_inline", "isolated"]
 
 log = logging.getLogger("raydamp_service.checks")
 
@@ -56,6 +56,15 @@ def isolated(spec: JobSpec) -> bool:
     a chain of expression bonds too, a structure parses its files and factorises M), and every job whose load
     has an expression (compiled like a system's)."""
     return spec.system is not None or _has_expression(spec.load) or _has_expression(spec.ground_motion)
+
+
+def checked_inline(spec: JobSpec) -> bool:
+    """Whether a job's check is light enough for the event loop: a built-in model without a load, its initial
+    state given as numbers (not files): its check (sizes, one trial step) is arithmetic on at most max_dim
+    coordinates, and reads no file."""
+    state = spec.initial_state
+    return (spec.system is None and spec.load is None and spec.ground_motion is None
+            and isinstance(getattr(state, "q", None), list) and isinstance(getattr(state, "p", None), list))
 
 
 def _has_expression(value) -> bool:
@@ -226,13 +235,14 @@ class CheckPool:
         for process in processes:
             process.end()
 
-    def job(self, spec: JobSpec, files=None) -> None:
+    def job(self, spec: JobSpec, files=None) -> RaydampCall | None:
         """Every check of a job (problems.check_spec); raises JobError naming the field, or ChecksBusy. The
-        functions the check compiled are loaded here, for the run."""
+        functions the check compiled are loaded here, for the run. Returns the run a check made in this
+        process built (None for a check process's)."""
         if not isolated(spec):
-            check_spec(spec, self._settings, files=files)
-            return
+            return check_spec(spec, self._settings, files=files)
         _load(self._run("job", spec, ("system",)))
+        return None
 
     def sweep(self, spec: SweepSpec) -> int:
         """Every check of a sweep (problems.check_sweep_spec); its number of members."""

@@ -100,6 +100,10 @@ class Settings(BaseSettings):
     max_sweep_bytes: int = Field(256 * 2**20, ge=1, le=900_000_000, description="a sweep's result size at most")
     max_queued_sweeps: int = Field(20, ge=1, description="queued sweeps beyond this get 429 with Retry-After")
 
+    # One line per request on stdout (uvicorn's access log); off saves about 0.1 ms of the server's CPU per
+    # request (benchmarks/bench_service_load.py prints both).
+    access_log: bool = Field(True, description="log every request (method, path, status) on stdout")
+
     # How often a run's progress is also written to the database (GET reads memory first).
     progress_save_seconds: float = Field(1.0, gt=0)
     # How long shutdown waits for interrupted runs to hand their jobs back to the queue.

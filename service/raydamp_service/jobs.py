@@ -3,6 +3,7 @@ blobs in a table of their own), the uploaded Matrix Market files its system may 
 
 from __future__ import annotations
 
+import functools
 import math
 import sqlite3
 from dataclasses import dataclass
@@ -12,17 +13,20 @@ import numpy as np
 
 from raydamp.systems.system import NotCompiled, compiled_elsewhere
 
-from .checks import CheckPool, ChecksBusy
+from .checks import CheckPool, ChecksBusy, checked_inline
 from .config import Settings
 from .files import FILE_COLUMNS_ADDED, FILES_TABLE, FileStore, file_resolver
-from .problems import JobError, RaydampCall, build_call
+from .problems import JobError, RaydampCall, build_call, planned_steps
 from .runner import Outcome, Run
 from .schemas import JobSpec, normalise_stored
+from .group_commit import Waiter
 from .store import TaskRecord, TaskStore
 
 __all__ = ["JobStore", "JobRecord", "JobWork", "TrajectoryArrays", "StoredTrajectory"]
 
-_FLOAT = np.dtype("<f8")  # the blob format: little-endian float64, row-major
+_FLOAT = np.dtype("<f8")
+# Steps x coordinates of a built-in model's run below which it is quick (JobWork.quick): milliseconds of work.
+_QUICK_WORK = 100_000  # the blob format: little-endian float64, row-major
 _TABLES = """
 CREATE TABLE IF NOT EXISTS trajectories (
     job_id TEXT PRIMARY KEY REFERENCES jobs(id) ON DELETE CASCADE,
@@ -42,6 +46,23 @@ class JobRecord(TaskRecord):
     summary: dict[str, Any] | None = None
     failed_step: int | None = None
     has_trajectory: bool = False
+
+    @functools.cached_property
+    def job_spec(self) -> JobSpec:
+        """The stored spec as a JobSpec, validated once per record (a quick run asks twice: JobWork)."""
+        return JobSpec.model_validate(self.spec)
+
+    @functools.cached_property
+    def checked_call(self) -> RaydampCall | None:
+        """The run the submission's check built in this process (checked()), else None: the runner builds it."""
+        return None
+
+    def checked(self, spec: JobSpec, call: RaydampCall | None) -> JobRecord:
+        """This record as just stored, with the spec validated at submission and the run its check built: a
+        quick run then neither validates the spec again nor builds the model (a tenth and more of its CPU)."""
+        self.__dict__["job_spec"] = spec  # the cached properties' values (not fields: no columns of the table)
+        self.__dict__["checked_call"] = call
+        return self
 
 
 @dataclass(frozen=True)
@@ -131,16 +152,17 @@ class JobStore(TaskStore[JobRecord], FileStore):
 
     def finish(self, job_id: str, status: str, *, summary: dict[str, Any] | None = None, error: str | None = None,
                failed_step: int | None = None, trajectory: TrajectoryArrays | None = None,
-               progress: float | None = None) -> None:
-        """Record the end of a run and its saved points in one transaction: all of it or none."""
+               progress: float | None = None, unclaimed_since: str | None = None) -> Waiter | None:
+        """Record the end of a run and its saved points in one transaction: all of it or none (unclaimed_since:
+        TaskStore.finish)."""
         row = None if trajectory is None else (
             "INSERT OR REPLACE INTO trajectories (job_id, points, dim, momenta, t, q, p, energy, momentum, work, "
             "load_work) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
             (job_id, *trajectory.q.shape, trajectory.momentum.shape[1],
              *(_blob(getattr(trajectory, name)) for name in ("t", "q", "p", "energy", "momentum", "work",
                                                               "load_work"))))
-        super().finish(job_id, status, error=error, progress=1.0 if status == "completed" else progress, also=row,
-                       summary=summary, failed_step=failed_step)
+        return super().finish(job_id, status, error=error, progress=1.0 if status == "completed" else progress,
+                              also=row, unclaimed_since=unclaimed_since, summary=summary, failed_step=failed_step)
 
     def trajectory(self, job_id: str) -> TrajectoryArrays | None:
         row = self.db.connection().execute("SELECT * FROM trajectories WHERE job_id = ?", (job_id,)).fetchone()
@@ -158,6 +180,11 @@ class JobStore(TaskStore[JobRecord], FileStore):
                                  "FROM trajectories WHERE job_id = ?", (job_id,))
         return (found[0], StoredTrajectory(*found[1][:4], has_work=bool(found[1][4]),
                                            has_load_work=bool(found[1][5]))) if found else None
+
+
+def _dim(spec: JobSpec) -> int:
+    """A built-in model's coordinates, read from its initial state (numbers: checks.checked_inline)."""
+    return max(len(spec.initial_state.q), len(spec.initial_state.p), 1)
 
 
 class JobWork:
@@ -201,11 +228,22 @@ class JobWork:
                 raise
         return False
 
+    def quick(self, record: JobRecord) -> bool:
+        """A run of milliseconds: a built-in model without a load (nothing to compile or read) and fewer than
+        10^5 steps x coordinates. It reports no live progress (raydamp calls progress about 100 times a run,
+        each call taking the interpreter lock from the C++ loop: a fifth of the server's CPU per small job, for
+        a progress nobody sees; a cancel still stops it, the token being read without the lock), and the
+        runner records it without a claim (Runner._run_quick)."""
+        spec = record.job_spec
+        return checked_inline(spec) and planned_steps(spec) * _dim(spec) < _QUICK_WORK
+
     def run(self, record: JobRecord, run: Run) -> Outcome:
-        call = self._call(JobSpec.model_validate(record.spec), run)
+        spec = record.job_spec
+        call = record.checked_call or self._call(spec, run)
         if call is None:
             return Outcome("cancelled", None, run.progress)
-        solution = call.run(progress=run.report, cancel=run.token)
+        quick = checked_inline(spec) and planned_steps(spec) * call.model.dim < _QUICK_WORK
+        solution = call.run(progress=None if quick else run.report, cancel=run.token)
         result = {"summary": solution.summary(), "trajectory": TrajectoryArrays(
             t=solution.t, q=solution.q, p=solution.p, energy=solution.energy, momentum=solution.momentum,
             work=solution.work, load_work=solution.load_work)}

@@ -1,9 +1,10 @@
 """The runner of one kind of task: worker threads that take queued ids, claim the task in its store, run it
 through the kind's work (jobs.JobWork, sweeps.SweepWork) and record how it ended.
 
-HTTP handlers only write a row and put its id on the queue. A cancel stops the run through its token and
-it ends "cancelled" with what it computed; at shutdown the runs are interrupted and handed back to the
-queue, to run again from the start at the next start (as are those a killed process left running).
+HTTP handlers only write a row and put its id (with the row) on the queue. A cancel stops the run through its
+token and it ends "cancelled" with what it computed; at shutdown the runs are interrupted and handed back to
+the queue, to run again from the start at the next start (as are those a killed process left running). A
+quick run (JobWork.quick) is not claimed: made while its task is still queued, it is recorded by one write.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ import queue
 import sqlite3
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol
@@ -20,13 +22,17 @@ from typing import TYPE_CHECKING, Any, Protocol
 import raydamp
 
 from .config import Settings
+from .store import now
 
 if TYPE_CHECKING:
+    from .group_commit import Waiter
     from .store import TaskRecord, TaskStore
 
 __all__ = ["Runner", "Run", "Outcome", "Work"]
 
 log = logging.getLogger("raydamp_service.runner")
+
+_UNCOMMITTED = 8  # quick runs' records a worker hands to the group commit before waiting for the oldest
 
 
 @dataclass
@@ -73,6 +79,10 @@ class Work(Protocol):
     threads: int
     fraction: bool  # progress is done / total (a job's steps); else the count done (a sweep's members)
 
+    def quick(self, record: TaskRecord) -> bool:
+        """A run of milliseconds, recorded without a claim (Runner._run_quick)."""
+        ...
+
     def run(self, record: TaskRecord, run: Run) -> Outcome: ...
 
     def close(self) -> None: ...
@@ -83,7 +93,8 @@ class Runner:
         self._store = store
         self._settings = settings
         self._work: Work = work if work is not None else store.work(settings)
-        self._queue: queue.Queue[str | None] = queue.Queue()
+        # (id, the row as just stored by a submission, or None: read it from the store), or None: stop.
+        self._queue: queue.SimpleQueue[tuple[str, TaskRecord | None] | None] = queue.SimpleQueue()
         self._threads: list[threading.Thread] = []
         self._active: dict[str, Run] = {}
         self._lock = threading.Lock()
@@ -105,7 +116,7 @@ class Runner:
         if recovered:
             log.info("re-queued %d %s left queued or running by a previous process", len(recovered), self._store.TABLE)
         for task_id in recovered:
-            self._queue.put(task_id)
+            self._queue.put((task_id, None))
 
     def stop(self) -> None:
         """Interrupt the runs; their tasks go back to "queued" and run again at the next start."""
@@ -122,8 +133,9 @@ class Runner:
         self._threads.clear()
         self._work.close()
 
-    def submit(self, task_id: str) -> None:
-        self._queue.put(task_id)
+    def submit(self, task_id: str, record: TaskRecord | None = None) -> None:
+        """Queue a task; record, its row as just stored (a submission), spares a quick run reading it back."""
+        self._queue.put((task_id, record))
 
     def cancel(self, task_id: str) -> None:
         with self._lock:
@@ -140,12 +152,15 @@ class Runner:
     # ---- worker threads ----
 
     def _serve(self) -> None:
+        committing: deque[Waiter] = deque()  # this thread's quick runs whose records are being committed
         while True:
-            task_id = self._queue.get()
-            if task_id is None or self._stopping.is_set():
+            task = self._queue.get()
+            if task is None or self._stopping.is_set():
+                self._settle(committing, 0)
                 return  # a task still queued stays "queued" in the store and is recovered at the next start
+            task_id, stored = task
             try:
-                self._run(task_id)
+                self._run(task_id, stored, committing)
             except Exception as error:  # a worker outlives any one task
                 log.exception("%s %s: internal error", self._store.TABLE, task_id)
                 try:
@@ -153,6 +168,15 @@ class Runner:
                 except sqlite3.Error:
                     log.exception("%s %s: could not record the failure; it is re-run at the next start",
                                   self._store.TABLE, task_id)
+
+    def _settle(self, committing: deque[Waiter], keep: int) -> None:
+        """Wait for the oldest records being committed until at most `keep` remain."""
+        while len(committing) > keep:
+            try:
+                committing.popleft().wait()
+            except sqlite3.Error:  # still queued in the store: run again at the next start
+                log.exception("%s: could not record a quick run; it is run again at the next start",
+                              self._store.TABLE)
 
     def _retain(self) -> None:
         """The retention pass: at start, after runs finish (at most once a second), and periodically."""
@@ -176,13 +200,23 @@ class Runner:
         except sqlite3.Error:  # the stored progress is advisory; never stop a run for it
             log.warning("%s %s: could not save progress", self._store.TABLE, task_id, exc_info=True)
 
-    def _run(self, task_id: str) -> None:
+    def _run(self, task_id: str, stored: TaskRecord | None, committing: deque[Waiter]) -> None:
+        """Run the task (stored: its row as submitted, else read here); a quick run's record being committed
+        joins `committing`."""
         run = Run(save=lambda progress: self._save_progress(task_id, progress),
                   every=self._settings.progress_save_seconds, fraction=self._work.fraction, stopping=self._stopping)
         # Registered before the claim, so a cancel arriving once the task is "running" always finds the token.
         with self._lock:
             self._active[task_id] = run
         try:
+            # A row handed over by its submission may have been cancelled since: a quick run of it then records
+            # nothing (its write expects "queued"), and a claim fails.
+            record = stored if stored is not None else self._store.get(task_id)
+            if record is None or record.status != "queued":
+                return  # cancelled while queued (or removed)
+            if self._work.quick(record):
+                self._run_quick(record, run, committing)
+                return
             record = self._store.claim(task_id)
             if record is None:
                 return  # cancelled while queued
@@ -192,10 +226,7 @@ class Runner:
             if self._stopping.is_set():
                 self._store.requeue(task_id)
                 return
-            try:
-                outcome = self._work.run(record, run)
-            except ValueError as error:  # the spec passed the checks at submission (a file named has gone since)
-                outcome = Outcome("failed", str(error))
+            outcome = self._outcome(record, run)
             if outcome.status == "cancelled" and run.interrupted:
                 self._store.requeue(task_id)
             else:
@@ -205,3 +236,25 @@ class Runner:
             with self._lock:
                 self._active.pop(task_id, None)
             self._retention_wake.set()
+
+    def _run_quick(self, record: TaskRecord, run: Run, committing: deque[Waiter]) -> None:
+        """A run of milliseconds, made while its task is still "queued" in the store and recorded as it ends:
+        queued -> completed (or failed) and its result in one write, which the group commit adds to its next
+        transaction with the submissions and the other runs of the moment, while this thread goes on. A claim
+        and a finish were two transactions of their own, each more than the run. A cancel meanwhile wins (the
+        task is then cancelled in the store, and the write changes nothing); a crash before the commit leaves
+        the task queued, to run at the next start. At most _UNCOMMITTED such records per worker wait for
+        their commit (each holds its run's arrays: a few MB at most, the run being quick)."""
+        started = now()
+        outcome = self._outcome(record, run)
+        if outcome.status == "cancelled" and run.interrupted:
+            return  # still queued in the store: it runs at the next start
+        self._settle(committing, _UNCOMMITTED - 1)
+        committing.append(self._store.finish(record.id, outcome.status, error=outcome.error,
+                                             progress=outcome.progress, unclaimed_since=started, **outcome.result))
+
+    def _outcome(self, record: TaskRecord, run: Run) -> Outcome:
+        try:
+            return self._work.run(record, run)
+        except ValueError as error:  # the spec passed the checks at submission (a file named has gone since)
+            return Outcome("failed", str(error))

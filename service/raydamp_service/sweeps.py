@@ -87,6 +87,10 @@ class SweepWork:
                 except Exception:  # a cluster already gone must not stop the shutdown
                     log.warning("closing the Dask client failed", exc_info=True)
 
+    def quick(self, record: SweepRecord) -> bool:
+        """A sweep is never quick: it is claimed, and shows "running" with its members done."""
+        return False
+
     def run(self, record: SweepRecord, run: Run) -> Outcome:
         spec = SweepSpec.model_validate(record.spec)
         job, grid = spec.job_form(), spec.grid_arguments()

@@ -117,6 +117,31 @@ def test_a_run_killed_by_a_crash_is_run_again_after_restart(start_server):
     assert_matches(job, trajectory, direct(spec))
 
 
+def test_concurrent_submissions_answered_202_survive_a_sigkill_right_after(start_server):
+    """A 202 is sent once the row is committed (the group commit writes concurrent submissions together): 40
+    submissions at once, SIGKILL as soon as the last 202 is in, and after the restart every one of them is
+    there and runs exactly once; nothing else appears."""
+    import concurrent.futures
+
+    server = start_server(RAYDAMP_WORKERS="1", RAYDAMP_MAX_STEPS=str(10**10))
+    blocker = server.submit(LONG_RUN)  # the one worker is busy: the submissions stay queued until the crash
+    server.wait_for(blocker, lambda job: job["status"] == "running")
+    small = {**PENDULUM, "t_end": 2}
+    with concurrent.futures.ThreadPoolExecutor(40) as pool:
+        ids = list(pool.map(lambda i: server.submit({**small, "parameters": {"eps": 0.01 + i / 1000}}), range(40)))
+    server.kill()
+
+    server.start()
+    assert server.client.delete(f"/v1/jobs/{blocker}").status_code == 202  # requeued by recovery; cancelled
+    jobs = {job_id: server.wait_finished(job_id) for job_id in ids}
+    assert all(job["status"] == "completed" and job["attempts"] == 1 for job in jobs.values())
+    # Each job ran its own spec (no row swapped between concurrent submissions), from its own parameters.
+    assert sorted(job["spec"]["parameters"]["eps"] for job in jobs.values()) == sorted(
+        0.01 + i / 1000 for i in range(40))
+    listed = server.client.get("/v1/jobs", params={"limit": 100}).json()["jobs"]
+    assert sorted(job["id"] for job in listed) == sorted([*ids, blocker])
+
+
 def test_cancelling_a_running_job_keeps_its_partial_trajectory(server):
     spec = LONG_RUN
     job_id = server.submit(spec)

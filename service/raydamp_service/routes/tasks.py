@@ -69,10 +69,27 @@ class Tasks:
               setting: str, settings: Settings, **columns: Any) -> Any:
         """Store the checked spec as queued and hand it to the runner; 429 when limit are waiting."""
         record = store.create(spec.model_dump(mode="json"), limit, **columns)
+        if record is not None:
+            runner.submit(record.id)
+        return self._queued(request, response, record, limit, setting, settings)
+
+    async def queue_committed(self, request: Request, response: Response, store: TaskStore, runner: Runner,
+                              spec: Any, limit: int, setting: str, settings: Settings,
+                              prepare: Callable[[Any], Any] | None = None, **columns: Any) -> Any:
+        """queue() through the store's group commit, from the event loop: answered once the row is committed
+        with the other submissions of the moment; the runner has it (as prepare(record), if given) even if
+        the client has gone."""
+        def hand_over(stored: Any) -> None:
+            runner.submit(stored.id, prepare(stored) if prepare is not None else stored)
+
+        record = await store.create_committed(spec.model_dump(mode="json"), limit, hand_over, **columns)
+        return self._queued(request, response, record, limit, setting, settings)
+
+    def _queued(self, request: Request, response: Response, record: Any, limit: int, setting: str,
+                settings: Settings) -> Any:
         if record is None:
             raise HTTPException(429, detail=f"{limit} {self.noun}s are already queued ({setting}); retry later",
                                 headers={"Retry-After": str(settings.retry_after_seconds)})
-        runner.submit(record.id)
         # A path, never built from the Host header: a forged Host must not come back as a redirect target.
         response.headers["Location"] = request.scope.get("root_path", "") + self.url(record.id)
         return record
