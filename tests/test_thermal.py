@@ -54,10 +54,11 @@ def _ou(M, A, n, t, kT):
     return F, Q
 
 
-def _kick_ou(M, K, A, n, t, kT):  # 2s's affine kick-damp: p -> E p - A^{-1}(I - E) K q + noise
+def _kick_ou(M, K, A, n, t, kT):  # 2s's affine kick-damp: p -> E p - t phi1(-tA) K q + noise
     F, Q = _ou(M, A, n, t, kT)
-    E = F[n:, n:]
-    F[n:, :n] = -np.linalg.solve(A, np.eye(n) - E) @ K
+    B = np.zeros((2 * n, 2 * n))  # expm([[X, I], [0, 0]]) = [[e^X, phi1(X)], [0, I]]: no A^-1 (A may be singular)
+    B[:n, :n], B[:n, n:] = -t * A, np.eye(n)
+    F[n:, :n] = -t * scipy.linalg.expm(B)[:n, n:] @ K
     return F, Q
 
 
