@@ -3,7 +3,8 @@
 // replaced (cpp/tests/reference_normal_stream.hpp), both in the same run, as the step loop draws them:
 // fill() of a vector (a large model's damping flow) and single next() calls (the pendulum, lanes).
 // The outputs are checked equal before timing. Prints figures only; exits 0 whatever they are.
-// Built by benchmarks/CMakeLists.txt; RAYDAMP_NORMAL_BUFFER=8/16/32 compares buffer sizes:
+// Built by benchmarks/CMakeLists.txt; RAYDAMP_NORMAL_BUFFER=8/16/32 compares buffer sizes and
+// RAYDAMP_NORMAL_SIMD=0/1/2 the portable, SSE2 and AVX2 refills:
 //   g++ -std=c++17 -O3 -fPIC -Icpp/include -Icpp/tests -DRAYDAMP_NORMAL_BUFFER=16 benchmarks/bench_normals.cpp
 #include <algorithm>
 #include <chrono>
@@ -65,8 +66,13 @@ int main() {
     for (long i = 0; i < normals; ++i) acc += s.next();
     sink = acc;
   }, normals);
-  std::printf("normal numbers, best of 7 x %ld; buffer %d blocks (%zu-byte stream)\n", normals,
-              NormalStream::kBuffered, sizeof(NormalStream));
+#if RAYDAMP_NORMAL_SIMD >= 2
+  const char* refill = __builtin_cpu_supports("avx2") ? "AVX2" : "SSE2";
+#else
+  const char* refill = RAYDAMP_NORMAL_SIMD == 1 ? "SSE2" : "portable loop";
+#endif
+  std::printf("normal numbers, best of 7 x %ld; buffer %d blocks (%zu-byte stream), refill by %s\n", normals,
+              NormalStream::kBuffered, sizeof(NormalStream), refill);
   std::printf("%-34s %12s %12s %8s\n", "", "reference", "buffered", "speedup");
   std::printf("%-34s %9.2f ns %9.2f ns %7.2fx\n", "fill of 10^4 (a large model)", fill_old, fill_new, fill_old / fill_new);
   std::printf("%-34s %9.2f ns %9.2f ns %7.2fx\n", "next() one at a time", next_old, next_new, next_old / next_new);

@@ -3,7 +3,8 @@
 // and the same State after every call, for fill() of any length, next(), their mixture, slow-path draws
 // (the ziggurat's wedges and tail take further blocks: counted here), a restore() of a saved State in the
 // middle (forward, backward, and into the buffered range), copies, the counter's wrap at 2^64, and the
-// noise of a whole Workspace as the step loop draws it.
+// noise of a whole Workspace as the step loop draws it. Built once per way of computing the blocks
+// (RAYDAMP_NORMAL_SIMD: AVX2 where the processor has it, SSE2, portable; cpp/tests/CMakeLists.txt).
 #include <Eigen/Dense>
 #include <cstdint>
 #include <vector>
