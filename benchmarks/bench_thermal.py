@@ -3,7 +3,8 @@
 
 - the damped pendulum ensemble (10^4 members, 3s and baoab): noiseless members run as SIMD lanes
   of one step loop; with noise each member runs its own loop (the lanes' step has no noise yet), and
-  each damping flow draws one normal number (Philox-4x32-10 + Box-Muller);
+  each damping flow draws one normal number (Philox-4x32-10 blocks, computed 16 ahead, and a ziggurat;
+  benchmarks/bench_normals.cpp times the stream alone);
 - a 10^4-DOF LinearStructure with alpha M damping, lumped and consistent M (the noise is a root of M
   times n normals: sqrt of the diagonal, or the sparse Cholesky factor), and with beta K damping
   (psi(C M^-1) R xi: a sparse Cholesky factor of C and a Chebyshev series; ratio measured, no target);
