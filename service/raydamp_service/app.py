@@ -38,10 +38,10 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         store, sweeps = JobStore(database), SweepStore(database)
         store.open()
         sweeps.open()
-        # The check processes compile users' systems, for the submissions and for the job runs.
+        # The check processes compile users' systems, for the submissions and for the runs of jobs and sweeps.
         app.state.checks = checks = CheckPool(settings)
         runner = Runner(store, settings, store.work(settings, checks))
-        sweep_runner = Runner(sweeps, settings)
+        sweep_runner = Runner(sweeps, settings, sweeps.work(settings, checks))
         app.state.store, app.state.runner = store, runner
         app.state.sweeps, app.state.sweep_runner = sweeps, sweep_runner
         checks.start()

@@ -40,7 +40,7 @@ from .files import ParsedFiles
 from .problems import JobError, RaydampCall, check_spec, check_sweep_spec
 from .schemas import JobSpec, SweepSpec
 
-__all__ = ["CheckPool", "ChecksBusy", "checked_inline", "isolated"]
+__all__ = ["CheckPool", "ChecksBusy", "checked_inline", "compile_for_run", "isolated"]
 
 log = logging.getLogger("raydamp_service.checks")
 
@@ -330,3 +330,20 @@ class CheckPool:
         return (f"{path}: checking this system needed more than the memory budget of "
                 f"{settings.check_memory_bytes / 2**20:.0f} MiB (check_memory_bytes){ended}; write it with fewer "
                 "couplings, or use a Chain or LinearStructure for a large system")
+
+
+def compile_for_run(checks: CheckPool, spec: JobSpec, run) -> bool:
+    """A run (a job's, or a sweep's base job) that found its system's functions not loaded (a restart, an
+    eviction): a check process compiles them and they are loaded here, waiting for a free process (a JobError
+    past a budget: the run fails with its message). False if the service stops meanwhile."""
+    while not (run.stopping.is_set() or checks.closed):
+        try:
+            checks.compile(spec)
+            return True
+        except ChecksBusy:
+            continue
+        except JobError:
+            if checks.closed:  # its process was ended by the shutdown, not by a budget
+                return False
+            raise
+    return False

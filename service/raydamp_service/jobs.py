@@ -13,10 +13,10 @@ import numpy as np
 
 from raydamp.systems.system import NotCompiled, compiled_elsewhere
 
-from .checks import CheckPool, ChecksBusy, checked_inline
+from .checks import CheckPool, checked_inline, compile_for_run
 from .config import Settings
 from .files import FILE_COLUMNS_ADDED, FILES_TABLE, FileStore, file_resolver
-from .problems import JobError, RaydampCall, build_call, planned_steps
+from .problems import RaydampCall, build_call, planned_steps
 from .runner import Outcome, Run
 from .schemas import JobSpec, normalise_stored
 from .group_commit import Waiter
@@ -208,25 +208,10 @@ class JobWork:
                 return build_call(spec, files=files)
         except NotCompiled:
             pass
-        if not self._compile_elsewhere(spec, run):
+        if not compile_for_run(self._checks, spec, run):
             return None
         with compiled_elsewhere():  # NotCompiled now would be a bug, reported as an internal error
             return build_call(spec, files=files)
-
-    def _compile_elsewhere(self, spec: JobSpec, run: Run) -> bool:
-        """A check process compiles the job's system and the functions are loaded here (a JobError past a
-        budget: the run fails with its message); False if the service stops meanwhile."""
-        while not (run.stopping.is_set() or self._checks.closed):
-            try:
-                self._checks.compile(spec)
-                return True
-            except ChecksBusy:
-                continue
-            except JobError:
-                if self._checks.closed:  # its process was ended by the shutdown, not by a budget
-                    return False
-                raise
-        return False
 
     def quick(self, record: JobRecord) -> bool:
         """A run of milliseconds: a built-in model without a load (nothing to compile or read) and fewer than

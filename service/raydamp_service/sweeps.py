@@ -16,7 +16,11 @@ import raydamp
 from raydamp.results.ensemble_solution import STATUSES
 from raydamp.results.io.sweep import save_sweep
 
+from raydamp.systems.system import NotCompiled, compiled_elsewhere
+
+from .checks import CheckPool, compile_for_run, isolated
 from .config import Settings
+from .problems import build_call
 from .runner import Outcome, Run
 from .store import TaskRecord, TaskStore
 from .schemas import SweepSpec, normalise_stored
@@ -44,8 +48,8 @@ class SweepStore(TaskStore[SweepRecord]):
     def _upgrade(self, db: sqlite3.Connection) -> None:
         normalise_stored(db, self.TABLE, SweepSpec)
 
-    def work(self, settings: Settings) -> SweepWork:
-        return SweepWork(self, settings)
+    def work(self, settings: Settings, checks: CheckPool | None = None) -> SweepWork:
+        return SweepWork(self, settings, checks)
 
     def result_handle(self, sweep_id: str) -> tuple[sqlite3.Connection, int, int] | None:
         """(a read-only connection holding a snapshot, the blob's rowid, its size) for streaming the result;
@@ -62,9 +66,10 @@ class SweepWork:
 
     threads, fraction = 1, False  # members done
 
-    def __init__(self, store: SweepStore, settings: Settings):
+    def __init__(self, store: SweepStore, settings: Settings, checks: CheckPool | None = None):
         self._store = store
         self._settings = settings
+        self._checks = checks
         self._client = self._cluster = None
 
     def _dask_client(self):
@@ -91,8 +96,23 @@ class SweepWork:
         """A sweep is never quick: it is claimed, and shows "running" with its members done."""
         return False
 
+    def _loaded(self, spec: SweepSpec, run: Run) -> bool:
+        """The base system's functions loaded (a restart lost what the submission's check loaded): compiled
+        by a check process, never here, where the compile would hold the interpreter lock. False if the
+        service stops meanwhile."""
+        if self._checks is None or not isolated(spec.job):
+            return True
+        try:
+            with compiled_elsewhere():
+                build_call(spec.job)
+            return True
+        except NotCompiled:
+            return compile_for_run(self._checks, spec.job, run)
+
     def run(self, record: SweepRecord, run: Run) -> Outcome:
         spec = SweepSpec.model_validate(record.spec)
+        if not self._loaded(spec, run):
+            return Outcome("cancelled")  # the service is stopping: back to the queue
         job, grid = spec.job_form(), spec.grid_arguments()
         ds = raydamp.sweep(job, grid, client=self._dask_client(), chunk_size=spec.chunk_size,
                            progress=run.report, cancel=run.token)  # once per chunk

@@ -182,3 +182,28 @@ def test_a_system_queued_across_a_restart_is_compiled_by_a_check_process(start_s
     assert job["status"] == "completed", job
     assert slowest <= HEALTHZ_BOUND, f"/healthz took {slowest * 1000:.0f} ms while the job ran"
     _assert_same_run(server, job_id, spec)
+
+
+def test_a_sweep_queued_across_a_restart_is_compiled_by_a_check_process(start_server):
+    # The same for a sweep's base system: after the restart the sweep's run asks a check process to compile
+    # it (it compiled in the server before, holding the interpreter lock for the compile's 1.3 s).
+    server = start_server(RAYDAMP_CHECK_SECONDS="120", RAYDAMP_CHECK_WORKERS="1", RAYDAMP_MAX_STEPS=str(10**10))
+    blocker = {"job": {**LONG_RUN, "n_steps": 10**9}, "grid": {"eps": [0.01]}}
+    response = server.client.post("/v1/sweeps", json=blocker)
+    assert response.status_code == 202, response.text
+    blocker_id = response.json()["id"]
+    deadline = time.monotonic() + 60
+    while server.client.get(f"/v1/sweeps/{blocker_id}").json()["status"] != "running":  # holds the sweep runner
+        assert time.monotonic() < deadline
+        time.sleep(0.05)
+    job = {**quartic(64), "n_steps": 200}
+    response = server.client.post("/v1/sweeps", json={"job": job, "grid": {"q0[0]": [0.1, 0.2]}})
+    assert response.status_code == 202, response.text
+    sweep_id = response.json()["id"]
+    server.kill()
+
+    server.start()
+    assert server.client.post(f"/v1/sweeps/{blocker_id}/cancel").status_code == 202
+    view, took, slowest = _while_polling_healthz(server, lambda: server.wait_for_sweep(sweep_id))
+    assert view["status"] == "completed" and view["outcomes"] == {"completed": 2}, view
+    assert slowest <= HEALTHZ_BOUND, f"/healthz took {slowest * 1000:.0f} ms while the sweep ran"
