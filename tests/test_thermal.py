@@ -89,6 +89,25 @@ def omega_max(M, K):
     return float(np.sqrt(np.max(scipy.linalg.eigh(K, M, eigvals_only=True))))
 
 
+def assert_runs_documented_map(system, method, M, K, D, *, kT, h, rtol, atol, rng_seed, seed):
+    """The code runs the documented one-step map of (M, K, D): its deterministic part to rounding (temperature
+    0, the columns of F), and 10^5 members started from its stationary law keep that law, every covariance
+    entry within 4 standard errors."""
+    F, _ = step_map(method, M, K, D, h, kT)
+    for j in range(6):
+        z = np.eye(6)[j]
+        one = raydamp.integrate(system, z[:3], z[3:], method=method, h=h, n_steps=1)
+        np.testing.assert_allclose(np.concatenate([one.q[-1], one.p[-1]]), F[:, j], rtol=rtol, atol=atol)
+    S = stationary(method, M, K, D, h, kT)
+    members = 100_000
+    z0 = np.random.default_rng(rng_seed).multivariate_normal(np.zeros(6), S, size=members)
+    ens = raydamp.integrate_ensemble(system, z0[:, :3], z0[:, 3:], method=method, h=h, n_steps=6, save_every=6,
+                                     temperature=kT, seed=seed, threads=2)
+    sample = np.cov(np.concatenate([ens.q_final, ens.p_final], axis=1).T)
+    se = np.sqrt((np.outer(np.diag(S), np.diag(S)) + S ** 2) / members)
+    assert np.all(np.abs(sample - S) <= 4 * se), np.max(np.abs(sample - S) / se)
+
+
 @pytest.mark.parametrize("h_omega", [0.2, 1.0, 1.9])
 def test_baoab_samples_the_exact_position_covariance_of_a_linear_system(h_omega):
     M, K, D = random_linear()
@@ -103,22 +122,8 @@ def test_the_code_runs_the_documented_map(method):
     """Its deterministic part to rounding (temperature 0, columns of F), its stationary covariance in
     an ensemble of 10^5 members started from it: every entry within 4 standard errors."""
     M, K, D = random_linear()
-    system = quadratic_system(M, K, D)
-    kT, h = 0.7, 1.0 / omega_max(M, K)
-    F, _ = step_map(method, M, K, D, h, kT)
-    for j in range(6):
-        z = np.eye(6)[j]
-        one = raydamp.integrate(system, z[:3], z[3:], method=method, h=h, n_steps=1)
-        np.testing.assert_allclose(np.concatenate([one.q[-1], one.p[-1]]), F[:, j], rtol=1e-12, atol=1e-13)
-    S = stationary(method, M, K, D, h, kT)
-    members = 100_000
-    z0 = np.random.default_rng(1).multivariate_normal(np.zeros(6), S, size=members)
-    ens = raydamp.integrate_ensemble(system, z0[:, :3], z0[:, 3:], method=method, h=h, n_steps=6, save_every=6,
-                                     temperature=kT, seed=2024, threads=2)
-    z = np.concatenate([ens.q_final, ens.p_final], axis=1)
-    sample = np.cov(z.T)
-    se = np.sqrt((np.outer(np.diag(S), np.diag(S)) + S ** 2) / members)
-    assert np.all(np.abs(sample - S) <= 4 * se), np.max(np.abs(sample - S) / se)
+    assert_runs_documented_map(quadratic_system(M, K, D), method, M, K, D, kT=0.7, h=1.0 / omega_max(M, K),
+                               rtol=1e-12, atol=1e-13, rng_seed=1, seed=2024)
 
 
 def dashpot_system(M, K, dampers):
@@ -142,20 +147,8 @@ def test_dashpots_run_their_exact_ou_flow(method, dashpots):
     M, K, _ = random_linear(seed=8)
     dampers = [(np.array([1.0, -1.0, 0.5]), 2.0)] + ([(np.array([0.0, 0.3, 1.0]), 0.7)] if dashpots == "two" else [])
     system, D = dashpot_system(M, K, dampers)
-    kT, h = 0.6, 0.8 / omega_max(M, K)
-    F, _ = step_map(method, M, K, D, h, kT)
-    for j in range(6):
-        z = np.eye(6)[j]
-        one = raydamp.integrate(system, z[:3], z[3:], method=method, h=h, n_steps=1)
-        np.testing.assert_allclose(np.concatenate([one.q[-1], one.p[-1]]), F[:, j], rtol=1e-11, atol=1e-12)
-    S = stationary(method, M, K, D, h, kT)
-    members = 100_000
-    z0 = np.random.default_rng(4).multivariate_normal(np.zeros(6), S, size=members)
-    ens = raydamp.integrate_ensemble(system, z0[:, :3], z0[:, 3:], method=method, h=h, n_steps=6, save_every=6,
-                                     temperature=kT, seed=77, threads=2)
-    sample = np.cov(np.concatenate([ens.q_final, ens.p_final], axis=1).T)
-    se = np.sqrt((np.outer(np.diag(S), np.diag(S)) + S ** 2) / members)
-    assert np.all(np.abs(sample - S) <= 4 * se), np.max(np.abs(sample - S) / se)
+    assert_runs_documented_map(system, method, M, K, D, kT=0.6, h=0.8 / omega_max(M, K), rtol=1e-11, atol=1e-12,
+                               rng_seed=4, seed=77)
 
 
 def test_a_q_dependent_dashpot_thermalises_an_anharmonic_oscillator():

@@ -200,3 +200,14 @@ def start_module_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator:
     yield start
     for server in servers:
         server.stop()
+
+
+@pytest.fixture
+def store(tmp_path):
+    """A job store in a fresh database, opened, closed after the test (in-process tests of the store)."""
+    from raydamp_service.jobs import JobStore
+
+    store = JobStore(tmp_path / "jobs.sqlite3")
+    store.open()
+    yield store
+    store.close()

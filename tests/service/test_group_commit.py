@@ -13,14 +13,6 @@ from raydamp_service.jobs import JobStore
 SPEC = {"model": "damped_pendulum", "method": "3s"}
 
 
-@pytest.fixture
-def store(tmp_path):
-    store = JobStore(tmp_path / "jobs.sqlite3")
-    store.open()
-    yield store
-    store.close()
-
-
 def committed(store: JobStore) -> dict[str, str]:
     """id -> status as another connection sees the file: what has been committed, not only written."""
     with sqlite3.connect(store.path) as db:

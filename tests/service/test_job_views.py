@@ -7,7 +7,6 @@ from __future__ import annotations
 import json
 import sqlite3
 
-import pytest
 from raydamp.jobs import JobSpec, SweepSpec
 from raydamp_service.jobs import JobStore
 from raydamp_service.sweeps import SweepStore
@@ -21,14 +20,6 @@ CHAIN = {"system": {"kind": "chain", "n": 4}, "method": "2s", "h": 0.1, "t_end":
 
 def normalised(spec: dict) -> dict:
     return JobSpec.model_validate(spec).model_dump(mode="json")
-
-
-@pytest.fixture
-def store(tmp_path):
-    store = JobStore(tmp_path / "jobs.sqlite3")
-    store.open()
-    yield store
-    store.close()
 
 
 def test_a_list_shows_the_label_and_method_the_spec_and_summary_give(store):

@@ -8,7 +8,6 @@ import time
 import pytest
 from raydamp_service.config import Settings
 from raydamp_service.runner import Runner
-from raydamp_service.jobs import JobStore
 
 LONG_RUN = {  # about a minute of steps: always still running when the test acts
     "model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "step_size": 0.001,
@@ -22,14 +21,6 @@ def wait_until(condition, timeout: float = 60.0):
         assert time.monotonic() < deadline, "timed out"
         time.sleep(0.02)
     return value
-
-
-@pytest.fixture
-def store(tmp_path):
-    store = JobStore(tmp_path / "jobs.sqlite3")
-    store.open()
-    yield store
-    store.close()
 
 
 def test_progress_is_live_and_saved(store, tmp_path):
