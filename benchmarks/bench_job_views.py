@@ -17,16 +17,14 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
-import socket
 import statistics
-import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 import httpx
+
+from bench_service_systems import cpu_seconds, start_server  # one way to start and time a server
 
 SMALL = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "h": 0.01, "n_steps": 100,
          "initial_state": {"q": [0.9 * math.pi], "p": [0.0]}}
@@ -47,32 +45,6 @@ def structure_job(n: int) -> dict:
               "K": {"coo": {"shape": [n, n], "rows": rows, "cols": cols, "values": values}}, "alpha": 0.1, "f": [0.0] * (n - 1) + [1.0]}
     return {"system": system, "method": "2s", "h": 0.01, "n_steps": 10, "save_every": 10,
             "initial_state": {"rest": True}}
-
-
-def cpu_seconds(pid: int) -> float:
-    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
-
-
-def start_server(root: Path, db: Path, log: Path) -> tuple[subprocess.Popen, str]:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        port = sock.getsockname()[1]
-    env = {**os.environ, "RAYDAMP_DB": str(db), "RAYDAMP_MAX_QUEUED": "100000",
-           "PYTHONPATH": os.pathsep.join([str(root / "python"), str(root / "service")])}
-    with log.open("wb") as out:
-        process = subprocess.Popen([sys.executable, "-m", "raydamp_service", "--port", str(port)], env=env,
-                                   stdout=out, stderr=subprocess.STDOUT)
-    base = f"http://127.0.0.1:{port}"
-    deadline = time.monotonic() + 60
-    while time.monotonic() < deadline:
-        try:
-            if httpx.get(base + "/healthz").status_code == 200:
-                return process, base
-        except httpx.TransportError:
-            time.sleep(0.1)
-    process.kill()
-    raise SystemExit(f"the service did not start:\n{log.read_text()[-2000:]}")
 
 
 def measure(client: httpx.Client, pid: int, label: str, path: str, repeats: int, params=None) -> None:
@@ -99,7 +71,8 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=40)
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as scratch:
-        process, base = start_server(args.root, Path(scratch) / "jobs.sqlite3", Path(scratch) / "log")
+        process, base = start_server(args.root, Path(scratch) / "jobs.sqlite3", Path(scratch) / "log",
+                                     RAYDAMP_MAX_QUEUED="100000")
         try:
             with httpx.Client(base_url=base, timeout=120) as client:
                 ids = [client.post("/v1/jobs", json=SMALL).json()["id"] for _ in range(args.small)]

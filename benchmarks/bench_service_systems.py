@@ -47,11 +47,12 @@ def cpu_seconds(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
-def start_server(root: Path, db: Path, log: Path) -> tuple[subprocess.Popen, str]:
+def start_server(root: Path, db: Path, log: Path, **settings: str) -> tuple[subprocess.Popen, str]:
+    """The service of checkout `root` on a free port (settings: more RAYDAMP_* variables); (process, base URL)."""
     with socket.socket() as sock:
         sock.bind(("127.0.0.1", 0))
         port = sock.getsockname()[1]
-    env = {**os.environ, "RAYDAMP_DB": str(db),
+    env = {**os.environ, **settings, "RAYDAMP_DB": str(db),
            "PYTHONPATH": os.pathsep.join([str(root / "service"), str(root / "python")])}
     with log.open("wb") as out:
         process = subprocess.Popen([sys.executable, "-m", "raydamp_service", "--port", str(port)], env=env,
