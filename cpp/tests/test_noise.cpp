@@ -84,6 +84,24 @@ int main() {
   CHECK_NEAR(z.p[0], std::exp(-0.2) * 1.5 + std::sqrt(0.3 * (1.0 - std::exp(-0.4))) * xi, 1e-15);
   CHECK(z.q[0] == 0.2);
 
+  // Radial damping (the elastic pendulum: A = (eps/m) u u^T, u = q/|q|) has rank-one noise: one damping flow
+  // draws one normal number, along q, so the stream's next number is the second one (it drew three before).
+  {
+    const ElasticPendulum spring;  // eps 0.1, m 1
+    WorkspaceFor<ElasticPendulum> ews(3, 1);
+    ews.sigma = std::sqrt(0.3);
+    ews.noise = NormalStream(5, 1);
+    State<3> s{Vector<3>(0.3, -0.4, 1.2), Vector<3>(0.5, 0.25, -1.0)};
+    const Vector<3> q = s.q, p = s.p, u = q / q.norm();
+    flows::damp(spring, s, 0.4, ews);
+    NormalStream reference(5, 1);
+    const double first = reference.next(), second = reference.next();
+    const double decay = std::exp(-0.1 * 0.4), radial = u.dot(p);
+    const Vector<3> expected = p + ((decay - 1.0) * radial + std::sqrt(0.3 * (1.0 - decay * decay)) * first) * u;
+    CHECK((s.p - expected).cwiseAbs().maxCoeff() <= 1e-15);
+    CHECK(ews.noise.next() == second);
+  }
+
   // beta K noise: N's columns from unit draws, then N N^T against the OU covariance, to 1e-11 of its largest
   // entry. Diagonal case: lumped M = diag(m), K = diag(k), so M - E M E^T = diag(m_i (1 - e^{-2t(alpha + beta
   // k_i / m_i)})); the rates k_i / m_i span 1e-4 .. 1e2, and alpha = 0 with t = 1e-3 puts psi's steep part

@@ -38,10 +38,16 @@ struct Workspace {
   // Or one stream per coordinate (RunSpec::stream_per_coordinate: lanes of independent members).
   std::vector<NormalStream> lane_noise;
 
-  // xi <- standard normal numbers, from the run's stream or each coordinate's own.
-  void draw_noise() {
+  // xi <- standard normal numbers, from the run's stream or each coordinate's own; the first `count` of
+  // them only where the damping's noise needs fewer than one per coordinate (noise_count, flows/exact.hpp).
+  void draw_noise(Eigen::Index count) {
     if (lane_noise.empty()) {
-      noise.fill(xi);
+      if (count == xi.size()) {
+        noise.fill(xi);
+      } else {
+        auto head = xi.head(count);
+        noise.fill(head);
+      }
     } else {
       for (std::size_t i = 0; i < lane_noise.size(); ++i) xi[static_cast<Eigen::Index>(i)] = lane_noise[i].next();
     }

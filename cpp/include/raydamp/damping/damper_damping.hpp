@@ -162,6 +162,7 @@ class DamperDamping {
   // One dashpot: S = lambda v v^T, v = L^{-1} grad g / sqrt(a), lambda = eps c a, so
   //   M - E M E^T = (1 - e^{-2 t lambda}) / a grad g grad g^T = 2 t eps c phi1(-2 t lambda) grad g grad g^T,
   // one normal along grad g (exact at a = 0, where grad g = 0). Several: N = L V diag(sqrt(1 - e^{-2t lambda_i})).
+  Eigen::Index noise_count(Eigen::Index n) const { return c_.size() == 1 ? 1 : n; }
   template <class Q, class Mass, class X, class P>
   void add_noise(const Q& q, const Factors& f, const Mass&, double sigma, const X& xi, P& p) const {
     constexpr int N = P::RowsAtCompileTime;

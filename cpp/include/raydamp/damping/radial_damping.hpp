@@ -4,6 +4,7 @@
 // radial component of p alone.
 #pragma once
 
+#include <Eigen/Core>
 #include <cmath>
 
 #include "raydamp/damping/decay_factors.hpp"
@@ -36,6 +37,7 @@ struct RadialDamping {
 
   // The noise of the exact OU flow: A = a u u^T, so kT (M - E M E^T) = kT m (1 - e^{-2ta}) u u^T with the
   // scalar mass m: one normal number along u.
+  Eigen::Index noise_count(Eigen::Index) const { return 1; }
   template <class Q, class Mass, class X, class P>
   void add_noise(const Q& q, const DecayFactors& f, const Mass& mass, double sigma, const X& xi, P& p) const {
     const double r = q.norm();

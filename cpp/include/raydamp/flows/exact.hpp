@@ -92,12 +92,25 @@ struct has_thermal_noise<Model, std::void_t<decltype(std::declval<const Model&>(
                                     0.0, std::declval<const typename Model::Vec&>(),
                                     std::declval<typename Model::Vec&>()))>> : std::true_type {};
 
+// The normal numbers one OU flow of the damping draws: one per coordinate, or the kind's noise_count(n)
+// where its noise has lower rank (a radial damping, one dashpot: one number along a direction).
+template <class Damping, class = void>
+struct has_noise_count : std::false_type {};
+template <class Damping>
+struct has_noise_count<Damping, std::void_t<decltype(std::declval<const Damping&>().noise_count(Eigen::Index(0)))>>
+    : std::true_type {};
+template <class Damping>
+inline Eigen::Index noise_count(const Damping& damping, Eigen::Index n) {
+  if constexpr (has_noise_count<Damping>::value) return damping.noise_count(n);
+  else return n;
+}
+
 // p += the noise of the OU flow over the factors' time: Gaussian with covariance kT (M - E M E^T),
 // E = exp(-t eps D M^{-1}) at the frozen q (fluctuation-dissipation). Independent of the flow's
 // deterministic part, so it is the same for the damping flow and the affine kick-damp flow.
 template <class Model, class WS, class F>
 RAYDAMP_OUT_OF_LINE void noise_increment(const Model& model, const F& factors, WS& ws) {
-  ws.draw_noise();
+  ws.draw_noise(noise_count(model.damping, ws.xi.size()));
   ws.stage_p.setZero();
   model.damping.add_noise(ws.stage_q, factors, model.mass, ws.sigma, ws.xi, ws.stage_p);
 }
@@ -106,7 +119,7 @@ template <class Model, int Dim, class WS, class F>
 inline void thermal_noise(const Model& model, State<Dim>& z, const F& factors, WS& ws) {
   if constexpr (has_thermal_noise<Model>::value) {
     if constexpr (Dim == Eigen::Dynamic) {  // a heap state: in place
-      ws.draw_noise();
+      ws.draw_noise(noise_count(model.damping, ws.xi.size()));
       model.damping.add_noise(z.q, factors, model.mass, ws.sigma, ws.xi, z.p);
     } else {  // out of line on copies, so that the call never sees the state's address (see add_load)
       ws.stage_q = z.q;
