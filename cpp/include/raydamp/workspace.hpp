@@ -40,9 +40,9 @@ struct Workspace {
 
   // xi <- standard normal numbers, from the run's stream or each coordinate's own; the first `count` of
   // them only where the damping's noise needs fewer than one per coordinate (noise_count, flows/exact.hpp).
-  void draw_noise(Eigen::Index count) {
+  void draw_noise(Eigen::Index count = -1) {
     if (lane_noise.empty()) {
-      if (count == xi.size()) {
+      if (count < 0 || count == xi.size()) {
         noise.fill(xi);
       } else {
         auto head = xi.head(count);
