@@ -112,3 +112,20 @@ def test_a_blown_up_member_stops_alone_and_cancelled_members_keep_their_rows(sma
 def test_other_kinds_refuse_them_in_an_ensemble_naming_the_method(method):
     with pytest.raises(ValueError, match=f"method: '{method}'.*LinearStructure"):
         raydamp.integrate_ensemble(DampedPendulum(), [[1.0], [0.5]], [0.0], method=method, h=0.1, n_steps=3)
+
+
+@pytest.mark.parametrize(("method", "composition", "short_last", "count"), [
+    ("midpoint", None, False, 1), ("midpoint", None, True, 2), ("gauss4", None, True, 2),
+    # yoshida4's sub-steps gamma_1 h, gamma_0 h, gamma_1 h: two lengths, each also of h_last
+    ("midpoint", "yoshida4", True, 4)])
+def test_one_factorisation_per_sub_step_length_whatever_the_members(method, composition, short_last, count):
+    pl = plate(12, 6)
+    s = raydamp.LinearStructure(pl.M, pl.K, alpha=0.05, beta=0.0 if composition else 0.002)
+    core = s._core_model
+    for members in (1, 9):
+        q0 = 1e-2 * np.random.default_rng(members).standard_normal((members, pl.n))
+        out = type(core).integrate_ensemble([core], np.zeros(members, dtype=np.int64), [], np.zeros((members, 0)),
+                                            method, "", composition or "", q0, np.zeros_like(q0), 0.05, 20,
+                                            0.02 if short_last else 0.05, 5, 2, None, None)
+        assert out["factorisations"] == count, members
+        assert list(out["status"]) == ["completed"] * members
