@@ -11,11 +11,16 @@
    overdamping the high modes, h rho >> 1), where 3s and 2s lose their order and
    rks-midpoint and Newmark keep it. Fitted orders (slope of the state error at t_end
    against h) are printed beside each table. With --png PATH the tables are also plotted.
+3. An ensemble of the implicit midpoint rule: 100 members (random initial states) of the
+   n = 10^4 plate (consistent mass), integrate_ensemble on 1 and 2 threads (one factorisation
+   shared by every member) beside 100 single raydamp.integrate calls (one each), same process,
+   interleaved; the members are checked equal to the single runs bit for bit.
 
 It prints figures and exits 0 whatever they are (a benchmark, not a test).
 
     .venv/bin/python benchmarks/bench_structure.py            # a few minutes on 2 cores
     .venv/bin/python benchmarks/bench_structure.py --quick    # n = 10^4 only, fewer points
+    .venv/bin/python benchmarks/bench_structure.py --sections 3   # the ensemble alone (a minute)
 """
 
 from __future__ import annotations
@@ -217,14 +222,59 @@ def work_precision(nx: int, ny: int, t_end: float, factors: list[int], png: str 
         print(f"\n  work-precision plot written to {png}")
 
 
+# -- 3. an ensemble of the implicit midpoint rule -----------------------------------------------------
+
+def implicit_ensemble(nx: int, ny: int, members: int, steps: int, rounds: int) -> None:
+    pl = plate(nx, ny)
+    w = np.sqrt(np.sort(sla.eigsh(pl.K, k=3, M=pl.M, sigma=0.0, which="LM", return_eigenvectors=False)))
+    alpha, beta = raydamp.rayleigh_coefficients(w[0], w[2], 0.02, 0.02)
+    s = raydamp.LinearStructure(pl.M, pl.K, alpha=alpha, beta=beta)
+    rng = np.random.default_rng(3)
+    q0, p0 = 1e-3 * rng.standard_normal((members, pl.n)), np.zeros((members, pl.n))
+    h = 10.0 / np.sqrt(s.spectral_bound)     # h omega_max about 10
+    options = {"method": "midpoint", "h": h, "n_steps": steps, "save_every": steps}
+
+    def ensemble(threads: int):
+        return raydamp.integrate_ensemble(s, q0, p0, threads=threads, **options)
+
+    def singles():
+        return [raydamp.integrate(s, q0[i], p0[i], **options) for i in range(members)]
+
+    print(f"\n3. Ensemble of midpoint: {members} members of the plate n = {pl.n} (consistent M, 2% damping in modes "
+          f"1 and 3), {steps} steps each, h omega_max = 10")
+    ens, ones = ensemble(2), singles()
+    same = all(np.array_equal(ens.q[i], ones[i].q) and np.array_equal(ens.p[i], ones[i].p) for i in range(members))
+    print(f"   every member equal to its single run bit for bit: {same}")
+    best = {"ensemble, 1 thread": np.inf, "ensemble, 2 threads": np.inf, f"{members} integrate() calls": np.inf}
+    for _ in range(rounds):
+        for label, fn in zip(best, (lambda: ensemble(1), lambda: ensemble(2), singles)):
+            start = time.perf_counter()
+            fn()
+            best[label] = min(best[label], time.perf_counter() - start)
+    factor = raydamp.integrate(s, q0[0], p0[0], method="midpoint", h=h, n_steps=1).wall_time
+    print(f"   (one run of 1 step, its factorisation and one solve: {factor:.3f} s)")
+    print(f"   {'':<28}{'seconds':>9}{'us per member-step':>20}")
+    for label, seconds in best.items():
+        print(f"   {label:<28}{seconds:>9.3f}{1e6 * seconds / (members * steps):>20.1f}")
+    single = best[f"{members} integrate() calls"]
+    print(f"   single calls / ensemble: {single / best['ensemble, 1 thread']:.2f}x on 1 thread, "
+          f"{single / best['ensemble, 2 threads']:.2f}x on 2 threads (best of {rounds})")
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="n = 10^4 only and fewer work-precision points")
     parser.add_argument("--png", default=None, help="also plot the work-precision tables to this PNG")
+    parser.add_argument("--sections", default="1,2,3", help="which of the sections 1, 2, 3 to run (default all)")
     args = parser.parse_args(argv)
+    sections = set(args.sections.split(","))
     sizes = [(100, 50)] if args.quick else [(100, 50), (316, 158)]
-    time_per_step(sizes, steps=20 if args.quick else 50)
-    work_precision(28, 14, t_end=10.0, factors=[1, 2, 4] if args.quick else [1, 2, 4, 8, 16], png=args.png)
+    if "1" in sections:
+        time_per_step(sizes, steps=20 if args.quick else 50)
+    if "2" in sections:
+        work_precision(28, 14, t_end=10.0, factors=[1, 2, 4] if args.quick else [1, 2, 4, 8, 16], png=args.png)
+    if "3" in sections:
+        implicit_ensemble(100, 50, members=100, steps=10 if args.quick else 20, rounds=2 if args.quick else 3)
     return 0
 
 

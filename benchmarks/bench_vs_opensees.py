@@ -39,6 +39,12 @@ for comparison, midpoint (the same method as Newmark's average acceleration).
     .venv/bin/python benchmarks/bench_vs_opensees.py           # everything: about an hour on 2 cores
     .venv/bin/python benchmarks/bench_vs_opensees.py --quick   # 200 and 2,000 DOF only
     .venv/bin/python benchmarks/bench_vs_opensees.py --models ground   # the ground-motion case alone (seconds)
+    .venv/bin/python benchmarks/bench_vs_opensees.py --models plate    # the 10^5-DOF plate alone (minutes)
+
+The plate: the clamped 2-D plate of tests/fe_plate.py (plane stress, linear triangles, consistent mass)
+at 100,488 DOF, raydamp alone (gauss4, its best method), 2% Rayleigh damping in modes 1 and 3, from
+q0 in the span of modes 1-3 at rest, so that the modal solution of those modes (scipy's eigsh) is
+the exact reference; the time to 1e-6 includes the factorisation.
 
 The ground-motion case (benchmarks/ground_motion_frame.py, issue 26): a 10-storey shear frame with 5%
 Rayleigh damping under a 20 s record as uniform base excitation, OpenSees' UniformExcitation beside
@@ -447,6 +453,71 @@ def best_time(run, m: int, searched: float) -> float:
     return min([searched] + [run(m)[0] for _ in range(2)])
 
 
+# -- the plate, raydamp alone --------------------------------------------------------------------
+
+PLATE = (316, 158)   # elements along x and y: 2 nx (ny + 1) = 100,488 DOF
+
+
+def plate_structure(nx: int, ny: int) -> Structure:
+    """The clamped 2-D plate of tests/fe_plate.py (plane stress, linear triangles, consistent mass)."""
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests"))
+    from fe_plate import plate
+
+    pl = plate(nx, ny)
+    return Structure("plate", pl.M, pl.K, int(pl.tip[-1]), False)
+
+
+def run_plate(nx: int, ny: int) -> dict:
+    """gauss4 (raydamp's best method) to 1e-6 on a plate of about 10^5 DOF, from q0 in the span of modes
+    1-3 at rest: the modal solution of those three modes (eigsh, shift-invert) is then exact to the
+    modes' own accuracy, printed as their residual. midpoint is shown at gauss4's h for its cost per step
+    (at order 2 it would need about 100x gauss4's steps to reach 1e-6 here)."""
+    start = time.perf_counter()
+    s = plate_structure(nx, ny)
+    w2, phi = sla.eigsh(s.K, k=3, M=s.M, sigma=0.0, which="LM", tol=0.0)
+    order = np.argsort(w2)
+    w2, phi = w2[order], phi[:, order]
+    residual = max(np.linalg.norm(s.K @ phi[:, j] - w2[j] * (s.M @ phi[:, j])) / np.linalg.norm(s.K @ phi[:, j])
+                   for j in range(3))
+    w = np.sqrt(w2)
+    alpha, beta = raydamp.rayleigh_coefficients(w[0], w[2], 0.02, 0.02)
+    q0 = phi @ np.array([1.0, 0.5, 0.25])
+    problem = Problem(s, alpha, beta, q0, 2 * (2 * np.pi / w[0]))
+    reference = ModalSolution(lambda: iter([(w2, phi)]), s.M, alpha, beta).at(q0, problem.times)
+    setup = time.perf_counter() - start
+    omega_max = np.sqrt(raydamp.LinearStructure(s.M, s.K).spectral_bound / 1.05)
+    print(f"\nplate (raydamp alone), n = {s.n}, nnz(K) = {s.K.nnz}: omega_1 = {w[0]:.4g}, omega_3 = {w[2]:.4g}, "
+          f"omega_max = {omega_max:.4g}, alpha = {alpha:.3g}, beta = {beta:.3g}, T = 2 periods of mode 1 = "
+          f"{problem.T:.4g}")
+    print(f"    q0 = phi_1 + phi_2 / 2 + phi_3 / 4 at rest; reference: their exact modal solution (eigsh residual "
+          f"||K phi - w^2 M phi|| / ||K phi|| <= {residual:.1e}); plate, modes and reference built in {setup:.1f} s")
+    run_gauss, build = raydamp_runner(problem, "gauss4")
+    run_mid, _ = raydamp_runner(problem, "midpoint")
+    print(f"    raydamp.LinearStructure built in {build:.3f} s (not in the times below)")
+    for label, run in (("gauss4", run_gauss), ("midpoint", run_mid)):
+        seconds, _ = run(1)                       # 10 steps: the factorisation and a few solves
+        print(f"    {label:<8} 10 steps (its factorisation and 10 solves): {seconds:.2f} s")
+    norm = np.linalg.norm(q0)
+    m, tried = time_to_tolerance(run_gauss, reference, norm, 4, 8, TOLERANCE)
+    runs = ", ".join(f"{SAVES * k}: {e:.1e}" for k, (e, _) in sorted(tried.items()))
+    row = {"model": "plate", "n": s.n, "tolerance": TOLERANCE}
+    if m is None:
+        print(f"    gauss4   did not reach {TOLERANCE:g} [{runs}]")
+        return row
+    error, seconds = tried[m]
+    seconds = best_time(run_gauss, m, seconds)
+    h = problem.T / (SAVES * m)
+    print(f"    gauss4   {SAVES * m:>8} steps (h = {h:.3g}, h omega_max = {h * omega_max:.3g}), error {error:.2e}, "
+          f"{seconds:9.3f} s, {1e6 * seconds / (SAVES * m):9.1f} us/step   [steps: error of {len(tried)} runs: "
+          f"{runs}]")
+    row["raydamp gauss4"] = (SAVES * m, seconds)
+    mid_seconds, q = run_mid(m)
+    mid_error = float(np.max(np.linalg.norm(q - reference, axis=1)) / norm)
+    print(f"    midpoint {SAVES * m:>8} steps (the same h), error {mid_error:.2e}, {mid_seconds:9.3f} s, "
+          f"{1e6 * mid_seconds / (SAVES * m):9.1f} us/step")
+    return row
+
+
 # -- main ----------------------------------------------------------------------------------------
 
 SIZES = {"chain": [200, 2000, 20000], "beam": [67, 667, 6667]}   # beam: elements (3 DOF each)
@@ -488,8 +559,9 @@ def reference_states(problem: Problem, out=print):
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="200 and 2,000 DOF only")
-    parser.add_argument("--models", default="chain,beam,ground",
-                        help="any of chain, beam, ground (the 10-storey frame under a record), comma-separated")
+    parser.add_argument("--models", default="chain,beam,ground,plate",
+                        help="any of chain, beam, ground (the 10-storey frame under a record), plate (about 10^5 "
+                             "DOF, raydamp alone), comma-separated")
     args = parser.parse_args()
     ops = opensees()
     print(f"raydamp {raydamp.__version__}; OpenSeesPy "
@@ -502,7 +574,7 @@ def main() -> None:
         import ground_motion_frame
 
         ground_motion_frame.run(ops)
-    for name in (n for n in names if n != "ground"):
+    for name in (n for n in names if n not in ("ground", "plate")):
         for size in SIZES[name][: 2 if args.quick else 3]:
             s = chain(size) if name == "chain" else beam(size)
             w = lowest_frequencies(s)
@@ -576,6 +648,8 @@ def main() -> None:
                       f"{1e6 * seconds / (SAVES * m):9.1f} us/step   [steps: error of {len(tried)} runs: {runs}]")
                 row[label] = (SAVES * m, seconds)
             rows.append(row)
+    if "plate" in names:
+        rows.append(run_plate(*PLATE))
     print("\ntime to the tolerance, seconds [steps] (a row whose system resolves nothing finer than 1e-2: time per "
           "step at equal h)")
     print(f"{'model':<6} {'DOF':>6} {'tolerance':>9} " + " ".join(f"{c:>22}" for c in COLUMNS)

@@ -211,12 +211,6 @@ def test_other_kinds_refuse_them_naming_the_method(method):
         raydamp.integrate(DampedPendulum(), [1.0], [0.0], method=method, h=0.1, n_steps=3)
 
 
-def test_ensembles_refuse_them_naming_the_method():
-    s, _, q0, p0 = chain_problem()
-    with pytest.raises(ValueError, match="method: 'midpoint'"):
-        raydamp.integrate_ensemble(s, np.stack([q0, 2 * q0]), p0, method="midpoint", h=0.1, n_steps=3)
-
-
 def test_composition_refused_where_the_backward_matrix_is_indefinite():
     # beta K damping: M - (|s|/2) C + (s^2/4) K is indefinite once |s| < 2 beta.
     M, K = shear_building(50)

@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <limits>
+#include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -173,15 +175,29 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
     using Vec = typename Model::Vec;
     return State<Model::dim>{Vec(Eigen::Map<const Vec>(q0d + i * n, n)), Vec(Eigen::Map<const Vec>(p0d + i * n, n))};
   };
+  int factorisations = 0;  // of the linear implicit methods, over the whole ensemble
   {
     py::gil_scoped_release release;
-    with_method(method, [&](auto method_tag) {
+    with_method_for<Model>(method, [&](auto method_tag) {
       using Method = decltype(method_tag);
       if (temperature != 0.0) check_temperature<Method>(*member_model.front(), comp, temperature);  // once, here
+      // The linear implicit methods' factorisations: made here, once per distinct model and sub-step length,
+      // before any thread starts, and read by every member of that model (each with scratch of its own).
+      std::vector<std::shared_ptr<const LinearImplicitFactors>> factors(members);
+      if constexpr (detail::has_own_stepper<Method>::value) {
+        std::map<const Model*, std::shared_ptr<const LinearImplicitFactors>> by_model;
+        for (long i = 0; i < members; ++i) {
+          auto& made = by_model[member_model[i]];
+          if (!made) made = Method::Stepper::prepare(*member_model[i], comp, spec);
+          factors[i] = made;
+        }
+        for (const auto& entry : by_model) factorisations += entry.second->count();
+      }
       auto run_member = [&](long i) {
         try {
           RunSpec member_spec = spec;
           member_spec.load = member_load[i];
+          member_spec.implicit_factors = factors[i];
           // member i's noise: stream first_stream + i of the seed, whatever the threads (a sweep's chunk
           // starting at member k passes first_stream = k, so streams follow the whole grid's numbering)
           member_spec.stream = first_stream + static_cast<std::uint64_t>(i);
@@ -240,6 +256,7 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
   out["status"] = status;
   out["message"] = message;
   out["threads"] = ensemble_threads(threads, members);
+  out["factorisations"] = factorisations;
   return out;
 }
 

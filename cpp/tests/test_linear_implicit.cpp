@@ -6,7 +6,10 @@
 // - the damping work of a step is the method's: H(z1) - H(z0) + W = 0 to rounding;
 // - compositions: yoshida4 over midpoint runs at beta = 0 and is refused, naming why,
 //   where the backward sub-step's matrix is indefinite;
-// - after the factorisations the steps allocate nothing (a counting operator new).
+// - after the factorisations the steps allocate nothing (a counting operator new);
+// - an ensemble's factors: made once per sub-step length (1, or 2 with a short last step,
+//   whatever the member count), shared read-only by runs on two threads, each run equal
+//   bit for bit to the same run making its own factors.
 // GCC 12 false positives: see test_linear_structure.cpp.
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #pragma GCC diagnostic ignored "-Wnonnull"
@@ -21,6 +24,7 @@
 
 #include "check.hpp"
 #include "counting_new.hpp"
+#include "raydamp/ensemble.hpp"
 #include "raydamp/implicit/linear_implicit_step.hpp"
 #include "raydamp/raydamp.hpp"
 
@@ -187,6 +191,52 @@ void compositions_where_positive_definite() {
   CHECK(e1 / e2 > 12.0 && e1 / e2 < 20.0);
 }
 
+
+template <class Method>
+void ensemble_shares_factors() {
+  const int n = 40;
+  const Bar b = bar(n);
+  const Vec f = Vec::LinSpaced(n, 0.2, -0.3);
+  LinearStructure<ConsistentMass> s(ConsistentMass(b.m), b.k, f, 0.3, 0.002);
+  const ButcherTableau& euler = builtin_tableau("euler");
+  const Composition& none = builtin_composition("none");
+  // 24 steps of h and a last one of h / 2 (t_end = 0.6125), saved every 4.
+  RunSpec spec{0.025, 25, 0.0125, 4};
+  RunSpec even = spec;
+  even.h_last = spec.h;
+  CHECK(Method::Stepper::prepare(s, none, even)->count() == 1);
+  const std::shared_ptr<const LinearImplicitFactors> shared = Method::Stepper::prepare(s, none, spec);
+  CHECK(shared->count() == 2);
+  const int members = 9;
+  std::vector<State<Eigen::Dynamic>> z0;
+  for (int i = 0; i < members; ++i)
+    z0.push_back({(Vec::LinSpaced(n, 0.0, 1.0) * (i + 1.0)).array().sin().matrix(),
+                  Vec::LinSpaced(n, 1.0, -0.5) * (0.1 * i)});
+  std::vector<RunResult> own(members), ensemble(members);
+  for (int i = 0; i < members; ++i) own[i] = integrate<Method>(s, euler, none, z0[i], spec);
+  RunSpec member_spec = spec;
+  member_spec.implicit_factors = shared;
+  for_each_member(members, 2, [&](long i) { ensemble[i] = integrate<Method>(s, euler, none, z0[i], member_spec); });
+  CHECK(shared->count() == 2);  // the members made none of their own
+  for (int i = 0; i < members; ++i) {
+    CHECK(ensemble[i].status == Status::completed && ensemble[i].steps == 25);
+    CHECK(ensemble[i].trajectory.t == own[i].trajectory.t);
+    CHECK(ensemble[i].trajectory.q == own[i].trajectory.q);
+    CHECK(ensemble[i].trajectory.p == own[i].trajectory.p);
+  }
+  // The run really moved: the last state is not the first.
+  CHECK(std::abs(own[3].trajectory.q.back() - z0[3].q[n - 1]) > 1e-3);
+  // Factors of another structure (the same K, another damping) are refused.
+  LinearStructure<ConsistentMass> other(ConsistentMass(b.m), b.k, f, 0.1, 0.002);
+  bool refused = false;
+  try {
+    integrate<Method>(other, euler, none, z0[0], member_spec);
+  } catch (const std::logic_error&) {
+    refused = true;
+  }
+  CHECK(refused);
+}
+
 }  // namespace
 
 int main() {
@@ -194,5 +244,7 @@ int main() {
   step_matches_collocation<ImplicitMidpoint>(1);
   step_matches_collocation<Gauss4>(2);
   compositions_where_positive_definite();
+  ensemble_shares_factors<ImplicitMidpoint>();
+  ensemble_shares_factors<Gauss4>();
   TEST_MAIN_RETURN();
 }

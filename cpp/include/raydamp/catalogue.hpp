@@ -176,7 +176,7 @@ decltype(auto) with_method(const std::string& name, F&& f) {
   const MethodEntry& entry = method_entry(name);
   if (entry.linear_implicit)
     throw std::invalid_argument("method: '" + name + "' steps a LinearStructure's whole linear system implicitly, "
-                                "and runs only raydamp.integrate of a LinearStructure (no ensemble run yet)");
+                                "and runs only a LinearStructure (with_method_for, implicit/linear_implicit_step.hpp)");
   return detail::with_table<F, StormerVerlet, ThreeTermSplitting, Baoab, TwoTermSplitting, RungeKuttaSplitting,
                             RungeKuttaSplittingB, RungeKutta>(method_entry(name).table, f);
 }

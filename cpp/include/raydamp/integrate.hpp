@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <new>
 #include <stdexcept>
 #include <string>
@@ -29,6 +30,8 @@
 #endif
 
 namespace raydamp {
+
+class LinearImplicitFactors;  // implicit/linear_implicit_factors.hpp
 
 // Whether the step loop of Model is flattened (run_block_flat). Flattening pays where
 // a step is a few dozen nanoseconds of register work that a call would interrupt: a
@@ -76,6 +79,9 @@ struct RunSpec {
   // A run whose coordinates are the lanes of independent members (the pendulum ensemble's lanes):
   // coordinate i draws its own stream, stream + i, so that lane i's noise is member i's single run's.
   bool stream_per_coordinate = false;
+  // The linear implicit methods' factorisations, made beforehand and shared read-only (an
+  // ensemble's members: implicit/linear_implicit_factors.hpp); null: the run makes its own.
+  std::shared_ptr<const LinearImplicitFactors> implicit_factors{};
 };
 
 struct Control {

@@ -95,7 +95,10 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
         from their parameter tables; a System is rebuilt once per distinct parameter set before
         the run (a change of eps alone reuses its compiled functions; other parameters recompile it).
     method, h, t_end, n_steps, save_every, tableau, composition : as :func:`raydamp.integrate`,
-        shared by every member.
+        shared by every member. A LinearStructure's implicit "midpoint" and "gauss4" factorise
+        M + c C + c^2 K once per sub-step length for the whole ensemble (once, twice with a
+        shortened last step), before the members run; the members share the factors read-only,
+        each solving in buffers of its own.
     threads : threads to spread the members over (None: one per hardware thread).
     progress : called as ``progress(members_finished, members)`` about 100 times.
     cancel : a :class:`raydamp.CancelToken`; cancelling it stops every member within a few

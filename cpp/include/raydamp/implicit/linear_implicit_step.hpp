@@ -18,7 +18,8 @@
 // method's own: H(z1) - H(z0) + W_step = 0 to rounding (H with the load's potential).
 //
 // The matrix of (*) is factorised once per distinct sub-step length (a run has one,
-// two with a shortened last step, more for a composition) before the first step:
+// two with a shortened last step, more for a composition) before the first step, once
+// for all the members of an ensemble (implicit/linear_implicit_factors.hpp):
 // real SPD for the midpoint, complex symmetric with an SPD real part for gauss4
 // (Re(c) > 0, Re(c^2) > 0), both by SparseLDLT over one shared analysis.
 // A time-dependent load f(t) (load.hpp) enters (*) as f~, the stage forces weighted by
@@ -44,7 +45,7 @@
 
 #include "raydamp/amplification.hpp"
 #include "raydamp/catalogue.hpp"
-#include "raydamp/implicit/sparse_ldlt.hpp"
+#include "raydamp/implicit/linear_implicit_factors.hpp"
 #include "raydamp/integrate.hpp"
 #include "raydamp/load.hpp"
 #include "raydamp/methods/linear_implicit.hpp"
@@ -60,31 +61,6 @@ template <class Mass>
 struct is_linear_structure<LinearStructure<Mass>> : std::true_type {};
 
 namespace detail {
-
-// What the implicit steps read of a structure, the same for either mass kind (one
-// compiled step for both).
-struct LinearSystem {
-  SparseRowMajor mass;
-  std::shared_ptr<const SparseRowMajor> stiffness;
-  Eigen::VectorXd force;
-  double alpha, beta, spectral_bound;
-  std::shared_ptr<const SparsePattern> pattern;  // of M + K
-
-  template <class Mass>
-  explicit LinearSystem(const LinearStructure<Mass>& s)
-      : mass(s.mass.matrix()), stiffness(s.stiffness), force(s.force), alpha(s.damping.alpha()),
-        beta(s.damping.beta()), spectral_bound(s.damping.spectral_bound()) {
-    const SparseColMajor m(mass), k(*stiffness);
-    pattern = std::make_shared<const SparsePattern>(SparseColMajor(m.cwiseAbs() + k.cwiseAbs()));
-  }
-
-  // M + c C + c^2 K = (1 + c alpha) M + (c beta + c^2) K.
-  template <class Scalar>
-  Eigen::SparseMatrix<Scalar, Eigen::ColMajor, int> shifted(Scalar c) const {
-    const Scalar a = Scalar(1) + c * alpha, b = c * beta + c * c;
-    return SparseColMajor(mass).cast<Scalar>() * a + SparseColMajor(*stiffness).cast<Scalar>() * b;
-  }
-};
 
 // The largest factor by which one backward implicit-midpoint sub-step of length s < 0
 // multiplies a mode (|R(s lambda)|, R(z) = (1 + z/2) / (1 - z/2), lambda an eigenvalue
@@ -106,15 +82,8 @@ inline double backward_midpoint_amplification(const LinearSystem& sys, double s)
   return worst;
 }
 
-// One factorised sub-step length.
-template <class Scalar>
-struct ImplicitFactor {
-  double s;
-  SparseLDLT<Scalar> solver;
-};
-
-// The step of Method over a sub-step of length s with its factor; scratch vectors
-// are sized once (the step loop allocates nothing).
+// The step of Method over a sub-step of length s with its factor, in scratch of its own:
+// one per run (an ensemble's member), over factors any number of runs share.
 template <class Method>
 class LinearImplicitCore {
  public:
@@ -127,7 +96,9 @@ class LinearImplicitCore {
     else return 0.5;
   }
 
-  explicit LinearImplicitCore(LinearSystem system) : sys_(std::move(system)) {
+  // Scratch sized once (the step loop allocates nothing); the factors are shared, read-only.
+  explicit LinearImplicitCore(std::shared_ptr<const LinearImplicitFactors> factors)
+      : factors_(std::move(factors)), sys_(factors_->system()) {
     const Eigen::Index n = sys_.mass.rows();
     kq_.resize(n);
     real_.resize(n);
@@ -136,19 +107,6 @@ class LinearImplicitCore {
     u_.resize(n);
     work_.resize(n);
     load_.resize(n);
-  }
-
-  const LinearSystem& system() const { return sys_; }
-
-  // The factor of sub-steps of length s (made once; a run asks for a handful).
-  const ImplicitFactor<Scalar>* factor(double s) {
-    for (const auto& f : factors_)
-      if (f->s == s) return f.get();
-    const Scalar c = Scalar(s) * lambda();
-    auto made = std::make_unique<ImplicitFactor<Scalar>>(
-        ImplicitFactor<Scalar>{s, SparseLDLT<Scalar>(sys_.pattern, sys_.shifted(c), "M + c C + c^2 K")});
-    factors_.push_back(std::move(made));
-    return factors_.back().get();
   }
 
   // z <- one step of length f.s from time t; adds the step's damping work to *work and
@@ -228,8 +186,8 @@ class LinearImplicitCore {
   static double stage_c(int i) { return 0.5 + (i == 0 ? -1.0 : 1.0) * std::sqrt(3.0) / 6.0; }
   static double stage_g(int i) { return std::sqrt(3.0) + (i == 0 ? -2.0 : 2.0); }
 
-  LinearSystem sys_;
-  std::vector<std::unique_ptr<ImplicitFactor<Scalar>>> factors_;
+  std::shared_ptr<const LinearImplicitFactors> factors_;
+  const LinearSystem& sys_;  // factors_'s
   Eigen::VectorXd kq_, real_, product_, load_;
   ScalarVector rhs_, u_, work_;
 };
@@ -238,8 +196,10 @@ class LinearImplicitCore {
 
 // The steps of one run of Method (ImplicitMidpoint or Gauss4) on a linear structure:
 // each step is the composition's sub-steps gamma_j h (one sub-step of h uncomposed),
-// the last step's of h_last. Copied once per block of steps by the step loop: it holds
-// only the sub-step table and a shared pointer to the factors and scratch.
+// the last step's of h_last. The factors are spec.implicit_factors when given (an
+// ensemble's, made once by prepare() for all its members), else the run's own. Copied
+// once per block of steps by the step loop: it holds only the sub-step table and a
+// shared pointer to the run's scratch, which points to the factors.
 template <class Method>
 class LinearImplicitStepper {
  public:
@@ -249,12 +209,27 @@ class LinearImplicitStepper {
   template <class Model>
   LinearImplicitStepper(const Model& model, const Composition& composition, const RunSpec& spec)
       : last_step_(spec.n_steps - 1), stages_(composition.stages()) {
-    static_assert(is_linear_structure<Model>::value, "the linear implicit methods run a LinearStructure");
-    core_ = std::make_shared<Core>(detail::LinearSystem(model));
+    std::shared_ptr<const LinearImplicitFactors> factors = spec.implicit_factors;
+    if (!factors) factors = prepare(model, composition, spec);
+    if (!factors->system().describes(model))
+      throw std::logic_error("implicit_factors: made for another structure than the run's");
     for (int j = 0; j < stages_; ++j) {
-      regular_[j] = checked_factor(composition, composition.gamma(j) * spec.h);
-      last_[j] = checked_factor(composition, composition.gamma(j) * spec.h_last);
+      regular_[j] = made(*factors, composition.gamma(j) * spec.h);
+      last_[j] = made(*factors, composition.gamma(j) * spec.h_last);
     }
+    core_ = std::make_shared<Core>(std::move(factors));
+  }
+
+  // The factors of every sub-step length of a run of spec (gamma_j h and gamma_j h_last),
+  // each made once; refused as checked() says.
+  template <class Model>
+  static std::shared_ptr<const LinearImplicitFactors> prepare(const Model& model, const Composition& composition,
+                                                             const RunSpec& spec) {
+    static_assert(is_linear_structure<Model>::value, "the linear implicit methods run a LinearStructure");
+    auto factors = std::make_shared<LinearImplicitFactors>(detail::LinearSystem(model));
+    for (int j = 0; j < composition.stages(); ++j)
+      for (const double h : {spec.h, spec.h_last}) checked(*factors, composition, composition.gamma(j) * h);
+    return factors;
   }
 
   template <class Model, class Tab, int Dim, class WS>
@@ -269,14 +244,20 @@ class LinearImplicitStepper {
   }
 
  private:
-  // The factor of a sub-step of length s; a backward one (a composition's negative
+  static const detail::ImplicitFactor<Scalar>* made(const LinearImplicitFactors& factors, double s) {
+    const detail::ImplicitFactor<Scalar>* f = factors.find<Scalar>(s);
+    if (!f) throw std::logic_error(std::string("implicit_factors: no factor of ") + Method::name + "'s sub-step");
+    return f;
+  }
+
+  // Makes the factor of a sub-step of length s; a backward one (a composition's negative
   // coefficient) only where its matrix stays positive definite and it amplifies no
   // mode past kMaxAmplification.
-  const detail::ImplicitFactor<Scalar>* checked_factor(const Composition& composition, double s) {
-    const detail::ImplicitFactor<Scalar>* f = core_->factor(s);
+  static void checked(LinearImplicitFactors& factors, const Composition& composition, double s) {
+    const detail::ImplicitFactor<Scalar>* f = factors.make<Scalar>(s, Core::lambda());
     if constexpr (std::is_same_v<Scalar, double>) {
-      if (s >= 0.0) return f;
-      const detail::LinearSystem& sys = core_->system();
+      if (s >= 0.0) return;
+      const detail::LinearSystem& sys = factors.system();
       std::ostringstream why;
       why.precision(3);
       why << "composition: '" << composition.name() << "' over '" << Method::name
@@ -298,7 +279,6 @@ class LinearImplicitStepper {
         throw std::invalid_argument(why.str());
       }
     }
-    return f;
   }
 
   std::shared_ptr<Core> core_;
