@@ -226,7 +226,7 @@ def test_pendulum_lanes_carry_each_members_own_noise(method):
     part = raydamp.integrate_ensemble(model, q0[:7], p0[:7], first_stream=5, vector_sine=True, **run)
     np.testing.assert_array_equal(whole.q[:7], part.q)
     single = raydamp.integrate(model, q0[3], p0[3], stream=8, **run)
-    np.testing.assert_allclose(whole.member(3).q, single.q, rtol=0, atol=1e-12)  # sin4 vs libm: last bits
+    np.testing.assert_allclose(whole.member(3).q, single.q, rtol=0, atol=1e-12)  # raydamp's sine vs libm: last bits
 
 
 def test_member_noises_are_independent():

@@ -89,20 +89,23 @@ int main() {
     compare(ThreeTermSplitting{}, builtin_composition("none"));
     compare(TwoTermSplitting{}, builtin_composition("none"));
     compare(ThreeTermSplitting{}, yoshida);
-    // vector_sine: the lanes' sines are math::sin4's. Lane i then equals a run of
-    // member i as the only lane (math::sin) bit for bit, whatever the other lanes and
-    // the block of four it fell in (19 lanes: four blocks and a tail of three); it
+    // vector_sine: the lanes' sines are math::sin's, in registers of two or four lanes
+    // (math/sine_lanes.hpp). Lane i then equals a run of member i as the only lane
+    // (math::sin) bit for bit, whatever the other lanes, the block it fell in and the
+    // width (19 lanes: two blocks of eight or four of four, and a tail of three); it
     // differs from the libm single run by rounding only (measured: about 1e-15 here),
     // and not at all on no lane would mean the flag did nothing.
-    auto compare_vector_sine = [&](auto method) {
+    std::vector<math::SineWidth> widths{math::SineWidth::two};
+    if (math::best_sine_width() == math::SineWidth::four) widths.push_back(math::SineWidth::four);
+    auto compare_vector_sine = [&](auto method, math::SineWidth width) {
       using Method = decltype(method);
       const Composition& none = builtin_composition("none");
-      RunResult all = detail::run_steps<Method>(PendulumLanes(member, lanes, true), heun, none,
+      RunResult all = detail::run_steps<Method>(PendulumLanes(member, lanes, true, width), heun, none,
                                                 State<Eigen::Dynamic>{q0, p0}, lane_spec, Control{});
       CHECK(all.status == Status::completed);
       int differing = 0;
       for (int i = 0; i < lanes; ++i) {
-        RunResult alone = detail::run_steps<Method>(PendulumLanes(member, 1, true), heun, none,
+        RunResult alone = detail::run_steps<Method>(PendulumLanes(member, 1, true, width), heun, none,
                                                     State<Eigen::Dynamic>{q0.segment(i, 1), p0.segment(i, 1)},
                                                     lane_spec, Control{});
         RunResult libm = integrate<Method>(member, heun, none, State<1>{Vector<1>(q0[i]), Vector<1>(p0[i])}, lane_spec);
@@ -119,8 +122,41 @@ int main() {
       }
       CHECK(differing > 0);
     };
-    compare_vector_sine(ThreeTermSplitting{});
-    compare_vector_sine(TwoTermSplitting{});
+    for (math::SineWidth width : widths) {
+      compare_vector_sine(ThreeTermSplitting{}, width);
+      compare_vector_sine(TwoTermSplitting{}, width);  // its kick-damp takes the gradient's kernel
+    }
+  }
+  // vector_sine's AVX2 registers (four lanes) give the SSE2 ones' bits (two lanes): 1003
+  // pendulums swinging and going over the top (q0 over (-9, 9), p0 over (-2, 2)), 3s and
+  // 2s, every saved row of every member. Only where the processor has AVX2 (printed).
+  {
+    std::printf("vector_sine widths tested: %zu (best %d lanes)\n", math::best_sine_width() == math::SineWidth::four
+                ? std::size_t{2} : std::size_t{1}, static_cast<int>(math::best_sine_width()));
+    if (math::best_sine_width() == math::SineWidth::four) {
+      const int lanes = 1003;
+      const DampedPendulum member(0.05);
+      Eigen::VectorXd q0(lanes), p0(lanes);
+      for (int i = 0; i < lanes; ++i) {
+        q0[i] = -9.0 + 18.0 * i / (lanes - 1);
+        p0[i] = -2.0 + 4.0 * ((i * 37) % lanes) / (lanes - 1);
+      }
+      const RunSpec spec{0.02, 400, 0.02, 50};
+      auto same_bits = [&](auto method) {
+        using Method = decltype(method);
+        const Composition& none = builtin_composition("none");
+        RunResult two = detail::run_steps<Method>(PendulumLanes(member, lanes, true, math::SineWidth::two), heun, none,
+                                                  State<Eigen::Dynamic>{q0, p0}, spec, Control{});
+        RunResult four = detail::run_steps<Method>(PendulumLanes(member, lanes, true, math::SineWidth::four), heun,
+                                                   none, State<Eigen::Dynamic>{q0, p0}, spec, Control{});
+        CHECK(two.status == Status::completed && four.status == Status::completed);
+        CHECK(two.trajectory.rows() == 9);
+        CHECK(two.trajectory.q == four.trajectory.q);
+        CHECK(two.trajectory.p == four.trajectory.p);
+      };
+      same_bits(ThreeTermSplitting{});
+      same_bits(TwoTermSplitting{});
+    }
   }
   // Lane batches: about kBatchesPerThread per thread, between 32 and 256 lanes, a
   // multiple of four, and a change of eps always starts a new batch (members sharing

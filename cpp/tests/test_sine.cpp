@@ -1,6 +1,8 @@
 // raydamp::math::sin and sin4 (math/sine.hpp): accuracy against long double sinl,
 // the four-lane form equal to the scalar one bit for bit on every path (series,
-// reduced, libm fallback, mixed blocks, signed zeros, NaN), and the constants.
+// reduced, libm fallback, mixed blocks, signed zeros, NaN), and the constants; the
+// ensemble lanes' kernels (math/sine_lanes.hpp) in two- and four-lane registers equal
+// to the scalar form bit for bit.
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -10,6 +12,7 @@
 
 #include "check.hpp"
 #include "raydamp/math/sine.hpp"
+#include "raydamp/math/sine_lanes.hpp"
 
 namespace {
 
@@ -96,11 +99,55 @@ void check_constants() {
   CHECK(raydamp::math::detail::taylor(4) == 1.0 / 24.0);
 }
 
+// The lanes' kernels, p[i] -= t sin(q[i]) and g[i] = sin(q[i]), against the scalar form bit
+// for bit: every length from 0 to 40 (blocks of eight, of four, and a scalar tail), each
+// with lanes of every path mixed in, for both register widths where the processor has AVX2
+// (the width the ensemble picks on this machine is printed).
+void check_lane_kernels() {
+  using raydamp::math::SineWidth;
+  std::mt19937_64 rng(13);
+  const double specials[] = {0.0, -0.0, 0.78, -0.7799999, 1e-300, 3.0, -1e3, 1e6, -1e12,
+                             std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()};
+  std::uniform_real_distribution<double> small(-0.7, 0.7), wide(-50.0, 50.0), u(-1.0, 1.0);
+  std::uniform_int_distribution<int> pick(0, 10), kind(0, 9);
+  std::vector<SineWidth> widths{SineWidth::two};
+  if (raydamp::math::best_sine_width() == SineWidth::four) widths.push_back(SineWidth::four);
+  std::printf("lane kernels: best width %d\n", static_cast<int>(raydamp::math::best_sine_width()));
+  long mismatches = 0, lanes = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    const int n = trial % 41;
+    const bool all_small = trial % 3 == 0;  // blocks that take the series alone
+    std::vector<double> q(n), p0(n), expect_p(n), expect_g(n);
+    const double t = 0.01 * u(rng);
+    for (int i = 0; i < n; ++i) {
+      const int k = kind(rng);
+      q[i] = all_small || k < 4 ? small(rng) : k < 9 ? wide(rng) : specials[pick(rng)];
+      p0[i] = u(rng);
+      expect_g[i] = sin(q[i]);
+      expect_p[i] = p0[i] - t * sin(q[i]);
+    }
+    for (SineWidth w : widths) {
+      std::vector<double> p = p0, g(n);
+      raydamp::math::kick_sine_lanes(w, q.data(), p.data(), t, n);
+      raydamp::math::sine_lanes(w, q.data(), g.data(), n);
+      for (int i = 0; i < n; ++i) {
+        mismatches += bits_of(p[i]) != bits_of(expect_p[i]);
+        mismatches += bits_of(g[i]) != bits_of(expect_g[i]);
+      }
+      lanes += n;
+    }
+  }
+  std::printf("lane kernels against sin: %ld mismatches in %ld lanes\n", mismatches, lanes);
+  CHECK(mismatches == 0);
+  CHECK(lanes >= 50000 * static_cast<long>(widths.size()));
+}
+
 }  // namespace
 
 int main() {
   check_constants();
   check_accuracy();
   check_lanes_equal_scalar();
+  check_lane_kernels();
   TEST_MAIN_RETURN();
 }

@@ -1,8 +1,9 @@
-// sin(x) written once for one number and for blocks of four, with the same
-// operations in the same order on every lane, so sin4(x)[k] == sin(x[k]) bit for
-// bit. The damped pendulum's ensemble lanes use it when asked for vector_sine
-// (models/pendulum_lanes.hpp): their sines then run as SIMD, and a member's result
-// does not depend on which lane or block it ran in. Everything else keeps libm's
+// sin(x) written once for one number and for blocks of vectors (sin_block; sin4 for
+// four numbers), with the same operations in the same order on every lane, so
+// sin4(x)[k] == sin(x[k]) bit for bit. The damped pendulum's ensemble lanes use it
+// when asked for vector_sine (models/pendulum_lanes.hpp, through math/sine_lanes.hpp):
+// their sines then run as SIMD, and a member's result does not depend on which lane,
+// block or register width it ran in. Everything else keeps libm's
 // sin: this one differs from it in the last bit for about 3% of arguments, and a
 // System compiles sin to libm's, so the single pendulum, and ensembles by default,
 // stay equal to them bit for bit. It is also slower than glibc's for one number
@@ -18,26 +19,36 @@
 // +-sin r or +-cos r by bit masks, with no branch on a lane.
 // - |x| < kSmall: n = 0, lo = +0, and the quadrant step is the identity, so sin is
 //   sin_series(a) with x's sign; the scalar form then skips the reduction (a
-//   shorter chain), and a block of four takes that path only when all four lanes
-//   would (the result is the same bits either way).
+//   shorter chain), and a block takes that path only when all its lanes would (the
+//   result is the same bits either way).
 // - |x| >= kLarge (or infinite): n p1 would stop being exact; libm's sin, lane by
 //   lane, in both forms.
 // Accuracy (cpp/tests/test_sine.cpp, against long double sinl): within 1 ulp, where
 // libm is within about 0.52.
-// Vector types are GCC/Clang vector extensions: SSE2 registers on baseline x86-64,
-// NEON on arm64; other compilers would need a port of the four-lane form.
+// Vector types are GCC/Clang vector extensions: SSE2 registers on baseline x86-64
+// (AVX2 in sine_lanes.hpp's kernel, chosen at run time), NEON on arm64; other
+// compilers would need a port of the block form.
 #pragma once
 
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 
+// Forced inline, so that a caller compiled for wider registers (math/sine_lanes.hpp's AVX2
+// kernel) gets this code in its own instructions and no vector is passed by value across
+// a call (a 32-byte vector's ABI differs with and without AVX).
+#if defined(__GNUC__) || defined(__clang__)
+#define RAYDAMP_SINE_INLINE inline __attribute__((always_inline))
+#else
+#define RAYDAMP_SINE_INLINE inline
+#endif
+
 namespace raydamp::math {
 
 namespace detail {
 
-// Two lanes: an SSE2 register on baseline x86-64, a NEON one on arm64 (four-lane
-// types would change the ABI of these functions without AVX, and GCC warns).
+// Two lanes: an SSE2 register on baseline x86-64, a NEON one on arm64. (Four-lane
+// vectors only inside math/sine_lanes.hpp's AVX2 kernel, which inlines all of this.)
 using D2 = double __attribute__((vector_size(16)));
 using I2 = std::int64_t __attribute__((vector_size(16)));
 
@@ -55,7 +66,7 @@ constexpr double kP1 = 0x1.921fb544p+0, kP2 = 0x1.0b4611a6p-34, kP3 = 0x1.3198a2
 constexpr double kRound = 0x1.8p52;  // (y + kRound) - kRound rounds y to an integer, |y| < 2^51
 
 template <class To, class From>
-inline To bits(const From& from) {
+RAYDAMP_SINE_INLINE To bits(const From& from) {
   static_assert(sizeof(To) == sizeof(From));
   To to;
   std::memcpy(&to, &from, sizeof to);
@@ -65,13 +76,13 @@ inline To bits(const From& from) {
 // sum_k taylor(2k+3) z^k, k = 0..7 (so sin r = r + r z S(z)), and
 // sum_k taylor(2k+4) z^k, k = 0..7 (so cos r = 1 - z/2 + z^2 C(z)), in Estrin's order.
 template <class V>
-inline V sin_tail(V z, V z2, V z4) {
+RAYDAMP_SINE_INLINE V sin_tail(V z, V z2, V z4) {
   const V a = taylor(3) + taylor(5) * z, b = taylor(7) + taylor(9) * z;
   const V c = taylor(11) + taylor(13) * z, d = taylor(15) + taylor(17) * z;
   return (a + z2 * b) + z4 * (c + z2 * d);
 }
 template <class V>
-inline V cos_tail(V z, V z2, V z4) {
+RAYDAMP_SINE_INLINE V cos_tail(V z, V z2, V z4) {
   const V a = taylor(4) + taylor(6) * z, b = taylor(8) + taylor(10) * z;
   const V c = taylor(12) + taylor(14) * z, d = taylor(16) + taylor(18) * z;
   return (a + z2 * b) + z4 * (c + z2 * d);
@@ -80,14 +91,14 @@ inline V cos_tail(V z, V z2, V z4) {
 // sin a, a = |x| < kSmall. The reduced form adds lo (1 - z/2) with lo = +0 to the
 // same a z S(z): no change, even to the sign of a zero, since a >= +0.
 template <class V>
-inline V sin_series(V a) {
+RAYDAMP_SINE_INLINE V sin_series(V a) {
   const V z = a * a, z2 = z * z, z4 = z2 * z2;
   return a + (a * z) * sin_tail(z, z2, z4);
 }
 
 // sin a for a = |x| >= 0, any lane below kLarge: reduction, both series, quadrant.
 template <class V, class I>
-inline V sin_reduced(V a) {
+RAYDAMP_SINE_INLINE V sin_reduced(V a) {
   const V shifted = a * kTwoOverPi + kRound;
   const V n = shifted - kRound;
   const V r1 = a - n * kP1;  // exact
@@ -128,32 +139,54 @@ inline double sin(double x) {
   return bits<D2>(bits<I2>(s) ^ sign)[0];
 }
 
-// out[k] = sin(x[k]), k = 0..3: two pairs of SIMD lanes, interleaved by the compiler.
-inline void sin4(const double* x, double* out) {
-  using detail::D2;
-  using detail::I2;
-  using detail::bits;
-  D2 v[2];
-  std::memcpy(v, x, sizeof v);
+namespace detail {
+
+// s[g][k] = sin(x[g L + k]) for the G vectors of L lanes at x: interleaved by the compiler, with
+// one choice of path for all of them. One vector at a time in and out of memory (a copy of the
+// whole array went through the stack in halves, and its reload stalled on them).
+template <class V, class I, int G>
+RAYDAMP_SINE_INLINE void sin_block(const double* x, V (&s)[G]) {
+  constexpr int L = static_cast<int>(sizeof(V) / sizeof(double));
+  V v[G], a[G];
+  I sign[G];
+  for (int g = 0; g < G; ++g) std::memcpy(&v[g], x + g * L, sizeof(V));
   const auto sign_bit = static_cast<std::int64_t>(std::uint64_t{1} << 63);
-  const I2 sign[2] = {bits<I2>(v[0]) & sign_bit, bits<I2>(v[1]) & sign_bit};
-  const D2 a[2] = {bits<D2>(bits<I2>(v[0]) ^ sign[0]), bits<D2>(bits<I2>(v[1]) ^ sign[1])};
+  for (int g = 0; g < G; ++g) {
+    sign[g] = bits<I>(v[g]) & sign_bit;
+    a[g] = bits<V>(bits<I>(v[g]) ^ sign[g]);
+  }
   // Masks; NaN lanes count as large, as in sin().
-  const I2 small = (a[0] < kSmall) & (a[1] < kSmall), large = ~(a[0] < kLarge) | ~(a[1] < kLarge);
-  D2 s[2];
-  if ((small[0] & small[1]) != 0) {
-    s[0] = detail::sin_series(a[0]);
-    s[1] = detail::sin_series(a[1]);
-  } else if ((large[0] | large[1]) != 0) {
-    for (int k = 0; k < 4; ++k) out[k] = sin(x[k]);
+  I small = a[0] < kSmall, large = ~(a[0] < kLarge);
+  for (int g = 1; g < G; ++g) {
+    small &= a[g] < kSmall;
+    large |= ~(a[g] < kLarge);
+  }
+  std::int64_t all_small = small[0], any_large = large[0];
+  for (int k = 1; k < L; ++k) {
+    all_small &= small[k];
+    any_large |= large[k];
+  }
+  if (all_small != 0) {
+    for (int g = 0; g < G; ++g) s[g] = sin_series(a[g]);
+  } else if (any_large != 0) {
+    double out[G * L];
+    for (int k = 0; k < G * L; ++k) out[k] = sin(x[k]);
+    for (int g = 0; g < G; ++g) std::memcpy(&s[g], out + g * L, sizeof(V));
     return;
   } else {
-    s[0] = detail::sin_reduced<D2, I2>(a[0]);
-    s[1] = detail::sin_reduced<D2, I2>(a[1]);
+    for (int g = 0; g < G; ++g) s[g] = sin_reduced<V, I>(a[g]);
   }
-  s[0] = bits<D2>(bits<I2>(s[0]) ^ sign[0]);
-  s[1] = bits<D2>(bits<I2>(s[1]) ^ sign[1]);
-  std::memcpy(out, s, sizeof s);
+  for (int g = 0; g < G; ++g) s[g] = bits<V>(bits<I>(s[g]) ^ sign[g]);
+}
+
+}  // namespace detail
+
+// out[k] = sin(x[k]), k = 0..3: two pairs of SIMD lanes, interleaved by the compiler.
+inline void sin4(const double* x, double* out) {
+  detail::D2 s[2];
+  detail::sin_block<detail::D2, detail::I2, 2>(x, s);
+  std::memcpy(out, &s[0], sizeof s[0]);
+  std::memcpy(out + 2, &s[1], sizeof s[1]);
 }
 
 }  // namespace raydamp::math

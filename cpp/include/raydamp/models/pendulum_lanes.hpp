@@ -10,18 +10,19 @@
 // rounding). Then only the multiplications and additions run as SIMD across lanes.
 //
 // vector_sine (integrate_ensemble's opt-in): the sines run as SIMD too, through
-// math::sin4 (math/sine.hpp), about twice the throughput. That sine differs from
-// libm's in the last bit for about 3% of arguments, so the members then differ from
-// their single runs by rounding; they stay independent of the lane count and of the
-// other members (sin4 equals math::sin lane by lane), so a member's result does not
-// depend on how the ensemble was cut into runs or threads.
+// math/sine_lanes.hpp (math::sin's arithmetic, two or four lanes per register). That
+// sine differs from libm's in the last bit for about 3% of arguments, so the members
+// then differ from their single runs by rounding; they stay independent of the lane
+// count, of the register width and of the other members (each lane's sine is
+// math::sin's bits), so a member's result does not depend on how the ensemble was cut
+// into runs or threads, nor on the machine.
 #pragma once
 
 #include <cmath>
 
 #include "raydamp/damping/isotropic_damping.hpp"
 #include "raydamp/mass/unit_mass.hpp"
-#include "raydamp/math/sine.hpp"
+#include "raydamp/math/sine_lanes.hpp"
 #include "raydamp/models/damped_pendulum.hpp"
 #include "raydamp/state.hpp"
 
@@ -40,10 +41,14 @@ struct PendulumLanes {
   IsotropicDamping damping;
   int lanes;
   bool vector_sine;
+  // vector_sine's registers: four lanes where the processor has AVX2 (found here, once per
+  // run), else two; the same bits either way (math/sine_lanes.hpp). Tests force each.
+  math::SineWidth width;
 
   // Lanes of `member`'s kind: its eps, and so its damping rate.
-  PendulumLanes(const DampedPendulum& member, int lanes_, bool vector_sine_ = false)
-      : eps(member.eps), damping(member.damping), lanes(lanes_), vector_sine(vector_sine_) {}
+  PendulumLanes(const DampedPendulum& member, int lanes_, bool vector_sine_ = false,
+                math::SineWidth width_ = math::best_sine_width())
+      : eps(member.eps), damping(member.damping), lanes(lanes_), vector_sine(vector_sine_), width(width_) {}
 
   int size() const { return lanes; }
   // The step loop saves V summed over lanes; the ensemble recomputes each member's
@@ -51,9 +56,7 @@ struct PendulumLanes {
   double potential(const Vec& q) const { return (1.0 - q.array().cos()).sum(); }
   void gradient(const Vec& q, Vec& g) const {
     if (vector_sine) {
-      int i = 0;
-      for (; i + 4 <= lanes; i += 4) math::sin4(q.data() + i, g.data() + i);
-      for (; i < lanes; ++i) g[i] = math::sin(q[i]);
+      math::sine_lanes(width, q.data(), g.data(), lanes);
     } else {
       for (int i = 0; i < lanes; ++i) g[i] = std::sin(q[i]);
     }
@@ -63,13 +66,7 @@ struct PendulumLanes {
   void drift(Vec& q, const Vec& p, double t) const { q += t * p; }
   void kick(const Vec& q, Vec& p, double t) const {
     if (vector_sine) {
-      int i = 0;
-      double s[4];
-      for (; i + 4 <= lanes; i += 4) {
-        math::sin4(q.data() + i, s);
-        for (int k = 0; k < 4; ++k) p[i + k] -= t * s[k];
-      }
-      for (; i < lanes; ++i) p[i] -= t * math::sin(q[i]);
+      math::kick_sine_lanes(width, q.data(), p.data(), t, lanes);
     } else {
       for (int i = 0; i < lanes; ++i) p[i] -= t * std::sin(q[i]);
     }
