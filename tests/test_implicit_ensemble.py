@@ -6,12 +6,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-import scipy.sparse.linalg as sla
 
 import raydamp
 from fe_plate import plate
 from raydamp.models import DampedPendulum
 from test_ensemble import same
+from test_implicit_structure import damped_plate
 
 IMPLICIT = ["midpoint", "gauss4"]
 
@@ -19,11 +19,7 @@ IMPLICIT = ["midpoint", "gauss4"]
 @pytest.fixture(scope="module")
 def small_plate():
     """A plate of 420 DOF, 2% damping in modes 1 and 3, a constant load, and 7 initial states."""
-    pl = plate(20, 10)
-    w = np.sqrt(np.sort(sla.eigsh(pl.K, k=3, M=pl.M, sigma=0.0, which="LM", return_eigenvectors=False)))
-    alpha, beta = raydamp.rayleigh_coefficients(w[0], w[2], 0.02, 0.02)
-    f = 1e-3 * np.random.default_rng(5).standard_normal(pl.n)
-    s = raydamp.LinearStructure(pl.M, pl.K, alpha=alpha, beta=beta, f=f)
+    pl, s, _, _, _ = damped_plate(20, 10, 3, 5)
     rng = np.random.default_rng(6)
     q0, p0 = 1e-2 * rng.standard_normal((7, pl.n)), 1e-2 * rng.standard_normal((7, pl.n))
     # h omega_max about 20: far past every explicit method's limit

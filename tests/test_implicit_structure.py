@@ -54,14 +54,20 @@ class Modal:
 
 # -- the energy balance --------------------------------------------------------------------------
 
+def damped_plate(nx, ny, mode, load_seed):
+    """plate(nx, ny) with 2% damping in modes 1 and `mode` and a random constant load 1e-3 N(0, 1):
+    (plate, structure, load, alpha, beta)."""
+    pl = plate(nx, ny)
+    w = np.sqrt(np.sort(sla.eigsh(pl.K, k=mode, M=pl.M, sigma=0.0, which="LM", return_eigenvectors=False)))
+    alpha, beta = raydamp.rayleigh_coefficients(w[0], w[mode - 1], 0.02, 0.02)
+    f = 1e-3 * np.random.default_rng(load_seed).standard_normal(pl.n)
+    return pl, raydamp.LinearStructure(pl.M, pl.K, alpha=alpha, beta=beta, f=f), f, alpha, beta
+
+
 @pytest.fixture(scope="module")
 def plate_10k():
     """A plate of 9,940 DOF (consistent mass), 2% damping in modes 1 and 6, a random constant load."""
-    pl = plate(70, 70)
-    w = np.sqrt(np.sort(sla.eigsh(pl.K, k=6, M=pl.M, sigma=0.0, which="LM", return_eigenvectors=False)))
-    alpha, beta = raydamp.rayleigh_coefficients(w[0], w[5], 0.02, 0.02)
-    f = 1e-3 * np.random.default_rng(3).standard_normal(pl.n)
-    return pl, raydamp.LinearStructure(pl.M, pl.K, alpha=alpha, beta=beta, f=f), f, alpha, beta
+    return damped_plate(70, 70, 6, 3)
 
 
 def test_midpoint_energy_balance_holds_per_step_to_rounding(plate_10k):
