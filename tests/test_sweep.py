@@ -8,6 +8,7 @@ import math
 import os
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -165,6 +166,34 @@ def test_cancel_keeps_the_finished_chunks(client, tmp_path):
         ref = raydamp.integrate(DampedPendulum(float(ds["eps"].values[i])), SPEC["q0"], [0.0], h=0.1, n_steps=20000,
                                 save_every=10000)
         assert np.array_equal(ds["q"].values[i], ref.q)
+
+
+def test_cancel_stops_the_chunks_running_on_the_workers(client):
+    # Two chunks of one member each, 10^11 steps (about half an hour each), one on each worker's only
+    # thread. Cancelled once both run, the sweep returns, and the chunks stop on the workers too: a new
+    # task then runs at once. Before, they ran to their end, holding the workers (and a service's
+    # shutdown, which waited for them).
+    token = raydamp.CancelToken()
+    spec = {**SPEC, "t_end": None, "n_steps": 10**11, "save_every": 10**11}
+    grid = {"eps": [0.01, 0.02]}
+
+    def cancel_once_both_run():
+        deadline = time.monotonic() + 60
+        while sum(len(tasks) for tasks in client.processing().values()) < 2 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        time.sleep(0.5)  # inside the step loop by now
+        token.cancel()
+
+    canceller = threading.Thread(target=cancel_once_both_run)
+    canceller.start()
+    ds = raydamp.sweep(spec, grid=grid, client=client, chunk_size=1, cancel=token)
+    canceller.join()
+    assert ds.attrs["cancelled"] == 1 and (ds["rows"].values == 0).all()
+    # Both workers free again: two tasks that each need a whole worker thread finish (within 60 s,
+    # for a loaded machine; the chunks, left running, would hold the threads for half an hour).
+    futures = [client.submit(lambda x: x + 1, i, pure=False) for i in range(2)]
+    distributed.wait(futures, timeout=60)
+    assert client.gather(futures) == [1, 2]
 
 
 def test_sweep_over_a_chains_initial_state_equals_the_ensemble(client):

@@ -12,6 +12,8 @@ import ast
 import json
 import re
 import sys
+import threading
+import uuid
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -28,7 +30,7 @@ from ..systems.models import MODELS, Model
 from ..systems.system import System
 from .ensemble import integrate_ensemble
 from .choose_method import choose_method
-from .integrate import _catalogue, span
+from .integrate import CancelToken, _catalogue, span
 
 __all__ = ["sweep", "check_sweep", "SweepPlan", "parse_grid_item", "SPEC_KEYS", "RUN_ARGUMENTS"]
 
@@ -227,17 +229,45 @@ def _grid_times(run: dict[str, Any]) -> np.ndarray:
     return np.array([(n - 1) * h + h_last if k == n and h_last != h else k * h for k in ks])
 
 
+# How often a running chunk asks the scheduler whether its sweep was cancelled (one small message).
+_STOP_POLL_SECONDS = 0.25
+
+
+def _watch_stop(name: str | None) -> tuple[CancelToken | None, threading.Event | None]:
+    """For a chunk of a cancellable sweep: a CancelToken that a thread cancels once the sweep's
+    distributed Event ``name`` is set (sweep sets it at a cancel), so a running chunk stops within a
+    poll and a few hundred steps instead of running to its end on the worker; and the threading.Event
+    that ends the watch. (None, None) for a sweep without a cancel."""
+    if name is None:
+        return None, None
+    from distributed import Event, get_client
+
+    stop = Event(name, client=get_client())  # the worker's client, resolved in the task's thread
+    token, finished = CancelToken(), threading.Event()
+
+    def watch() -> None:
+        while not finished.is_set():
+            try:
+                if stop.wait(timeout=_STOP_POLL_SECONDS):
+                    token.cancel()
+                    return
+            except Exception:  # the scheduler gone: nothing can cancel the chunk any more
+                return
+
+    threading.Thread(target=watch, name="raydamp-sweep-stop", daemon=True).start()
+    return token, finished
+
+
 def _run_chunk(task: dict[str, Any]) -> dict[str, Any]:
     """A worker's part: one ensemble call; plain data in, arrays out."""
     model = model_from_spec(task["model"])
     run = task["run"]
-    ens = integrate_ensemble(model, task["q0"], task["p0"], parameters=task["parameters"] or None,
-                             method=run["method"], tableau=run.get("tableau"), composition=run.get("composition"),
-                             h=run["h"], t_end=run.get("t_end"), n_steps=run.get("n_steps"),
-                             save_every=run["save_every"], threads=task["threads"],
-                             load=Load.from_dict(run["load"]) if run.get("load") is not None else None,
-                             temperature=run.get("temperature"), seed=run.get("seed"),
-                             first_stream=run.get("stream", 0) + task["start"] if run.get("temperature") else 0)
+    token, finished = _watch_stop(task.get("stop"))
+    try:
+        ens = _run_ensemble(model, task, run, token)
+    finally:
+        if finished is not None:
+            finished.set()
     return {"start": task["start"], "t": ens.t, "q": ens.q, "p": ens.p, "energy": ens.energy,
             "momentum": ens.momentum, "rows": ens.rows, "t_final": ens.t_final, "q_final": ens.q_final,
             "p_final": ens.p_final, "energy_final": ens.energy_final, "momentum_final": ens.momentum_final,
@@ -248,16 +278,31 @@ def _run_chunk(task: dict[str, Any]) -> dict[str, Any]:
                          if s != "completed"}}
 
 
-def _finished(client, futures, cancel):
-    """The futures as they finish; once ``cancel`` is cancelled, the rest are cancelled on the
-    cluster and no longer waited for."""
+def _run_ensemble(model, task: dict[str, Any], run: dict[str, Any], cancel: CancelToken | None):
+    return integrate_ensemble(model, task["q0"], task["p0"], parameters=task["parameters"] or None,
+                             method=run["method"], tableau=run.get("tableau"), composition=run.get("composition"),
+                             h=run["h"], t_end=run.get("t_end"), n_steps=run.get("n_steps"),
+                             save_every=run["save_every"], threads=task["threads"],
+                             load=Load.from_dict(run["load"]) if run.get("load") is not None else None,
+                             temperature=run.get("temperature"), seed=run.get("seed"),
+                             first_stream=run.get("stream", 0) + task["start"] if run.get("temperature") else 0,
+                             cancel=cancel)
+
+
+def _finished(client, futures, cancel, stop: str | None):
+    """The futures as they finish; once ``cancel`` is cancelled, the running chunks are told to stop
+    (the distributed Event ``stop``, which _watch_stop watches), the queued ones are cancelled on the
+    cluster, and none is waited for any more. The Event stays set on the scheduler (a few bytes per
+    cancelled sweep): a chunk that has not looked yet still sees it."""
     import time
 
-    from dask.distributed import as_completed
+    from dask.distributed import Event, as_completed
 
     pending = as_completed(futures)
     while not pending.is_empty():
         if cancel is not None and cancel.cancelled:
+            if stop is not None:
+                Event(stop, client=client).set()
             client.cancel([f for f in futures if not f.done()])
             return
         if pending.has_ready():
@@ -440,7 +485,8 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
     cancel : a :class:`raydamp.CancelToken`; once cancelled, no further chunk is waited for (chunks
         still queued on the cluster are cancelled there) and the Dataset of the chunks finished so
         far comes back, the other members with status "cancelled" and no rows, ``attrs["cancelled"]``
-        true. A chunk already running on a worker finishes there but is not waited for.
+        true. A chunk already running on a worker stops there too, within a quarter of a second and a
+        few hundred steps (it watches a distributed Event the cancel sets), and is not waited for.
 
     Returns an xarray.Dataset laid out as ``EnsembleSolution.to_xarray()``'s, with a member
     coordinate per grid name; when the groups' save grids differ (a grid over h with t_end),
@@ -473,6 +519,9 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
     shared_times = all(t.shape == times[0].shape and np.array_equal(t, times[0]) for t in times)
     tasks = [_task(plan, model_spec, run, a, min(stop, a + chunk_size), threads)
              for run, start, stop in groups for a in range(start, stop, chunk_size)]
+    stop_event = f"raydamp-sweep-stop-{uuid.uuid4().hex}" if cancel is not None else None
+    for task in tasks:
+        task["stop"] = stop_event
 
     n, m = model.dim, len(model.momentum_names)
     sizes = {"time": R, "dof": n, "momentum_map": m}
@@ -528,7 +577,7 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
         bar = tqdm(total=members, unit="member", desc="sweep")
     try:
         futures = client.map(_run_chunk, tasks, pure=False)
-        for future in _finished(client, futures, cancel):
+        for future in _finished(client, futures, cancel, stop_event):
             out = future.result()
             a = out["start"]
             b = a + out["q"].shape[0]
