@@ -178,3 +178,20 @@ def test_a_sweep_interrupted_by_a_crash_runs_again_at_restart(start_server, tmp_
     ref = raydamp.integrate(DampedPendulum(float(ds["eps"].values[57])), JOB["initial_state"]["q"], [0.0], h=0.1,
                             n_steps=2_000_000, save_every=1_000_000)
     assert np.array_equal(ds["q"].values[57], ref.q)
+
+
+def test_a_cancelled_sweep_frees_the_worker_its_chunk_held(start_server):
+    # The in-process cluster with one thread: a sweep's chunk of 10^11 steps (about half an hour) holds it.
+    # Cancelled while that chunk runs, the chunk stops there too, so the next sweep runs at once; before,
+    # it waited for the cancelled chunk's end.
+    server = start_server(RAYDAMP_SWEEP_THREADS="1", RAYDAMP_MAX_STEPS=str(10**12),
+                          RAYDAMP_MAX_SWEEP_STEPS=str(10**12))
+    blocker = submit(server, {"job": {**JOB, "t_end": None, "n_steps": 10**11, "save_every": 10**11},
+                              "grid": {"eps": [0.01]}})
+    wait(server, blocker, lambda v: v["status"] == "running")
+    time.sleep(1.0)  # its chunk is in the step loop by now
+    assert server.client.post(f"/v1/sweeps/{blocker}/cancel").status_code == 202
+    assert wait(server, blocker, finished)["status"] == "cancelled"
+    quick = submit(server, {"job": JOB, "grid": {"eps": [0.0, 0.3]}})
+    view = wait(server, quick, finished, timeout=60)
+    assert view["status"] == "completed" and view["members_done"] == 2, view
