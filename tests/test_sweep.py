@@ -189,11 +189,29 @@ def test_cancel_stops_the_chunks_running_on_the_workers(client):
     ds = raydamp.sweep(spec, grid=grid, client=client, chunk_size=1, cancel=token)
     canceller.join()
     assert ds.attrs["cancelled"] == 1 and (ds["rows"].values == 0).all()
-    # Both workers free again: two tasks that each need a whole worker thread finish (within 60 s,
-    # for a loaded machine; the chunks, left running, would hold the threads for half an hour).
-    futures = [client.submit(lambda x: x + 1, i, pure=False) for i in range(2)]
+    assert_every_worker_is_free(client)  # the chunks, left running, would hold the threads for half an hour
+
+
+def test_an_error_in_the_driver_stops_the_chunks_still_running(client):
+    # Two chunks: 20 steps, and 2 x 10^10 (h = 1e-10 to t = 2: about five minutes). The progress callback
+    # raises at the first; the sweep raises it, and the long chunk stops on its worker rather than holding
+    # it for minutes: then a task on each worker's only thread runs at once.
+    def progress(done, total):
+        raise RuntimeError("the caller's callback failed")
+
+    spec = {**SPEC, "save_every": 10**11}
+    with pytest.raises(RuntimeError, match="callback failed"):
+        raydamp.sweep(spec, grid={"h": [0.1, 1e-10]}, client=client, chunk_size=1, progress=progress)
+    assert_every_worker_is_free(client)
+
+
+def assert_every_worker_is_free(client):
+    """A task pinned to each worker finishes within 60 s (a chunk left running would hold its thread)."""
+    workers = sorted(client.scheduler_info()["workers"])
+    futures = [client.submit(lambda x: x + 1, i, pure=False, workers=[w], allow_other_workers=False)
+               for i, w in enumerate(workers)]
     distributed.wait(futures, timeout=60)
-    assert client.gather(futures) == [1, 2]
+    assert client.gather(futures) == list(range(1, len(workers) + 1))
 
 
 def test_sweep_over_a_chains_initial_state_equals_the_ensemble(client):

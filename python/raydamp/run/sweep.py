@@ -234,10 +234,10 @@ _STOP_POLL_SECONDS = 0.25
 
 
 def _watch_stop(name: str | None) -> tuple[CancelToken | None, threading.Event | None]:
-    """For a chunk of a cancellable sweep: a CancelToken that a thread cancels once the sweep's
-    distributed Event ``name`` is set (sweep sets it at a cancel), so a running chunk stops within a
-    poll and a few hundred steps instead of running to its end on the worker; and the threading.Event
-    that ends the watch. (None, None) for a sweep without a cancel."""
+    """For a chunk of a sweep: a CancelToken that a thread cancels once the sweep's distributed Event
+    ``name`` is set (sweep sets it at a cancel, or when it ends by an error), so a running chunk stops
+    within a poll and a few hundred steps instead of running to its end on the worker; and the
+    threading.Event that ends the watch. (None, None) for the driver's own check run (no name)."""
     if name is None:
         return None, None
     from distributed import Event, get_client
@@ -251,7 +251,7 @@ def _watch_stop(name: str | None) -> tuple[CancelToken | None, threading.Event |
                 if stop.wait(timeout=_STOP_POLL_SECONDS):
                     token.cancel()
                     return
-            except Exception:  # the scheduler gone: nothing can cancel the chunk any more
+            except BaseException:  # the client or scheduler closing (CancelledError included): nothing can stop it now
                 return
 
     threading.Thread(target=watch, name="raydamp-sweep-stop", daemon=True).start()
@@ -289,21 +289,28 @@ def _run_ensemble(model, task: dict[str, Any], run: dict[str, Any], cancel: Canc
                              cancel=cancel)
 
 
-def _finished(client, futures, cancel, stop: str | None):
+def _stop_chunks(client, futures, stop: str) -> None:
+    """The running chunks told to stop (the distributed Event they watch) and the queued ones
+    cancelled on the cluster."""
+    from dask.distributed import Event
+
+    Event(stop, client=client).set()
+    client.cancel([f for f in futures if not f.done()])
+
+
+def _finished(client, futures, cancel, stop: str):
     """The futures as they finish; once ``cancel`` is cancelled, the running chunks are told to stop
     (the distributed Event ``stop``, which _watch_stop watches), the queued ones are cancelled on the
     cluster, and none is waited for any more. The Event stays set on the scheduler (a few bytes per
     cancelled sweep): a chunk that has not looked yet still sees it."""
     import time
 
-    from dask.distributed import Event, as_completed
+    from dask.distributed import as_completed
 
     pending = as_completed(futures)
     while not pending.is_empty():
         if cancel is not None and cancel.cancelled:
-            if stop is not None:
-                Event(stop, client=client).set()
-            client.cancel([f for f in futures if not f.done()])
+            _stop_chunks(client, futures, stop)
             return
         if pending.has_ready():
             yield next(pending)
@@ -519,7 +526,8 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
     shared_times = all(t.shape == times[0].shape and np.array_equal(t, times[0]) for t in times)
     tasks = [_task(plan, model_spec, run, a, min(stop, a + chunk_size), threads)
              for run, start, stop in groups for a in range(start, stop, chunk_size)]
-    stop_event = f"raydamp-sweep-stop-{uuid.uuid4().hex}" if cancel is not None else None
+    # Set at a cancel, or when the sweep ends by an error while chunks still run on the client's workers.
+    stop_event = f"raydamp-sweep-stop-{uuid.uuid4().hex}"
     for task in tasks:
         task["stop"] = stop_event
 
@@ -575,6 +583,7 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
         from tqdm.auto import tqdm
 
         bar = tqdm(total=members, unit="member", desc="sweep")
+    futures = []
     try:
         futures = client.map(_run_chunk, tasks, pure=False)
         for future in _finished(client, futures, cancel, stop_event):
@@ -611,6 +620,11 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
     finally:
         if bar is not None:
             bar.close()
+        if not close and any(not f.done() for f in futures):  # an error here or in a chunk: the rest stop too
+            try:
+                _stop_chunks(client, futures, stop_event)
+            except Exception:  # the client itself failing: the error being raised is the one to see
+                pass
         for thing in close:
             thing.close()
 

@@ -37,6 +37,12 @@
 #define RAYDAMP_NORMAL_CHUNK 4
 #endif
 
+// The fast path marks a word outside its layer's core by NaN (NormalStream::fast_value), which
+// -ffinite-math-only would let the compiler assume away: the slow path would never run.
+#if defined(__FINITE_MATH_ONLY__) && __FINITE_MATH_ONLY__
+#error "raydamp/random/philox.hpp needs NaN: build without -ffast-math / -ffinite-math-only"
+#endif
+
 namespace raydamp {
 
 using Philox4x32 = std::array<std::uint32_t, 4>;
@@ -101,7 +107,8 @@ struct Ziggurat {
 class NormalStream {
  public:
   // 16 blocks: 256 bytes of cache, in a stream that the step loop's workspace holds per run and per lane.
-  // benchmarks/bench_normals.cpp (fill of 10^4, ns per normal, unbuffered 8.9): AVX2 4.4, SSE2 5.5-5.9,
+  // benchmarks/bench_normals.cpp (fill of 10^4, ns per normal, unbuffered 8.9): AVX2 3.9 (4.4 before fill ran
+  // whole runs of blocks), SSE2 5.5-5.9,
   // the portable loop 10.1 (no gain: GCC does not vectorize it); 8 and 32 blocks within the noise of 16.
   static constexpr int kBuffered = RAYDAMP_NORMAL_BUFFER;
   static_assert(kBuffered % (2 * RAYDAMP_NORMAL_CHUNK) == 0, "whole chunks of SSE2 registers of blocks");
