@@ -181,6 +181,12 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
     with_method_for<Model>(method, [&](auto method_tag) {
       using Method = decltype(method_tag);
       if (temperature != 0.0) check_temperature<Method>(*member_model.front(), comp, temperature);  // once, here
+      // Refusals before the factorisations below, which can take seconds.
+      constexpr bool lanes = std::is_same_v<Model, DampedPendulum> && !uses_tableau<Method>();
+      if (vector_sine && !lanes)
+        throw std::invalid_argument("vector_sine: only the damped pendulum's 3s, 2s and sv ensembles run their "
+                                    "sines as SIMD lanes");
+      if (vector_sine && loaded) throw std::invalid_argument("vector_sine: the SIMD lanes take no load");
       // The linear implicit methods' factorisations: made here, once per distinct model and sub-step length,
       // before any thread starts, and read by every member of that model (each with scratch of its own).
       std::vector<std::shared_ptr<const LinearImplicitFactors>> factors(members);
@@ -206,11 +212,6 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
           throw std::invalid_argument("member " + std::to_string(i) + ": " + e.what());
         }
       };
-      constexpr bool lanes = std::is_same_v<Model, DampedPendulum> && !uses_tableau<Method>();
-      if (vector_sine && !lanes)
-        throw std::invalid_argument("vector_sine: only the damped pendulum's 3s, 2s and sv ensembles run their "
-                                    "sines as SIMD lanes");
-      if (vector_sine && loaded) throw std::invalid_argument("vector_sine: the SIMD lanes take no load");
       if (lanes && loaded) {  // the lanes' step has no clock: one by one
         for_each_member(members, threads, run_member, control);
       } else if constexpr (lanes) {
