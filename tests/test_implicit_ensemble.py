@@ -125,3 +125,10 @@ def test_one_factorisation_per_sub_step_length_whatever_the_members(method, comp
                                             0.02 if short_last else 0.05, 5, 2, None, None)
         assert out["factorisations"] == count, members
         assert list(out["status"]) == ["completed"] * members
+
+
+def test_vector_sine_is_refused_for_a_structure_naming_it(small_plate):
+    # The refusal names the argument (run_ensemble.hpp makes it before the factorisations).
+    s, q0, p0, h = small_plate
+    with pytest.raises(ValueError, match="vector_sine: only the damped pendulum"):
+        raydamp.integrate_ensemble(s, q0, p0, method="midpoint", h=h, n_steps=3, vector_sine=True)
