@@ -74,6 +74,14 @@ def main() -> None:
         row(label, runs, steps, repeats)
     import scipy.sparse as sp
 
+    def baoab_runs(structure, n, steps):
+        """baoab from rest, noiseless and at kT = 0.5: the pair a row compares."""
+        zeros = np.zeros(n)
+        return {"noiseless": lambda: raydamp.integrate(structure, zeros, zeros, method="baoab", h=0.01,
+                                                       n_steps=steps, save_every=steps),
+                "kT = 0.5": lambda: raydamp.integrate(structure, zeros, zeros, method="baoab", h=0.01, n_steps=steps,
+                                                      save_every=steps, temperature=0.5, seed=1)}
+
     n = 10_000
     K = sp.diags([np.full(n, 2.0), -np.ones(n - 1), -np.ones(n - 1)], [0, 1, -1], format="csc") * 100.0
     for kind, M in (("lumped", sp.identity(n, format="csc")),
@@ -81,11 +89,7 @@ def main() -> None:
                                             format="csc") / 6.0)):
         structure = raydamp.LinearStructure(M, K, alpha=0.05)
         steps = int(2000 * scale)
-        zeros = np.zeros(n)
-        runs = {"noiseless": lambda s=structure: raydamp.integrate(s, zeros, zeros, method="baoab", h=0.01,
-                                                                  n_steps=steps, save_every=steps),
-                "kT = 0.5": lambda s=structure: raydamp.integrate(s, zeros, zeros, method="baoab", h=0.01, n_steps=steps,
-                                                                 save_every=steps, temperature=0.5, seed=1)}
+        runs = baoab_runs(structure, n, steps)
         row(f"{n}-DOF structure, {kind} M, alpha M damping, baoab (per step)", runs, steps, repeats)
     # beta K damping: the noise is psi(C M^-1) R xi, a Chebyshev series in K M^-1 of about the damping flow's
     # degree after a product with C's sparse Cholesky factor R, so a step does about twice the products.
@@ -93,11 +97,7 @@ def main() -> None:
     for alpha, beta in ((0.05, 0.005), (0.0, 0.005)):
         structure = raydamp.LinearStructure(M, K, alpha=alpha, beta=beta)
         steps = int(2000 * scale)
-        zeros = np.zeros(n)
-        runs = {"noiseless": lambda s=structure: raydamp.integrate(s, zeros, zeros, method="baoab", h=0.01,
-                                                                  n_steps=steps, save_every=steps),
-                "kT = 0.5": lambda s=structure: raydamp.integrate(s, zeros, zeros, method="baoab", h=0.01, n_steps=steps,
-                                                                 save_every=steps, temperature=0.5, seed=1)}
+        runs = baoab_runs(structure, n, steps)
         row(f"{n}-DOF structure, lumped M, C = {alpha} M + {beta} K, baoab", runs, steps, repeats)
 
 
