@@ -47,6 +47,23 @@ int main() {
     }
   }
 
+  // Progress under contention: members that take no time, a report for every member,
+  // so threads race to report. The counts must still only grow and end at `members`
+  // (a thread that finished member 36 could once report after the one that finished 37).
+  for (int round = 0; round < 200; ++round) {
+    long reported = 0;
+    bool grew = true;
+    EnsembleControl control;
+    control.max_progress_calls = 4000;
+    control.progress = [&](long done, long) {
+      grew = grew && done > reported;
+      reported = done;
+    };
+    for_each_member(4000, 4, [](long) {}, control);
+    CHECK(grew);
+    CHECK(reported == 4000);
+  }
+
   // Members 11 and 23 fail; whatever the threads, member 11's error is the one reported.
   for (int threads : {1, 2, 4}) {
     std::string what;

@@ -19,7 +19,8 @@ namespace raydamp {
 
 struct EnsembleControl {
   // Called as progress(members finished, members) from whichever thread finished
-  // the member, one call at a time, a bounded number of times.
+  // the member, one call at a time, a bounded number of times; the counts only grow
+  // and the last call says (members, members).
   std::function<void(long done, long total)> progress;
   long max_progress_calls = 100;
 };
@@ -42,8 +43,9 @@ void for_each_member(long members, int threads, RunMember&& run_member, const En
   threads = ensemble_threads(threads, members);
   std::atomic<long> next{0}, done{0};
   std::atomic<bool> failed{false};
-  std::mutex mutex;  // guards the failure record and the progress callback
+  std::mutex mutex;  // guards the failure record, `reported` and the progress callback
   long failed_member = members;
+  long reported = 0;  // the last count given to control.progress
   std::exception_ptr failure;
   const long report_every = std::max(1L, members / std::max(1L, control.max_progress_calls));
 
@@ -56,8 +58,15 @@ void for_each_member(long members, int threads, RunMember&& run_member, const En
         run_member(i);
         const long finished = done.fetch_add(1, std::memory_order_acq_rel) + 1;
         if (control.progress && (finished % report_every == 0 || finished == members)) {
+          // Two threads can reach here out of order (37 locks before 36): report the
+          // count as it is under the lock, and only when it grew, so counts never go
+          // back and the last call says `members`.
           std::lock_guard<std::mutex> lock(mutex);
-          control.progress(finished, members);
+          const long now = done.load(std::memory_order_acquire);
+          if (now > reported) {
+            reported = now;
+            control.progress(now, members);
+          }
         }
       } catch (...) {
         std::lock_guard<std::mutex> lock(mutex);
