@@ -136,6 +136,21 @@ def test_cancel_stops_every_member():
     assert ens.status == ("cancelled",) * 4 and (ens.steps == 0).all()
 
 
+@pytest.mark.parametrize("eps_groups", [1, 400])
+def test_progress_counts_only_grow_and_end_at_members(eps_groups):
+    # One eps: members run as lanes, progress counted per batch; 400 eps: one by one. Two threads race
+    # to report (a count of 37 once came before 36: CI's test_ensemble); the counts must only grow.
+    members = 400
+    eps = np.repeat(np.linspace(0.0, 0.3, eps_groups), members // eps_groups)
+    for _ in range(20):
+        counts: list[tuple[int, int]] = []
+        raydamp.integrate_ensemble(DampedPendulum(), np.linspace(-1, 1, members)[:, None], [0.0],
+                                   parameters={"eps": eps}, h=0.1, n_steps=3, threads=2,
+                                   progress=lambda done, total: counts.append((done, total)))
+        done = [c[0] for c in counts]
+        assert done == sorted(set(done)) and done[-1] == members and {c[1] for c in counts} == {members}
+
+
 def vector_sine_ensemble(**kwargs) -> raydamp.EnsembleSolution:
     # Two eps groups (two lane runs and their tails of fewer than four lanes), 500 steps.
     q0 = np.linspace(-2.5, 2.5, 70)[:, None]

@@ -220,7 +220,12 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
             lane_batches(member_model, batch_lanes(members, ensemble_threads(threads, members)));
         std::atomic<long> finished{0};
         EnsembleControl batch_control;
-        if (control.progress) batch_control.progress = [&](long, long) { control.progress(finished.load(), members); };
+        long reported = 0;  // called under for_each_member's lock: members counts only grow, as there
+        if (control.progress)
+          batch_control.progress = [&](long, long) {
+            const long now = finished.load();
+            if (now > reported) control.progress(reported = now, members);
+          };
         for_each_member(static_cast<long>(batches.size()), threads, [&](long b) {
           const LaneBatch& batch = batches[b];
           // With vector_sine every member runs as a lane, so that its sines are math::sin's.
