@@ -45,6 +45,10 @@ __all__ = ["CheckPool", "ChecksBusy", "checked_inline", "compile_for_run", "isol
 log = logging.getLogger("raydamp_service.checks")
 
 _BYTES_PER_PARSED_ENTRY = 12  # a CSC matrix: a float64 value and an int32 row index per stored entry
+# A check process's first message, once warmed up (_serve), and how long the server waits for it: a start is
+# not a check, and is not charged to the budget of the check that waits for it.
+_READY = ("ready", None)
+_START_SECONDS = 60.0
 
 
 class ChecksBusy(Exception):
@@ -157,13 +161,15 @@ def _check(kind: str, spec: Any, settings: Settings, files: ParsedFiles) -> Any:
 
 
 def _serve(connection, settings: Settings) -> None:
-    """A check process: answers (kind, spec, settings) with ("ok", value), ("invalid", (loc, message)),
-    ("error", text), or ("memory", None) and then ends (a fresh process replaces it)."""
+    """A check process: says _READY once warmed up, then answers (kind, spec, settings) with ("ok", value),
+    ("invalid", (loc, message)), ("error", text), or ("memory", None) and then ends (a fresh process
+    replaces it)."""
     _die_with_parent()
     _warm_up(settings)
     db, memory_bytes = str(Path(settings.db).resolve()), settings.check_memory_bytes
     _limit_address_space(memory_bytes)
     files = ParsedFiles(_StoredFiles(db), memory_bytes // 4 // _BYTES_PER_PARSED_ENTRY)
+    connection.send(_READY)  # the warm-up is done: a check's budget starts from here (_Process.started)
     while True:
         try:
             kind, spec, settings = connection.recv()
@@ -197,6 +203,18 @@ class _Process:
                                        args=(child, settings))
         self.process.start()
         child.close()
+        self.ready = False
+
+    def started(self) -> bool:
+        """Waits (at most _START_SECONDS) for the process's warm-up to end; whether it did. A check's budget
+        counts from here: a process that replaced a killed one is handed out at once and warms up (0.4 s here,
+        more on a loaded machine), and that time is not the submitted system's."""
+        if not self.ready:
+            try:
+                self.ready = self.connection.poll(_START_SECONDS) and self.connection.recv() == _READY
+            except (EOFError, OSError):
+                return False
+        return self.ready
 
     def end(self) -> None:
         self.process.kill()
@@ -303,6 +321,9 @@ class CheckPool:
                 process = self._idle.get(timeout=budget)
             except queue.Empty:
                 raise ChecksBusy from None
+            if not process.started():  # died or hung in its warm-up: the next one is asked
+                self._replace(process)
+                continue
             try:
                 process.connection.send((kind, spec, self._settings))
             except OSError:
