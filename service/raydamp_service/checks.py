@@ -33,14 +33,14 @@ from pathlib import Path
 from typing import Any
 
 from raydamp.jobs import SystemInput
-from raydamp.systems.system import load_compiled
+from raydamp.systems.system import NotCompiled, compiled_elsewhere, load_compiled
 
 from .config import Settings
 from .files import ParsedFiles
-from .problems import JobError, RaydampCall, check_spec, check_sweep_spec
+from .problems import JobError, RaydampCall, build_call, check_spec, check_sweep_spec
 from .schemas import JobSpec, SweepSpec
 
-__all__ = ["CheckPool", "ChecksBusy", "checked_inline", "compile_for_run", "isolated"]
+__all__ = ["CheckPool", "ChecksBusy", "build_for_run", "checked_inline", "isolated"]
 
 log = logging.getLogger("raydamp_service.checks")
 
@@ -353,18 +353,30 @@ class CheckPool:
                 "couplings, or use a Chain or LinearStructure for a large system")
 
 
-def compile_for_run(checks: CheckPool, spec: JobSpec, run) -> bool:
-    """A run (a job's, or a sweep's base job) that found its system's functions not loaded (a restart, an
-    eviction): a check process compiles them and they are loaded here, waiting for a free process (a JobError
-    past a budget: the run fails with its message). False if the service stops meanwhile."""
+def build_for_run(checks: CheckPool | None, spec: JobSpec, run, files=None) -> RaydampCall | None:
+    """A run's call (a job's, or a sweep's base job), its system built from functions a check process
+    compiled: those the submission's check loaded, else (a restart lost them, or an eviction) compiled now by
+    a check process, waiting for a free one (a JobError past a budget: the run fails with its message), and
+    loaded here. Never compiled in the server, where the compile would hold the interpreter lock. None if
+    the service stops meanwhile. Without check processes (checks None), built here."""
+    if checks is None:
+        return build_call(spec, files=files)
+    try:
+        with compiled_elsewhere():
+            return build_call(spec, files=files)
+    except NotCompiled:
+        pass
     while not (run.stopping.is_set() or checks.closed):
         try:
             checks.compile(spec)
-            return True
+            break
         except ChecksBusy:
             continue
         except JobError:
             if checks.closed:  # its process was ended by the shutdown, not by a budget
-                return False
+                return None
             raise
-    return False
+    else:
+        return None
+    with compiled_elsewhere():  # NotCompiled now would be a bug, reported as an internal error
+        return build_call(spec, files=files)

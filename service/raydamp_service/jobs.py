@@ -11,12 +11,10 @@ from typing import Any
 
 import numpy as np
 
-from raydamp.systems.system import NotCompiled, compiled_elsewhere
-
-from .checks import CheckPool, checked_inline, compile_for_run
+from .checks import CheckPool, build_for_run, checked_inline
 from .config import Settings
 from .files import FILE_COLUMNS_ADDED, FILES_TABLE, FileStore, file_resolver
-from .problems import RaydampCall, build_call, planned_steps
+from .problems import RaydampCall, planned_steps
 from .runner import Outcome, Run
 from .schemas import JobSpec, normalise_stored
 from .group_commit import Waiter
@@ -200,18 +198,7 @@ class JobWork:
 
     def _call(self, spec: JobSpec, run: Run) -> RaydampCall | None:
         """The job's call, its system from the compiled functions loaded; None if the service is stopping."""
-        files = file_resolver(self._store)
-        if self._checks is None:
-            return build_call(spec, files=files)
-        try:
-            with compiled_elsewhere():
-                return build_call(spec, files=files)
-        except NotCompiled:
-            pass
-        if not compile_for_run(self._checks, spec, run):
-            return None
-        with compiled_elsewhere():  # NotCompiled now would be a bug, reported as an internal error
-            return build_call(spec, files=files)
+        return build_for_run(self._checks, spec, run, files=file_resolver(self._store))
 
     def quick(self, record: JobRecord) -> bool:
         """A run of milliseconds: a built-in model without a load (nothing to compile or read) and fewer than

@@ -16,11 +16,8 @@ import raydamp
 from raydamp.results.ensemble_solution import STATUSES
 from raydamp.results.io.sweep import save_sweep
 
-from raydamp.systems.system import NotCompiled, compiled_elsewhere
-
-from .checks import CheckPool, compile_for_run, isolated
+from .checks import CheckPool, build_for_run, isolated
 from .config import Settings
-from .problems import build_call
 from .runner import Outcome, Run
 from .store import TaskRecord, TaskStore
 from .schemas import SweepSpec, normalise_stored
@@ -97,17 +94,9 @@ class SweepWork:
         return False
 
     def _loaded(self, spec: SweepSpec, run: Run) -> bool:
-        """The base system's functions loaded (a restart lost what the submission's check loaded): compiled
-        by a check process, never here, where the compile would hold the interpreter lock. False if the
-        service stops meanwhile."""
-        if self._checks is None or not isolated(spec.job):
-            return True
-        try:
-            with compiled_elsewhere():
-                build_call(spec.job)
-            return True
-        except NotCompiled:
-            return compile_for_run(self._checks, spec.job, run)
+        """The base system's functions loaded (a restart lost what the submission's check loaded), by a check
+        process (checks.build_for_run). False if the service stops meanwhile."""
+        return self._checks is None or not isolated(spec.job) or build_for_run(self._checks, spec.job, run) is not None
 
     def run(self, record: SweepRecord, run: Run) -> Outcome:
         spec = SweepSpec.model_validate(record.spec)

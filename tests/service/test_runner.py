@@ -102,7 +102,7 @@ def test_a_submitted_builtin_job_is_built_once_for_its_check_and_its_run(tmp_pat
     import httpx
     import numpy as np
     import raydamp
-    import raydamp_service.jobs
+    import raydamp_service.checks
     import raydamp_service.problems
     from raydamp.models import make_model
     from raydamp_service.app import create_app
@@ -115,7 +115,7 @@ def test_a_submitted_builtin_job_is_built_once_for_its_check_and_its_run(tmp_pat
         return build_call(*args, **kwargs)
 
     monkeypatch.setattr(raydamp_service.problems, "build_call", counted)
-    monkeypatch.setattr(raydamp_service.jobs, "build_call", counted)
+    monkeypatch.setattr(raydamp_service.checks, "build_call", counted)  # a run builds its call there
     spec = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "h": 0.01, "n_steps": 100,
             "initial_state": {"q": [0.9 * math.pi], "p": [0.0]}}
 
