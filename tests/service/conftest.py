@@ -23,6 +23,11 @@ import pytest
 SERVICE_DIR = Path(__file__).resolve().parents[2] / "service"
 if str(SERVICE_DIR) not in sys.path:
     sys.path.insert(0, str(SERVICE_DIR))
+# And so do the check processes of an app a test makes in this process: Python 3.11's forkserver does not
+# take its parent's sys.path (it finds modules by PYTHONPATH), and would import an installed copy, older
+# than the checkout until `make setup` runs again.
+if str(SERVICE_DIR) not in os.environ.get("PYTHONPATH", "").split(os.pathsep):
+    os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [str(SERVICE_DIR), os.environ.get("PYTHONPATH")]))
 
 START_TIMEOUT = 60.0   # seconds for a process to answer /healthz
 JOB_TIMEOUT = 120.0    # seconds for a job to reach the awaited state
@@ -36,8 +41,7 @@ def _free_port() -> int:
 
 
 def service_env(**env: str) -> dict[str, str]:
-    return {**os.environ, **env,
-            "PYTHONPATH": os.pathsep.join(filter(None, [str(SERVICE_DIR), os.environ.get("PYTHONPATH")]))}
+    return {**os.environ, **env}  # PYTHONPATH names the checkout's service (above)
 
 
 def _run_service(*args: str, timeout: float = 60.0, **env: str) -> subprocess.CompletedProcess:

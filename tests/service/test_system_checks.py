@@ -7,6 +7,7 @@ The budget is scaled down (1 s) so the reproducers run in seconds; the responsiv
 from __future__ import annotations
 
 import threading
+from pathlib import Path
 import time
 from concurrent.futures import ThreadPoolExecutor
 
@@ -228,3 +229,20 @@ def test_a_checks_budget_starts_once_its_process_is_ready(tmp_path):
         assert pool.job(raydamp.jobs.JobSpec.model_validate(quartic(1))) is None  # checked there, no JobError
     finally:
         pool.stop()
+
+
+def test_check_processes_run_the_service_under_test():
+    """The check processes of an app a test makes in this process import raydamp_service from the checkout, as
+    the test does. Python 3.11's forkserver finds modules by PYTHONPATH, not by its parent's sys.path: with an
+    older copy installed, the checks ran that copy, whose processes never said they were ready, and a system's
+    submission waited 3 x 60 s for a 429 (seen once `make setup` had not run since a change to checks.py)."""
+    import importlib.util
+    import multiprocessing
+
+    import raydamp_service
+
+    context = multiprocessing.get_context("forkserver")  # the check pool's, with its preload
+    context.set_forkserver_preload(["raydamp_service.checks"])
+    with context.Pool(1) as pool:
+        found = pool.apply(importlib.util.find_spec, ("raydamp_service.checks",))
+    assert found.origin == str(Path(raydamp_service.__file__).parent / "checks.py")
