@@ -217,3 +217,18 @@ def test_each_model_kind_binds_its_own_integrate():
             assert doc.count(f"{name}(") == 1, f"{kind.__name__}.{name} is overloaded:\n{doc}"
     for model in (DampedPendulum(), ElasticPendulum()):
         assert type(model._core_model) in kinds
+
+
+def test_the_summary_is_the_job_summary_schema_the_service_describes():
+    """Solution.summary() is built by raydamp.jobs.JobSummary, the one definition the service's job views and
+    OpenAPI document use: every key is a field and every field a key, so a new summary value is added in one
+    place."""
+    from raydamp.jobs import JobSummary
+
+    model, q0, p0 = paper_problem("damped_pendulum", 0.01)
+    s = raydamp.integrate(model, q0, p0, h=0.2, n_steps=10, work=True).summary()
+    assert list(s) == list(JobSummary.model_fields)
+    assert s["work_final"] is not None and s["energy_balance_max"] is not None
+    assert JobSummary.model_validate(s).model_dump() == s
+    with pytest.raises(ValueError, match="extra"):
+        JobSummary.model_validate({**s, "energy_drift": 0.0})  # a value no field declares

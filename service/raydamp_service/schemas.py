@@ -9,9 +9,10 @@ import sqlite3
 from datetime import datetime
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from pydantic_core import core_schema
 from raydamp.jobs import JobSpec, SweepSpec
+from raydamp.jobs.summary import JobSummary  # the library's: Solution.summary()
 
 __all__ = [
     "JobSpec", "SweepSpec", "normalise_stored", "FileInfo", "FileList",
@@ -67,40 +68,6 @@ def _spec_as_model(schema: dict[str, Any]) -> None:
 class JobCreated(BaseModel):
     id: str
     status: JobStatus
-
-
-class JobSummary(BaseModel):
-    """raydamp's Solution.summary(): the scalar results of a run (non-finite numbers as null)."""
-
-    status: str
-    message: str
-    method: str
-    tableau: str | None
-    composition: str | None = None
-    h: float
-    step_size: float = Field(description="h, under its former name (kept for one release)")
-
-    @model_validator(mode="before")
-    @classmethod
-    def _h_from_step_size(cls, data: Any) -> Any:  # summaries stored before 0.2 carry only step_size
-        return {**data, "h": data.get("step_size")} if isinstance(data, dict) and "h" not in data else data
-    steps: int
-    failed_step: int | None
-    t_final: float
-    saved_points: int
-    energy_initial: float | None
-    energy_final: float | None
-    energy_dissipated: float | None
-    mean_dissipation_rate: float | None
-    momentum_drift: float | None
-    work_final: float | None = Field(None, description="the damping work W at the end (jobs with work)")
-    load_work_final: float | None = Field(None, description="the load's work W_f at the end (jobs with work)")
-    energy_balance_max: float | None = Field(None, description="max |H - H0 + W - W_f| over the saved points: the "
-                                                               "energy budget's error (jobs with work)")
-    kinetic_temperature: float | None = Field(
-        None, description="<p^T M^-1 p> / n over the second half of the saved points (at most 2000, evenly "
-                          "spaced), to compare with the job's temperature kT (jobs at a temperature)")
-    wall_time: float
 
 
 class JobView(BaseModel):

@@ -191,40 +191,33 @@ class Solution:
         return self.origin[0]
 
     def summary(self) -> dict[str, Any]:
-        """The scalar results as plain JSON-ready values (non-finite numbers as None);
-        ``momentum_drift`` is ``max_momentum_drift`` (None for a model without momentum maps);
-        ``kinetic_temperature`` is <p^T M^-1 p> / n over the second half of the saved points (at most
-        2000 of them, evenly spaced) for a run at a temperature, to compare with its kT (None otherwise,
-        and for a run that saved only some coordinates)."""
+        """The scalar results as plain JSON-ready values, the fields of :class:`raydamp.jobs.JobSummary`
+        (which describes each): non-finite numbers are None; ``momentum_drift`` is ``max_momentum_drift``
+        (None for a model without momentum maps); ``kinetic_temperature`` is <p^T M^-1 p> / n over the second
+        half of the saved points (at most 2000 of them, evenly spaced) for a run at a temperature, to compare
+        with its kT (None otherwise, and for a run that saved only some coordinates)."""
+        from ..jobs.summary import JobSummary
         from .temperature import summary_kinetic_temperature
 
         def num(x: float) -> float | None:
             return float(x) if math.isfinite(x) else None
 
-        return {
-            "status": self.status,
-            "message": self.message,
-            "method": self.method,
-            "tableau": self.tableau,
-            "composition": self.composition,
-            "h": self.h,
-            "step_size": self.h,  # h's former name, kept for one release
-            "steps": self.steps,
-            "failed_step": self.failed_step,
-            "t_final": float(self.t[-1]),
-            "saved_points": int(self.t.size),
-            "energy_initial": num(self.initial_energy),
-            "energy_final": num(self.final_energy),
-            "energy_dissipated": num(self.energy_dissipated),
-            "mean_dissipation_rate": num(self.mean_dissipation_rate),
-            "momentum_drift": num(self.max_momentum_drift) if self.momentum.shape[1] else None,
+        kinetic = summary_kinetic_temperature(self)
+        return JobSummary(
+            status=self.status, message=self.message, method=self.method, tableau=self.tableau,
+            composition=self.composition, h=self.h,
+            step_size=self.h,  # h's former name, kept for one release
+            steps=self.steps, failed_step=self.failed_step, t_final=float(self.t[-1]), saved_points=int(self.t.size),
+            energy_initial=num(self.initial_energy), energy_final=num(self.final_energy),
+            energy_dissipated=num(self.energy_dissipated), mean_dissipation_rate=num(self.mean_dissipation_rate),
+            momentum_drift=num(self.max_momentum_drift) if self.momentum.shape[1] else None,
             # with work recorded: W and W_f at the end, and max |H - H0 + W - W_f| (the energy budget's error)
-            "work_final": num(float(self.work[-1])) if self.work is not None else None,
-            "load_work_final": num(float(self.load_work[-1])) if self.load_work is not None else None,
-            "energy_balance_max": num(float(np.max(np.abs(self.energy_balance)))) if self.work is not None else None,
-            "kinetic_temperature": None if (kinetic := summary_kinetic_temperature(self)) is None else num(kinetic),
-            "wall_time": self.wall_time,
-        }
+            work_final=num(float(self.work[-1])) if self.work is not None else None,
+            load_work_final=num(float(self.load_work[-1])) if self.load_work is not None else None,
+            energy_balance_max=num(float(np.max(np.abs(self.energy_balance)))) if self.work is not None else None,
+            kinetic_temperature=None if kinetic is None else num(kinetic),
+            wall_time=self.wall_time,
+        ).model_dump()
 
     def __repr__(self) -> str:
         return (f"Solution(status={self.status!r}, method={self.method!r}, steps={self.steps}, "

@@ -1,0 +1,51 @@
+"""A run's summary: the scalar results of a Solution (Solution.summary()), as a job answers them.
+
+One definition for raydamp (Solution.summary() builds this model, so a value without a field here is an
+error), `raydamp run` (which prints it) and the service (whose job views carry it, and whose OpenAPI
+document describes it from here). Non-finite numbers are None (JSON null).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+__all__ = ["JobSummary"]
+
+
+class JobSummary(BaseModel):
+    """raydamp's Solution.summary(): the scalar results of a run (non-finite numbers as null)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    status: str = Field(description="completed, non_finite (a blow-up), out_of_memory or cancelled")
+    message: str
+    method: str
+    tableau: str | None
+    composition: str | None = None
+    h: float
+    step_size: float = Field(description="h, under its former name (kept for one release)")
+    steps: int
+    failed_step: int | None
+    t_final: float
+    saved_points: int
+    energy_initial: float | None
+    energy_final: float | None
+    energy_dissipated: float | None
+    mean_dissipation_rate: float | None
+    momentum_drift: float | None
+    work_final: float | None = Field(None, description="the damping work W at the end (jobs with work)")
+    load_work_final: float | None = Field(None, description="the load's work W_f at the end (jobs with work)")
+    energy_balance_max: float | None = Field(None, description="max |H - H0 + W - W_f| over the saved points: the "
+                                                               "energy budget's error (jobs with work)")
+    kinetic_temperature: float | None = Field(
+        None, description="<p^T M^-1 p> / n over the second half of the saved points (at most 2000, evenly "
+                          "spaced), to compare with the job's temperature kT (jobs at a temperature)")
+    wall_time: float
+
+    @model_validator(mode="before")
+    @classmethod
+    def _h_from_step_size(cls, data: Any) -> Any:
+        """A summary stored by the service before 0.2 carries only step_size."""
+        return {**data, "h": data.get("step_size")} if isinstance(data, dict) and "h" not in data else data
