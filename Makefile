@@ -37,8 +37,12 @@ $(PY):
 # cmake and ninja come from PyPI into the venv: they build the C++ tests too. The build backend
 # lives in the venv as well (--no-build-isolation): an isolated build gets pybind11 from a new
 # temporary directory each time, so every file recompiles; from the venv, build/ stays incremental.
-$(INSTALLED): $(PY) pyproject.toml CMakeLists.txt $(SOURCES)
+TOOLS := $(VENV)/.build-tools
+$(TOOLS): $(PY)
 	$(PIP) install cmake ninja 'scikit-build-core>=0.10' 'pybind11>=3.1,<3.2'
+	@touch $@
+
+$(INSTALLED): $(TOOLS) pyproject.toml CMakeLists.txt $(SOURCES)
 	$(PIP) install --no-build-isolation '.[service,analysis,io,structures,sweep,test]'
 	@touch $@
 
@@ -46,18 +50,19 @@ serve: setup
 	@mkdir -p $(dir $(RAYDAMP_DB))
 	$(PY) -m raydamp_service --host $(HOST) --port $(PORT)
 
-# pytest keeps about one of the two cores busy (250 s of CPU in 265 s), so the C++ tests build
-# meanwhile, at the lowest priority: they take what pytest leaves, and do not slow its timed waits.
-# The build is a session of its own (so that it can be ended as one), and Linux's autogroups share
-# the processor between sessions before nice counts within one: its session's nice is lowered too
-# (with nice alone, pytest took 6:33 instead of 4:25). Then ctest runs; a failure of either fails
-# the target, after both have run.
-test: setup
+# The C++ tests need only Eigen and the build tools: they build while the package installs and pytest
+# runs, at the lowest priority, taking what those leave (pytest keeps about one of the two cores
+# busy: 250 s of CPU in 265 s). The build is a session of its own (so that it can be ended as one),
+# and Linux's autogroups share the processor between sessions before nice counts within one, so its
+# session's nice is lowered too (with nice alone, pytest took 6:33 instead of 4:25). Then ctest runs;
+# a failure of pytest or ctest fails the target once both have run.
+test: system-deps $(TOOLS)
 	@mkdir -p build
 	@setsid bash -c 'echo 19 >/proc/self/autogroup 2>/dev/null; exec nice -n 19 $(MAKE) -s ctest-build' \
 	  >build/ctest-build.log 2>&1 & build=$$!; \
 	  trap 'kill -- -$$build 2>/dev/null' EXIT; \
-	  echo "building the C++ tests alongside pytest (log: build/ctest-build.log)"; \
+	  echo "building the C++ tests alongside (log: build/ctest-build.log)"; \
+	  $(MAKE) --no-print-directory setup || exit 1; \
 	  $(MAKE) --no-print-directory layers pytest; status=$$?; \
 	  if ! wait $$build; then cat build/ctest-build.log; echo "the C++ tests did not build"; exit 1; fi; \
 	  $(VENV)/bin/ctest --test-dir build/cpp --output-on-failure || status=1; \
@@ -66,7 +71,7 @@ test: setup
 ctest: ctest-build
 	$(VENV)/bin/ctest --test-dir build/cpp --output-on-failure
 
-ctest-build: setup
+ctest-build: system-deps $(TOOLS)
 	$(VENV)/bin/cmake -S . -B build/cpp -G Ninja -DCMAKE_BUILD_TYPE=Release -DRAYDAMP_BUILD_TESTS=ON \
 	  -DCMAKE_MAKE_PROGRAM=$(CURDIR)/$(VENV)/bin/ninja
 	$(VENV)/bin/cmake --build build/cpp -j2

@@ -164,8 +164,11 @@ def test_cancelling_a_queued_job_and_deleting_a_running_one(server):
         server.wait_for(job_id, lambda job: job["status"] == "running")
     queued = server.submit(PENDULUM)
     assert server.job(queued)["status"] == "queued"
-    response = server.client.get(f"/v1/jobs/{queued}/trajectory")
-    assert response.status_code == 409 and "queued" in response.json()["detail"]
+    # The JSON, a file and a plot of a queued job: 409, saying that the trajectory comes when the run ends.
+    for path in ("trajectory", "trajectory?format=npz", "plots/energy.png"):
+        response = server.client.get(f"/v1/jobs/{queued}/{path}")
+        assert response.status_code == 409 and "queued; its trajectory is stored when the run ends" in \
+            response.json()["detail"], (path, response.text)
 
     assert server.client.delete(f"/v1/jobs/{queued}").json()["status"] == "cancelled"
     for job_id in busy:

@@ -134,15 +134,7 @@ def get_trajectory(job_id: str, request: Request, store: StoreDep, settings: Set
     record = JOBS.existing(store, job_id)
     if format != "json":
         return _trajectory_file(record, store, request, settings, slice(start, stop, every), format)
-    opened = store.open_trajectory(job_id)
-    if opened is None:
-        if record.status in FINAL_STATUSES:
-            reason = f": {record.error}" if record.error else ""
-            detail = f"job {job_id} is {record.status} and has no trajectory{reason}"
-        else:
-            detail = f"job {job_id} is {record.status}; its trajectory is stored when the run ends"
-        raise HTTPException(409, detail=detail)
-    connection, stored = opened
+    connection, stored = _opened(record, store)
     selection = Selection(*slice(start, stop, every).indices(stored.points))
     try:
         lease = FetchLease(_large_slot(request, settings, len(selection) * stored.row_bytes))
@@ -155,8 +147,12 @@ def get_trajectory(job_id: str, request: Request, store: StoreDep, settings: Set
 
 
 def _opened(record: JobRecord, store: JobStore):
+    """The job's stored trajectory (store.open_trajectory), or 409 saying why there is none."""
     opened = store.open_trajectory(record.id)
     if opened is None:
+        if record.status not in FINAL_STATUSES:
+            raise HTTPException(409, detail=f"job {record.id} is {record.status}; its trajectory is stored when the "
+                                "run ends")
         raise HTTPException(409, detail=f"job {record.id} is {record.status} and has no trajectory"
                             + (f": {record.error}" if record.error else ""))
     return opened
