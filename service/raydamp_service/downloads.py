@@ -18,7 +18,8 @@ import raydamp
 from raydamp.jobs import JobSpec
 from raydamp.results.io import write_solution
 
-from .jobs import JobRecord, StoredTrajectory, TrajectoryArrays
+from .jobs import JobRecord
+from .stored_arrays import SAVED, StoredTrajectory, TrajectoryArrays
 from .trajectory_stream import Selection, read_arrays, read_column
 
 __all__ = ["stored_solution", "write_file"]
@@ -37,8 +38,7 @@ def stored_solution(record: JobRecord, arrays: TrajectoryArrays, spec: JobSpec |
                   "coordinates": coordinates, "momentum_names": momentum_names}
     drift = summary.get("momentum_drift")
     return raydamp.Solution(
-        t=arrays.t, q=arrays.q, p=arrays.p, energy=arrays.energy, momentum=arrays.momentum, work=arrays.work,
-        load_work=arrays.load_work,
+        **{a.name: getattr(arrays, a.name) for a in SAVED},
         status=summary.get("status", record.status), steps=int(summary.get("steps", 0)),
         failed_step=record.failed_step, message=summary.get("message") or record.error or "",
         method=summary.get("method") or record.spec.get("method") or "3s", tableau=summary.get("tableau"), composition=summary.get("composition"),

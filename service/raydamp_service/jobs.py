@@ -19,21 +19,22 @@ from .runner import Outcome, Run
 from .schemas import JobSpec, normalise_stored
 from .group_commit import Waiter
 from .store import TaskRecord, TaskStore
+from .stored_arrays import SAVED, StoredTrajectory, TrajectoryArrays
 
 __all__ = ["JobStore", "JobRecord", "JobWork", "TrajectoryArrays", "StoredTrajectory"]
 
-_FLOAT = np.dtype("<f8")
+_FLOAT = np.dtype("<f8")  # the blob format: little-endian float64, row-major
 # Steps x coordinates of a built-in model's run below which it is quick (JobWork.quick): milliseconds of work.
-_QUICK_WORK = 100_000  # the blob format: little-endian float64, row-major
-_TABLES = """
+_QUICK_WORK = 100_000
+
+
+_TABLES = f"""
 CREATE TABLE IF NOT EXISTS trajectories (
     job_id TEXT PRIMARY KEY REFERENCES jobs(id) ON DELETE CASCADE,
     points INTEGER NOT NULL,
     dim INTEGER NOT NULL,
     momenta INTEGER NOT NULL,
-    t BLOB NOT NULL, q BLOB NOT NULL, p BLOB NOT NULL, energy BLOB NOT NULL, momentum BLOB NOT NULL,
-    work BLOB,                              -- the damping work W(t) (N), NULL for jobs stored before it was kept
-    load_work BLOB                          -- the load's work W_f(t) (N), NULL for a run without a load
+    {", ".join(f"{a.name} BLOB{'' if a.optional else ' NOT NULL'}" for a in SAVED)}
 );
 """
 
@@ -63,37 +64,6 @@ class JobRecord(TaskRecord):
         return self
 
 
-@dataclass(frozen=True)
-class TrajectoryArrays:
-    """The saved points: t (N,), q and p (N, n), energy (N,), momentum (N, m), work W(t) (N,) or None, and
-    load_work W_f(t) (N,) or None (a run without a load)."""
-
-    t: np.ndarray
-    q: np.ndarray
-    p: np.ndarray
-    energy: np.ndarray
-    momentum: np.ndarray
-    work: np.ndarray | None = None
-    load_work: np.ndarray | None = None
-
-
-@dataclass(frozen=True)
-class StoredTrajectory:
-    """Where a trajectory's blobs are (the row) and their shapes, for reading them in slices."""
-
-    rowid: int
-    points: int
-    dim: int
-    momenta: int
-    has_work: bool = False
-    has_load_work: bool = False
-
-    @property
-    def row_bytes(self) -> int:
-        """Stored bytes per saved point: t, energy, work, load work, a row of q and of p, a row of momentum."""
-        return (2 + self.has_work + self.has_load_work + 2 * self.dim + self.momenta) * 8
-
-
 def _blob(array: np.ndarray | None) -> memoryview | None:
     # The array's own buffer, not a copy of it (a 480 MB q stored as bytes was a second 480 MB).
     return memoryview(np.ascontiguousarray(array, dtype=_FLOAT).reshape(-1)).cast("B") if array is not None else None
@@ -120,15 +90,16 @@ class JobStore(TaskStore[JobRecord], FileStore):
     TABLE, RECORD, PROGRESS, RETAINED, TABLES = "jobs", JobRecord, "progress", True, _TABLES + FILES_TABLE
     COLUMNS = "progress REAL NOT NULL DEFAULT 0, summary TEXT, failed_step INTEGER"  # summary: Solution.summary()
     COMPUTED = {"has_trajectory": "EXISTS (SELECT 1 FROM trajectories WHERE job_id = jobs.id)"}
-    # Stored bytes of a job's trajectory: t, energy, work, load work (N), q, p (N x dim), momentum (N x m).
-    BYTES = ("(SELECT points * (2 + (work IS NOT NULL) + (load_work IS NOT NULL) + 2 * dim + momenta) * 8 "
-             "FROM trajectories WHERE job_id = jobs.id)")
+    # Stored bytes of a job's trajectory (StoredTrajectory.row_bytes per point).
+    BYTES = ("(SELECT points * (" + " + ".join(f"({a.name} IS NOT NULL) * {a.width or 1}" if a.optional else
+                                               a.width or "1" for a in SAVED) +
+             ") * 8 FROM trajectories WHERE job_id = jobs.id)")
 
     def _upgrade(self, db: sqlite3.Connection) -> None:
-        if "work" not in {row["name"] for row in db.execute("PRAGMA table_info(trajectories)")}:
-            db.execute("ALTER TABLE trajectories ADD COLUMN work BLOB")  # from before the work integral was kept
-        if "load_work" not in {row["name"] for row in db.execute("PRAGMA table_info(trajectories)")}:
-            db.execute("ALTER TABLE trajectories ADD COLUMN load_work BLOB")  # from before loads
+        kept = {row["name"] for row in db.execute("PRAGMA table_info(trajectories)")}
+        for array in SAVED:  # an optional array from after the file was written (work, then load_work)
+            if array.name not in kept:
+                db.execute(f"ALTER TABLE trajectories ADD COLUMN {array.name} BLOB")
         present = {row["name"] for row in db.execute("PRAGMA table_info(files)")}
         for column, declaration in FILE_COLUMNS_ADDED.items():  # from before records were uploaded
             if column not in present:
@@ -154,11 +125,10 @@ class JobStore(TaskStore[JobRecord], FileStore):
         """Record the end of a run and its saved points in one transaction: all of it or none (unclaimed_since:
         TaskStore.finish)."""
         row = None if trajectory is None else (
-            "INSERT OR REPLACE INTO trajectories (job_id, points, dim, momenta, t, q, p, energy, momentum, work, "
-            "load_work) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+            f"INSERT OR REPLACE INTO trajectories (job_id, points, dim, momenta, {', '.join(a.name for a in SAVED)}) "
+            f"VALUES (?, ?, ?, ?{', ?' * len(SAVED)})",
             (job_id, *trajectory.q.shape, trajectory.momentum.shape[1],
-             *(_blob(getattr(trajectory, name)) for name in ("t", "q", "p", "energy", "momentum", "work",
-                                                              "load_work"))))
+             *(_blob(getattr(trajectory, a.name)) for a in SAVED)))
         return super().finish(job_id, status, error=error, progress=1.0 if status == "completed" else progress,
                               also=row, unclaimed_since=unclaimed_since, summary=summary, failed_step=failed_step)
 
@@ -166,18 +136,20 @@ class JobStore(TaskStore[JobRecord], FileStore):
         row = self.db.connection().execute("SELECT * FROM trajectories WHERE job_id = ?", (job_id,)).fetchone()
         if row is None:
             return None
-        n, dim, m = row["points"], row["dim"], row["momenta"]
-        return TrajectoryArrays(t=_array(row["t"], n), q=_array(row["q"], n, dim), p=_array(row["p"], n, dim),
-                                energy=_array(row["energy"], n), momentum=_array(row["momentum"], n, m),
-                                work=_array(row["work"], n), load_work=_array(row["load_work"], n))
+        n, shape = row["points"], StoredTrajectory(0, row["points"], row["dim"], row["momenta"])
+        return TrajectoryArrays(**{a.name: _array(row[a.name], n, *([shape.width(a)] if a.width else []))
+                                   for a in SAVED})
 
     def open_trajectory(self, job_id: str) -> tuple[sqlite3.Connection, StoredTrajectory] | None:
         """A read-only connection holding a snapshot in which the job's trajectory exists, and where it is.
         The caller reads the blobs through it (incremental I/O) and closes it."""
-        found = self.db.snapshot("SELECT rowid, points, dim, momenta, work IS NOT NULL, load_work IS NOT NULL "
-                                 "FROM trajectories WHERE job_id = ?", (job_id,))
-        return (found[0], StoredTrajectory(*found[1][:4], has_work=bool(found[1][4]),
-                                           has_load_work=bool(found[1][5]))) if found else None
+        optional = [a.name for a in SAVED if a.optional]
+        found = self.db.snapshot(f"SELECT rowid, points, dim, momenta{''.join(f', {name} IS NOT NULL' for name in optional)}"
+                                 " FROM trajectories WHERE job_id = ?", (job_id,))
+        if found is None:
+            return None
+        connection, row = found
+        return connection, StoredTrajectory(*row[:4], frozenset(name for name, kept in zip(optional, row[4:]) if kept))
 
 
 def _dim(spec: JobSpec) -> int:
@@ -216,9 +188,7 @@ class JobWork:
             return Outcome("cancelled", None, run.progress)
         quick = checked_inline(spec) and planned_steps(spec) * call.model.dim < _QUICK_WORK
         solution = call.run(progress=None if quick else run.report, cancel=run.token)
-        result = {"summary": solution.summary(), "trajectory": TrajectoryArrays(
-            t=solution.t, q=solution.q, p=solution.p, energy=solution.energy, momentum=solution.momentum,
-            work=solution.work, load_work=solution.load_work)}
+        result = {"summary": solution.summary(), "trajectory": TrajectoryArrays.of(solution)}
         if solution.status == "completed" and not math.isfinite(float(solution.t[-1])):
             # Refused at submission (step_size x steps must be finite); kept as a last guard, since a
             # run whose times overflowed has not computed what was asked.

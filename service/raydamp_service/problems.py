@@ -16,9 +16,9 @@ from raydamp.jobs import (CooForm, DiagonalForm, JobCall, JobError, JobSpec, Lin
                           build_job, error_at, planned_steps)
 
 from .config import Settings
+from .stored_arrays import StoredTrajectory
 
-__all__ = ["JobError", "RaydampCall", "build_call", "check_spec", "check_sweep_spec", "planned_steps",
-           "trajectory_bytes"]
+__all__ = ["JobError", "RaydampCall", "build_call", "check_spec", "check_sweep_spec", "planned_steps"]
 
 
 @dataclass(frozen=True)
@@ -36,13 +36,6 @@ class RaydampCall:
 def build_call(spec: JobSpec, files=None) -> RaydampCall:
     """The run of a job; files(id) opens an uploaded matrix (files.file_resolver)."""
     return RaydampCall(build_job(spec, files))
-
-
-def trajectory_bytes(points: int, saved: int, momenta: int, work: bool = True, load_work: bool = False) -> int:
-    """Bytes the store keeps for a run's saved points (float64): t, energy, the damping work W (a job with
-    work), the load's work W_f (a job with work and a load), q and p (saved coordinates), momentum
-    (jobs.StoredTrajectory.row_bytes)."""
-    return points * (2 + work + load_work + 2 * saved + momenta) * 8
 
 
 def _check_sizes(spec: JobSpec, settings: Settings) -> None:
@@ -104,12 +97,13 @@ def check_spec(spec: JobSpec, settings: Settings, files=None) -> RaydampCall:
         raise JobError(("save_every",), f"save_every: {saved_points} saved points (n_steps // save_every + 2) "
                        f"exceed max_saved_points = {settings.max_saved_points}; raise save_every")
     call = build_call(spec, files)
-    # What the store will hold per saved point: t, energy, W and W_f when the run records them (raydamp records
-    # W_f with W, for a run with a load), q, p (saved coordinates) and momentum.
+    # What the store will hold per saved point (jobs.StoredTrajectory): W and W_f when the run records them
+    # (raydamp records W_f with W, for a run with a load).
     saved = call.model.dim if spec.save_dofs is None else len(spec.save_dofs)
     loaded = call.call.options.get("load") is not None
-    stored = trajectory_bytes(saved_points, saved, len(call.model.momentum_names), work=spec.work,
-                              load_work=spec.work and loaded)
+    kept = {"work", "load_work"} if spec.work and loaded else {"work"} if spec.work else set()
+    stored = saved_points * StoredTrajectory(0, saved_points, saved, len(call.model.momentum_names),
+                                             frozenset(kept)).row_bytes
     if stored > settings.max_trajectory_bytes:
         raise JobError(("save_every",), f"save_every: the stored trajectory would take {stored / 2**20:.0f} MiB "
                        f"({saved_points} saved points x {saved} saved coordinates); the limit is max_trajectory_bytes "

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .jobs import StoredTrajectory, TrajectoryArrays
+from .stored_arrays import SAVED, StoredTrajectory, TrajectoryArrays
 
 __all__ = ["FetchLease", "Selection", "read_arrays", "read_column", "trajectory_chunks"]
 
@@ -61,32 +61,27 @@ class Selection:
             yield Selection(first, first + min(rows, n - done) * self.every, self.every)
 
 
-_COLUMNS = ("t", "q", "p", "energy", "momentum", "work", "load_work")
-_OPTIONAL = {"work": "has_work", "load_work": "has_load_work"}  # columns NULL for some jobs
-
-
-def _width(stored: StoredTrajectory, column: str) -> int:
-    return {"q": stored.dim, "p": stored.dim, "momentum": stored.momenta}.get(column, 1)
+_BY_NAME = {array.name: array for array in SAVED}
 
 
 def read_column(connection: sqlite3.Connection, stored: StoredTrajectory, column: str,
                 selection: Selection) -> np.ndarray:
     """One array's selected rows, (points,) for t, energy, work and load work, else (points, width); a part of the
     blob is read, never the whole of it."""
-    width, n = _width(stored, column), len(selection)
+    array = _BY_NAME[column]
+    width, n = stored.width(array), len(selection)
     if width == 0 or n == 0:
         rows = np.empty((n, width))
     else:
         with connection.blobopen("trajectories", column, stored.rowid, readonly=True) as blob:
             rows = _read_rows(blob, selection.start, n, selection.every, width)
-    return rows if column in ("q", "p", "momentum") else rows[:, 0]
+    return rows if array.width else rows[:, 0]
 
 
 def read_arrays(connection: sqlite3.Connection, stored: StoredTrajectory, selection: Selection) -> TrajectoryArrays:
     """The selected points of every array (a caller bounds their size: Selection.pieces, a plot's decimation)."""
-    arrays = {column: read_column(connection, stored, column, selection)
-              for column in _COLUMNS if column not in _OPTIONAL or getattr(stored, _OPTIONAL[column])}
-    return TrajectoryArrays(**arrays)
+    return TrajectoryArrays(**{a.name: read_column(connection, stored, a.name, selection)
+                               for a in SAVED if stored.has(a)})
 
 
 def _json_rows(array: np.ndarray) -> str:
@@ -139,15 +134,15 @@ def trajectory_chunks(connection: sqlite3.Connection, stored: StoredTrajectory, 
     """The body of GET .../trajectory. Owns the read connection (a snapshot: a concurrent DELETE or
     retention pass does not change what is being sent) and the lease; both end when the body does."""
     try:
-        arrays = [("t", None), ("q", stored.dim), ("p", stored.dim), ("energy", None), ("momentum", stored.momenta)]
-        arrays += [(column, None) for column, flag in _OPTIONAL.items() if getattr(stored, flag)]
-        for i, (column, width) in enumerate(arrays):
-            yield f'{"{" if i == 0 else ","}"{column}":'.encode()
-            for piece in _array_json(connection, stored, column, width, selection):
+        for i, array in enumerate(SAVED):
+            yield f'{"{" if i == 0 else ","}"{array.name}":'.encode()
+            if not stored.has(array):  # an optional array the job has not: null, as the Trajectory schema says
+                yield b"null"
+                continue
+            width = stored.width(array) if array.width else None
+            for piece in _array_json(connection, stored, array.name, width, selection):
                 yield piece.encode()
-        # A job without them: null, as the Trajectory schema says.
-        yield "".join(f',"{column}":null' for column, flag in _OPTIONAL.items()
-                      if not getattr(stored, flag)).encode() + b"}"
+        yield b"}"
     finally:
         connection.close()
         lease.release()

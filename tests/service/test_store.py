@@ -171,3 +171,33 @@ def test_claim_gives_the_row_it_changed(tmp_path, monkeypatch, returning):
     assert store.claim(job.id) is None  # no longer queued
     store.requeue(job.id)
     assert store.claim(job.id).attempts == 2
+
+
+def test_the_saved_arrays_are_listed_once(store):
+    """stored_arrays.SAVED is the one list of a trajectory's arrays: the table's blob columns, the fields of
+    TrajectoryArrays and of the Trajectory JSON schema, and Solution attributes are its names, so an array added
+    there but missed elsewhere fails here; the store's byte count (retention's measure, SQL) is the
+    StoredTrajectory's row_bytes per point, with or without the optional arrays."""
+    import dataclasses
+
+    import raydamp
+    from raydamp_service.schemas import Trajectory
+    from raydamp_service.stored_arrays import SAVED, StoredTrajectory
+
+    names = [a.name for a in SAVED]
+    assert [f.name for f in dataclasses.fields(TrajectoryArrays)] == names == list(Trajectory.model_fields)
+    assert all(name in {f.name for f in dataclasses.fields(raydamp.Solution)} for name in names)
+    with sqlite3.connect(store.path) as db:
+        columns = [row[1] for row in db.execute("PRAGMA table_info(trajectories)")]
+    assert columns == ["job_id", "points", "dim", "momenta", *names]
+
+    rng = np.random.default_rng(2)
+    base = dict(t=np.arange(4.0), q=rng.normal(size=(4, 2)), p=rng.normal(size=(4, 2)), energy=np.ones(4),
+                momentum=np.ones((4, 1)))
+    expected = 0
+    for extra in ({}, {"work": np.ones(4)}, {"work": np.ones(4), "load_work": np.zeros(4)}):
+        arrays = TrajectoryArrays(**base, **extra)
+        store.finish(store.create(SPEC).id, "completed", trajectory=arrays)
+        expected += 4 * StoredTrajectory.of(arrays).row_bytes
+    assert expected == 8 * 4 * (3 * (1 + 2 + 2 + 1 + 1) + 0 + 1 + 2)
+    assert store.stored_bytes() == expected

@@ -42,7 +42,6 @@ def test_the_columns_counted_are_those_the_run_stores(spec, columns):
     """The run's arrays as the store keeps them (jobs.StoredTrajectory: W and W_f when not None), and its
     n_steps + 1 points within the estimate's n_steps // save_every + 2."""
     solution = check_spec(JobSpec.model_validate(spec), Settings()).run()
-    stored = StoredTrajectory(0, solution.t.size, solution.q.shape[1], solution.momentum.shape[1],
-                              has_work=solution.work is not None, has_load_work=solution.load_work is not None)
+    stored = StoredTrajectory.of(solution)
     assert stored.row_bytes == columns * 8
     assert stored.points == POINTS - 1

@@ -1,0 +1,79 @@
+"""A job's trajectory as the store keeps it: the arrays a run saves per point (SAVED), each a column of
+float64 blobs in the trajectories table (jobs.py), read in slices (trajectory_stream.py) and turned back
+into a raydamp.Solution (downloads.py)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+__all__ = ["SAVED", "Saved", "StoredTrajectory", "TrajectoryArrays"]
+
+
+@dataclass(frozen=True)
+class Saved:
+    """An array a run saves per point, kept as a blob column of the trajectories table: the name of its column,
+    of the Solution's attribute and of the Trajectory JSON's field. width: of a row, "" for one value, "dim" the
+    saved coordinates, "momenta" the momentum maps; optional: NULL for a run without it."""
+
+    name: str
+    width: str = ""
+    optional: bool = False
+
+
+# The arrays of a trajectory, in the order of the table and of the JSON: adding one is a line here, and a field
+# of TrajectoryArrays (and of the Trajectory schema).
+SAVED = (Saved("t"), Saved("q", "dim"), Saved("p", "dim"), Saved("energy"), Saved("momentum", "momenta"),
+         Saved("work", optional=True),  # the damping work W(t): a job with work (NULL in jobs from before it)
+         Saved("load_work", optional=True))  # the load's work W_f(t): a job with work and a load
+
+
+@dataclass(frozen=True)
+class TrajectoryArrays:
+    """The saved points (SAVED): t (N,), q and p (N, n), energy (N,), momentum (N, m), work W(t) (N,) or None, and
+    load_work W_f(t) (N,) or None (a run without a load)."""
+
+    t: np.ndarray
+    q: np.ndarray
+    p: np.ndarray
+    energy: np.ndarray
+    momentum: np.ndarray
+    work: np.ndarray | None = None
+    load_work: np.ndarray | None = None
+
+    @classmethod
+    def of(cls, source: Any) -> TrajectoryArrays:
+        """The arrays of a raydamp.Solution (or anything with them as attributes)."""
+        return cls(**{a.name: getattr(source, a.name) for a in SAVED})
+
+
+@dataclass(frozen=True)
+class StoredTrajectory:
+    """Where a trajectory's blobs are (the row), their shapes, and the optional arrays present (SAVED), for
+    reading them in slices."""
+
+    rowid: int
+    points: int
+    dim: int
+    momenta: int
+    present: frozenset[str] = frozenset()
+
+    @classmethod
+    def of(cls, arrays: Any, rowid: int = 0) -> StoredTrajectory:
+        """What the store keeps of a run's arrays (TrajectoryArrays, or a raydamp.Solution)."""
+        return cls(rowid, arrays.t.size, arrays.q.shape[1], arrays.momentum.shape[1],
+                   frozenset(a.name for a in SAVED if a.optional and getattr(arrays, a.name) is not None))
+
+    def has(self, array: Saved) -> bool:
+        return not array.optional or array.name in self.present
+
+    def width(self, array: Saved) -> int:
+        """Values per point of the array."""
+        return getattr(self, array.width) if array.width else 1
+
+    @property
+    def row_bytes(self) -> int:
+        """Stored bytes per saved point: every array kept (float64)."""
+        return 8 * sum(self.width(a) for a in SAVED if self.has(a))
