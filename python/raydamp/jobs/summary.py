@@ -1,8 +1,10 @@
 """A run's summary: the scalar results of a Solution (Solution.summary()), as a job answers them.
 
-One definition for raydamp (Solution.summary() builds this model, so a value without a field here is an
-error), `raydamp run` (which prints it) and the service (whose job views carry it, and whose OpenAPI
-document describes it from here). Non-finite numbers are None (JSON null).
+One definition for raydamp (Solution.summary() builds this model through summary_values, where a value
+without a field here is an error), `raydamp run` (which prints it) and the service (whose job views carry
+it, and whose OpenAPI document describes it from here). Read back, a summary stored by another version
+keeps its fields and drops keys this one does not know (one a later version added, or one removed).
+Non-finite numbers are None (JSON null).
 """
 
 from __future__ import annotations
@@ -11,13 +13,11 @@ from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-__all__ = ["JobSummary"]
+__all__ = ["JobSummary", "summary_values"]
 
 
 class JobSummary(BaseModel):
     """raydamp's Solution.summary(): the scalar results of a run (non-finite numbers as null)."""
-
-    model_config = ConfigDict(extra="forbid")
 
     status: str = Field(description="completed, non_finite (a blow-up), out_of_memory or cancelled")
     message: str
@@ -49,3 +49,12 @@ class JobSummary(BaseModel):
     def _h_from_step_size(cls, data: Any) -> Any:
         """A summary stored by the service before 0.2 carries only step_size."""
         return {**data, "h": data.get("step_size")} if isinstance(data, dict) and "h" not in data else data
+
+
+class _Built(JobSummary):
+    model_config = ConfigDict(extra="forbid")
+
+
+def summary_values(**values: Any) -> dict[str, Any]:
+    """A run's summary as plain values, every one a field of JobSummary (an undeclared one raises)."""
+    return _Built(**values).model_dump()

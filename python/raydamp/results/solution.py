@@ -196,14 +196,14 @@ class Solution:
         (None for a model without momentum maps); ``kinetic_temperature`` is <p^T M^-1 p> / n over the second
         half of the saved points (at most 2000 of them, evenly spaced) for a run at a temperature, to compare
         with its kT (None otherwise, and for a run that saved only some coordinates)."""
-        from ..jobs.summary import JobSummary
+        from ..jobs.summary import summary_values
         from .temperature import summary_kinetic_temperature
 
         def num(x: float) -> float | None:
             return float(x) if math.isfinite(x) else None
 
         kinetic = summary_kinetic_temperature(self)
-        return JobSummary(
+        return summary_values(
             status=self.status, message=self.message, method=self.method, tableau=self.tableau,
             composition=self.composition, h=self.h,
             step_size=self.h,  # h's former name, kept for one release
@@ -217,7 +217,7 @@ class Solution:
             energy_balance_max=num(float(np.max(np.abs(self.energy_balance)))) if self.work is not None else None,
             kinetic_temperature=None if kinetic is None else num(kinetic),
             wall_time=self.wall_time,
-        ).model_dump()
+        )
 
     def __repr__(self) -> str:
         return (f"Solution(status={self.status!r}, method={self.method!r}, steps={self.steps}, "
