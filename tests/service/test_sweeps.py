@@ -165,15 +165,17 @@ def test_in_process_cluster_by_default(start_server, tmp_path):
 
 def test_a_sweep_interrupted_by_a_crash_runs_again_at_restart(start_server, tmp_path):
     server = start_server()
+    # 200 members: 2.4-3.2 s between the first chunk's end and the sweep's (1.3-1.7 s with 100), for the kill
+    # to land in on a loaded machine too.
     body = {"job": {**JOB, "t_end": None, "n_steps": 2_000_000, "save_every": 1_000_000},
-            "grid": {"eps": {"start": 0.0, "stop": 0.1, "num": 100}}, "chunk_size": 2}
+            "grid": {"eps": {"start": 0.0, "stop": 0.1, "num": 200}}, "chunk_size": 2}
     sweep_id = submit(server, body)
     wait(server, sweep_id, lambda v: v["members_done"] > 0 or finished(v))
     server.kill()  # SIGKILL mid-sweep: no shutdown code runs
     server.start()
     view = wait(server, sweep_id, finished)
     assert view["status"] == "completed" and view["attempts"] == 2, view
-    assert view["outcomes"] == {"completed": 100}
+    assert view["outcomes"] == {"completed": 200}
     ds = result(server, sweep_id, tmp_path)
     ref = raydamp.integrate(DampedPendulum(float(ds["eps"].values[57])), JOB["initial_state"]["q"], [0.0], h=0.1,
                             n_steps=2_000_000, save_every=1_000_000)
