@@ -26,8 +26,6 @@ __all__ = ["JobStore", "JobRecord", "JobWork", "TrajectoryArrays", "StoredTrajec
 _FLOAT = np.dtype("<f8")  # the blob format: little-endian float64, row-major
 # Steps x coordinates of a built-in model's run below which it is quick (JobWork.quick): milliseconds of work.
 _QUICK_WORK = 100_000
-
-
 _TABLES = f"""
 CREATE TABLE IF NOT EXISTS trajectories (
     job_id TEXT PRIMARY KEY REFERENCES jobs(id) ON DELETE CASCADE,
@@ -144,8 +142,9 @@ class JobStore(TaskStore[JobRecord], FileStore):
         """A read-only connection holding a snapshot in which the job's trajectory exists, and where it is.
         The caller reads the blobs through it (incremental I/O) and closes it."""
         optional = [a.name for a in SAVED if a.optional]
-        found = self.db.snapshot(f"SELECT rowid, points, dim, momenta{''.join(f', {name} IS NOT NULL' for name in optional)}"
-                                 " FROM trajectories WHERE job_id = ?", (job_id,))
+        flags = "".join(f", {name} IS NOT NULL" for name in optional)
+        found = self.db.snapshot(f"SELECT rowid, points, dim, momenta{flags} FROM trajectories WHERE job_id = ?",
+                                 (job_id,))
         if found is None:
             return None
         connection, row = found

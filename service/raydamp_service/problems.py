@@ -97,7 +97,7 @@ def check_spec(spec: JobSpec, settings: Settings, files=None) -> RaydampCall:
         raise JobError(("save_every",), f"save_every: {saved_points} saved points (n_steps // save_every + 2) "
                        f"exceed max_saved_points = {settings.max_saved_points}; raise save_every")
     call = build_call(spec, files)
-    # What the store will hold per saved point (jobs.StoredTrajectory): W and W_f when the run records them
+    # What the store will hold per saved point (stored_arrays.StoredTrajectory): W and W_f when the run records them
     # (raydamp records W_f with W, for a run with a load).
     saved = call.model.dim if spec.save_dofs is None else len(spec.save_dofs)
     loaded = call.call.options.get("load") is not None
