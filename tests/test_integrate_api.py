@@ -44,6 +44,9 @@ def pendulum_run(**kwargs):
     ({"save_every": 10**20}, "save_every must be <= "),
     ({"n_steps": 2**63}, "n_steps must be <= "),
     ({"n_steps": None, "t_end": 1e300, "h": 1e-300}, "t_end: reaching t_end"),
+    # The core reads an empty list as "every coordinate": the run saved them all, dofs said none, and
+    # Solution.save failed on the mismatch.
+    ({"save_dofs": []}, "save_dofs: an empty list saves no coordinate"),
 ])
 def test_bad_arguments_are_named(kwargs, message):
     with pytest.raises(ValueError, match=message):
@@ -236,3 +239,22 @@ def test_the_summary_is_the_job_summary_schema_the_service_describes():
     with pytest.raises(ValueError, match="extra"):
         summary_values(**s, energy_drift=0.0)  # a value no field declares
     assert JobSummary.model_validate({**s, "energy_drift": 0.0}).model_dump() == s
+
+
+@pytest.mark.parametrize(("work", "load", "save_dofs"), [
+    (False, None, None), (True, None, None), (True, "harmonic", None), (False, "harmonic", [2, 0]),
+    (True, "empty", [1]), (True, "harmonic", [1, 2, 0])])
+def test_row_bytes_counts_the_arrays_a_run_saves(work, load, save_dofs):
+    """raydamp.run.integrate.row_bytes (the service bounds a job's stored trajectory by it) is the float64s of
+    one saved point as the Solution holds them: W only with work, W_f only with work and a load that has
+    terms (a load without terms records none)."""
+    from raydamp.run.integrate import row_bytes
+
+    forcing = {None: None, "empty": raydamp.Load(), "harmonic": raydamp.Load.harmonic([0.1, 0.0, 0.2], 1.3)}[load]
+    model = ElasticPendulum()
+    sol = raydamp.integrate(model, ELASTIC_Q0, ELASTIC_P0, h=0.1, n_steps=7, work=work, load=forcing,
+                            save_dofs=save_dofs)
+    arrays = [sol.t, sol.energy, sol.q, sol.p, sol.momentum, sol.work, sol.load_work]
+    per_point = sum(a.size for a in arrays if a is not None) // sol.t.size
+    assert row_bytes(model, save_dofs, work=work, load=forcing) == 8 * per_point
+    assert (sol.load_work is not None) == (work and load == "harmonic")

@@ -14,9 +14,9 @@ from typing import Any
 import raydamp
 from raydamp.jobs import (CooForm, DiagonalForm, JobCall, JobError, JobSpec, LinearStructureInput, SweepSpec,
                           build_job, error_at, planned_steps)
+from raydamp.run.integrate import row_bytes
 
 from .config import Settings
-from .stored_arrays import StoredTrajectory
 
 __all__ = ["JobError", "RaydampCall", "build_call", "check_spec", "check_sweep_spec", "planned_steps"]
 
@@ -97,14 +97,10 @@ def check_spec(spec: JobSpec, settings: Settings, files=None) -> RaydampCall:
         raise JobError(("save_every",), f"save_every: {saved_points} saved points (n_steps // save_every + 2) "
                        f"exceed max_saved_points = {settings.max_saved_points}; raise save_every")
     call = build_call(spec, files)
-    # What the store will hold per saved point (stored_arrays.StoredTrajectory): W and W_f when the run records them
-    # (raydamp records W_f with W, for a run with a load).
-    saved = call.model.dim if spec.save_dofs is None else len(spec.save_dofs)
-    loaded = call.call.options.get("load") is not None
-    kept = {"work", "load_work"} if spec.work and loaded else {"work"} if spec.work else set()
-    stored = saved_points * StoredTrajectory(0, saved_points, saved, len(call.model.momentum_names),
-                                             frozenset(kept)).row_bytes
+    # What the store will hold: the points the run saves (raydamp's count of a saved point's arrays).
+    stored = saved_points * row_bytes(call.model, spec.save_dofs, work=spec.work, load=call.call.options.get("load"))
     if stored > settings.max_trajectory_bytes:
+        saved = call.model.dim if spec.save_dofs is None else len(spec.save_dofs)
         raise JobError(("save_every",), f"save_every: the stored trajectory would take {stored / 2**20:.0f} MiB "
                        f"({saved_points} saved points x {saved} saved coordinates); the limit is max_trajectory_bytes "
                        f"= {settings.max_trajectory_bytes / 2**20:.0f} MiB: raise save_every, or save fewer "

@@ -30,6 +30,8 @@ BAD_SPECS = [
     ("zero n_steps", {**without(VALID, "t_end"), "n_steps": 0}, ("n_steps",)),
     ("fractional n_steps", {**without(VALID, "t_end"), "n_steps": 10.5}, ("n_steps",)),
     ("zero save_every", {**VALID, "save_every": 0}, ("save_every",)),
+    # Before min_length 1 the run saved every coordinate while its dofs said none: its NetCDF failed.
+    ("empty save_dofs", {**VALID, "save_dofs": []}, ("save_dofs",)),
     ("unknown model", {**VALID, "model": "double_pendulum"}, ("model",)),
     ("unknown method", {**VALID, "method": "leapfrog"}, ("method",)),
     ("unknown tableau", {**VALID, "method": "rks", "tableau": "dopri5"}, ("tableau",)),

@@ -150,7 +150,7 @@ class JobSpec(ModelSpec):
                                          "balance) can be plotted; false skips it and lets 3s merge the damping "
                                          "sub-flows of consecutive steps (a little faster, equal to rounding)")
     save_dofs: Annotated[list[Annotated[int, Field(ge=0)]], indices(MAX_VECTOR)] | None = Field(
-        None, max_length=MAX_VECTOR, description="save q and p of these coordinates only (energy, W and momenta "
+        None, min_length=1, max_length=MAX_VECTOR, description="save q and p of these coordinates only (energy, W and momenta "
                                                  "still from the whole state); null saves all")
     load: dict[str, Any] | None = Field(
         None, description="a time-dependent force f(t): {\"harmonic\": {\"amplitude\": [...], \"omega\": w, "

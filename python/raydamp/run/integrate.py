@@ -16,7 +16,7 @@ from ..results.solution import Solution
 from ..systems.models import Model
 from .choose_method import choose_method
 
-__all__ = ["integrate", "steps_for", "CancelToken", "MAX_SAVED_BYTES", "MAX_STEPS", "MAX_AMPLIFICATION"]
+__all__ = ["integrate", "steps_for", "row_bytes", "CancelToken", "MAX_SAVED_BYTES", "MAX_STEPS", "MAX_AMPLIFICATION"]
 
 # Refuse runs whose saved points alone would not fit in memory comfortably.
 MAX_SAVED_BYTES = 4 * 2**30
@@ -30,6 +30,19 @@ class CancelToken(_core.CancelToken):
     The run stops within a few hundred steps with status "cancelled", keeping the
     points saved so far.
     """
+
+
+def row_bytes(model: Model, save_dofs=None, *, work: bool = False, load: Load | None = None) -> int:
+    """Bytes of one saved point of ``integrate(model, ..., save_dofs=, work=, load=)``, all float64: t and the
+    energy, q and p of the saved coordinates, the momentum maps, W with ``work``, and W_f with ``work`` and a
+    load that has terms. A run keeps ``n_steps // save_every + 2`` points at most."""
+    saved = model.dim if save_dofs is None else len(save_dofs)
+    recorded = (1 + _loaded(load)) if work else 0
+    return 8 * (2 + 2 * saved + len(model.momentum_names) + recorded)
+
+
+def _loaded(load: Load | None) -> bool:
+    return load is not None and bool(load.terms)
 
 
 @functools.cache
@@ -161,14 +174,13 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
         raise ValueError(f"cancel must be a raydamp.CancelToken or None, got {cancel!r}")
     if load is not None and not isinstance(load, Load):
         raise ValueError(f"load must be a raydamp.Load or raydamp.GroundMotion or None, got {_short(load)}")
-    core_load = None if load is None or not load.terms else load.bind(model)  # raises naming load.direction etc.
+    core_load = load.bind(model) if _loaded(load) else None  # raises naming load.direction etc.
     kT, seed, stream = thermal(temperature, seed, stream)
     dofs = _save_dofs(save_dofs, model.dim)
     rows = n_steps // save_every + 2
-    saved = model.dim if dofs is None else len(dofs)
-    row_bytes = 8 * (2 + 2 * work + 2 * saved + len(model.momentum_names))
-    if rows * row_bytes > MAX_SAVED_BYTES:
-        raise ValueError(f"save_every: {rows} saved points would take {rows * row_bytes / 2**30:.1f} GiB "
+    size = rows * row_bytes(model, dofs, work=work, load=load)
+    if size > MAX_SAVED_BYTES:
+        raise ValueError(f"save_every: {rows} saved points would take {size / 2**30:.1f} GiB "
                          f"(limit {MAX_SAVED_BYTES / 2**30:.0f} GiB); raise save_every")
 
     start = time.perf_counter()
@@ -203,6 +215,8 @@ def _save_dofs(save_dofs, dim: int) -> list[int] | None:
         return None
     if isinstance(save_dofs, (str, bytes)) or not hasattr(save_dofs, "__len__"):
         raise ValueError(f"save_dofs must be a list of coordinate indices or None, got {_short(save_dofs)}")
+    if len(save_dofs) == 0:  # the core reads an empty list as "all": refused rather than saving every coordinate
+        raise ValueError("save_dofs: an empty list saves no coordinate; give at least one index, or None for all")
     out = []
     for i, x in enumerate(save_dofs):
         if isinstance(x, bool) or not isinstance(x, (int, np.integer)):
