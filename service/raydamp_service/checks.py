@@ -29,6 +29,7 @@ import resource
 import signal
 import sqlite3
 import threading
+import time
 from pathlib import Path
 from typing import Any
 
@@ -203,18 +204,25 @@ class _Process:
                                        args=(child, settings))
         self.process.start()
         child.close()
-        self.ready = False
+        self.ready = self.dead = False
+        self.warm_by = time.monotonic() + _START_SECONDS
 
-    def started(self) -> bool:
-        """Waits (at most _START_SECONDS) for the process's warm-up to end; whether it did. A check's budget
-        counts from here: a process that replaced a killed one is handed out at once and warms up (0.4 s here,
-        more on a loaded machine), and that time is not the submitted system's."""
-        if not self.ready:
+    def started(self, until: float) -> bool:
+        """Waits (until that time.monotonic(), or the end of the warm-up's own _START_SECONDS) for the process's
+        warm-up to end; whether it did. A check's budget counts from here: a process that replaced a killed one
+        is handed out at once and warms up (0.4 s here, more on a loaded machine), and that time is not the
+        submitted system's."""
+        if not self.ready and not self.dead:
             try:
-                self.ready = self.connection.poll(_START_SECONDS) and self.connection.recv() == _READY
+                seconds = max(0.0, min(until, self.warm_by) - time.monotonic())
+                self.ready = self.connection.poll(seconds) and self.connection.recv() == _READY
             except (EOFError, OSError):
-                return False
+                self.dead = True
         return self.ready
+
+    def hung(self) -> bool:
+        """Not ready, and never will be: it died, or its warm-up outlasted _START_SECONDS."""
+        return not self.ready and (self.dead or time.monotonic() >= self.warm_by)
 
     def end(self) -> None:
         self.process.kill()
@@ -316,13 +324,19 @@ class CheckPool:
 
     def _answer(self, kind: str, spec: Any) -> tuple[str, Any]:
         budget = self._settings.check_seconds
+        # One wait for warm-ups per check, shared by its tries: processes that hang while warming up (a broken
+        # installation) cost a submission _START_SECONDS at most before its 429, not that for each try.
+        start_by = time.monotonic() + _START_SECONDS
         for _ in range(3):  # a process found dead when asked is replaced, and the next one asked
             try:
                 process = self._idle.get(timeout=budget)
             except queue.Empty:
                 raise ChecksBusy from None
-            if not process.started():  # died or hung in its warm-up: the next one is asked
-                self._replace(process)
+            if not process.started(start_by):
+                if not process.hung():  # still warming up, within its own time: kept for the next check
+                    self._idle.put(process)
+                    raise ChecksBusy
+                self._replace(process)  # died or hung in its warm-up: the next one is asked
                 continue
             try:
                 process.connection.send((kind, spec, self._settings))

@@ -246,3 +246,50 @@ def test_check_processes_run_the_service_under_test():
     with context.Pool(1) as pool:
         found = pool.apply(importlib.util.find_spec, ("raydamp_service.checks",))
     assert found.origin == str(Path(raydamp_service.__file__).parent / "checks.py")
+
+
+class _SilentPipe:
+    """A check process's end of the pipe that never says it is ready; records how long each poll waited."""
+
+    def __init__(self, waited: list[float]):
+        self._waited = waited
+
+    def poll(self, seconds: float) -> bool:
+        self._waited.append(seconds)
+        time.sleep(seconds)
+        return False
+
+
+def _warming(warm_for: float, waited: list[float]):
+    from raydamp_service import checks
+
+    process = object.__new__(checks._Process)  # no process behind it: only its warm-up is asked about
+    process.connection, process.ready, process.dead = _SilentPipe(waited), False, False
+    process.warm_by = time.monotonic() + warm_for
+    return process
+
+
+@pytest.mark.parametrize("warm_for", [0.0, 30.0])
+def test_a_check_waits_for_warm_ups_once(tmp_path, monkeypatch, warm_for):
+    """The tries of one check share one wait for warm-ups. Each waited _START_SECONDS (60 s) for its process,
+    so processes hanging in their warm-up (a broken installation) made a submission wait 3 minutes for its
+    429. A process past its own warm-up time (warm_for 0) is replaced and the next one asked within what is
+    left; one still within it (warm_for 30) is kept for the next check and this one gets 429 (ChecksBusy)."""
+    from raydamp_service import checks
+    from raydamp_service.config import Settings
+
+    monkeypatch.setattr(checks, "_START_SECONDS", 0.2)
+    pool = checks.CheckPool(Settings(db=tmp_path / "jobs.sqlite3", check_seconds=5))
+    replaced: list = []
+    monkeypatch.setattr(pool, "_replace", replaced.append)
+    waited: list[float] = []
+    processes = [_warming(warm_for, waited) for _ in range(3)]
+    for process in processes:
+        pool._idle.put(process)
+    with pytest.raises(checks.ChecksBusy):
+        pool._answer("job", None)
+    assert sum(waited) <= 0.2 + 1e-9, waited
+    if warm_for:
+        assert replaced == [] and pool._idle.qsize() == 3
+    else:
+        assert replaced == processes and pool._idle.qsize() == 0
