@@ -162,6 +162,19 @@ def test_bad_thermal_flags_exit_2_naming_the_flag(tmp_path, args, message):
     assert message in done.stderr and "Traceback" not in done.stderr, done.stderr
 
 
+@pytest.mark.parametrize(("extra", "args", "message"), [
+    ({"seed": 5}, [], "seed: the file gives a seed but no temperature"),
+    ({"seed": 5, "stream": 3}, [], "seed: the file gives a seed but no temperature"),
+    ({"stream": 3, "temperature": 0.2}, ["--temperature", "0"], "stream: the file gives a stream but no temperature"),
+])
+def test_a_files_seed_or_stream_without_a_temperature_exits_2_naming_the_key(tmp_path, extra, args, message):
+    """The file's keys are checked as the flags are (the module's docstring says so): before, a file's seed
+    without a temperature ran, exit code 0, and the seed was dropped from the provenance."""
+    done = _run(tmp_path, {**OSCILLATOR, **extra}, *args)
+    assert done.returncode == 2, done.stdout
+    assert message in done.stderr and "Traceback" not in done.stderr, done.stderr
+
+
 def test_a_temperature_flag_on_a_method_without_noise_flows_exits_2(tmp_path):
     done = _run(tmp_path, {**OSCILLATOR, "method": "rks"}, "--temperature", "1")
     assert done.returncode == 2

@@ -44,6 +44,8 @@ def pendulum_run(**kwargs):
     ({"save_every": 10**20}, "save_every must be <= "),
     ({"n_steps": 2**63}, "n_steps must be <= "),
     ({"n_steps": None, "t_end": 1e300, "h": 1e-300}, "t_end: reaching t_end"),
+    # Accepted before: t ran to inf and the run said "completed".
+    ({"n_steps": 3, "h": 1e308}, "h: 3 steps of h = 1e[+]308 end beyond the largest float"),
     # The core reads an empty list as "every coordinate": the run saved them all, dofs said none, and
     # Solution.save failed on the mismatch.
     ({"save_dofs": []}, "save_dofs: an empty list saves no coordinate"),

@@ -254,6 +254,10 @@ def test_bad_input_names_the_argument():
     with pytest.raises(ValueError, match=r"first_stream: members draw streams first_stream \+ i for i < 3"):
         raydamp.integrate_ensemble(model, np.full((3, 1), 0.1), np.zeros((3, 1)), temperature=1.0, seed=1,
                                    first_stream=2**64 - 2, **run)  # stream 2^64 - 2 + 2 would wrap to 0
+    for bad in (-1, True, 1.5):  # the message said "stream must be ..."
+        with pytest.raises(ValueError, match=r"^first_stream must be an integer in \[0, 2\^64\)"):
+            raydamp.integrate_ensemble(model, np.full((3, 1), 0.1), np.zeros((3, 1)), temperature=1.0,
+                                       first_stream=bad, **run)
     with pytest.raises(ValueError, match=r"temperature: method 'rks' has no exact noise flow"):
         raydamp.integrate(model, [0.1], [0.0], method="rks", temperature=1.0, **run)
     with pytest.raises(ValueError, match=r"temperature: composition 'yoshida4' runs sub-steps backward"):

@@ -74,9 +74,10 @@ def vector(name: str, value, dim: int) -> np.ndarray:
 MAX_SEED = 2**64 - 1
 
 
-def thermal(temperature, seed, stream: int = 0) -> tuple[float, int, int]:
-    """(kT, seed, stream) checked; kT 0 for no noise. A temperature without a seed gets a fresh one
-    from the operating system (kept in the run's provenance, so the run can be repeated)."""
+def thermal(temperature, seed, stream: int = 0, stream_name: str = "stream") -> tuple[float, int, int]:
+    """(kT, seed, stream) checked, the stream's errors naming stream_name; kT 0 for no noise. A temperature
+    without a seed gets a fresh one from the operating system (kept in the run's provenance, so the run can
+    be repeated)."""
     kT = 0.0 if temperature is None else real("temperature", temperature, nonnegative=True)
     if seed is None:
         import secrets
@@ -87,7 +88,7 @@ def thermal(temperature, seed, stream: int = 0) -> tuple[float, int, int]:
     elif not 0 <= int(seed) <= MAX_SEED:
         raise ValueError(f"seed must be an integer in [0, 2^64), got {int(seed)}")
     if isinstance(stream, bool) or not isinstance(stream, (int, np.integer)) or not 0 <= int(stream) <= MAX_SEED:
-        raise ValueError(f"stream must be an integer in [0, 2^64), got {_short(stream)}")
+        raise ValueError(f"{stream_name} must be an integer in [0, 2^64), got {_short(stream)}")
     return kT, int(seed), int(stream)
 
 
@@ -101,9 +102,13 @@ def span(h: float, t_end: float | None, n_steps: int | None) -> tuple[int, float
         both = t_end is not None
         raise ValueError(("n_steps" if both else "t_end") + ": give exactly one of t_end and n_steps"
                          + (", not both" if both else ""))
-    if n_steps is not None:
-        return integer("n_steps", n_steps, maximum=MAX_STEPS), h
-    return steps_for(t_end, h)
+    if n_steps is None:
+        return steps_for(t_end, h)
+    n_steps = integer("n_steps", n_steps, maximum=MAX_STEPS)
+    if not math.isfinite(n_steps * h):  # the times would pass the largest float: t = inf, "completed"
+        raise ValueError(f"h: {n_steps} steps of h = {h:g} end beyond the largest float, so the times would "
+                         "not be finite; lower h or n_steps")
+    return n_steps, h
 
 
 def steps_for(t_end: float, h: float) -> tuple[int, float]:

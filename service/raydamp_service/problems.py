@@ -7,7 +7,6 @@ only its limits, and says which one a job exceeds.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -89,9 +88,6 @@ def check_spec(spec: JobSpec, settings: Settings, files=None) -> RaydampCall:
         field = "n_steps" if spec.n_steps is not None else "t_end"
         raise JobError((field,), f"{field}: the run would take {steps} steps; this service runs at most "
                        f"max_steps = {settings.max_steps} (raise {spec.h_key} or shorten the run)")
-    if not math.isfinite(spec.h * steps):
-        raise JobError((spec.h_key,), f"{spec.h_key}: {steps} steps of {spec.h} end beyond the largest float, so "
-                       f"the times would not be finite; lower {spec.h_key} or the number of steps")
     saved_points = steps // spec.save_every + 2
     if saved_points > settings.max_saved_points:
         raise JobError(("save_every",), f"save_every: {saved_points} saved points (n_steps // save_every + 2) "

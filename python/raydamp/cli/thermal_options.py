@@ -53,14 +53,18 @@ def add_thermal_options(parser: argparse.ArgumentParser, members: str) -> None:
 
 
 def with_thermal_options(spec: Any, temperature: float | None, seed: int | None, stream: int | None) -> Any:
-    """The spec with the flags given (not None) in place of its own keys; ValueError naming the flag
-    for a seed or stream that would have no temperature to act on."""
-    given = {key: value for key, value in zip(THERMAL_KEYS, (temperature, seed, stream)) if value is not None}
-    if not given or not isinstance(spec, dict):  # a spec that is no JSON object: the job's own check says so
+    """The spec with the flags given (not None) in place of its own keys; ValueError naming the flag, or
+    the file's key, for a seed or stream that would have no temperature to act on."""
+    if not isinstance(spec, dict):  # a spec that is no JSON object: the job's own check says so
         return spec
+    given = {key: value for key, value in zip(THERMAL_KEYS, (temperature, seed, stream)) if value is not None}
     spec = {**spec, **given}
-    unused = [f"--{key}" for key in ("seed", "stream") if key in given]
-    if unused and not spec.get("temperature"):
-        raise ValueError(f"{unused[0]}: there is no temperature to draw noise at (give --temperature > 0 or the "
-                         "file's \"temperature\")")
+    if not spec.get("temperature"):
+        for key in ("seed", "stream"):
+            if key in given:
+                raise ValueError(f"--{key}: there is no temperature to draw noise at (give --temperature > 0 or "
+                                 "the file's \"temperature\")")
+            if spec.get(key) is not None:
+                raise ValueError(f"{key}: the file gives a {key} but no temperature to draw noise at (give "
+                                 "--temperature > 0 or the file's \"temperature\", or remove its \"" + key + "\")")
     return spec

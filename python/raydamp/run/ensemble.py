@@ -158,7 +158,7 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
     system.check_configurations("q0", q0)
     params = _parameter_arrays(system, parameters, members)
     loads, load_index, load_arrays = _member_loads(system, load, load_parameters, members)
-    kT, seed, first_stream = thermal(temperature, seed, first_stream)
+    kT, seed, first_stream = thermal(temperature, seed, first_stream, "first_stream")
     if kT > 0 and first_stream + members - 1 > MAX_SEED:  # the core's stream counter would wrap to stream 0
         raise ValueError(f"first_stream: members draw streams first_stream + i for i < {members}, which passes "
                          f"2^64 - 1 from first_stream = {first_stream}")

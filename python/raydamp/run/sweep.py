@@ -392,12 +392,16 @@ def check_sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, chunk_size:
             (Q0 if state.group(1) == "q0" else P0)[:, int(state.group(2))] = values
         elif name not in RUN_ARGUMENTS:
             parameters[name] = values.astype(float)
-    times = [_grid_times(run) for run, _, _ in groups]
-    for (run, _, _), grid_t in zip(groups, times):
-        if not np.isfinite(grid_t[-1]):  # as a job refuses it: the run's times would not be finite
-            where = f"grid.{STEP_SIZE_ALIAS if STEP_SIZE_ALIAS in grid else 'h'}" if "h" in columns else "h"
+    times = []
+    for run, _, _ in groups:
+        try:
+            times.append(_grid_times(run))
+        except ValueError as error:  # as a job refuses it (span): the run's times would not be finite
+            if "h" not in columns or "largest float" not in str(error):
+                raise
+            where = f"grid.{STEP_SIZE_ALIAS if STEP_SIZE_ALIAS in grid else 'h'}"
             raise ValueError(f"{where}: {run.get('n_steps')} steps of {run['h']} end beyond the largest float, so the "
-                             "times would not be finite; lower h or the number of steps")
+                             "times would not be finite; lower h or the number of steps") from None
     plan = SweepPlan(model=model, q0=Q0, p0=P0, options=options, columns=columns, parameters=parameters,
                      groups=groups, times=times, chunk_size=chunk_size,
                      grid={k: _axis(k, g).tolist() for k, g in grid.items()})
