@@ -49,6 +49,8 @@ def pendulum_run(**kwargs):
     # The core reads an empty list as "every coordinate": the run saved them all, dofs said none, and
     # Solution.save failed on the mismatch.
     ({"save_dofs": []}, "save_dofs: an empty list saves no coordinate"),
+    ({"save_dofs": np.array(0)}, "save_dofs must be a list of coordinate indices"),  # was a TypeError
+    ({"save_dofs": {0}}, "save_dofs must be a list of coordinate indices"),  # a set has no order to keep
 ])
 def test_bad_arguments_are_named(kwargs, message):
     with pytest.raises(ValueError, match=message):

@@ -239,6 +239,8 @@ def test_load_vector_shifts_the_equilibrium(small_plate):
     ({"M": np.eye(2), "K": np.array([[1.0, 0.5], [0.0, 1.0]])}, "K: must be symmetric"),
     ({"M": np.eye(2), "K": np.eye(2), "alpha": -1.0}, "alpha must be >= 0"),
     ({"M": np.eye(2), "K": np.eye(2), "f": [1.0]}, "f must be None or a vector of length 2"),
+    ({"M": np.eye(2), "K": np.eye(2), "f": [1j, 0]}, "f must be None or a vector of 2 real numbers"),  # a TypeError
+    ({"M": np.eye(2), "K": np.eye(2), "f": ["1", "2"]}, "f must be None or a vector of 2 real numbers"),  # ran as 1, 2
     ({"M": np.ones(3), "K": np.eye(3)}, "M must be a 2-D matrix"),
     ({"M": "no/such/file.mtx", "K": np.eye(3)}, "M: no Matrix Market file"),
     ({"M": np.eye(2), "K": np.array([[1.0, np.nan], [np.nan, 1.0]])}, "K must be finite"),

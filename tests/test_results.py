@@ -153,3 +153,20 @@ def test_composed_run_keeps_its_composition(tmp_path):
     assert plain.provenance["composition"] is None
     plain.save(tmp_path / "p.nc")
     assert raydamp.load(tmp_path / "p.nc").composition is None
+
+
+@pytest.mark.parametrize("suffix", [".nc", ".npz", "xarray"])
+def test_the_saved_coordinates_survive_a_round_trip(tmp_path, suffix):
+    """Solution.dofs came back None (every coordinate saved) from a file or a Dataset of a run with save_dofs,
+    while q held only the saved columns."""
+    sol = raydamp.integrate(ElasticPendulum(), ELASTIC_Q0, ELASTIC_P0, h=0.1, n_steps=20, save_dofs=[2, 0])
+    if suffix == "xarray":
+        from raydamp.results.io.solution import from_xarray
+
+        back = from_xarray(sol.to_xarray())
+    else:
+        sol.save(tmp_path / f"run{suffix}")
+        back = raydamp.load(tmp_path / f"run{suffix}")
+    np.testing.assert_array_equal(back.dofs, [2, 0])
+    assert back.coordinates == sol.coordinates == ("z", "x")
+    np.testing.assert_array_equal(back.q, sol.q)

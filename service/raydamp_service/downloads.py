@@ -41,10 +41,10 @@ def stored_solution(record: JobRecord, arrays: TrajectoryArrays, spec: JobSpec |
         **{a.name: getattr(arrays, a.name) for a in SAVED},
         status=summary.get("status", record.status), steps=int(summary.get("steps", 0)),
         failed_step=record.failed_step, message=summary.get("message") or record.error or "",
-        method=summary.get("method") or record.spec.get("method") or "3s", tableau=summary.get("tableau"), composition=summary.get("composition"),
-        h=spec.h,
-        max_momentum_drift=float(drift) if drift is not None else 0.0,
-        wall_time=float(summary.get("wall_time", 0.0)), origin=provenance)
+        method=summary.get("method") or record.spec.get("method") or "3s", tableau=summary.get("tableau"),
+        composition=summary.get("composition"), h=spec.h, max_momentum_drift=float(drift) if drift is not None else 0.0,
+        wall_time=float(summary.get("wall_time", 0.0)), origin=provenance,
+        dofs=None if spec.save_dofs is None else np.asarray(spec.save_dofs, dtype=np.int64))
 
 
 def write_file(record: JobRecord, connection: sqlite3.Connection, stored: StoredTrajectory, selection: Selection,

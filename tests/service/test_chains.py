@@ -23,7 +23,7 @@ def _peak_rss_mib(pid: int) -> float:
 
 
 @pytest.mark.parametrize("on_site", [None, {"kind": "phi4", "k2": -0.5}])
-def test_chain_job_matches_python(server, on_site):
+def test_chain_job_matches_python(server, on_site, tmp_path):
     system = SMALL if on_site is None else {**SMALL, "on_site": on_site}
     job = {"system": system, "method": "3s", "step_size": 0.1, "n_steps": 500, "save_every": 100,
            "initial_state": {"mode": 1, "amplitude": 0.5}, "save_dofs": [0, 31, 63]}
@@ -38,6 +38,10 @@ def test_chain_job_matches_python(server, on_site):
     np.testing.assert_array_equal(np.array(trajectory["q"]), local.q)
     np.testing.assert_array_equal(np.array(trajectory["energy"]), local.energy)
     assert np.array(trajectory["q"]).shape == (6, 3)
+    if on_site is None:  # the download says which coordinates it holds (its dofs were lost: None, "all")
+        download = tmp_path / "chain.nc"
+        download.write_bytes(server.client.get(f"/v1/jobs/{done['id']}/trajectory?format=netcdf").content)
+        np.testing.assert_array_equal(raydamp.load(download).dofs, [0, 31, 63])
 
 
 def test_million_site_chain_through_the_service(start_server):

@@ -130,5 +130,13 @@ def test_impossible_plots_are_422(server, jobs):
     unknown = server.client.get(f"/v1/jobs/{jobs['kepler']}/plots/phase.png", params={"coordinate": "w"})
     assert unknown.status_code == 422
     assert unknown.json()["detail"][0]["loc"] == ["query", "coordinate"]
+    # Each named by its own parameter: a bad y was blamed on x, and "²" (a digit to str.isdigit, not to int())
+    # on the path's kind, with int()'s message.
+    for kind, params, where in [("projection", {"x": "x", "y": "w"}, "y"), ("projection", {"x": "w"}, "x"),
+                                ("phase", {"coordinate": "\u00b2"}, "coordinate")]:
+        bad = server.client.get(f"/v1/jobs/{jobs['kepler']}/plots/{kind}.png", params=params)
+        assert bad.status_code == 422, bad.text
+        detail = bad.json()["detail"][0]
+        assert detail["loc"] == ["query", where] and "unknown coordinate" in detail["msg"], detail
     assert server.client.get(f"/v1/jobs/{jobs['kepler']}/plots/histogram.png").status_code == 422
     assert server.client.get("/v1/jobs/nope/plots/energy.png").status_code == 404

@@ -80,6 +80,11 @@ HOSTILE = [
     ("parameters beside a system", {**JOB, "parameters": {"eps": 0.1}}, ("parameters",)),
     ("wrong q length", {**JOB, "initial_state": {"q": [1.0, 2.0], "p": P0}}, ("initial_state", "q")),
     ("momentum of an unknown coordinate", with_system(momenta={"J": "x*p_w"}), ("system", "momenta", "J")),
+    # Accepted before, and its CSV had two columns named "energy" (or t, work, q_x).
+    ("momentum named as a saved column", with_system(momenta={"energy": "x*p_y - y*p_x"}),
+     ("system", "momenta", "energy")),
+    ("momentum named as a coordinate's column", with_system(momenta={"q_x": "x*p_y - y*p_x"}),
+     ("system", "momenta", "q_x")),
     ("state-dependent mass", with_system(mass="1 + x^2"), ("system", "mass")),
     ("lone surrogate", None, ("system", "potential")),
 ]

@@ -96,7 +96,7 @@ def record_format(content: bytes, name: str | None = None) -> str:
         by_name = _SUFFIXES.get(Path(name).suffix.lower())
         if by_name is not None:
             return by_name
-    if content[:14].lower() == b"%%matrixmarket":
+    if content[:4096].lstrip()[:14].lower() == b"%%matrixmarket":  # as scipy reads it, after leading blanks
         return "mtx"
     if content.startswith(_NPY_MAGIC):
         return "npy"

@@ -43,16 +43,17 @@ class SolutionPlots:
     def __init__(self, solution: Solution):
         self._sol = solution
 
-    def _coordinate(self, coordinate) -> int:
+    def _coordinate(self, coordinate, argument: str = "coordinate") -> int:
+        """The column of a coordinate given by name or index; errors name the argument (coordinate, x or y)."""
         names = self._sol.coordinates
         if isinstance(coordinate, str):
             if coordinate not in names:
-                raise ValueError(f"coordinate: unknown coordinate {coordinate!r} (known: {', '.join(names)})")
+                raise ValueError(f"{argument}: unknown coordinate {coordinate!r} (known: {', '.join(names)})")
             return names.index(coordinate)
         if isinstance(coordinate, (int, np.integer)) and not isinstance(coordinate, bool) \
                 and 0 <= coordinate < len(names):
             return int(coordinate)
-        raise ValueError(f"coordinate: a name ({', '.join(names)}) or an index below {len(names)}, got {coordinate!r}")
+        raise ValueError(f"{argument}: a name ({', '.join(names)}) or an index below {len(names)}, got {coordinate!r}")
 
     def energy(self, *, ax=None, balance: bool | None = None, label: str | None = None):
         """H(t); with ``balance`` (default: when the run recorded the work) also H - H0 + W."""
@@ -87,7 +88,7 @@ class SolutionPlots:
         sol = self._sol
         if sol.q.shape[1] < 2:
             raise ValueError("projection: needs a system of at least two coordinates; use phase() for one")
-        i, j = self._coordinate(x), self._coordinate(y)
+        i, j = self._coordinate(x, "x"), self._coordinate(y, "y")
         ax = _axes(ax)
         ax.plot(sol.q[:, i], sol.q[:, j], linewidth=0.8, label=_label(sol, label))
         ax.set_xlabel(sol.coordinates[i])

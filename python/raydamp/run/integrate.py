@@ -213,7 +213,9 @@ def _save_dofs(save_dofs, dim: int) -> list[int] | None:
     """The coordinates to save, checked: distinct integers in [0, dim)."""
     if save_dofs is None:
         return None
-    if isinstance(save_dofs, (str, bytes)) or not hasattr(save_dofs, "__len__"):
+    # Ordered sequences only: a set's or dict's order is not one the caller chose; a 0-d array has no len().
+    if isinstance(save_dofs, (str, bytes, set, frozenset, Mapping)) or not hasattr(save_dofs, "__len__") \
+            or np.ndim(save_dofs) != 1:
         raise ValueError(f"save_dofs must be a list of coordinate indices or None, got {_short(save_dofs)}")
     if len(save_dofs) == 0:  # the core reads an empty list as "all": refused rather than saving every coordinate
         raise ValueError("save_dofs: an empty list saves no coordinate; give at least one index, or None for all")

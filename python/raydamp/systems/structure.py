@@ -62,7 +62,7 @@ from typing import Any
 import numpy as np
 
 from .. import _core
-from .._validation import real
+from .._validation import _short, real
 from .matrix_market import read_header
 from .models import SharedModel
 
@@ -177,8 +177,14 @@ class LinearStructure(SharedModel):
         if f is None:
             load = np.zeros(0)
         else:
-            load = np.asarray(f, dtype=float).reshape(-1) if not isinstance(f, str) else None
-            if load is None or load.shape != (n,):
+            try:  # numbers only: asarray(dtype=float) read "1" as 1.0 and failed on 1j with a TypeError
+                load = np.asarray(f)
+            except (TypeError, ValueError):
+                load = None
+            if load is None or load.dtype.kind not in "iuf":
+                raise ValueError(f"f must be None or a vector of {n} real numbers, got {_short(f)}")
+            load = load.astype(float).reshape(-1)
+            if load.shape != (n,):
                 raise ValueError(f"f must be None or a vector of length {n}")
             if not np.isfinite(load).all():
                 raise ValueError("f must be finite")

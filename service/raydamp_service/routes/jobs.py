@@ -241,14 +241,14 @@ def get_plot(job_id: str, kind: Literal["energy", "phase", "projection"], reques
     finally:
         connection.close()
 
-    def pick(value: str | None):  # a coordinate's name, or its index
-        return int(value) if value is not None and value.isdigit() else value
+    def pick(value: str | None):  # a coordinate's name, or its index (ASCII digits: int() refuses "²")
+        return int(value) if value is not None and value.isascii() and value.isdecimal() else value
 
     try:
         png = sol.plot.png(kind, width=width, height=height, coordinate=pick(coordinate), x=pick(x), y=pick(y))
     except ValueError as error:
-        field = str(error).partition(": ")[0]
-        loc = ("query", "coordinate" if kind == "phase" else "x") if field == "coordinate" else ("path", "kind")
+        field = str(error).partition(": ")[0]  # raydamp names the argument: coordinate, x, y, or the plot's kind
+        loc = ("query", field) if field in ("coordinate", "x", "y") else ("path", "kind")
         raise RequestValidationError([{"type": "value_error", "loc": loc, "msg": str(error), "input": None}]) from None
     return Response(png, media_type="image/png")
 

@@ -39,6 +39,12 @@ def _attributes(sol: Solution) -> dict[str, Any]:
     return attrs
 
 
+def _dofs(provenance: dict[str, Any]) -> np.ndarray | None:
+    """The saved coordinates' indices, from the provenance's save_dofs (None: every coordinate was saved)."""
+    dofs = provenance.get("save_dofs")
+    return None if dofs is None else np.asarray(dofs, dtype=np.int64)
+
+
 def _scalars_from(attrs: dict[str, Any]) -> dict[str, Any]:
     out = {key: attrs.get(key, "") for key in _SCALARS}
     out["steps"] = int(out["steps"])
@@ -80,7 +86,7 @@ def from_xarray(ds) -> Solution:
                     momentum=np.asarray(ds["momentum"].values, float).reshape(ds.sizes["time"], -1),
                     work=np.asarray(ds["work"].values, float) if "work" in ds else None, origin=provenance,
                     load_work=np.asarray(ds["load_work"].values, float) if "load_work" in ds else None,
-                    **_scalars_from(dict(ds.attrs)))
+                    dofs=_dofs(provenance), **_scalars_from(dict(ds.attrs)))
 
 
 def _csv_table(sol: Solution) -> tuple[list[str], np.ndarray]:
@@ -116,4 +122,4 @@ def from_npz(path) -> Solution:
                         momentum=data["momentum"].reshape(rows, -1),
                         work=data["work"] if "work" in data else None, origin=provenance,
                         load_work=data["load_work"] if "load_work" in data else None,
-                        **_scalars_from(attrs))
+                        dofs=_dofs(provenance), **_scalars_from(attrs))

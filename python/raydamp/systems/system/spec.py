@@ -24,6 +24,7 @@ MAX_PARAMETERS = 256
 MAX_DAMPERS = 32        # kMaxDampers in cpp/include/raydamp/system/small_dense.hpp
 MAX_DENSE_DAMPING = 32  # kMaxDenseDim: n for a constant-matrix D or dashpots
 MAX_MOMENTA = 16
+_SAVED_COLUMNS = frozenset({"t", "energy", "work", "load_work"})
 KEYS = ("coordinates", "potential", "parameters", "mass", "damping", "eps", "momenta", "name")
 DAMPING_FORMS = ("scalar", "diagonal", "matrix", "dampers")
 
@@ -263,6 +264,10 @@ def normalise(*, coordinates, potential, parameters=None, mass=1.0, damping=None
     for key, text in momenta.items():
         if not isinstance(key, str) or not _NAME.match(key):
             raise SpecError(("momenta",), f"momentum names must be names, got {_show(key)}")
+        if key in _SAVED_COLUMNS or key in {f"{side}_{c}" for side in "qp" for c in coords}:
+            # A saved run's columns (a CSV's header, a Dataset's variables) beside the momentum maps.
+            raise SpecError(("momenta", key), f"{key!r} names a column of every saved run (t, q_<coordinate>, "
+                                              "p_<coordinate>, energy, work, load_work); choose another")
         moms[key] = _expression(("momenta", key), text, with_momenta)
     if name is not None and (not isinstance(name, str) or len(name) > 200):
         raise SpecError(("name",), "must be a string of at most 200 characters")
