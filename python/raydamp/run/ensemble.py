@@ -59,10 +59,7 @@ def _parameter_arrays(system: Model, parameters, members: int) -> dict[str, np.n
                              f"(known: {', '.join(known) or 'none'}"
                              f"{'' if known else '; its members differ by initial state: build one model per value'})")
         shape = (members,) if known[name] == 1 else (members, known[name])
-        try:
-            array = np.asarray(values, dtype=float)
-        except (TypeError, ValueError):
-            raise ValueError(f"parameters.{name} must be an array of real numbers") from None
+        array = _floats(f"parameters.{name}", values, "an array of real numbers")
         if array.ndim == len(shape) - 1:
             array = np.broadcast_to(array, shape)
         if array.shape != shape:
@@ -145,13 +142,8 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
     if load is not None and not isinstance(load, Load):
         raise ValueError(f"load must be a raydamp.Load or None, got {type(load).__name__}")
     parameters, load_parameters = _split_load_parameters(parameters, load)
-    if members is None and load_parameters:
-        members = len(next(iter(load_parameters.values())))
-    if members is None and parameters:
-        sizes = system.member_parameters()
-        lengths = {len(np.atleast_1d(np.asarray(v, dtype=object))) for k, v in parameters.items()
-                   if sizes.get(k, 1) == 1}
-        members = max(lengths) if lengths else None
+    if members is None:
+        members = _parameter_members(system, parameters, load_parameters)
     q0 = _states("q0", q0, members, n)
     members = q0.shape[0]
     p0 = _states("p0", p0, members, n)
@@ -223,21 +215,11 @@ def _split_load_parameters(parameters, load: Load | None) -> tuple[Any, dict[str
 def _member_loads(system: Model, load: Load | None, varied: dict[str, Any], members: int):
     """(core loads, (members,) index into them, {"load.<name>": (members,) values}): one core load per
     distinct set of the varied parameters other than the amplitude, scaled per member (data shared)."""
-    if load is None or not load.terms:
+    if load is None:
         return [], np.zeros(0, dtype=np.int64), {}
-    known = load.parameters
-    arrays: dict[str, np.ndarray] = {}
-    for name, values in varied.items():
-        if name not in known:
-            raise ValueError(f"parameters.load.{name}: this load has no parameter {name!r} (it has: "
-                             f"{', '.join(sorted(known))})")
-        try:
-            array = np.broadcast_to(np.asarray(values, dtype=float), (members,))
-        except (TypeError, ValueError):
-            raise ValueError(f"parameters.load.{name} must be {members} real numbers") from None
-        if not np.isfinite(array).all():
-            raise ValueError(f"parameters.load.{name} must be finite")
-        arrays[name] = np.ascontiguousarray(array)
+    arrays = _load_parameter_arrays(load, varied, members)
+    if not load.terms:  # no force to run, but its parameters were checked and are recorded per member
+        return [], np.zeros(0, dtype=np.int64), {f"load.{k}": v for k, v in arrays.items()}
     others = [k for k in arrays if k != "amplitude"]
     base: dict[tuple, int] = {}
     bound = []
@@ -253,3 +235,70 @@ def _member_loads(system: Model, load: Load | None, varied: dict[str, Any], memb
         scaled = [bound[index[i]].scaled(float(arrays["amplitude"][i]), 1.0) for i in range(members)]
         bound, index = scaled, np.arange(members, dtype=np.int64)
     return bound, index, {f"load.{k}": v for k, v in arrays.items()}
+
+
+def _load_parameter_arrays(load: Load, varied: dict[str, Any], members: int) -> dict[str, np.ndarray]:
+    """{name: (members,) finite floats} of the "load.<name>" parameters, each a name of ``load.parameters``."""
+    known = load.parameters
+    arrays: dict[str, np.ndarray] = {}
+    for name, values in varied.items():
+        if name not in known:
+            raise ValueError(f"parameters.load.{name}: this load has no parameter {name!r} (it has: "
+                             f"{', '.join(sorted(known))})")
+        array = _floats(f"parameters.load.{name}", values, f"{members} real numbers")
+        try:
+            array = np.broadcast_to(array, (members,))
+        except ValueError:
+            raise ValueError(f"parameters.load.{name} must be {members} real numbers, "
+                             f"got shape {array.shape}") from None
+        if not np.isfinite(array).all():
+            raise ValueError(f"parameters.load.{name} must be finite")
+        arrays[name] = np.ascontiguousarray(array)
+    return arrays
+
+
+def _floats(name: str, values, expected: str) -> np.ndarray:
+    """``values`` as a float array. Bools are refused, as integrate refuses eps=True: np.asarray would
+    read True as 1.0, and a mask passed by mistake would run as parameters."""
+    flag = _first_bool(values)
+    if flag is not None:
+        raise ValueError(f"{name} must be {expected}, got the bool {bool(flag)}")
+    try:
+        return np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be {expected}") from None
+
+
+def _first_bool(values):
+    """The first bool in ``values`` (a scalar, a nested list or an array), or None. A list mixing bools
+    and floats converts to floats, so the elements are looked at, not the converted dtype."""
+    if isinstance(values, np.ndarray) and values.dtype != object:
+        return values.flat[0] if values.dtype.kind == "b" and values.size else None
+    if isinstance(values, (bool, np.bool_)):
+        return values
+    try:
+        elements = np.asarray(values, dtype=object)
+    except (TypeError, ValueError):
+        return None  # ragged: the float conversion refuses it with the argument's name
+    return next((x for x in elements.flat if isinstance(x, (bool, np.bool_))), None)
+
+
+def _parameter_members(system: Model, parameters, load_parameters: dict[str, Any]) -> int | None:
+    """The member count the parameters give when q0 and p0 are single states: the longest per-member
+    list. A scalar counts as one member (broadcast to the others), as does a vector parameter given as
+    its k components: only a 2-D (members, k) array lists one vector per member. None: no parameters."""
+    sizes = system.member_parameters()
+    given = [(sizes.get(k, 1), v) for k, v in parameters.items()] if isinstance(parameters, Mapping) else []
+    given += [(1, v) for v in load_parameters.values()]
+    counts = [_rows(values, 1 if size == 1 else 2) for size, values in given]
+    return max(counts) if counts else None
+
+
+def _rows(values, per_member_ndim: int) -> int:
+    """len(values) when it has the dimensions of a per-member list, else 1 (one value for every member).
+    Ragged or odd values count as 1 here; converting them to floats refuses them by name."""
+    try:
+        shape = np.shape(np.asarray(values, dtype=object))
+    except (TypeError, ValueError):
+        return 1
+    return shape[0] if len(shape) >= per_member_ndim else 1
