@@ -28,11 +28,9 @@ MEDIA_TYPES = {"csv": "text/csv", "npz": "application/octet-stream", "netcdf": "
 SUFFIXES = {"csv": ".csv", "npz": ".npz", "netcdf": ".nc"}
 
 
-def stored_solution(record: JobRecord, arrays: TrajectoryArrays, spec: JobSpec | None = None) -> raydamp.Solution:
-    """The stored run as a Solution; its provenance is the job spec as submitted (spec: it validated, when the
-    caller has it already)."""
+def stored_solution(record: JobRecord, arrays: TrajectoryArrays, spec: JobSpec) -> raydamp.Solution:
+    """The stored run as a Solution; its provenance is the job spec as submitted (spec: it validated)."""
     summary = record.summary or {}
-    spec = spec or JobSpec.model_validate(record.spec)
     coordinates, momentum_names = spec.names(arrays.q.shape[1], arrays.momentum.shape[1], spec.save_dofs)
     provenance = {**record.spec, "raydamp_version": raydamp.__version__, "job_id": record.id,
                   "coordinates": coordinates, "momentum_names": momentum_names}
@@ -47,11 +45,11 @@ def stored_solution(record: JobRecord, arrays: TrajectoryArrays, spec: JobSpec |
         dofs=None if spec.save_dofs is None else np.asarray(spec.save_dofs, dtype=np.int64))
 
 
-def write_file(record: JobRecord, connection: sqlite3.Connection, stored: StoredTrajectory, selection: Selection,
-               fmt: Literal["csv", "npz", "netcdf"], directory: Path) -> tuple[Path, str]:
+def write_file(record: JobRecord, spec: JobSpec, connection: sqlite3.Connection, stored: StoredTrajectory,
+               selection: Selection, fmt: Literal["csv", "npz", "netcdf"], directory: Path) -> tuple[Path, str]:
     """(path, media type) of the selected points written in directory by raydamp, which asks for them a slice
-    at a time: rows [start, stop) of the selection are read from their blobs, never the whole of them."""
-    spec = JobSpec.model_validate(record.spec)  # once for the file, not once per slice
+    at a time: rows [start, stop) of the selection are read from their blobs, never the whole of them. spec:
+    the record's, validated (once for the file, not once per slice)."""
     head = stored_solution(record, read_arrays(connection, stored, Selection(selection.start, selection.start + 1,
                                                                              selection.every)), spec)
 

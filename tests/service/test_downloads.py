@@ -140,3 +140,25 @@ def test_impossible_plots_are_422(server, jobs):
         assert detail["loc"] == ["query", where] and "unknown coordinate" in detail["msg"], detail
     assert server.client.get(f"/v1/jobs/{jobs['kepler']}/plots/histogram.png").status_code == 422
     assert server.client.get("/v1/jobs/nope/plots/energy.png").status_code == 404
+
+
+def test_a_spec_this_version_refuses_keeps_its_json_and_says_why_files_are_409(start_server):
+    """A job stored by an earlier version whose spec this one refuses (save_dofs [] is refused since it saved
+    every coordinate; a momentum map named "energy" since the CSV had two such columns): its files and plots,
+    whose names and provenance come from the validated spec, were a 500."""
+    import sqlite3
+
+    server = start_server()
+    job_id = server.submit({"model": "elastic_pendulum", "method": "3s", "h": 0.1, "n_steps": 20,
+                            "initial_state": {"q": [0.0, 1.55884573, -0.6], "p": [1.34164079, 0.0, 0.0]}})
+    assert server.wait_finished(job_id)["status"] == "completed"
+    server.stop()
+    with sqlite3.connect(server.db) as db:
+        spec = json.loads(db.execute("SELECT spec FROM jobs WHERE id = ?", (job_id,)).fetchone()[0])
+        db.execute("UPDATE jobs SET spec = ? WHERE id = ?", (json.dumps({**spec, "save_dofs": []}), job_id))
+    server.start()
+    assert len(server.client.get(f"/v1/jobs/{job_id}/trajectory").json()["t"]) == 21
+    for url in (f"/v1/jobs/{job_id}/trajectory?format=netcdf", f"/v1/jobs/{job_id}/plots/energy.png"):
+        response = server.client.get(url)
+        assert response.status_code == 409, response.text
+        assert "save_dofs" in response.json()["detail"] and "served as JSON only" in response.json()["detail"]

@@ -17,6 +17,8 @@ from typing import Annotated, Literal
 from fastapi import APIRouter, HTTPException, Query, Request, Response
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse, StreamingResponse
+from pydantic import ValidationError
+from raydamp.jobs import validation_error
 from starlette.background import BackgroundTask
 from starlette.concurrency import run_in_threadpool
 
@@ -158,6 +160,16 @@ def _opened(record: JobRecord, store: JobStore):
     return opened
 
 
+def _spec(record: JobRecord) -> JobSpec:
+    """The stored spec validated, for a file or a plot (their names and provenance come from it); 409 if a
+    version that checks more than the one that stored it refuses it. Its points are still served as JSON."""
+    try:
+        return JobSpec.model_validate(record.spec)
+    except ValidationError as error:
+        raise HTTPException(409, detail=f"job {record.id} was stored by an earlier version whose spec this one "
+                            f"refuses ({validation_error(error)}); its trajectory is served as JSON only") from None
+
+
 def _large_slot(request: Request, settings: Settings, selected_bytes: int) -> threading.Semaphore | None:
     """The large-fetch slot a fetch, file or plot reading this many stored bytes needs (None for a small one)."""
     if selected_bytes <= settings.large_fetch_bytes:
@@ -186,6 +198,7 @@ class _Download(FetchLease):
 def _trajectory_file(record: JobRecord, store: JobStore, request: Request, settings: Settings, points: slice,
                      fmt: str) -> Response:
     """The selected points written as a file, a slice at a time (downloads.write_file), and sent from disk."""
+    spec = _spec(record)
     connection, stored = _opened(record, store)
     try:
         selection = Selection(*points.indices(stored.points))
@@ -197,7 +210,7 @@ def _trajectory_file(record: JobRecord, store: JobStore, request: Request, setti
         download = _Download(_large_slot(request, settings, len(selection) * stored.row_bytes),
                              Path(tempfile.mkdtemp(prefix="raydamp-download-")))
         try:
-            path, media_type = write_file(record, connection, stored, selection, fmt, download._directory)
+            path, media_type = write_file(record, spec, connection, stored, selection, fmt, download._directory)
         except BaseException:
             download.release()
             raise
@@ -229,13 +242,14 @@ def get_plot(job_id: str, kind: Literal["energy", "phase", "projection"], reques
     """energy: H(t) (and H - H0 + W when recorded); phase: (q_i, p_i); projection: (q_x, q_y). At most 20,000
     points and max_plot_bytes of stored floats are drawn, decimated evenly."""
     record = JOBS.existing(store, job_id)
+    spec = _spec(record)
     connection, stored = _opened(record, store)
     try:
         points = max(2, min(_PLOT_POINTS, settings.max_plot_bytes // stored.row_bytes))
         selection = Selection(0, stored.points, max(1, -(-stored.points // points)))
         lease = FetchLease(_large_slot(request, settings, len(selection) * stored.row_bytes))
         try:
-            sol = stored_solution(record, read_arrays(connection, stored, selection))
+            sol = stored_solution(record, read_arrays(connection, stored, selection), spec)
         finally:
             lease.release()
     finally:
