@@ -334,3 +334,17 @@ def test_a_thermal_sweep_starts_its_members_streams_at_the_jobs_stream(client):
     with pytest.raises(ValueError, match=r"stream: members draw streams stream \+ k for k < 12"):
         raydamp.check_sweep({**job, "stream": 2**64 - 5}, {"h": [0.05, 0.04], "eps": [0.1, 0.3],
                                                             "q0[0]": [0.2, 0.6, 1.0]})
+
+
+def test_a_member_failing_on_a_worker_is_named_by_its_index_in_the_sweep(client):
+    """Audit: a member that failed on a worker was named by its index in its chunk ("member 0" for the
+    sweep's member 3 in chunks of 1). A combination of values each right alone (sv, and eps 0.1 with 3s)
+    passes the driver's check, whose steps grow with the axes' lengths, not their product, and fails on the
+    worker, named as the Dataset's member."""
+    grid = {"method": ["3s", "sv"], "eps": [0.0, 0.1]}
+    plan = raydamp.check_sweep(SPEC, grid, chunk_size=1)
+    assert (plan.columns["method"][3], plan.columns["eps"][3]) == ("sv", 0.1)  # member 3, in chunk 3 of 4
+    with pytest.raises(ValueError, match=r"^member 3: method: 'sv' ignores damping and this model has eps = 0\.1"):
+        raydamp.sweep(SPEC, grid, client=client, chunk_size=1)
+    with pytest.raises(ValueError, match=r"^member 3: method: 'sv' ignores damping"):  # chunks of 2: member 1 of 2
+        raydamp.sweep(SPEC, grid, client=client, chunk_size=2)

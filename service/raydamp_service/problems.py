@@ -14,6 +14,7 @@ import raydamp
 from raydamp.jobs import (CooForm, DiagonalForm, JobCall, JobError, JobSpec, LinearStructureInput, SweepSpec,
                           build_job, error_at, planned_steps)
 from raydamp.run.integrate import row_bytes
+from raydamp.run.sweep import GridTooLarge
 
 from .config import Settings
 
@@ -111,24 +112,37 @@ def check_spec(spec: JobSpec, settings: Settings, files=None) -> RaydampCall:
 
 
 def check_sweep_spec(spec: SweepSpec, settings: Settings) -> raydamp.SweepPlan:
-    """Every check a sweep must pass before it is queued: the job's, raydamp.check_sweep's (grid names and
-    values, one step of the first member), then the service's size bounds."""
+    """Every check a sweep must pass before it is queued: the job's, the service's bounds on the grid's size
+    (members and members x steps, counted from the axes' lengths before raydamp builds a member), raydamp's
+    (raydamp.check_sweep: grid names and values, one step per value), then the result's size."""
     try:
         check_spec(spec.job, settings)
         job, grid = spec.job_form(), spec.grid_arguments()
     except JobError as error:
         raise error.within("job") if error.loc[:1] != ("job",) else error from None
+    steps = planned_steps(spec.job)
+
+    def too_large(members: int) -> JobError | None:
+        if members > settings.max_sweep_members:
+            return JobError(("grid",), f"grid: {members} members (the product of the axes' lengths); this service "
+                            f"runs at most max_sweep_members = {settings.max_sweep_members}")
+        if members * steps > settings.max_sweep_steps:
+            return JobError(("grid",), f"grid: {members} members x {steps} steps = {members * steps} steps; "
+                            f"this service runs at most max_sweep_steps = {settings.max_sweep_steps} per sweep")
+        return None
+
+    # Both bounds as one on the members, which raydamp applies before it builds any (a grid of 10^8 members
+    # would otherwise be built, gigabytes, before being refused).
+    bound = min(settings.max_sweep_members, max(1, settings.max_sweep_steps // max(steps, 1)))
     try:
-        plan = raydamp.check_sweep(job, grid, chunk_size=spec.chunk_size)
+        plan = raydamp.check_sweep(job, grid, chunk_size=spec.chunk_size, max_members=bound)
+    except GridTooLarge as error:
+        raise too_large(error.members) or spec.error_at(error) from None
     except ValueError as error:
         raise spec.error_at(error) from None
-    if plan.members > settings.max_sweep_members:
-        raise JobError(("grid",), f"grid: {plan.members} members (the product of the axes' lengths); this service "
-                       f"runs at most max_sweep_members = {settings.max_sweep_members}")
-    steps = planned_steps(spec.job)
-    if plan.members * steps > settings.max_sweep_steps:
-        raise JobError(("grid",), f"grid: {plan.members} members x {steps} steps = {plan.members * steps} steps; "
-                       f"this service runs at most max_sweep_steps = {settings.max_sweep_steps} per sweep")
+    refused = too_large(plan.members)
+    if refused is not None:
+        raise refused
     size = plan.values * 8
     if size > settings.max_sweep_bytes:
         raise JobError(("job", "save_every"), f"job.save_every: the result would hold {size / 2**20:.0f} MiB "

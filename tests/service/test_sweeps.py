@@ -136,6 +136,14 @@ def test_blown_up_members_are_counted_and_kept(sweeps, tmp_path):
     ({"grid": {"step_size": [0.1, -1.0]}}, ["body", "grid", "step_size"], "grid.step_size must be > 0"),
     ({"grid": {"method": ["3s", "rk9"]}}, ["body", "grid", "method"], "unknown method 'rk9'"),
     ({"grid": {"eps": list(range(100)), "q0[0]": list(range(100))}}, ["body", "grid"], "max_sweep_members = 5000"),
+    # 10^8 members: refused from the axes' lengths (the server built them first, gigabytes, and stalled)
+    ({"grid": {"eps": [0.1] * 10_000, "h": [0.1] * 10_000}}, ["body", "grid"],
+     "grid: 100000000 members (the product of the axes' lengths); this service runs at most max_sweep_members = 5000"),
+    # every value of an axis is checked, not the first member's only (a later one failed the sweep on a worker)
+    ({"grid": {"eps": [0.1, -0.5]}}, ["body", "grid", "eps"], "grid.eps[1] = -0.5: parameters.eps must be"),
+    ({"grid": {"method": ["3s", "sv"]}}, ["body", "grid", "method"], "grid.method[1] = 'sv': method: 'sv' ignores"),
+    # the axis is the key the client wrote, dot and all
+    ({"grid": {"load.omega": ["abc"]}}, ["body", "grid", "load.omega"], "grid.load.omega: not a parameter"),
     ({"grid": {}}, ["body", "grid"], "at least 1 item"),
     ({"job": {**JOB, "work": True}}, ["body", "job", "work"], "do not record the damping work"),
     ({"job": {**JOB, "step_size": 0.0}}, ["body", "job", "step_size"], "greater than 0"),
@@ -149,6 +157,36 @@ def test_bad_sweeps_are_422_naming_the_path(sweeps, change, loc, words):
     assert response.status_code == 422, response.text
     detail = response.json()["detail"]
     assert any(d["loc"] == loc and words in d["msg"] for d in detail), detail
+
+
+@pytest.mark.parametrize("settings, message", [
+    ({"max_sweep_members": 5000}, "grid: 100000000 members (the product of the axes' lengths); this service runs at "
+                                  "most max_sweep_members = 5000"),
+    ({"max_sweep_members": 10**9, "max_sweep_steps": 10**6},
+     "grid: 100000000 members x 200 steps = 20000000000 steps; this service runs at most max_sweep_steps = 1000000 "
+     "per sweep"),
+])
+def test_a_huge_grid_is_refused_before_raydamp_builds_it(settings, message):
+    """Audit, serious: check_sweep_spec let raydamp build the whole grid before comparing its members with
+    max_sweep_members (10^8 members: 220 MB/s past 10 GB, no answer). Both bounds now reach raydamp as one on
+    the members, applied to the product of the axes' lengths; the messages are the service's own."""
+    import tracemalloc
+
+    from raydamp.jobs import JobError, SweepSpec
+    from raydamp_service.config import Settings
+    from raydamp_service.problems import check_sweep_spec
+
+    spec = SweepSpec.model_validate({"job": JOB, "grid": {"eps": [0.1] * 10_000, "q0[0]": {"start": 0.0, "stop": 1.0,
+                                                                                           "num": 10_000}}})
+    tracemalloc.start()
+    try:
+        with pytest.raises(JobError) as caught:
+            check_sweep_spec(spec, Settings(**settings))
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert caught.value.loc == ("grid",) and str(caught.value) == message
+    assert peak < 50 * 2**20  # numpy reports its arrays to tracemalloc: nothing of the grid's size was made
 
 
 def test_in_process_cluster_by_default(start_server, tmp_path):

@@ -82,11 +82,28 @@ class SweepSpec(Input):
         """A ValueError of raydamp.sweep or raydamp.check_sweep for this sweep, at the JSON path of what its
         message starts with: a grid axis, a member (the grid made it), chunk_size, else the job."""
         message = str(error)
+        if message.startswith("grid."):
+            return JobError(self._grid_path(message[len("grid."):]), message)
         head = message.replace(":", " ").split(" ", 1)[0]
-        if head.startswith("grid."):
-            return JobError(("grid", *head.split(".")[1:]), message)
-        if head in self.grid or head == "member":  # a member's run (e.g. the amplification bound)
-            return JobError(("grid", head) if head in self.grid else ("grid",), message)
+        if head in self.grid:
+            return JobError(("grid", head), message)
+        if head in ("grid", "member"):  # the grid as a whole (its size), or a member's run (the amplification bound)
+            return JobError(("grid",), message)
         if head == "chunk_size":
             return JobError(("chunk_size",), message)
         return error_at(self.job, error).within("job")
+
+    def _grid_path(self, rest: str) -> tuple[str, ...]:
+        """The JSON path of a message about an axis, from its text after "grid.": the axis is the key the
+        client wrote, matched whole (a key may hold a dot, "load.omega", or brackets, "q0[1]"); then a
+        range's key (".num") is a part of the path, and a value's index ("[2]") is not (a range's values
+        have no path of their own)."""
+        keys = [key for key in self.grid
+                if rest.startswith(key) and rest[len(key):len(key) + 1] in ("", ":", " ", ".", "[")]
+        if not keys:  # not one of the client's keys: the name up to the message's text, as one part
+            return ("grid", rest.replace(":", " ").split(" ", 1)[0])
+        key = max(keys, key=len)
+        tail = rest[len(key):]
+        if tail.startswith("."):
+            return ("grid", key, tail[1:].replace(":", " ").split(" ", 1)[0])
+        return ("grid", key)

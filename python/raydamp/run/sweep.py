@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import ast
 import json
+import math
 import re
 import sys
 import threading
@@ -30,9 +31,9 @@ from ..systems.models import MODELS, Model
 from ..systems.system import System
 from .ensemble import integrate_ensemble
 from .choose_method import choose_method
-from .integrate import CancelToken, _catalogue, span
+from .integrate import MAX_SAVED_BYTES, CancelToken, _catalogue, span
 
-__all__ = ["sweep", "check_sweep", "SweepPlan", "parse_grid_item", "SPEC_KEYS", "RUN_ARGUMENTS"]
+__all__ = ["sweep", "check_sweep", "SweepPlan", "GridTooLarge", "parse_grid_item", "SPEC_KEYS", "RUN_ARGUMENTS"]
 
 # The Python form of a sweep's spec: integrate's arguments and the model.
 SPEC_KEYS = ("model", "system", "parameters", "q0", "p0", "method", "tableau", "composition", "h", "t_end", "load",
@@ -96,18 +97,25 @@ def _base(spec: Mapping[str, Any]) -> tuple[Model, np.ndarray, np.ndarray, dict[
 
 
 _RANGE_KEYS = ("start", "stop", "num", "scale")
+# The axes of names; every other axis holds real numbers.
+_NAME_AXES = ("method", "tableau", "composition")
 
 
-def _range(name: str, spec: Mapping[str, Any]) -> np.ndarray:
-    """{"start", "stop", "num", "scale": "linear" | "log"}: num values from start to stop, both included."""
+def _range_num(name: str, spec: Mapping[str, Any]) -> int:
+    """A range's num, its keys checked: how many values it gives, known before any is made."""
     unknown = [k for k in spec if k not in _RANGE_KEYS]
     if unknown:
         raise ValueError(f"grid.{name}.{unknown[0]}: unknown key (a range has {', '.join(_RANGE_KEYS)})")
     for key in ("start", "stop", "num"):
         if key not in spec:
             raise ValueError(f"grid.{name}.{key}: missing (a range is {{start, stop, num[, scale]}})")
+    return integer(f"grid.{name}.num", spec["num"])
+
+
+def _range(name: str, spec: Mapping[str, Any]) -> np.ndarray:
+    """{"start", "stop", "num", "scale": "linear" | "log"}: num values from start to stop, both included."""
+    num = _range_num(name, spec)
     start, stop = real(f"grid.{name}.start", spec["start"]), real(f"grid.{name}.stop", spec["stop"])
-    num = integer(f"grid.{name}.num", spec["num"])
     scale = spec.get("scale", "linear")
     if scale == "linear":
         return np.linspace(start, stop, num)
@@ -144,16 +152,28 @@ def parse_grid_item(text: str) -> tuple[str, Any]:
         raise ValueError(f"--grid {text!r}: expected numbers separated by commas") from None
 
 
+def _axis_length(name: str, values) -> int:
+    """How many values an axis has, read without making them (a range's num), so that a grid's size is
+    known before anything is allocated. A malformed axis counts 1 here: _axis then refuses it by name."""
+    if isinstance(values, Mapping) and name not in _NAME_AXES:
+        return _range_num(name, values)
+    try:
+        return len(values)
+    except TypeError:
+        return 1
+
+
 def _axis(name: str, values) -> np.ndarray:
-    if isinstance(values, Mapping) and name not in ("method", "tableau", "composition"):
+    if isinstance(values, Mapping) and name not in _NAME_AXES:
         values = _range(name, values)
-    if name in ("method", "tableau", "composition"):
+    if name in _NAME_AXES:
         if isinstance(values, str) or not isinstance(values, (list, tuple, np.ndarray)):
             raise ValueError(f"grid.{name}: expected a list of names")
         out = np.array(["" if v is None else v for v in values], dtype=object)
         if any(not isinstance(v, str) for v in out):
             raise ValueError(f"grid.{name}: expected a list of names (or None)")
     else:
+        _refuse_bools(name, values)
         try:
             out = np.asarray(values, dtype=float)
         except (TypeError, ValueError):
@@ -167,22 +187,59 @@ def _axis(name: str, values) -> np.ndarray:
     return out
 
 
-def _plan(model: Model, options: dict[str, Any], grid: Mapping[str, Any]):
-    """Members of the Cartesian product, ordered group by group (members of a group share the
-    run arguments, so a group's chunks are ensembles); returns (columns, groups) with columns
-    {grid name: per-member values} in that order and groups [(run options, start, stop)]."""
+def _refuse_bools(name: str, values) -> None:
+    """A bool in a numeric axis is refused, as integrate refuses h=True: np.asarray would read True as 1.0."""
+    if isinstance(values, np.ndarray) and values.dtype.kind == "b":
+        raise ValueError(f"grid.{name}: expected a list of real numbers, got an array of bools")
+    if isinstance(values, (list, tuple)) or (isinstance(values, np.ndarray) and values.dtype == object):
+        for i, v in enumerate(values):
+            if isinstance(v, (bool, np.bool_)):
+                raise ValueError(f"grid.{name}[{i}]: expected a real number, got the bool {bool(v)}")
+
+
+class GridTooLarge(ValueError):
+    """A grid of more members than the caller's ``max_members``, refused before any member was made.
+    ``members`` is its count (the product of the axes' lengths), for a caller's own message."""
+
+    def __init__(self, members: int, max_members: int):
+        super().__init__(f"grid: {members} members (the product of the axes' lengths); at most max_members = "
+                         f"{max_members}")
+        self.members, self.max_members = members, max_members
+
+
+def _member_bytes(model: Model, axes: int) -> int:
+    """What the plan holds per member: q0 and p0, and per axis its column and the index that picks it,
+    with the group number and the order that sorts the members (8-byte numbers)."""
+    return 8 * (2 * model.dim + 2 * axes + 2)
+
+
+def _check_size(members: int, model: Model, axes: int, max_members: int | None) -> None:
+    """The grid's size, from its axes' lengths, before anything is built: a caller's bound, then the
+    library's own (a grid whose members alone would not fit in memory comfortably)."""
+    if max_members is not None and members > max_members:
+        raise GridTooLarge(members, max_members)
+    size = members * _member_bytes(model, axes)
+    if size > MAX_SAVED_BYTES:
+        raise ValueError(f"grid: {members} members (the product of the axes' lengths) would take "
+                         f"{size / 2**30:.1f} GiB for their initial states and grid values alone (limit "
+                         f"{MAX_SAVED_BYTES / 2**30:.0f} GiB); shrink the grid or split the sweep")
+
+
+def _axis_names(model: Model, options: dict[str, Any], grid: Mapping[str, Any]) -> dict[str, str]:
+    """{axis name: the key the client wrote} with each name checked; h's axis is named "h" whatever
+    the client called it."""
     if not isinstance(grid, Mapping) or not grid:
         raise ValueError("grid must be a non-empty dict of name: values")
     known = dict(model.member_parameters())
     if options.get("load") is not None:  # the load's parameters sweep as "load.<name>" (load.omega: a response curve)
         known.update({f"load.{k}": 1 for k in Load.from_dict(options["load"]).parameters})
-    axes = {}
-    h_label = "h"
-    for name, values in grid.items():
+    labels = {}
+    for name in grid:
+        label = name
         if name == STEP_SIZE_ALIAS:  # h's former name, accepted for one release; errors say what the client wrote
             if "h" in grid:
                 raise ValueError(f"grid.{name}: give the step size's axis once, as h")
-            h_label, name = name, "h"
+            name = "h"
         state = _STATE_COMPONENT.match(name) if isinstance(name, str) else None
         if state and int(state.group(2)) >= model.dim:
             raise ValueError(f"grid.{name}: the model has {model.dim} coordinates")
@@ -191,31 +248,61 @@ def _plan(model: Model, options: dict[str, Any], grid: Mapping[str, Any]):
                              f"argument ({', '.join(RUN_ARGUMENTS)}) or an initial-state component (q0[i], p0[i])")
         if known.get(name, 1) > 1:
             raise ValueError(f"grid.{name}: sweep the components of {name} through a model per value instead")
-        axes[name] = _axis(h_label if name == "h" else name, values)
+        labels[name] = label
+    return labels
+
+
+def _axes(model: Model, options: dict[str, Any], grid: Mapping[str, Any],
+          max_members: int | None) -> tuple[dict[str, np.ndarray], dict[str, str]]:
+    """The grid's axes, {name: values}, and {name: the key the client wrote}. The member count is the
+    product of the axes' lengths, so it is bounded before any axis, let alone any member, is made."""
+    labels = _axis_names(model, options, grid)
+    members = math.prod(_axis_length(label, grid[label]) for label in labels.values())
+    _check_size(members, model, len(labels), max_members)
+    return {name: _axis(label, grid[label]) for name, label in labels.items()}, labels
+
+
+def _groups(axes: dict[str, np.ndarray], index: np.ndarray) -> tuple[np.ndarray, list[tuple]]:
+    """Each member's group (the members sharing run arguments) and the groups' run-argument values, in
+    the order the members first show them. Found over the combinations of the run axes alone, not
+    member by member: a grid of many members and a few run arguments costs a few Python objects."""
     names = list(axes)
-    index = np.stack(np.meshgrid(*[np.arange(a.size) for a in axes.values()], indexing="ij"), axis=-1)
-    index = index.reshape(-1, len(names))
-    columns = {name: axes[name][index[:, k]] for k, name in enumerate(names)}
-    members = index.shape[0]
     run_names = [name for name in names if name in RUN_ARGUMENTS]
-    keys = [tuple(columns[name][i] for name in run_names) for i in range(members)] if run_names else [()] * members
-    distinct = list(dict.fromkeys(keys))
-    order = np.argsort(np.array([distinct.index(k) for k in keys]) if run_names else np.zeros(members), kind="stable")
-    columns = {name: values[order] for name, values in columns.items()}
+    if not run_names:
+        return np.zeros(index.shape[1], dtype=np.intp), [()]
+    sizes = [axes[name].size for name in run_names]
+    # In lexicographic order, as the members (first axis slowest) first show each combination.
+    combos = np.indices(sizes).reshape(len(run_names), -1)
+    number: dict[tuple, int] = {}
+    combo_group = np.array([number.setdefault(tuple(axes[name][combos[k, c]] for k, name in enumerate(run_names)),
+                                              len(number)) for c in range(combos.shape[1])], dtype=np.intp)
+    member_combo = np.ravel_multi_index(tuple(index[names.index(name)] for name in run_names), sizes)
+    return combo_group[member_combo], list(number)
+
+
+def _plan(options: dict[str, Any], axes: dict[str, np.ndarray], labels: dict[str, str]):
+    """Members of the Cartesian product, ordered group by group (members of a group share the
+    run arguments, so a group's chunks are ensembles); returns (columns, groups) with columns
+    {grid name: per-member values} in that order and groups [(run options, start, stop)]."""
+    names = list(axes)
+    index = np.indices([values.size for values in axes.values()]).reshape(len(names), -1)
+    group, distinct = _groups(axes, index)
+    order = np.argsort(group, kind="stable")
+    columns = {name: axes[name][index[k][order]] for k, name in enumerate(names)}
+    del index
+    counts = np.bincount(group, minlength=len(distinct))
+    run_names = [name for name in names if name in RUN_ARGUMENTS]
     groups, start = [], 0
-    counts = {k: 0 for k in distinct}
-    for k in keys:
-        counts[k] += 1
     names_catalogue, _ = _catalogue()
-    for key in distinct:
+    for key, count in zip(distinct, counts.tolist()):
         run = dict(options)
         for name, value in zip(run_names, key):
             run[name] = (value or None) if name in ("tableau", "composition") else value
         if run["method"] not in names_catalogue:
             raise ValueError(f"method: unknown method {run['method']!r} (known: {', '.join(names_catalogue)})")
-        run["h"] = real(f"grid.{h_label}" if "h" in run_names else "h", float(run["h"]), positive=True)
-        groups.append((run, start, start + counts[key]))
-        start += counts[key]
+        run["h"] = real(f"grid.{labels['h']}" if "h" in run_names else "h", run["h"], positive=True)
+        groups.append((run, start, start + count))
+        start += count
     return columns, groups
 
 
@@ -237,7 +324,7 @@ def _watch_stop(name: str | None) -> tuple[CancelToken | None, threading.Event |
     """For a chunk of a sweep: a CancelToken that a thread cancels once the sweep's distributed Event
     ``name`` is set (sweep sets it at a cancel, or when it ends by an error), so a running chunk stops
     within a poll and a few hundred steps instead of running to its end on the worker; and the
-    threading.Event that ends the watch. (None, None) for the driver's own check run (no name)."""
+    threading.Event that ends the watch. (None, None) for a task without one (no name)."""
     if name is None:
         return None, None
     from distributed import Event, get_client
@@ -265,6 +352,8 @@ def _run_chunk(task: dict[str, Any]) -> dict[str, Any]:
     token, finished = _watch_stop(task.get("stop"))
     try:
         ens = _run_ensemble(model, task, run, token)
+    except ValueError as error:
+        raise _renumbered(error, task["start"]) from None
     finally:
         if finished is not None:
             finished.set()
@@ -276,6 +365,15 @@ def _run_chunk(task: dict[str, Any]) -> dict[str, Any]:
             "max_momentum_drift": ens.max_momentum_drift,
             "messages": {str(task["start"] + i): m for i, (s, m) in enumerate(zip(ens.status, ens.message))
                          if s != "completed"}}
+
+
+def _renumbered(error: ValueError, start: int) -> ValueError:
+    """A chunk's "member i: ..." error with i the member's index in the sweep (the Dataset's member), not in
+    the chunk, which the ensemble counts from its own first member."""
+    found = re.match(r"member (\d+): ", str(error))
+    if found is None:
+        return error
+    return ValueError(f"member {start + int(found.group(1))}: {str(error)[found.end():]}")
 
 
 def _run_ensemble(model, task: dict[str, Any], run: dict[str, Any], cancel: CancelToken | None):
@@ -373,42 +471,167 @@ class SweepPlan:
         return self.members * self.rows * (2 + 2 * self.model.dim + len(self.model.momentum_names))
 
 
-def check_sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, chunk_size: int = 1000) -> SweepPlan:
+def check_sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, chunk_size: int = 1000,
+                max_members: int | None = None) -> SweepPlan:
     """Every check :func:`sweep` makes before it sends anything, without a cluster: the spec, the
-    grid (names, values, ranges) and one step of the first member, run here the way a worker will.
-    Raises ValueError naming the entry (``grid.eps``, ``spec.h`` ...); returns the plan, whose
-    ``members``, ``rows`` and ``values`` tell how big the result will be."""
+    grid (names, values, ranges; its size, the product of its axes' lengths, before anything is built)
+    and one step of members that hold every value of every axis (the first member of each group of
+    run arguments, and the members one axis away from the first; of an axis over a System's expression
+    parameter, whose every value compiles, 64 values spread over it), run here the way a worker will.
+    ``max_members`` bounds the members (a :class:`GridTooLarge`, a ValueError, names ``grid``).
+    Raises ValueError naming the entry (``grid.eps``, ``grid.eps[2] = -0.5``, ``spec.h`` ...); returns
+    the plan, whose ``members``, ``rows`` and ``values`` tell how big the result will be."""
     model, q0, p0, options = _base(spec)
     chunk_size = integer("chunk_size", chunk_size)
-    columns, groups = _plan(model, options, grid)
+    if max_members is not None:
+        max_members = integer("max_members", max_members)
+    axes, labels = _axes(model, options, grid, max_members)
+    columns, groups = _plan(options, axes, labels)
     members = groups[-1][2]
     if options.get("temperature") and options["stream"] + members - 1 > MAX_SEED:
         raise ValueError(f"stream: members draw streams stream + k for k < {members}, which passes 2^64 - 1 from "
                          f"stream = {options['stream']}; give a smaller stream")
-    Q0, P0 = np.tile(q0, (members, 1)), np.tile(p0, (members, 1))
+    Q0, P0, parameters = _members(q0, p0, columns, members)
+    times = [_times(run, grid, "h" in axes) for run, _, _ in groups]
+    plan = SweepPlan(model=model, q0=Q0, p0=P0, options=options, columns=columns, parameters=parameters,
+                     groups=groups, times=times, chunk_size=chunk_size,
+                     grid={labels[name]: values.tolist() for name, values in axes.items()})
+    _check_values(plan, axes, labels, q0, p0)
+    return plan
+
+
+def _members(q0: np.ndarray, p0: np.ndarray, columns: dict[str, np.ndarray],
+             rows: int) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    """(q0, p0, model parameters) of ``rows`` members: the spec's state with the grid's state components
+    set, and the grid's parameters, from ``columns`` {grid name: per-member values}."""
+    Q0, P0 = np.tile(q0, (rows, 1)), np.tile(p0, (rows, 1))
     parameters = {}
     for name, values in columns.items():
         if state := _STATE_COMPONENT.match(name):
             (Q0 if state.group(1) == "q0" else P0)[:, int(state.group(2))] = values
         elif name not in RUN_ARGUMENTS:
             parameters[name] = values.astype(float)
-    times = []
-    for run, _, _ in groups:
+    return Q0, P0, parameters
+
+
+def _times(run: dict[str, Any], grid: Mapping[str, Any], h_swept: bool) -> np.ndarray:
+    """A group's save grid; a step whose times overflow is refused as a job refuses it (span)."""
+    try:
+        return _grid_times(run)
+    except ValueError as error:
+        if not h_swept or "largest float" not in str(error):
+            raise
+        where = f"grid.{STEP_SIZE_ALIAS if STEP_SIZE_ALIAS in grid else 'h'}"
+        raise ValueError(f"{where}: {run.get('n_steps')} steps of {run['h']} end beyond the largest float, so the "
+                         "times would not be finite; lower h or the number of steps") from None
+
+
+# Members per one-step check call: an axis of a System's expression parameter compiles a model per value,
+# and those of one call are held at once.
+_CHECK_BATCH = 256
+# Values of such an axis that the check steps: each compiles (about 5 ms), as the run will, and a check of
+# thousands would take longer than a service's check budget; evenly spaced, both ends included.
+_COMPILED_VALUES_CHECKED = 64
+
+
+def _checked_values(model: Model, name: str, size: int) -> np.ndarray:
+    """The indices of axis ``name``'s values after the first that the check steps: all of them, but for an
+    axis over a System's expression parameter (each value compiles) _COMPILED_VALUES_CHECKED, spread."""
+    if not isinstance(model, System) or name == "eps" or size <= _COMPILED_VALUES_CHECKED:
+        return np.arange(1, size)
+    return np.unique(np.linspace(1, size - 1, _COMPILED_VALUES_CHECKED).round().astype(int))
+
+
+def _step(model: Model, q0: np.ndarray, p0: np.ndarray, columns: dict[str, np.ndarray], rows: int,
+          run: dict[str, Any]) -> None:
+    """One step of ``rows`` members (see _members), run here as a worker runs a chunk."""
+    Q0, P0, parameters = _members(q0, p0, columns, rows)
+    task = {"q0": Q0, "p0": P0, "parameters": parameters, "threads": 1, "start": 0}
+    _run_ensemble(model, task, dict(run, n_steps=1, t_end=None), None)
+
+
+def _show(value) -> str:
+    """An axis value as the client wrote it: a number, or a name (None for a name left out)."""
+    value = value.item() if isinstance(value, np.generic) else value
+    return repr(None if value == "" else value)
+
+
+def _reason(error: ValueError) -> str:
+    """A check run's error without its "member i: " (an index into the check's members, not the grid's)."""
+    return re.sub(r"^member \d+: ", "", str(error), count=1)
+
+
+def _check_values(plan: SweepPlan, axes: dict[str, np.ndarray], labels: dict[str, str], q0: np.ndarray,
+                  p0: np.ndarray) -> None:
+    """One step of members that together hold every value of every axis, run here before anything is
+    sent: the grid's first member, the first member of each other group (each distinct set of run
+    arguments) and, with the first group's run arguments, the members one axis away from the first
+    member. Costs a step per group and per axis value, not per member. A member failing here would fail
+    its chunk on a worker and lose the whole sweep; the error names the axis value (grid.eps[3] = -0.5)."""
+    model = model_from_spec(describe_model(plan.model))  # as a worker rebuilds it
+    first = {name: values[:1] for name, values in axes.items() if name not in RUN_ARGUMENTS}
+    run0 = plan.groups[0][0]
+    try:
+        _step(model, q0, p0, first, 1, run0)
+    except ValueError as error:
+        raise _first_member_error(model, q0, p0, plan, axes, labels, error) from None
+    for run, start, _ in plan.groups[1:]:  # its first member: the first values of the other axes
         try:
-            times.append(_grid_times(run))
-        except ValueError as error:  # as a job refuses it (span): the run's times would not be finite
-            if "h" not in columns or "largest float" not in str(error):
-                raise
-            where = f"grid.{STEP_SIZE_ALIAS if STEP_SIZE_ALIAS in grid else 'h'}"
-            raise ValueError(f"{where}: {run.get('n_steps')} steps of {run['h']} end beyond the largest float, so the "
-                             "times would not be finite; lower h or the number of steps") from None
-    plan = SweepPlan(model=model, q0=Q0, p0=P0, options=options, columns=columns, parameters=parameters,
-                     groups=groups, times=times, chunk_size=chunk_size,
-                     grid={k: _axis(k, g).tolist() for k, g in grid.items()})
-    first = _task(plan, describe_model(model), groups[0][0], 0, 1, threads=1)
-    first["run"] = dict(first["run"], n_steps=1, t_end=None)
-    _run_chunk(first)
-    return plan
+            _step(model, q0, p0, first, 1, run)
+        except ValueError as error:
+            raise _group_error(plan, axes, labels, start, error) from None
+    for name, values in axes.items():
+        if name in RUN_ARGUMENTS:
+            continue
+        checked = _checked_values(plan.model, name, values.size)
+        for a in range(0, checked.size, _CHECK_BATCH):
+            _check_axis_values(model, q0, p0, first, run0, name, checked[a:a + _CHECK_BATCH], axes, labels)
+
+
+def _check_axis_values(model: Model, q0, p0, first: dict[str, np.ndarray], run: dict[str, Any], name: str,
+                       indices: np.ndarray, axes: dict[str, np.ndarray], labels: dict[str, str]) -> None:
+    """One step of the members that take values ``indices`` of axis ``name`` and the first value of every
+    other axis; on an error each runs alone, for the first bad value's own message."""
+    def columns(picked: np.ndarray) -> dict[str, np.ndarray]:
+        return {**{k: np.repeat(v, picked.size) for k, v in first.items()}, name: axes[name][picked]}
+
+    try:
+        _step(model, q0, p0, columns(indices), indices.size, run)
+        return
+    except ValueError as error:
+        batch_error = error
+    for j in indices.tolist():
+        try:
+            _step(model, q0, p0, columns(np.array([j])), 1, run)
+        except ValueError as error:
+            raise ValueError(f"grid.{labels[name]}[{j}] = {_show(axes[name][j])}: {_reason(error)}") from None
+    raise ValueError(f"grid.{labels[name]}: {_reason(batch_error)}") from None
+
+
+def _first_member_error(model: Model, q0, p0, plan: SweepPlan, axes: dict[str, np.ndarray],
+                        labels: dict[str, str], error: ValueError) -> ValueError:
+    """The grid's first member failed: the spec's own error when the spec fails without the grid, the
+    only axis's first value when there is one axis, else member 0 (which of several axes is to blame is
+    not known)."""
+    try:
+        _step(model, q0, p0, {}, 1, plan.options)
+    except ValueError as own:
+        return ValueError(_reason(own))
+    if len(axes) == 1:
+        (name, values), = axes.items()
+        return ValueError(f"grid.{labels[name]}[0] = {_show(values[0])}: {_reason(error)}")
+    return ValueError(f"member 0: {_reason(error)}")
+
+
+def _group_error(plan: SweepPlan, axes: dict[str, np.ndarray], labels: dict[str, str], start: int,
+                 error: ValueError) -> ValueError:
+    """The first member of a group (member ``start``) failed where the grid's first member did not: the
+    run-argument axes it differs by are to blame; the message names the first, with the others' values."""
+    changed = [name for name in axes if name in RUN_ARGUMENTS and plan.columns[name][start] != plan.columns[name][0]]
+    name, value = changed[0], plan.columns[changed[0]][start]
+    j = int(np.flatnonzero(axes[name] == value)[0])
+    also = "".join(f" with {labels[k]} = {_show(plan.columns[k][start])}" for k in changed[1:])
+    return ValueError(f"grid.{labels[name]}[{j}] = {_show(value)}{also}: {_reason(error)}")
 
 
 def _unguarded_main_call() -> tuple[str, str] | None:
@@ -461,7 +684,7 @@ def _task(plan: SweepPlan, model_spec: dict, run: dict, a: int, b: int, threads:
 
 def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chunk_size: int = 1000,
           progress: bool | Callable[[int, int], object] | None = None, store=None, threads: int = 1,
-          cancel=None):
+          cancel=None, max_members: int | None = None):
     """Run the Cartesian product of ``grid`` over ``spec`` on a Dask client; one Dataset back.
 
     Parameters
@@ -498,6 +721,7 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
         far comes back, the other members with status "cancelled" and no rows, ``attrs["cancelled"]``
         true. A chunk already running on a worker stops there too, within a quarter of a second and a
         few hundred steps (it watches a distributed Event the cancel sets), and is not waited for.
+    max_members : refuse a grid of more members (a :class:`GridTooLarge`) before anything is built.
 
     Returns an xarray.Dataset laid out as ``EnsembleSolution.to_xarray()``'s, with a member
     coordinate per grid name; when the groups' save grids differ (a grid over h with t_end),
@@ -520,9 +744,9 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
         raise ValueError(f"store: expected a path ending in .zarr, got {store!r}")
     if cancel is not None and not hasattr(cancel, "cancelled"):
         raise ValueError(f"cancel must be a raydamp.CancelToken, got {cancel!r}")
-    # The driver checks everything, the first member included, before anything is sent: a bad
+    # The driver checks everything, every axis value included, before anything is sent: a bad
     # argument is reported here, naming it, rather than from a worker.
-    plan = check_sweep(spec, grid, chunk_size=chunk_size)
+    plan = check_sweep(spec, grid, chunk_size=chunk_size, max_members=max_members)
     model, options, columns, groups, times = plan.model, plan.options, plan.columns, plan.groups, plan.times
     members, chunk_size, Q0, P0 = plan.members, plan.chunk_size, plan.q0, plan.p0
     model_spec = describe_model(model)
