@@ -34,12 +34,14 @@ struct StepDurations {
   double lead = 0.0, trail = 0.0;
   int m = 1;
   std::array<double, kMaxCompositionStages * stride> body{};  // m * stride used; the last joint slot unused
+  std::array<double, kMaxCompositionStages> stage{};           // gamma_s h: each stage's step size
 
   StepDurations(const Composition& c, double h) : m(c.stages()) {
     const double first = Method::stages[0].fraction, last = Method::stages[S - 1].fraction;
     lead = first * c.gamma(0) * h;
     trail = last * c.gamma(m - 1) * h;
     for (int s = 0; s < m; ++s) {
+      stage[s] = c.gamma(s) * h;
       for (int j = 1; j < S - 1; ++j) body[s * stride + j - 1] = Method::stages[j].fraction * c.gamma(s) * h;
       if (s + 1 < m) body[s * stride + S - 2] = (last * c.gamma(s) + first * c.gamma(s + 1)) * h;
     }
@@ -102,6 +104,26 @@ class ComposedStepper {
     apply_flow<Method::stages[0].flow>(model, tab, z, d.lead, ws);
     body(model, tab, z, d, ws);
     apply_flow<Method::stages[S - 1].flow>(model, tab, z, d.trail, ws);
+  }
+
+  // Composition stages: 1 for the method itself.
+  int stages() const { return regular_.m; }
+
+  // The whole step i, one composition stage at a time (each joint run as the two flows it merges, equal
+  // to rounding), calling at_stage(gamma_s h) after stage s: for a quadrature at the stages' end points.
+  // The damping work's trapezoid there makes (state, W) a symmetric order-2 step of size gamma_s h, which
+  // the composition raises to its order; at the composed step's end points alone it stays order 2.
+  template <class Model, class Tab, int Dim, class WS, class AtStage>
+  void step_by_stage(const Model& model, const Tab& tab, State<Dim>& z, long i, WS& ws, AtStage&& at_stage) const {
+    const StepDurations<Method>& d = durations(i);
+    const double first = Method::stages[0].fraction, last = Method::stages[S - 1].fraction;
+    for (int s = 0; s < d.m; ++s) {
+      apply_flow<Method::stages[0].flow>(model, tab, z, first * d.stage[s], ws);
+      detail::inner_stages<Method>(model, tab, z, d.body.data() + s * StepDurations<Method>::stride, ws,
+                                   std::make_index_sequence<S - 2>{});
+      apply_flow<Method::stages[S - 1].flow>(model, tab, z, last * d.stage[s], ws);
+      at_stage(d.stage[s]);
+    }
   }
 
   // Step i without its first sub-flow (run by lead() or the previous join()) and

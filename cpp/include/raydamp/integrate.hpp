@@ -241,6 +241,12 @@ struct WholeStepper {
   }
 };
 
+// A stepper that can run a step one composition stage at a time (ComposedStepper::step_by_stage).
+template <class Stepper, class = void>
+struct has_step_by_stage : std::false_type {};
+template <class Stepper>
+struct has_step_by_stage<Stepper, std::void_t<decltype(&Stepper::stages)>> : std::true_type {};
+
 // A method with a stepper of its own (Method::Stepper: the linear implicit methods,
 // implicit/linear_implicit_step.hpp, which factorise before the first step).
 template <class Method, class = void>
@@ -482,20 +488,29 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
     if constexpr (Model::n_momenta > 0) return fixed(model, x, law(i, before_trail));
     else return momentum_drift(model, x, mb, law(i, before_trail));
   };
+  // The trapezoid's points: a composed step's stage boundaries (see ComposedStepper::step_by_stage).
+  auto trapezoid_point = [&](const State<Dim>& x, double dt, double t) {
+    const double next = dissipated_power(model, x, ws);
+    ws.work += 0.5 * dt * (power + next);
+    power = next;
+    if (track_load) {
+      const double next_f = load_power(x, t);
+      ws.load_work += 0.5 * dt * (power_f + next_f);
+      power_f = next_f;
+    }
+  };
   auto advance = [&](auto& w, State<Dim>& x, long i) {  // w: ws, or the same as Unhooked
     if (ws.load) ws.time = time_at(i);
+    if constexpr (trapezoid && has_step_by_stage<std::decay_t<decltype(stepper)>>::value) {
+      if (spec.track_work && stepper.stages() > 1) {
+        double t = time_at(i);
+        stepper.step_by_stage(model, tab, x, i, w, [&](double dt) { trapezoid_point(x, dt, t += dt); });
+        return;
+      }
+    }
     stepper.step(model, tab, x, i, w);
     if constexpr (trapezoid) {
-      if (spec.track_work) {
-        const double next = dissipated_power(model, x, ws);
-        ws.work += 0.5 * step_size(i) * (power + next);
-        power = next;
-        if (track_load) {
-          const double next_f = load_power(x, time_at(i + 1));
-          ws.load_work += 0.5 * step_size(i) * (power_f + next_f);
-          power_f = next_f;
-        }
-      }
+      if (spec.track_work) trapezoid_point(x, step_size(i), time_at(i + 1));
     }
   };
 
