@@ -168,6 +168,25 @@ def test_cancel_keeps_the_finished_chunks(client, tmp_path):
         assert np.array_equal(ds["q"].values[i], ref.q)
 
 
+def test_a_store_left_by_an_interrupted_sweep_reads_its_unfinished_members_as_cancelled(client, tmp_path):
+    """Ctrl-C (or any error, or a crash) between chunks: the members whose chunks were never written read the
+    store's fill value, 0 = "completed", with no rows (found by an audit of the CLI). Now they read
+    "cancelled" from the start, and the finished ones their own status."""
+    def interrupt(done, total):
+        raise KeyboardInterrupt
+
+    store = tmp_path / "interrupted.zarr"
+    spec = {**SPEC, "t_end": None, "n_steps": 200, "save_every": 100}
+    with pytest.raises(KeyboardInterrupt):
+        raydamp.sweep(spec, grid={"eps": np.linspace(0.0, 0.2, 8)}, client=client, chunk_size=2, progress=interrupt,
+                      store=store)
+    ds = raydamp.load(store)
+    written = ds["rows"].values > 0
+    assert written.sum() == 2, ds["rows"].values  # the first chunk's two members
+    assert (ds["status"].values[written] == 0).all()
+    assert (ds["status"].values[~written] == raydamp.results.ensemble_solution.STATUSES.index("cancelled")).all()
+
+
 def test_cancel_stops_the_chunks_running_on_the_workers(client):
     # Two chunks of one member each, 10^11 steps (about half an hour each), one on each worker's only
     # thread. Cancelled once both run, the sweep returns, and the chunks stop on the workers too: a new

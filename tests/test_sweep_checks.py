@@ -160,3 +160,25 @@ def test_an_axis_over_a_systems_expression_parameter_is_checked_at_64_values_end
     stepped.clear()
     raydamp.check_sweep(spec, {"k": k[:64], "eps": np.linspace(0.0, 1.0, 500)})  # eps recompiles nothing
     assert len(set(stepped)) == 64
+
+
+@pytest.mark.parametrize("processes", [False, True])
+def test_the_local_cluster_listens_on_loopback_only(processes):
+    """raydamp's own LocalCluster (the service's, a sweep's without a client): Dask's defaults opened the
+    scheduler's HTTP server on every interface (port 8787, even with dashboard_address=None), so a service
+    bound to 127.0.0.1 answered Dask's pages on the machine's other addresses."""
+    import psutil
+    from dask.distributed import Client
+
+    from raydamp.run.cluster import local_cluster
+
+    def listening() -> set:  # of this process and its children (other tests' servers among them)
+        me = psutil.Process()
+        return {c.laddr for p in (me, *me.children(recursive=True)) for c in p.net_connections("inet")
+                if c.status == psutil.CONN_LISTEN}
+
+    before = listening()
+    with local_cluster(1, processes=processes) as cluster, Client(cluster) as client:
+        assert client.submit(lambda x: x + 1, 1).result() == 2
+        opened = listening() - before
+    assert opened and all(address.ip == "127.0.0.1" for address in opened), opened

@@ -15,6 +15,7 @@ import numpy as np
 import raydamp
 from raydamp.results.ensemble_solution import STATUSES
 from raydamp.results.io.sweep import save_sweep
+from raydamp.run.cluster import local_cluster
 
 from .checks import CheckPool, build_for_run, isolated
 from .config import Settings
@@ -71,13 +72,12 @@ class SweepWork:
 
     def _dask_client(self):
         if self._client is None:
-            from dask.distributed import Client, LocalCluster
+            from dask.distributed import Client
 
             if self._settings.dask_scheduler:
                 self._client = Client(self._settings.dask_scheduler, timeout=30)
-            else:
-                self._cluster = LocalCluster(n_workers=1, threads_per_worker=self._settings.sweep_threads,
-                                             processes=False, dashboard_address=None)
+            else:  # its servers on 127.0.0.1 only (Dask's own open port 8787 on every address)
+                self._cluster = local_cluster(1, self._settings.sweep_threads, processes=False)
                 self._client = Client(self._cluster)
         return self._client
 

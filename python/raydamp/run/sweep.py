@@ -31,6 +31,7 @@ from ..systems.models import MODELS, Model
 from ..systems.system import System
 from .ensemble import integrate_ensemble
 from .choose_method import choose_method
+from .cluster import local_cluster
 from .integrate import MAX_SAVED_BYTES, CancelToken, _catalogue, span
 
 __all__ = ["sweep", "check_sweep", "SweepPlan", "GridTooLarge", "parse_grid_item", "SPEC_KEYS", "RUN_ARGUMENTS"]
@@ -416,17 +417,6 @@ def _finished(client, futures, cancel, stop: str):
             time.sleep(0.02)
 
 
-def _write_unfinished(store, finished: np.ndarray, status: int) -> None:
-    """Marks the members a cancel left unfinished in a Zarr store (written directly: their chunks
-    were never written, so no chunk is shared with a write in flight)."""
-    import zarr
-
-    array = zarr.open_group(str(store), mode="a")["status"]
-    values = array[:]
-    values[~finished] = status
-    array[:] = values
-
-
 _PER_MEMBER = {  # variable: (dims after member, dtype, fill)
     "q": (("time", "dof"), float, np.nan), "p": (("time", "dof"), float, np.nan),
     "energy": (("time",), float, np.nan), "momentum": (("time", "momentum_map"), float, np.nan),
@@ -793,17 +783,20 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
                                for k, (dims, dtype, fill) in _PER_MEMBER.items()} | statics,
                               coords=coords, attrs=attrs)
         template.to_zarr(store, mode="w", compute=False, zarr_format=2)  # see results.save_ensemble
-        # q0, p0 and the coordinates now; the per-member results as their chunks arrive.
-        xr.Dataset(statics).to_zarr(store, region={"member": slice(0, members)})
+        # q0, p0 and the coordinates now; the per-member results as their chunks arrive. Until its chunk is
+        # written every member reads "cancelled": a sweep ended any way (a cancel, Ctrl-C, an error, a crash)
+        # leaves its unfinished members so, not at the store's fill value, 0, which reads "completed".
+        unfinished = np.full(members, STATUSES.index("cancelled"), dtype=np.int8)
+        xr.Dataset({**statics, "status": (("member",), unfinished)}).to_zarr(store, region={"member": slice(0, members)})
     messages: dict[str, str] = {}
     finished = np.zeros(members, dtype=bool)
     done = 0
 
     close = []
     if client is None:
-        from dask.distributed import Client, LocalCluster
+        from dask.distributed import Client
 
-        cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0")
+        cluster = local_cluster(2)
         client = Client(cluster)
         close = [client, cluster]
     bar = None
@@ -860,10 +853,8 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
     attrs["cancelled"] = int(cancelled)  # NetCDF attributes hold no booleans
     if cancelled:
         unfinished = STATUSES.index("cancelled")
-        if store is None:
+        if store is None:  # (a store's unfinished members read "cancelled" from the start)
             arrays["status"][~finished] = unfinished
-        else:
-            _write_unfinished(store, finished, unfinished)
     attrs["messages"] = json.dumps(messages)
     if store is not None:
         import zarr
