@@ -179,3 +179,68 @@ def test_a_temperature_flag_on_a_method_without_noise_flows_exits_2(tmp_path):
     done = _run(tmp_path, {**OSCILLATOR, "method": "rks"}, "--temperature", "1")
     assert done.returncode == 2
     assert "temperature: method 'rks' has no exact noise flow" in done.stderr and "Traceback" not in done.stderr
+
+
+# About 20 s of steps on a free core: a Ctrl-C after a few seconds lands mid-run.
+LONG = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "h": 0.01, "n_steps": 2_000_000_000,
+        "initial_state": {"q": [2.8], "p": [0.0]}, "save_every": 1_000_000}
+
+
+def _running_in_a_thread(pid: int) -> bool:
+    """A thread other than the main one has had 0.3 s of CPU: raydamp run's worker, stepping (it starts once
+    the Ctrl-C handler is in place). A fixed wait instead could send the signal while imports still ran."""
+    ticks = os.sysconf("SC_CLK_TCK")
+    for task in Path(f"/proc/{pid}/task").iterdir():
+        try:
+            fields = (task / "stat").read_text().rsplit(")", 1)[1].split()
+        except OSError:  # the thread ended meanwhile
+            continue
+        if int(task.name) != pid and int(fields[11]) / ticks > 0.3:  # utime
+            return True
+    return False
+
+
+@pytest.mark.parametrize("flags", [[], ["--no-progress"]], ids=["progress", "no-progress"])
+def test_ctrl_c_cancels_the_run_and_writes_the_points_so_far(tmp_path, flags):
+    """Before, SIGINT gave a KeyboardInterrupt traceback and no file (with the progress callback) or was
+    ignored until the run's end (--no-progress: the main thread stayed in C++)."""
+    import signal
+    import time
+
+    (tmp_path / "spec.json").write_text(json.dumps(LONG))
+    process = subprocess.Popen([*RAYDAMP, "run", "spec.json", "--out", "cut.npz", *flags], cwd=tmp_path,
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while not _running_in_a_thread(process.pid):  # the run's worker, started once Ctrl-C is handled
+        assert process.poll() is None and time.monotonic() < deadline, process.communicate()
+        time.sleep(0.05)
+    process.send_signal(signal.SIGINT)
+    stdout, stderr = process.communicate(timeout=60)
+    assert process.returncode == 1, stderr  # (ignored, the run would have completed its 2e9 steps)
+    assert "Traceback" not in stderr and "stopped early (cancelled)" in stderr
+    assert "cancelled" in _table(stdout)["status"]
+    sol = raydamp.load(tmp_path / "cut.npz")
+    assert sol.status == "cancelled" and len(sol.t) > 1 and sol.steps < LONG["n_steps"]
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--out", "nodir/a.nc"], "--out nodir/a.nc: no such directory nodir"),
+    (["--out", "d.nc"], "--out d.nc: is a directory"),
+    (["--out", "f.nc/a.nc"], "--out f.nc/a.nc: f.nc is not a directory"),
+    (["--plot", "nodir/e.png"], "--plot nodir/e.png: no such directory nodir"),
+])
+def test_an_output_path_that_cannot_be_written_exits_2_before_the_run(tmp_path, args, message):
+    """Before, the run finished, then writing the file raised a traceback and its results were lost."""
+    (tmp_path / "d.nc").mkdir()
+    (tmp_path / "f.nc").write_text("")
+    done = _run(tmp_path, OSCILLATOR, *args)
+    assert done.returncode == 2 and message in done.stderr and "Traceback" not in done.stderr, done.stderr
+    assert done.stdout == ""  # refused before the run: no summary
+
+
+def test_reproduce_into_an_existing_file_exits_2(tmp_path):
+    (tmp_path / "report").write_text("")
+    done = subprocess.run([*RAYDAMP, "reproduce", "--out", "report", "--quick"], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=120)
+    assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
+    assert "--out report: exists and is not a directory" in done.stderr

@@ -105,3 +105,27 @@ def test_thermal_flags_of_a_sweep_seed_every_member_from_the_stream(tmp_path):
     ds.close()
     refused = sweep(tmp_path, oscillator, "--grid", "eps=0.2,0.5", "--temperature", "-0.5")
     assert refused.returncode == 2 and "argument --temperature: must be a finite number >= 0" in refused.stderr
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--grid", "k=1,2", "--grid", "k=3"], "--grid k: given twice"),
+    (["--grid", "k=1,2", "--scheduler", "garbage"], "--scheduler 'garbage': not a scheduler address"),
+    (["--grid", "k=1,2", "--out", "nodir/x.nc"], "--out nodir/x.nc: no such directory nodir"),
+    (["--grid", "k=1,2", "--out", "d.nc"], "--out d.nc: is a directory"),
+    (["--grid", "k=1,2", "--out", "f.zarr"], "--out f.zarr: exists and is not a directory"),
+])
+def test_bad_grid_scheduler_or_out_exits_2_before_the_sweep(tmp_path, args, message):
+    """Before: a repeated axis replaced the first; the others were tracebacks (an output path's after the sweep)."""
+    (tmp_path / "d.nc").mkdir()
+    (tmp_path / "f.zarr").write_text("")
+    done = sweep(tmp_path, ELASTIC, "--no-progress", "--workers", "1", *args)
+    assert done.returncode == 2, done.stdout
+    assert message in done.stderr and "Traceback" not in done.stderr, done.stderr
+
+
+def test_a_bad_scheduler_address_in_the_environment_is_named(tmp_path):
+    import os
+
+    done = sweep(tmp_path, ELASTIC, "--grid", "k=1,2", env={**os.environ, "RAYDAMP_DASK_SCHEDULER": "garbage"})
+    assert done.returncode == 2
+    assert "RAYDAMP_DASK_SCHEDULER 'garbage': not a scheduler address" in done.stderr and "Traceback" not in done.stderr

@@ -95,6 +95,11 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{model['name']:<18} dim {model['dim']}  ({params})  {model['description']}")
         return 0
     if args.command == "reproduce":
+        from .output_paths import directory_problem
+
+        if problem := directory_problem(args.out):  # before the experiments, which take minutes
+            print(f"raydamp reproduce: --out {args.out}: {problem}", file=sys.stderr)
+            return 2
         try:
             from ..reproduce import run
         except ImportError as exc:  # matplotlib or scipy missing

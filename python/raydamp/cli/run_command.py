@@ -1,18 +1,22 @@
 """``raydamp run spec.json``: a job file (the service's job JSON) run in this process, with a
 progress bar on a terminal, a summary table, and the solution and an energy plot written
-where asked. Exit codes: 0 completed, 1 the run stopped early (blow-up or cancel: the summary
-names the failing step and what was computed is still written), 2 a bad file or spec."""
+where asked. Exit codes: 0 completed, 1 the run stopped early (blow-up, or cancelled by Ctrl-C:
+the summary names the failing step and what was computed is still written), 2 a bad file, spec
+or output path (checked before the run)."""
 
 from __future__ import annotations
 
 import json
 import shutil
+import signal
 import sys
+import threading
 from pathlib import Path
 
 from ..jobs import job_arguments
 from ..results.io.solution import FORMATS
-from ..run.integrate import integrate
+from ..run.integrate import CancelToken, integrate
+from .output_paths import file_problem
 from .thermal_options import THERMAL_KEYS, with_thermal_options
 
 __all__ = ["run_file", "read_spec"]
@@ -43,6 +47,49 @@ def _progress_bar(enabled: bool):
     return update, bar.close
 
 
+def _integrate_until_interrupted(model, q0, p0, progress, options: dict):
+    """integrate(...), a Ctrl-C cancelling it: the run then ends "cancelled" with the points so far.
+
+    Python runs a signal handler only in the main thread, between bytecodes; the step loop holds
+    the main thread in C++ (the GIL released) for the whole run. So the run goes on a worker
+    thread while the main thread waits in short joins, where the handler runs at once. A second
+    Ctrl-C interrupts as usual (KeyboardInterrupt), for a run that does not stop."""
+    if threading.current_thread() is not threading.main_thread():  # no signal handler can be installed here
+        return integrate(model, q0, p0, progress=progress, **options)
+    cancel = CancelToken()
+    outcome: dict = {}
+
+    def run() -> None:
+        try:
+            outcome["solution"] = integrate(model, q0, p0, progress=progress, cancel=cancel, **options)
+        except BaseException as error:  # handed to the main thread, which reports it
+            outcome["error"] = error
+
+    def interrupt(signum, frame) -> None:
+        cancel.cancel()
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+
+    worker = threading.Thread(target=run, name="raydamp-run", daemon=True)
+    previous = signal.signal(signal.SIGINT, interrupt)
+    try:
+        worker.start()
+        while worker.is_alive():
+            worker.join(0.1)
+    finally:
+        signal.signal(signal.SIGINT, previous if previous is not None else signal.SIG_DFL)
+    if "error" in outcome:
+        raise outcome["error"]
+    return outcome["solution"]
+
+
+def _output_problem(out: str | None, plot: str | None) -> str | None:
+    """The first of --out and --plot that cannot be written, checked before the run (which could be long)."""
+    for flag, path in (("--out", out), ("--plot", plot)):
+        if path is not None and (problem := file_problem(path)):
+            return f"{flag} {path}: {problem}"
+    return None
+
+
 def _summary_table(summary: dict) -> str:
     rows = [(key, "-" if value is None else (f"{value:.6g}" if isinstance(value, float) else str(value)))
             for key, value in summary.items()]
@@ -68,6 +115,8 @@ def run_file(spec_path: str, *, out: str | None = None, plot: str | None = None,
         return _fail(f"--out: unknown format {Path(out).suffix!r} (known: {', '.join(FORMATS)})")
     if plot is not None and Path(plot).suffix.lower() != ".png":
         return _fail("--plot: give a .png path")
+    if problem := _output_problem(out, plot):
+        return _fail(problem)
     try:
         spec = with_thermal_options(read_spec(spec_path), temperature, seed, stream)
     except ValueError as error:
@@ -75,7 +124,7 @@ def run_file(spec_path: str, *, out: str | None = None, plot: str | None = None,
     callback, close = _progress_bar(progress)
     try:
         model, q0, p0, options = job_arguments(spec)
-        sol = integrate(model, q0, p0, progress=callback, **options)
+        sol = _integrate_until_interrupted(model, q0, p0, callback, options)
     except ValueError as error:
         return _fail(f"{spec_path}: {error}")
     finally:

@@ -17,7 +17,9 @@ import numpy as np
 from ..results.ensemble_solution import STATUSES
 from ..results.io.ensemble import ENSEMBLE_FORMATS
 from ..results.io.sweep import save_sweep
+from ..run.cluster import local_cluster
 from ..run.sweep import check_sweep, parse_grid_item, sweep
+from .output_paths import file_problem
 from .run_command import read_spec
 from .thermal_options import THERMAL_KEYS, with_thermal_options
 
@@ -32,13 +34,37 @@ def _fail(message: str) -> int:
 
 
 def _client(scheduler: str | None, workers: int):
-    from dask.distributed import Client, LocalCluster
+    from dask.distributed import Client
 
     if scheduler:
         return Client(scheduler, timeout=30), []
-    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+    cluster = local_cluster(workers)  # on 127.0.0.1 only
     client = Client(cluster)
     return client, [client, cluster]
+
+
+def _grid(items: list[str]) -> dict:
+    """The --grid axes by name; ValueError for an axis given twice (a dict would keep only the last)."""
+    grid: dict = {}
+    for item in items:
+        name, values = parse_grid_item(item)
+        if name in grid:
+            raise ValueError(f"--grid {name}: given twice")
+        grid[name] = values
+    return grid
+
+
+def _connect(scheduler: str | None, source: str, workers: int):
+    """_client's (client, things to close); ValueError naming ``source`` (the flag or the variable)."""
+    try:
+        return _client(scheduler, workers)
+    except ValueError as error:  # a malformed address: Dask's message lacks which setting gave it
+        if not scheduler:
+            raise
+        raise ValueError(f"{source} {scheduler!r}: not a scheduler address such as tcp://host:8786 ({error})") \
+            from None
+    except (OSError, TimeoutError) as error:
+        raise ValueError(f"{source} {scheduler}: cannot connect ({error})") from None
 
 
 def _summary(ds, seconds: float) -> str:
@@ -63,30 +89,33 @@ def sweep_file(spec_path: str, grid_items: list[str], *, out: str | None = None,
     spec file's. Returns the exit code."""
     if out is not None and Path(out).suffix.lower() not in ENSEMBLE_FORMATS:
         return _fail(f"--out: unknown format {Path(out).suffix!r} (known: {', '.join(ENSEMBLE_FORMATS)})")
+    zarr_out = out is not None and Path(out).suffix.lower() == ".zarr"
+    if out is not None and (problem := file_problem(out, store=zarr_out)):  # before the sweep, not after it
+        return _fail(f"--out {out}: {problem}")
     if not grid_items:
         return _fail("--grid: give at least one, e.g. --grid eps=0.001:0.1:20")
     if workers < 1:
         return _fail(f"--workers must be >= 1, got {workers}")
     try:
         spec = with_thermal_options(read_spec(spec_path), temperature, seed, stream)
-        grid = dict(parse_grid_item(item) for item in grid_items)
+        grid = _grid(grid_items)
     except ValueError as error:
         return _fail(str(error))
     if isinstance(spec, dict) and spec.get("work"):
         # The same file serves `raydamp run`, where W is recorded; members of a sweep do not record it.
-        print("raydamp sweep: note: the spec's \"work\": true is ignored (sweeps do not record the damping work)",
-              file=sys.stderr)
+        print("raydamp sweep: note: the spec's \"work\": true is ignored (sweeps do not record the damping work; "
+              "a member equals raydamp run with \"work\": false bit for bit)", file=sys.stderr)
         spec = {k: v for k, v in spec.items() if k != "work"}
+    source = "--scheduler" if scheduler else "RAYDAMP_DASK_SCHEDULER"
     scheduler = scheduler or os.environ.get("RAYDAMP_DASK_SCHEDULER") or None
-    zarr_out = out is not None and Path(out).suffix.lower() == ".zarr"
     try:
         check_sweep(spec, grid, chunk_size=chunk_size)  # bad input is reported before a cluster starts
     except ValueError as error:
         return _fail(f"{spec_path}: {error}")
     try:
-        client, close = _client(scheduler, workers)
-    except (OSError, TimeoutError) as error:
-        return _fail(f"--scheduler {scheduler}: cannot connect ({error})")
+        client, close = _connect(scheduler, source, workers)
+    except ValueError as error:
+        return _fail(str(error))
     start = time.perf_counter()
     try:
         ds = sweep(spec, grid, client=client, chunk_size=chunk_size, progress=True if progress else None,
