@@ -129,3 +129,31 @@ def test_a_bad_scheduler_address_in_the_environment_is_named(tmp_path):
     done = sweep(tmp_path, ELASTIC, "--grid", "k=1,2", env={**os.environ, "RAYDAMP_DASK_SCHEDULER": "garbage"})
     assert done.returncode == 2
     assert "RAYDAMP_DASK_SCHEDULER 'garbage': not a scheduler address" in done.stderr and "Traceback" not in done.stderr
+
+
+def test_ctrl_c_stops_the_sweep_and_writes_the_members_so_far(tmp_path):
+    """Ctrl-C gave a KeyboardInterrupt traceback, and a Zarr store whose unfinished members read "completed"
+    (an audit). Now it cancels the sweep: the finished members and the others "cancelled" are written,
+    exit 1, one line saying so."""
+    import signal
+    import time
+
+    spec = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "h": 0.01,
+            "n_steps": 500_000_000, "save_every": 100_000_000, "initial_state": {"q": [2.8], "p": [0.0]}}
+    (tmp_path / "spec.json").write_text(json.dumps(spec))
+    out = tmp_path / "cut.zarr"
+    process = subprocess.Popen([*RAYDAMP, "sweep", "spec.json", "--grid", "eps=0.01:0.1:6", "--chunk-size", "1",
+                                "--workers", "1", "--no-progress", "--out", str(out)], cwd=tmp_path,
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while not (out / ".zattrs").exists():  # the store's template: written inside sweep, once Ctrl-C is handled
+        assert process.poll() is None and time.monotonic() < deadline, process.communicate()
+        time.sleep(0.05)
+    process.send_signal(signal.SIGINT)
+    stdout, stderr = process.communicate(timeout=120)
+    assert process.returncode == 1, stderr
+    # (Dask may log its own shutdown noise: the point is that no KeyboardInterrupt escapes)
+    assert "KeyboardInterrupt" not in stderr and "stopped early (Ctrl-C)" in stderr, stderr
+    status = raydamp.load(out)["status"].values
+    cancelled = raydamp.results.ensemble_solution.STATUSES.index("cancelled")
+    assert status.size == 6 and (status == cancelled).any() and np.isin(status, [0, cancelled]).all(), status

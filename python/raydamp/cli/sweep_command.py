@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -18,6 +20,7 @@ from ..results.ensemble_solution import STATUSES
 from ..results.io.ensemble import ENSEMBLE_FORMATS
 from ..results.io.sweep import save_sweep
 from ..run.cluster import local_cluster
+from ..run.integrate import CancelToken
 from ..run.sweep import check_sweep, parse_grid_item, sweep
 from .output_paths import file_problem
 from .run_command import read_spec
@@ -117,12 +120,25 @@ def sweep_file(spec_path: str, grid_items: list[str], *, out: str | None = None,
     except ValueError as error:
         return _fail(str(error))
     start = time.perf_counter()
+    # Ctrl-C cancels the sweep as cancel= does: it returns the finished chunks, the other members
+    # "cancelled", and they are written (its loop waits in Python, so the handler runs at once). A
+    # second Ctrl-C interrupts as usual.
+    token = CancelToken()
+
+    def interrupt(signum, frame) -> None:
+        token.cancel()
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+
+    previous = signal.signal(signal.SIGINT, interrupt) if threading.current_thread() is threading.main_thread() \
+        else None
     try:
         ds = sweep(spec, grid, client=client, chunk_size=chunk_size, progress=True if progress else None,
-                   store=out if zarr_out else None)
+                   store=out if zarr_out else None, cancel=token)
     except ValueError as error:
         return _fail(f"{spec_path}: {error}")
     finally:
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
         for thing in close:
             thing.close()
     print(_summary(ds, time.perf_counter() - start))
@@ -137,5 +153,8 @@ def sweep_file(spec_path: str, grid_items: list[str], *, out: str | None = None,
             print(f"raydamp sweep: member {member} ({values}): {message}", file=sys.stderr)
         if len(messages) > _SHOWN_FAILURES:
             print(f"raydamp sweep: ... and {len(messages) - _SHOWN_FAILURES} more", file=sys.stderr)
+        return 1
+    if token.cancelled:
+        print("raydamp sweep: stopped early (Ctrl-C): the unfinished members are \"cancelled\"", file=sys.stderr)
         return 1
     return 0
