@@ -244,3 +244,24 @@ def test_reproduce_into_an_existing_file_exits_2(tmp_path):
                           text=True, timeout=120)
     assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
     assert "--out report: exists and is not a directory" in done.stderr
+
+
+def test_a_structures_matrix_file_is_a_path_for_raydamp_run(tmp_path):
+    """The README's plain form of a structure, {"file": "K.mtx"} (a Matrix Market path), in a job file: the
+    job schema took only an upload's id, and refused the path with a hex pattern's message. The service
+    refuses the path (tests/service/test_structures.py)."""
+    import scipy.io
+    import scipy.sparse
+
+    K = scipy.sparse.diags([[-1.0] * 3, [2.0] * 4, [-1.0] * 3], [-1, 0, 1]).tocoo()
+    scipy.io.mmwrite(tmp_path / "K.mtx", K, symmetry="symmetric")
+    system = {"kind": "linear_structure", "M": {"diagonal": [1.0] * 4}, "K": {"file": "K.mtx"}, "alpha": 0.1}
+    spec = {"system": system, "method": "3s", "h": 0.1, "n_steps": 50, "initial_state": {"rest": True},
+            "load": {"harmonic": {"amplitude": [1.0, 0.0, 0.0, 0.0], "omega": 1.0}}}
+    done = _run(tmp_path, spec, "--out", "k.npz")
+    assert done.returncode == 0, done.stderr
+    local = raydamp.integrate(raydamp.LinearStructure(np.eye(4), K, alpha=0.1), np.zeros(4), np.zeros(4), method="3s",
+                              h=0.1, n_steps=50, work=True, load=raydamp.Load.harmonic([1.0, 0.0, 0.0, 0.0], 1.0))
+    np.testing.assert_array_equal(raydamp.load(tmp_path / "k.npz").q, local.q)
+    missing = _run(tmp_path, {**spec, "system": {**system, "K": {"file": "nope.mtx"}}})
+    assert missing.returncode == 2 and "system.K.file" in missing.stderr and "Traceback" not in missing.stderr

@@ -229,6 +229,7 @@ def _bad_structures():
          ["body", "system", "M"]),
         ("missing file id", job({**system, "K": {"file": "0" * 32}}), ["body", "system", "K", "file"]),
         ("malformed file id", job({**system, "K": {"file": "../etc/passwd"}}), ["body", "system", "K", "file"]),
+        ("a path, which raydamp run reads", job({**system, "K": {"file": "K.mtx"}}), ["body", "system", "K", "file"]),
         ("unknown matrix form", job({**system, "K": {"dense": [[1.0]]}}), ["body", "system", "K"]),
         ("matrix not an object", job({**system, "M": [1.0, 2.0]}), ["body", "system", "M"]),
         ("extra key in coo", job({**system, "K": {"coo": {**coo(K)["coo"], "dense": 1}}}),
@@ -385,3 +386,13 @@ def test_a_large_structure_started_at_rest_under_its_load(start_server):
     for state in ({"rest": False}, {"rest": True, "q": [0.0]}):
         response = server.client.post("/v1/jobs", json={**spec, "initial_state": state})
         assert any(l[:2] == ["body", "initial_state"] for l in locs(response)), state
+
+
+def test_a_matrix_path_is_refused_saying_the_service_reads_no_paths(module_server):
+    """{"file": "<path>"} is a Matrix Market path for raydamp run; the service reads no file of its machine."""
+    M, K = bar()
+    for name in ("K.mtx", "/etc/passwd"):
+        response = module_server.client.post("/v1/jobs", json=job(structure_system(coo(M), {"file": name})))
+        detail = response.json()["detail"][0]
+        assert response.status_code == 422 and detail["loc"] == ["body", "system", "K", "file"], response.text
+        assert "the service reads no paths" in detail["msg"], detail

@@ -7,13 +7,15 @@ list fails at parsing, before any work.
 
 from __future__ import annotations
 
+import re
+
 from typing import Annotated, Any, Literal
 
 import numpy as np
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Discriminator, Field, Tag, model_validator
 
 __all__ = ["Input", "FiniteFloat", "Vector", "numbers", "indices", "MAX_ITEM_ERRORS", "InitialState", "ModeState", "RestState", "TableauInput",
-           "MAX_VECTOR", "MAX_CHAIN_SITES", "MAX_EXPRESSION", "Expression", "Name", "FileId", "VectorFile", "STATE_VECTOR_TAGS"]
+           "MAX_VECTOR", "MAX_CHAIN_SITES", "MAX_EXPRESSION", "Expression", "Name", "FileId", "FILE_ID", "MatrixFile", "VectorFile", "STATE_VECTOR_TAGS"]
 
 # JSON parsing accepts NaN and Infinity (and 1e999 overflows to inf); no run may start from them.
 FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
@@ -74,7 +76,11 @@ class Input(BaseModel):
     model_config = ConfigDict(extra="forbid", strict=True)
 
 
-FileId = Annotated[str, Field(pattern=r"^[0-9a-f]{32}$", description="an id from POST /v1/files")]
+FILE_ID = re.compile(r"^[0-9a-f]{32}$")
+FileId = Annotated[str, Field(pattern=FILE_ID.pattern, description="an id from POST /v1/files")]
+# A structure's matrix file: an upload's id, or (a run outside a service: raydamp run) a Matrix Market path.
+MatrixFile = Annotated[str, Field(min_length=1, max_length=4096, description="an id from POST /v1/files; "
+                                  "outside the service (raydamp run), a Matrix Market file's path")]
 
 
 class VectorFile(Input):

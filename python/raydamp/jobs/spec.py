@@ -16,9 +16,10 @@ from pydantic import AfterValidator, AliasChoices, ConfigDict, Discriminator, Fi
 from ..methods.catalogue import compositions, methods
 from ..systems.models import MODELS, make_model
 from .errors import JobError
-from .forms import STATE_VECTOR_TAGS, FiniteFloat, InitialState, Input, MAX_VECTOR, ModeState, RestState, TableauInput, \
-    Vector, indices
-from .system_forms import FORM_TAGS, MATRIX_TAGS, SYSTEM_TAGS, VALUE_TAGS, AnySystemInput, FileResolver
+from .forms import FILE_ID, STATE_VECTOR_TAGS, FiniteFloat, InitialState, Input, MAX_VECTOR, ModeState, RestState, \
+    TableauInput, Vector, indices
+from .system_forms import (FORM_TAGS, MATRIX_TAGS, SYSTEM_TAGS, VALUE_TAGS, AnySystemInput, FileResolver,
+                           LinearStructureInput)
 
 __all__ = ["ModelSpec", "JobSpec", "StateInput", "UNION_TAGS", "STEP_SIZE_ALIAS", "client_path"]
 
@@ -181,16 +182,21 @@ class JobSpec(ModelSpec):
         return spec
 
     def local_path(self) -> tuple[str | int, ...] | None:
-        """The JSON path of the first {"file": {"path": ...}} in the load or the ground motion (a file of the
-        machine the job runs on, which a service refuses), or None."""
+        """The JSON path of the first file of the machine the job runs on, which a service refuses: a
+        {"file": {"path": ...}} in the load or the ground motion, or a structure's {"file": "<path>"} (not an
+        upload's id); None if there is none."""
         def find(value: Any, at: tuple) -> tuple | None:
             if isinstance(value, dict) and at and at[-1] == "file" and "path" in value:
                 return (*at, "path")
+            if isinstance(value, str) and at[-1:] == ("file",) and at[0] == "system" and not FILE_ID.match(value):
+                return at
             items = value.items() if isinstance(value, dict) else enumerate(value) if isinstance(value, list) else ()
             return next((found for key, item in items if (found := find(item, (*at, key))) is not None), None)
 
-        return next((found for field in ("load", "ground_motion")
-                     if (found := find(getattr(self, field), (field,))) is not None), None)
+        system = self.system.model_dump() if isinstance(self.system, LinearStructureInput) else None
+        return next((found for field, value in (("load", self.load), ("ground_motion", self.ground_motion),
+                                                ("system", system))
+                     if (found := find(value, (field,))) is not None), None)
 
     @property
     def h_key(self) -> str:

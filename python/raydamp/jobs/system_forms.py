@@ -14,7 +14,8 @@ from pydantic import BeforeValidator, Discriminator, Field, Tag
 
 from ..systems.system.spec import OUTSIDE_CLASS
 from .errors import JobError, path_error
-from .forms import MAX_CHAIN_SITES, MAX_VECTOR, Expression, FileId, FiniteFloat, Input, Name, indices, numbers
+from .forms import (FILE_ID, MAX_CHAIN_SITES, MAX_VECTOR, Expression, FiniteFloat, Input, MatrixFile, Name, indices,
+                    numbers)
 
 __all__ = ["SystemInput", "ChainInput", "LinearStructureInput", "CooForm", "DiagonalForm", "FileForm",
            "AnySystemInput", "FileResolver", "MAX_COO_ENTRIES", "MAX_STRUCTURE_DIM", "SYSTEM_TAGS", "MATRIX_TAGS",
@@ -204,7 +205,7 @@ class DiagonalForm(Input):
 
 
 class FileForm(Input):
-    file: FileId
+    file: MatrixFile
 
 
 # The tags are not key names: "K" followed by "coo" in a loc is then always the client's key (our own
@@ -252,11 +253,11 @@ class LinearStructureInput(Input):
 
     def build(self, files: FileResolver | None = None):
         """raydamp builds and checks the structure (indices, shapes, symmetry and definiteness);
-        files(id) opens an uploaded file (a service's store); without it a {"file": id} is refused."""
+        files(id) opens an uploaded file (a service's store); without it a {"file": ...} is a path."""
         from ..systems.structure import LinearStructure
 
         try:
-            return LinearStructure.from_dict(self.model_dump(exclude_none=True), files=files or _no_files)
+            return LinearStructure.from_dict(self.model_dump(exclude_none=True), files=files or _local_files)
         except ValueError as error:
             raise path_error(error, type(self)) from None
 
@@ -267,9 +268,12 @@ def _site_names(dim: int, momenta: int, save_dofs: list[int] | None) -> tuple[li
     return [f"q{i}" for i in (save_dofs if save_dofs is not None else range(dim))], ["P"] * momenta
 
 
-def _no_files(file_id: str) -> Any:
-    # Never a path on the server: without a store, a {"file": ...} reference resolves to nothing.
-    raise ValueError(f"no uploaded file with id {file_id!r}")
+def _local_files(ref: str) -> Any:
+    # Without a store (raydamp run), a {"file": ...} is a Matrix Market path; an upload's id names nothing.
+    # A service refuses paths before any model is built (JobSpec.local_path), with or without its store.
+    if FILE_ID.match(ref):
+        raise ValueError(f"no uploaded file with id {ref!r} (without a service, give the Matrix Market file's path)")
+    return ref
 
 
 def _system_form(value: object) -> str:
