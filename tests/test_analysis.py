@@ -194,3 +194,45 @@ def test_piecewise_linear_response_names_a_bad_argument(arguments, message):
                  values=[0.0, 1.0, 0.0]) | arguments
     with pytest.raises(ValueError, match=message):
         piecewise_linear_response(**given)
+
+
+@pytest.mark.parametrize("mu", [1e-14, -3e-13])
+def test_relative_equilibrium_at_a_tiny_momentum(mu):
+    """rho grows like sqrt(|mu|): below about mu = 1e-12 the root lay under the bracket's fixed 1e-6, and
+    SciPy's 'f(a) and f(b) must have different signs' came out."""
+    model = ElasticPendulum()
+    eq = relative_equilibrium(model, mu)
+    assert 0 < eq.rho < 1e-6
+    # (the vertical balance's residual is rounding of z's 2.0 amplified by the stiff rho^4 dependence: 8e-11,
+    # as at mu = 1e-9, which was solved before)
+    assert np.abs(equilibrium_residual(model, eq.rho, eq.z, mu)).max() < 1e-9
+
+
+def test_energy_error_of_a_forced_run_is_against_a_forced_reference():
+    """The reference ignored the run's load: rk4's 'error' at h = 0.001 was 2.16, the load's effect."""
+    model = DampedPendulum(eps=0.1)
+    load = raydamp.Load.harmonic([1.0], 1.0)
+    sol = raydamp.integrate(model, [1.0], [0.0], method="rk4", h=0.001, t_end=10, load=load, save_every=1000)
+    assert np.abs(energy_error(model, sol)).max() < 1e-10
+    ground = raydamp.GroundMotion(raydamp.Load.harmonic(0.5, 2.0), [1.0])
+    sol = raydamp.integrate(model, [1.0], [0.0], method="rk4", h=0.001, t_end=5, load=ground, save_every=1000)
+    assert np.abs(energy_error(model, sol)).max() < 1e-10
+
+
+def test_analysis_refuses_what_it_cannot_read():
+    """Each was another exception than a ValueError naming the argument (an audit)."""
+    model, eq = ElasticPendulum(eps=0.1), relative_equilibrium(ElasticPendulum(eps=0.1), -2.0)
+    with pytest.raises(ValueError, match=r"^mu must be a real number"):
+        relative_equilibrium(model, "1")  # a TypeError
+    q, p = cartesian_state(*eq)
+    permuted = raydamp.integrate(model, q, p, method="rk4", h=0.01, t_end=0.1, save_dofs=[2, 0, 1])
+    with pytest.raises(ValueError, match=r"^solution: distance_from needs x, y and z saved in order"):
+        distance_from(eq, permuted)  # 2.25 where the full run gives 4e-11
+    pendulum = DampedPendulum()
+    with pytest.raises(ValueError, match=r"^t_end must be > 0"):
+        convergence(pendulum, "3s", [0.1, 0.05], q0=[1.0], p0=[0.0], t_end=0)  # an AttributeError
+    for t_eval in (5.0, [0.0, -1.0], [[0.0, 1.0]], [0.0, np.nan]):
+        with pytest.raises(ValueError, match=r"^t_eval must be a 1-D array"):
+            reference_solution(pendulum, [1.0], [0.0], t_eval)  # an IndexError, or NumPy's own message
+    with pytest.raises(ValueError, match=r"^t must be a time or a 1-D array of times"):
+        raydamp.Load.harmonic([1.0], 1.0).values(pendulum, [[0.0, 1.0]])  # the binding's TypeError

@@ -90,6 +90,11 @@ def test_files_at2_csv_npy(tmp_path):
     old = tmp_path / "old.at2"
     old.write_text("a\nb\nc\n    3    0.02    NPTS, DT\n1 2 3\n")
     np.testing.assert_allclose(raydamp.Load.from_file(old, [1.0]).values(model, [0.03])[:, 0], [2.5])
+    # A Fortran double's exponent: DT stopped at the D and was read as 1.0, every time 100 times too late.
+    fortran = tmp_path / "fortran.AT2"
+    fortran.write_text(AT2.replace("DT=   .0100", "DT=   1.0D-02").replace("-.3000000E-01", "-.3000000D-01"))
+    np.testing.assert_allclose(raydamp.Load.from_file(fortran, [1.0]).values(model, np.arange(7) * 0.01)[:, 0],
+                               values, rtol=1e-12)
 
 
 @pytest.mark.parametrize("text,match", [
@@ -97,6 +102,7 @@ def test_files_at2_csv_npy(tmp_path):
     (AT2.replace("-.3000000E-01", "x.3"), r"line 5: 'x\.3' is not a number"),
     (AT2.replace("DT=   .0100", "DT=   -.0100"), r"DT must be > 0"),
     (AT2.replace("NPTS=    7, DT=   .0100 SEC", "seven points"), r"line 4 must give NPTS and DT"),
+    (AT2.replace("DT=   .0100", "DT=   1.0DD2"), r"DT on line 4 is not a number: '1\.0DD2'"),
 ])
 def test_malformed_at2_is_refused_naming_the_problem(tmp_path, text, match):
     path = tmp_path / "bad.AT2"
@@ -225,3 +231,11 @@ def test_a_resolved_record_of_values_takes_the_jobs_dt():
         raydamp.Load.from_dict({"file": {"id": "tv", "direction": [1.0], "dt": 0.1}}, files=files.__getitem__)
     with pytest.raises(ValueError, match=r"load\.file\.dt must be > 0"):
         raydamp.Load.from_dict({"file": {"id": "v", "direction": [1.0], "dt": 0.0}}, files=files.__getitem__)
+
+
+@pytest.mark.parametrize("factor", ["x", None, True, [2.0]])
+def test_a_ground_motions_factor_must_be_a_number(factor):
+    """It was a TypeError (acceleration * factor), a traceback from raydamp run."""
+    with pytest.raises(ValueError, match=r"^ground_motion\.factor must be a real number"):
+        raydamp.GroundMotion.from_dict({"acceleration": {"series": {"t": [0, 1], "values": [1, 2]}},
+                                        "direction": [1.0], "factor": factor})

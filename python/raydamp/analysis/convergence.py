@@ -6,6 +6,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .._validation import real
 from ..run.integrate import integrate
 from ..systems.models import Model
 from .energy import reference_solution
@@ -28,6 +29,7 @@ def convergence(model: Model, method: str, hs, *, q0, p0, t_end: float = 10.0, t
     hs = np.asarray(hs, dtype=float)
     if hs.ndim != 1 or hs.size < 2:
         raise ValueError("hs must hold at least two step sizes")
+    t_end = real("t_end", t_end, positive=True)  # t_end = 0 was an AttributeError from the reference
     if reference is None:
         ref = reference_solution(model, q0, p0, [0.0, t_end])
         reference = (ref.q[-1], ref.p[-1])

@@ -6,7 +6,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._validation import vector
+from .._validation import _short, vector
+from ..loads import Load
 from ..results.solution import Solution
 from ..systems.models import Model
 
@@ -18,19 +19,26 @@ class ReferenceSolution(NamedTuple):
     energy: np.ndarray
 
 
-def reference_solution(model: Model, q0, p0, t_eval, *, rtol: float = 1e-13, atol: float = 1e-13) -> ReferenceSolution:
-    """Integrate the full damped system with SciPy's DOP853, independent of raydamp's
-    methods, and return the states and energies at the times ``t_eval``."""
+def reference_solution(model: Model, q0, p0, t_eval, *, load: Load | None = None, rtol: float = 1e-13,
+                       atol: float = 1e-13) -> ReferenceSolution:
+    """Integrate the full damped system (with ``load``'s force f(t), when given) with SciPy's DOP853,
+    independent of raydamp's methods, and return the states and energies at the times ``t_eval`` (1-D,
+    finite, non-decreasing, from t = 0, ending after it)."""
     from scipy.integrate import solve_ivp
 
     n = model.dim
-    t_eval = np.asarray(t_eval, dtype=float)
+    t_eval = _times(t_eval)
     core = model._core_model
+    if load is not None and not isinstance(load, Load):
+        raise ValueError(f"load must be a raydamp.Load or None, got {type(load).__name__}")
+    force = load.bind(model) if load is not None and load.terms else None
 
-    def rhs(_t, z):
+    def rhs(t, z):
         q, p = z[:n], z[n:]
         qdot = np.asarray(core.velocity(p)).reshape(n)
         pdot = -np.asarray(core.gradient(q)).reshape(n) - np.asarray(core.damping_rate(q, p)).reshape(n)
+        if force is not None:
+            pdot += np.asarray(force.values([t])).reshape(n)
         return np.concatenate([qdot, pdot])
 
     z0 = np.concatenate([vector("q0", q0, n), vector("p0", p0, n)])
@@ -42,10 +50,23 @@ def reference_solution(model: Model, q0, p0, t_eval, *, rtol: float = 1e-13, ato
     return ReferenceSolution(sol.t, q, p, energy)
 
 
+def _times(t_eval) -> np.ndarray:
+    try:
+        t = np.asarray(t_eval, dtype=float)
+    except (TypeError, ValueError):
+        t = None
+    if t is None or t.ndim != 1 or t.size == 0 or not np.isfinite(t).all() or (np.diff(t) < 0).any() \
+            or t[0] < 0 or t[-1] <= 0:
+        raise ValueError("t_eval must be a 1-D array of finite, non-decreasing times from t >= 0 to a time > 0, "
+                         f"got {_short(t_eval)}")
+    return t
+
+
 def energy_error(model: Model, solution: Solution, reference: ReferenceSolution | None = None) -> np.ndarray:
-    """H_num(t) - H_ref(t) at the solution's saved times."""
+    """H_num(t) - H_ref(t) at the solution's saved times; the reference, when not given, is driven by the
+    solution's load too (without it, a forced run's "error" was the load's effect)."""
     if reference is None:
-        reference = reference_solution(model, solution.q[0], solution.p[0], solution.t)
+        reference = reference_solution(model, solution.q[0], solution.p[0], solution.t, load=solution.load)
     if reference.t.shape != solution.t.shape or not np.allclose(reference.t, solution.t, rtol=0, atol=1e-9):
         raise ValueError("reference: its times differ from the solution's saved times")
     return solution.energy - reference.energy

@@ -21,6 +21,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .._validation import real
 from ..results.solution import Solution
 from ..run.integrate import integrate
 from ..systems.models import ElasticPendulum
@@ -81,7 +82,8 @@ def relative_equilibrium(model: ElasticPendulum, mu: float) -> RelativeEquilibri
     from scipy.optimize import brentq
 
     G = -_require_vertical_gravity(model)
-    if not math.isfinite(mu) or mu == 0.0:
+    mu = real("mu", mu)  # a string was math.isfinite's TypeError
+    if mu == 0.0:
         raise ValueError(f"mu must be finite and nonzero (mu = 0 is the static equilibrium), got {mu}")
     if model.k == 0.0:
         raise ValueError("model: k = 0 has no relative equilibrium (nothing holds the mass up)")
@@ -95,6 +97,10 @@ def relative_equilibrium(model: ElasticPendulum, mu: float) -> RelativeEquilibri
         return k * Z * (1.0 - l / math.hypot(rho, Z)) - m * G
 
     lo, hi = 1e-6, 1.0
+    while vertical_balance(lo) >= 0.0:  # rho grows like sqrt(|mu|): for |mu| below about 1e-12, under 1e-6
+        lo /= 16.0
+        if lo < 1e-300:
+            raise RuntimeError("no relative equilibrium found")
     while vertical_balance(hi) <= 0.0:
         hi *= 2.0
         if hi > 1e12:
@@ -127,6 +133,8 @@ def distance_from(equilibrium: RelativeEquilibrium, solution_or_q, p=None) -> np
     """Euclidean distance in reduced coordinates (rho, z, p_rho, p_z) from the equilibrium,
     per saved point of a Solution (or per row of q, p)."""
     if isinstance(solution_or_q, Solution):
+        if solution_or_q.dofs is not None:  # its columns are not x, y, z: wrong distances, or an IndexError
+            raise ValueError("solution: distance_from needs x, y and z saved in order (save_dofs=None)")
         q, p = solution_or_q.q, solution_or_q.p
     elif p is None:
         raise ValueError("p: give the momenta with the positions, or pass a Solution")

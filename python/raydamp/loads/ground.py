@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._validation import real
 from . import terms as T
 from .load import Load
 
@@ -30,6 +31,7 @@ class GroundMotion(Load):
     __slots__ = ("r", "acceleration")
 
     def __init__(self, acceleration, direction, *, factor: float = 1.0):
+        factor = real("factor", factor)  # "x", None or True made acceleration * factor a TypeError
         if isinstance(acceleration, (str, Path)):
             acceleration = Load.from_file(acceleration, factor=factor)
         elif isinstance(acceleration, tuple) and len(acceleration) == 2:

@@ -183,8 +183,14 @@ class Load:
         return _core.Load(n, core_terms, owners)
 
     def values(self, model, t) -> np.ndarray:
-        """f(t) for ``model`` at the times t: (len(t), n)."""
-        return self.bind(model).values(np.atleast_1d(np.asarray(t, dtype=float)).tolist())
+        """f(t) for ``model`` at the times t (a number or a 1-D array): (len(t), n)."""
+        try:
+            times = np.atleast_1d(np.asarray(t, dtype=float))
+        except (TypeError, ValueError):
+            times = None
+        if times is None or times.ndim != 1:  # a 2-D t reached the binding: its TypeError
+            raise ValueError(f"t must be a time or a 1-D array of times, got {_short(t)}")
+        return self.bind(model).values(times.tolist())
 
     # -- JSON ---------------------------------------------------------------------------
 

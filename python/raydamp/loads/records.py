@@ -32,9 +32,15 @@ class Record(NamedTuple):
 
 
 # "NPTS=  5590, DT=   .0050 SEC" (NGA-West2) or "5590    .0050    NPTS, DT" (the older format).
-_NPTS_DT = re.compile(r"NPTS\s*=\s*([0-9]+)\s*,?\s*DT\s*=\s*([-+0-9.eE]+)", re.IGNORECASE)
-_OLD_NPTS_DT = re.compile(r"^\s*([0-9]+)\s+([-+0-9.eE]+)\s+NPTS\s*,\s*DT", re.IGNORECASE)
+# DT may carry a Fortran exponent (5.0D-03): the number stopped at the D, and DT was read as 5.0.
+_NPTS_DT = re.compile(r"NPTS\s*=\s*([0-9]+)\s*,?\s*DT\s*=\s*([-+0-9.eEdD]+)", re.IGNORECASE)
+_OLD_NPTS_DT = re.compile(r"^\s*([0-9]+)\s+([-+0-9.eEdD]+)\s+NPTS\s*,\s*DT", re.IGNORECASE)
 _HEADER_LINES = 4
+
+
+def _fortran_float(text: str) -> float:
+    """A number as Python writes it or as Fortran may (1.5D-03: a double's exponent)."""
+    return float(text.replace("D", "E").replace("d", "e"))
 
 
 def read_record(path, *, dt: float | None = None, name: str = "path") -> tuple[np.ndarray, np.ndarray]:
@@ -67,7 +73,7 @@ def parse_at2(text: str, *, source: str = "record") -> tuple[np.ndarray, np.ndar
                          f"got {header[:80]!r}")
     npts = int(found.group(1))
     try:
-        dt = float(found.group(2))
+        dt = _fortran_float(found.group(2))
     except ValueError:
         raise ValueError(f"{source}: DT on line 4 is not a number: {found.group(2)!r}") from None
     if not (np.isfinite(dt) and dt > 0):
@@ -76,7 +82,7 @@ def parse_at2(text: str, *, source: str = "record") -> tuple[np.ndarray, np.ndar
     for number, line in enumerate(lines[_HEADER_LINES:], start=_HEADER_LINES + 1):
         for item in line.replace(",", " ").split():
             try:
-                values.append(float(item))
+                values.append(_fortran_float(item))
             except ValueError:
                 raise ValueError(f"{source}: line {number}: {item[:40]!r} is not a number") from None
     if len(values) != npts:
