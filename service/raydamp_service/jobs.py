@@ -165,6 +165,7 @@ class JobWork:
         self._store = store
         self._checks = checks
         self.threads, self.fraction = settings.workers, True
+        self.quick_threads = settings.workers  # quick runs do not wait behind long ones (Runner._quick)
 
     def _call(self, spec: JobSpec, run: Run) -> RaydampCall | None:
         """The job's call, its system from the compiled functions loaded; None if the service is stopping."""

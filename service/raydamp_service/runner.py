@@ -77,6 +77,7 @@ class Work(Protocol):
     release at shutdown."""
 
     threads: int
+    quick_threads: int  # threads of their own for quick runs (0: none are quick)
     fraction: bool  # progress is done / total (a job's steps); else the count done (a sweep's members)
 
     def quick(self, record: TaskRecord) -> bool:
@@ -95,6 +96,9 @@ class Runner:
         self._work: Work = work if work is not None else store.work(settings)
         # (id, the row as just stored by a submission, or None: read it from the store), or None: stop.
         self._queue: queue.SimpleQueue[tuple[str, TaskRecord | None] | None] = queue.SimpleQueue()
+        # Quick runs' own lane: behind two long runs on the workers, a job of milliseconds waited for them
+        # (an audit's small job waited over 120 s behind two million-site chains).
+        self._quick: queue.SimpleQueue[tuple[str, TaskRecord | None] | None] = queue.SimpleQueue()
         self._threads: list[threading.Thread] = []
         self._active: dict[str, Run] = {}
         self._lock = threading.Lock()
@@ -106,8 +110,11 @@ class Runner:
     def start(self) -> None:
         for i in range(self._work.threads):
             # daemon: a run that ignores cancellation must not keep a stopped service alive.
-            self._threads.append(threading.Thread(target=self._serve, name=f"raydamp-{self._store.TABLE}-{i}",
-                                                  daemon=True))
+            self._threads.append(threading.Thread(target=self._serve, args=(self._queue,),
+                                                  name=f"raydamp-{self._store.TABLE}-{i}", daemon=True))
+        for i in range(self._work.quick_threads):
+            self._threads.append(threading.Thread(target=self._serve, args=(self._quick,),
+                                                  name=f"raydamp-{self._store.TABLE}-quick-{i}", daemon=True))
         if self._store.RETAINED:
             self._threads.append(threading.Thread(target=self._retain, name="raydamp-retention", daemon=True))
         for thread in self._threads:
@@ -126,6 +133,8 @@ class Runner:
                 run.token.cancel()
         for _ in range(self._work.threads):
             self._queue.put(None)
+        for _ in range(self._work.quick_threads):
+            self._quick.put(None)
         self._retention_wake.set()
         deadline = time.monotonic() + self._settings.shutdown_seconds
         for thread in self._threads:
@@ -134,8 +143,10 @@ class Runner:
         self._work.close()
 
     def submit(self, task_id: str, record: TaskRecord | None = None) -> None:
-        """Queue a task; record, its row as just stored (a submission), spares a quick run reading it back."""
-        self._queue.put((task_id, record))
+        """Queue a task; record, its row as just stored (a submission), spares a quick run reading it back and
+        sends it to the quick lane."""
+        quick = record is not None and self._work.quick_threads > 0 and self._work.quick(record)
+        (self._quick if quick else self._queue).put((task_id, record))
 
     def cancel(self, task_id: str) -> None:
         with self._lock:
@@ -151,10 +162,10 @@ class Runner:
 
     # ---- worker threads ----
 
-    def _serve(self) -> None:
+    def _serve(self, tasks: queue.SimpleQueue) -> None:
         committing: deque[Waiter] = deque()  # this thread's quick runs whose records are being committed
         while True:
-            task = self._queue.get()
+            task = tasks.get()
             if task is None or self._stopping.is_set():
                 self._settle(committing, 0)
                 return  # a task still queued stays "queued" in the store and is recovered at the next start

@@ -62,7 +62,7 @@ class SweepWork:
     is made at the first sweep: to the scheduler at settings.dask_scheduler, or to a LocalCluster inside this
     process (threads). Progress is the members of the chunks finished; a cancel keeps them as the result."""
 
-    threads, fraction = 1, False  # members done
+    threads, quick_threads, fraction = 1, 0, False  # members done; a sweep is never quick
 
     def __init__(self, store: SweepStore, settings: Settings, checks: CheckPool | None = None):
         self._store = store

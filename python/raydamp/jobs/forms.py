@@ -7,6 +7,7 @@ list fails at parsing, before any work.
 
 from __future__ import annotations
 
+import functools
 import re
 
 from typing import Annotated, Any, Literal
@@ -74,6 +75,30 @@ Name = Annotated[str, Field(min_length=1, max_length=100, pattern=r"^[A-Za-z_][A
 
 class Input(BaseModel):
     model_config = ConfigDict(extra="forbid", strict=True)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _few_unknown_keys(cls, data: Any) -> Any:
+        # Each unknown key is an error of its own, built, converted and echoed one by one: a body of 160,000
+        # of them held a service's event loop for 2 s. Past MAX_ITEM_ERRORS of them, one error says so.
+        if isinstance(data, dict) and len(data) > MAX_ITEM_ERRORS:
+            known = _known_keys(cls)
+            unknown = [key for key in data if key not in known]
+            if len(unknown) > MAX_ITEM_ERRORS:
+                shown = ", ".join(repr(str(key)[:40]) for key in unknown[:3])
+                raise ValueError(f"{len(unknown)} unknown keys ({shown}, ...)")
+        return data
+
+
+@functools.cache
+def _known_keys(model: type[BaseModel]) -> frozenset[str]:
+    """The keys a model takes: its fields' names and aliases."""
+    keys = set(model.model_fields)
+    for field in model.model_fields.values():
+        for alias in (field.alias, field.validation_alias):
+            choices = getattr(alias, "choices", [alias])
+            keys.update(choice for choice in choices if isinstance(choice, str))
+    return frozenset(keys)
 
 
 FILE_ID = re.compile(r"^[0-9a-f]{32}$")
