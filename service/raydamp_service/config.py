@@ -44,6 +44,9 @@ class Settings(BaseSettings):
 
     # Bounds on what one job may ask for, so that no request can exhaust memory or disk.
     max_body_bytes: int = Field(2 * 2**20, ge=1024, description="a larger request body gets 413 before parsing")
+    # A body is parsed and validated on the event loop (70 ms for a 1.7 MB structure): large ones a few at a time.
+    large_body_bytes: int = Field(256 * 2**10, ge=1, description="a request body above this is large")
+    max_large_bodies: int = Field(2, ge=1, description="large request bodies handled at once; more get 429")
     max_queued: int = Field(1000, ge=1, description="queued jobs beyond this get 429 with Retry-After")
     retry_after_seconds: int = Field(5, ge=1, description="the Retry-After of a 429")
     max_steps: int = Field(10**8, ge=1)

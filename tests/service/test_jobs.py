@@ -19,6 +19,8 @@ ELASTIC_STATE = {"q": [0.0, 1.55884573, -0.6], "p": [1.34164079, 0.0, 0.0]}  # t
 BLOW_UP = {"model": "elastic_pendulum", "parameters": {"eps": 10.0}, "method": "heun", "step_size": 2.5,
            "n_steps": 1000, "initial_state": ELASTIC_STATE}
 
+# 10^5 steps: not a quick run (JobWork.quick), so it waits in the queue for a worker.
+NOT_QUICK = {**PENDULUM, "t_end": 20_000}
 # Long enough (about a minute) that a cancel always lands mid-run.
 LONG_RUN = {**{k: v for k, v in PENDULUM.items() if k != "t_end"}, "step_size": 0.001, "n_steps": 4 * 10**9,
             "save_every": 10**6}
@@ -162,7 +164,7 @@ def test_cancelling_a_queued_job_and_deleting_a_running_one(server):
     busy = [server.submit(LONG_RUN) for _ in range(2)]  # the service runs two at a time
     for job_id in busy:
         server.wait_for(job_id, lambda job: job["status"] == "running")
-    queued = server.submit(PENDULUM)
+    queued = server.submit(NOT_QUICK)  # (a quick job has a lane of its own: it would not wait)
     assert server.job(queued)["status"] == "queued"
     # The JSON, a file and a plot of a queued job: 409, saying that the trajectory comes when the run ends.
     for path in ("trajectory", "trajectory?format=npz", "plots/energy.png"):

@@ -14,6 +14,8 @@ PENDULUM = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "
 LONG_RUN = {**{k: v for k, v in PENDULUM.items() if k != "t_end"}, "step_size": 0.001, "n_steps": 4 * 10**9,
             "save_every": 10**6}
 JSON = {"content-type": "application/json"}
+# 10^5 steps: not a quick run (JobWork.quick, which has a lane of its own), so it waits in the queue.
+NOT_QUICK = {**PENDULUM, "t_end": 20_000}
 
 
 def six_megabytes() -> bytes:
@@ -88,15 +90,15 @@ def test_the_queue_bound_answers_429_with_retry_after(start_server):
     server = start_server(RAYDAMP_WORKERS="1", RAYDAMP_MAX_QUEUED="2", RAYDAMP_MAX_STEPS=str(10**10))
     running = server.submit(LONG_RUN)
     server.wait_for(running, lambda job: job["status"] == "running")
-    queued = [server.submit(PENDULUM) for _ in range(2)]
-    response = server.client.post("/v1/jobs", json=PENDULUM)
+    queued = [server.submit(NOT_QUICK) for _ in range(2)]
+    response = server.client.post("/v1/jobs", json=NOT_QUICK)
     assert response.status_code == 429, response.text
     assert response.headers["retry-after"] == "5"
     assert "max_queued" in response.json()["detail"]
     assert len(server.client.get("/v1/jobs").json()["jobs"]) == 3  # the refused job was not stored
 
     server.client.post(f"/v1/jobs/{queued[0]}/cancel")  # room for one more
-    assert server.client.post("/v1/jobs", json=PENDULUM).status_code == 202
+    assert server.client.post("/v1/jobs", json=NOT_QUICK).status_code == 202
     server.client.post(f"/v1/jobs/{running}/cancel")
     assert server.wait_finished(running)["status"] == "cancelled"
 
@@ -107,9 +109,49 @@ def test_concurrent_submissions_never_pass_the_bound(start_server):
     server.wait_for(running, lambda job: job["status"] == "running")
     def post(_):
         with httpx.Client(base_url=str(server.client.base_url), timeout=30.0) as client:
-            return client.post("/v1/jobs", json=PENDULUM).status_code
+            return client.post("/v1/jobs", json=NOT_QUICK).status_code
 
     with ThreadPoolExecutor(8) as pool:
         codes = list(pool.map(post, range(24)))
     assert codes.count(202) == 5 and codes.count(429) == 19, codes
     server.client.post(f"/v1/jobs/{running}/cancel")
+
+
+def test_large_bodies_are_handled_a_few_at_once(tmp_path):
+    """A body's parse and validation hold the event loop (70 ms for a 1.7 MB structure): thirty such POSTs at
+    once held /healthz for 2.9 s (an audit). max_large_bodies of them are handled at once; another gets 429
+    at once, and small bodies pass meanwhile. In-process, around an app that holds each body it gets."""
+    import asyncio
+
+    from raydamp_service.config import Settings
+    from raydamp_service.guard import RequestGuard
+
+    async def scenario():
+        release, holding = asyncio.Event(), []
+
+        async def app(scope, receive, send):
+            while (await receive()).get("more_body"):
+                pass
+            holding.append(scope["path"])
+            await release.wait()
+            await send({"type": "http.response.start", "status": 200, "headers": []})
+            await send({"type": "http.response.body", "body": b"{}"})
+
+        guard = RequestGuard(app, Settings(db=tmp_path / "jobs.sqlite3", large_body_bytes=1000, max_large_bodies=2))
+        async with httpx.AsyncClient(transport=httpx.ASGITransport(app=guard), base_url="http://127.0.0.1") as client:
+            large = [asyncio.create_task(client.post("/v1/jobs", content=b"x" * 2000)) for _ in range(2)]
+            while len(holding) < 2:
+                await asyncio.sleep(0.001)
+            third = await client.post("/v1/jobs", content=b"x" * 2000)
+            small = asyncio.create_task(client.post("/v1/jobs", content=b"x" * 100))
+            while len(holding) < 3:  # the small one reached the app beside the two large ones
+                await asyncio.sleep(0.001)
+            release.set()
+            done = [await task for task in (*large, small)]
+            again = await client.post("/v1/jobs", content=b"x" * 2000)  # both slots given back
+        return third, done, again, guard.large_bodies
+
+    third, done, again, left = asyncio.run(scenario())
+    assert third.status_code == 429 and third.headers["retry-after"] == "5", third.text
+    assert "max_large_bodies" in third.json()["detail"]
+    assert [r.status_code for r in done] == [200, 200, 200] and again.status_code == 200 and left == 0
