@@ -76,6 +76,8 @@ class Settings(BaseSettings):
     large_fetch_bytes: int = Field(16 * 2**20, ge=1, description="stored bytes selected above which a fetch, file "
                                                                  "or plot is large")
     max_large_fetches: int = Field(2, ge=1, description="large trajectory fetches served at once; more get 429")
+    send_timeout_seconds: float = Field(60.0, gt=0, description="a trajectory or file response whose client reads "
+                                                                "nothing for this long is dropped, with its slot")
     max_plot_bytes: int = Field(16 * 2**20, ge=2**16, description="stored bytes a plot reads at most (its points "
                                                                   "decimated evenly to fit)")
 

@@ -111,3 +111,37 @@ def test_four_parallel_downloads_stay_within_a_bound_and_agree(module_server, la
 def test_a_plot_of_a_large_trajectory_reads_a_bounded_part(module_server, large_job):
     response = module_server.client.get(f"/v1/jobs/{large_job}/plots/phase.png", params={"coordinate": "3"})
     assert response.status_code == 200 and response.content.startswith(b"\x89PNG")
+
+
+@pytest.mark.parametrize("fmt", ["json", "csv"])
+def test_a_client_that_stops_reading_gives_its_large_fetch_slot_back(start_server, fmt):
+    """Two sockets that asked for a large trajectory and never read held both large-fetch slots for as long
+    as they stayed open: every other large fetch got 429 (an audit). A response that sends nothing for
+    send_timeout_seconds is dropped, and its slot given back at once."""
+    import socket
+
+    server = start_server(RAYDAMP_MAX_LARGE_FETCHES="1", RAYDAMP_LARGE_FETCH_BYTES=str(2**20),
+                          RAYDAMP_SEND_TIMEOUT_SECONDS="3")
+    job_id = server.submit({"model": "damped_pendulum", "method": "3s", "h": 0.01, "n_steps": 200_000,
+                            "initial_state": {"q": [1.0], "p": [0.0]}})  # 8 MB stored, some 20 MB of JSON
+    assert server.wait_finished(job_id)["status"] == "completed"
+    url = f"/v1/jobs/{job_id}/trajectory?format={fmt}"
+
+    def status() -> int:  # a fetch's status, its body left unread (the connection closed: its slot freed)
+        with server.client.stream("GET", url) as response:
+            return response.status_code
+
+    stalled = socket.socket()
+    stalled.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+    stalled.connect((server.client.base_url.host, server.client.base_url.port))
+    stalled.sendall(f"GET {url} HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n".encode())
+    try:
+        assert stalled.recv(12) == b"HTTP/1.1 200"  # its response began: it holds the slot; then nothing is read
+        assert status() == 429
+        deadline = time.monotonic() + 60
+        while status() == 429:  # 3 s without a piece leaving, then the stalled response is dropped
+            assert time.monotonic() < deadline, "the stalled fetch kept its slot"
+            time.sleep(0.2)
+        assert len(server.client.get(url).content) > 2**20
+    finally:
+        stalled.close()

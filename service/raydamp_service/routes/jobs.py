@@ -16,7 +16,6 @@ from typing import Annotated, Literal
 
 from fastapi import APIRouter, HTTPException, Query, Request, Response
 from fastapi.exceptions import RequestValidationError
-from fastapi.responses import FileResponse, StreamingResponse
 from pydantic import ValidationError
 from raydamp.jobs import validation_error
 from starlette.background import BackgroundTask
@@ -32,6 +31,7 @@ from ..config import Settings
 from ..downloads import stored_solution, write_file
 from ..jobs import JobRecord, JobStore
 from ..store import FINAL_STATUSES
+from ..timed_send import TimedFileResponse, TimedStreamingResponse
 from .tasks import Tasks, check_limit, checks_busy, invalid
 from ..trajectory_stream import FetchLease, Selection, read_arrays, trajectory_chunks
 
@@ -144,8 +144,9 @@ def get_trajectory(job_id: str, request: Request, store: StoreDep, settings: Set
         connection.close()
         raise
     # Not validated against the response model: the pieces are written to have exactly its schema.
-    return StreamingResponse(trajectory_chunks(connection, stored, selection, lease), media_type="application/json",
-                             background=BackgroundTask(lease.release))
+    return TimedStreamingResponse(trajectory_chunks(connection, stored, selection, lease),
+                                  media_type="application/json", background=BackgroundTask(lease.release),
+                                  send_seconds=settings.send_timeout_seconds)
 
 
 def _opened(record: JobRecord, store: JobStore):
@@ -216,8 +217,9 @@ def _trajectory_file(record: JobRecord, store: JobStore, request: Request, setti
             raise
     finally:
         connection.close()
-    return FileResponse(path, media_type=media_type, background=BackgroundTask(download.release),
-                        headers={"Content-Disposition": f'attachment; filename="{record.id}-{path.name}"'})
+    return TimedFileResponse(path, media_type=media_type, background=BackgroundTask(download.release),
+                             headers={"Content-Disposition": f'attachment; filename="{record.id}-{path.name}"'},
+                             send_seconds=settings.send_timeout_seconds)
 
 
 _PLOT_POINTS = 20_000  # points drawn at most: a plot of more is decimated evenly

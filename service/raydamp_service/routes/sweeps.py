@@ -6,7 +6,6 @@ from __future__ import annotations
 from typing import Annotated, Literal
 
 from fastapi import APIRouter, HTTPException, Query, Request, Response
-from fastapi.responses import StreamingResponse
 
 from .jobs import with_seed
 from ..checks import ChecksBusy
@@ -15,6 +14,7 @@ from ..problems import JobError
 from ..runner import Runner
 from ..schemas import JobStatus, SweepCreated, SweepList, SweepListItem, SweepSpec, SweepView
 from ..sweeps import SweepRecord, SweepStore
+from ..timed_send import TimedStreamingResponse
 from .tasks import Tasks, check_limit, checks_busy, invalid
 
 router = APIRouter(prefix="/v1/sweeps", tags=["sweeps"])
@@ -119,9 +119,10 @@ def get_result(sweep_id: str, request: Request,
         reason = f": {record.error}" if record.error else ""
         raise HTTPException(409, detail=f"sweep {sweep_id} is {record.status} and has no result{reason}")
     connection, rowid, size = handle
-    return StreamingResponse(_pieces(connection, rowid, size), media_type="application/x-netcdf",
-                             headers={"Content-Disposition": f'attachment; filename="sweep-{sweep_id}.nc"',
-                                      "Content-Length": str(size)})
+    return TimedStreamingResponse(_pieces(connection, rowid, size), media_type="application/x-netcdf",
+                                  headers={"Content-Disposition": f'attachment; filename="sweep-{sweep_id}.nc"',
+                                           "Content-Length": str(size)},
+                                  send_seconds=request.app.state.settings.send_timeout_seconds)
 
 
 @router.post("/{sweep_id}/cancel", status_code=202, response_model=SweepView,

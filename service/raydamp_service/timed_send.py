@@ -1,0 +1,72 @@
+"""Responses that give up on a client that has stopped reading.
+
+A response is sent as fast as its client reads it: a client that never reads held its connection, the
+response's read snapshot and, for a large fetch, one of the max_large_fetches slots, for as long as it
+liked (an audit's two never-read sockets kept every other large fetch at 429). Here each piece of the body
+must leave within send_timeout_seconds; one that cannot ends the response and gives back what it held at
+once (its background task, and the body's source closed), not when a garbage collection finds them.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+from typing import Any
+
+from fastapi.responses import FileResponse, StreamingResponse
+from starlette.types import Message, Receive, Scope, Send
+
+__all__ = ["TimedStreamingResponse", "TimedFileResponse"]
+
+log = logging.getLogger("raydamp_service.timed_send")
+
+
+class _Stalled(Exception):
+    pass
+
+
+class _TimedSend:
+    """A response whose every send must complete within `send_seconds`."""
+
+    send_seconds: float
+    source: Any = None  # a streamed body's iterator, closed when the client stalls
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        async def within(message: Message) -> None:
+            try:
+                await asyncio.wait_for(send(message), self.send_seconds)
+            except TimeoutError:
+                raise _Stalled from None
+
+        try:
+            await super().__call__(scope, receive, within)
+        except Exception as error:
+            if not _stalled(error):
+                raise
+            log.warning("%s %s: the client read nothing for %g s (send_timeout_seconds); response dropped",
+                        scope.get("method"), scope.get("path"), self.send_seconds)
+            close = getattr(self.source, "close", None)
+            if close is not None:
+                close()  # suspended between pieces: its finally runs now (its snapshot, its lease)
+            if self.background is not None:
+                await self.background()  # not run when a response fails
+
+
+def _stalled(error: BaseException) -> bool:
+    """_Stalled, alone or in the exception group of the task group Starlette sends the body from."""
+    group = getattr(error, "exceptions", None)  # an ExceptionGroup's
+    if group is not None:
+        return all(_stalled(inner) for inner in group)
+    return isinstance(error, _Stalled)
+
+
+class TimedStreamingResponse(_TimedSend, StreamingResponse):
+    def __init__(self, content, *args, send_seconds: float, **kwargs):
+        super().__init__(content, *args, **kwargs)
+        self.source, self.send_seconds = content, send_seconds
+
+
+class TimedFileResponse(_TimedSend, FileResponse):
+    def __init__(self, *args, send_seconds: float, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.send_seconds = send_seconds
