@@ -260,6 +260,8 @@ def test_bad_input_names_the_argument():
                                        first_stream=bad, **run)
     with pytest.raises(ValueError, match=r"temperature: method 'rks' has no exact noise flow"):
         raydamp.integrate(model, [0.1], [0.0], method="rks", temperature=1.0, **run)
+    with pytest.raises(ValueError, match=r"^temperature: method 'rk4' has no exact noise flow"):  # it said 'rk'
+        raydamp.integrate(model, [0.1], [0.0], method="rk4", temperature=1.0, **run)
     with pytest.raises(ValueError, match=r"temperature: composition 'yoshida4' runs sub-steps backward"):
         raydamp.integrate(model, [0.1], [0.0], composition="yoshida4", temperature=1.0, **run)
     with pytest.raises(ValueError, match=r"temperature: this model has no damping"):

@@ -73,6 +73,14 @@ async def validation_error_handler(request: Request, error: RequestValidationErr
 async def http_error_handler(request: Request, error: HTTPException) -> Response:
     """FastAPI's own answer to an HTTPException, with a 405's Allow listing the methods /openapi.json
     documents for the path (a path it does not document, as the page's, keeps Starlette's)."""
+    cause = error.__cause__
+    if error.status_code == 400 and isinstance(cause, (RecursionError, UnicodeDecodeError)):
+        # FastAPI's 400 "There was an error parsing the body", without a loc, for a body JSON's parser refused
+        # other than by a JSONDecodeError (which is a 422): the 422 of every other body that is not JSON.
+        why = "nested too deeply" if isinstance(cause, RecursionError) else "not UTF-8"
+        return JSONResponse(status_code=422, content={"detail": [{
+            "type": "json_invalid", "loc": ["body"], "msg": f"the body is not JSON this service can read ({why})",
+            "input": None}]})
     if error.status_code == 405:
         path = request.scope["path"]
         methods = {method.upper() for pattern, operations in _documented_paths(request.app)

@@ -106,7 +106,10 @@ def test_overflowing_number_is_422(server):
                  ("step_size",))
 
 
-@pytest.mark.parametrize("body", [b'{"model": "damped_pendulum",', b"not json", b"[1, 2]", b""])
+@pytest.mark.parametrize("body", [b'{"model": "damped_pendulum",', b"not json", b"[1, 2]", b"",
+                                  # a 400 without a loc before, as FastAPI answers what json.loads refuses
+                                  # other than by a JSONDecodeError
+                                  b"[" * 5000 + b"]" * 5000, b'{"model": "\xff"}'])
 def test_malformed_body_is_422(server, body):
     response = server.client.post("/v1/jobs", content=body, headers={"content-type": "application/json"})
     assert response.status_code == 422, response.text

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import re
 import time
 from collections.abc import Callable, Mapping
 
@@ -184,9 +185,13 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
                          f"(limit {MAX_SAVED_BYTES / 2**30:.0f} GiB); raise save_every")
 
     start = time.perf_counter()
-    out = model._core_model.integrate(method, tableau_name, composition or "", q0, p0, h, n_steps, h_last,
-                                      save_every, work, progress, cancel, save_dofs=[] if dofs is None else dofs,
-                                      load=core_load, temperature=kT, seed=seed, stream=stream)
+    try:
+        out = model._core_model.integrate(method, tableau_name, composition or "", q0, p0, h, n_steps, h_last,
+                                          save_every, work, progress, cancel, save_dofs=[] if dofs is None else dofs,
+                                          load=core_load, temperature=kT, seed=seed, stream=stream)
+    except ValueError as error:  # the core names the method it runs ("rk" for "rk4"): the caller's name here
+        raise ValueError(re.sub(r"^temperature: method '[^']*'", f"temperature: method {method!r}", str(error))) \
+            from None
     wall = time.perf_counter() - start
     message = out["message"]
     explain = getattr(model, "_explain_failure", None)
