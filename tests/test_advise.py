@@ -114,6 +114,20 @@ def test_bad_arguments(building, arguments, message):
         raydamp.advise(building[0], *arguments)
 
 
+def test_a_tolerance_beyond_what_integrate_runs(building):
+    """tolerance=1e-300 recommended a run of a 77-digit step count (integrate runs at most 2^62 steps). A method
+    needing more is marked "steps" and never recommended; when every method does, a ValueError says so."""
+    from raydamp.run.integrate import MAX_STEPS
+
+    advice = raydamp.advise(building[0], 10.0, 1e-40, measure=False)
+    over = [row for row in advice.rows if row.limited_by == "steps"]
+    assert over and all(row.order == 2 and row.steps > MAX_STEPS for row in over)
+    assert advice.recommended.order == 4 and advice.recommended.steps <= MAX_STEPS
+    assert "steps" in str(advice)
+    with pytest.raises(ValueError, match=r"^tolerance: no method reaches 1e-300 by t_end = 10"):
+        raydamp.advise(building[0], 10.0, 1e-300, measure=False)
+
+
 def test_cli(building, tmp_path, capsys):
     s, _, _ = building
     path = tmp_path / "spec.json"

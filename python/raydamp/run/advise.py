@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from .._validation import real
+from .._validation import MAX_STEPS, real
 from ..systems.models import Model
 from ..systems.structure import LinearStructure
 from .integrate import integrate
@@ -73,7 +73,7 @@ class MethodAdvice:
     order: int
     h_max: float              # stability limit (inf: A-stable; 0: unstable at every step tried)
     h: float                  # the step it would take for the tolerance (nan when it cannot run)
-    limited_by: str           # "tolerance", "stability" or "unstable"
+    limited_by: str           # "tolerance", "stability", "unstable" or "steps" (more than integrate runs)
     steps: int
     error: float              # predicted error at h
     h_rho: float              # h (alpha + beta L): the damping's stiffness over one step
@@ -127,7 +127,7 @@ class Advice:
         table = [columns]
         for r in sorted(self.rows, key=lambda r: r.seconds):
             table.append((r.label, str(r.order), "A-stable" if math.isinf(r.h_max) else f"{r.h_max:.4g}",
-                          _g(r.h), r.limited_by, "-" if r.limited_by == "unstable" else str(r.steps), _g(r.error),
+                          _g(r.h), r.limited_by, "-" if r.limited_by == "unstable" else _count(r.steps), _g(r.error),
                           _g(r.h_rho), "-" if r.chebyshev_degree is None else str(r.chebyshev_degree),
                           _g(r.seconds_per_step), _g(r.setup_seconds), _g(r.seconds)))
         widths = [max(len(row[i]) for row in table) for i in range(len(columns))]
@@ -146,6 +146,10 @@ class Advice:
 
 def _g(x: float) -> str:
     return "-" if not math.isfinite(x) else f"{x:.3g}"
+
+
+def _count(steps: int) -> str:
+    return str(steps) if steps < 10**12 else f"{float(steps):.3g}"
 
 
 def advise(structure: Model, t_end: float, tolerance: float, *, omega: float | None = None,
@@ -191,6 +195,10 @@ def advise(structure: Model, t_end: float, tolerance: float, *, omega: float | N
                                      math.nan, math.nan, math.inf))
             continue
         steps = max(1, math.ceil(t_end / h * (1 - 1e-12)))
+        if steps > MAX_STEPS:  # more than integrate runs: the table said 10^75 steps and recommended one
+            rows.append(MethodAdvice(method, tableau, order, h_max, h, "steps", steps, math.nan, math.nan, None,
+                                     math.nan, math.nan, math.inf))
+            continue
         h = t_end / steps
         degree = max(structure.chebyshev_degrees(h)) if method in ("3s", "2s") and structure.eps else None
         per_step, setup = _trial(structure, method, tableau, h) if measure else (math.nan, math.nan)
@@ -198,6 +206,9 @@ def advise(structure: Model, t_end: float, tolerance: float, *, omega: float | N
         rows.append(MethodAdvice(method, tableau, order, h_max, h, limited, steps,
                                  constant * (h * omega) ** order * omega * t_end, h * structure.damping_rate_bound,
                                  degree, per_step, setup, seconds))
+    if all(math.isinf(row.seconds) for row in rows):
+        raise ValueError(f"tolerance: no method reaches {tolerance:g} by t_end = {t_end:g} in at most {MAX_STEPS:.3g} "
+                         "steps (the most integrate runs); raise the tolerance or shorten t_end")
     return Advice(structure.dim, int(structure._stiffness.nnz), omega_max, omega_1, omega,
                   structure.damping_rate_bound, t_end, tolerance, tuple(rows))
 
