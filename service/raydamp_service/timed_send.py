@@ -47,7 +47,10 @@ class _TimedSend:
                         scope.get("method"), scope.get("path"), self.send_seconds)
             close = getattr(self.source, "close", None)
             if close is not None:
-                close()  # suspended between pieces: its finally runs now (its snapshot, its lease)
+                try:
+                    close()  # suspended between pieces (the stalled send awaited): its finally runs now
+                except ValueError:  # "generator already executing": it ends with its garbage collection
+                    pass
             if self.background is not None:
                 await self.background()  # not run when a response fails
 
