@@ -322,3 +322,23 @@ def test_from_functions_checks_q0_and_has_no_plain_form():
         s.to_dict()
     with pytest.raises(ValueError, match=r"^gradient: must be a callable"):
         raydamp.System.from_functions(1, potential=lambda q: 0.0, gradient="x^2")
+
+
+@pytest.mark.parametrize(("potential", "words"), [
+    ("(4*x)^600", "beyond a double's range"),   # 4^600 x^600: the compiled value was inf * 0 = NaN
+    ("(x/3)^700", "beyond a double's range"),   # 3^-700 underflowed to 0: the value was 0
+    ("(-2)^x", "not a finite real number"),     # its gradient holds log(-2): a RuntimeError "I"
+    ("0^x", "not a finite real number"),        # log(0) = zoo: an AttributeError
+])
+def test_constants_a_double_cannot_hold_are_refused_naming_the_field(potential, words):
+    """An audit: these compiled to NaN or 0 (wrong numbers, silently), or raised SymEngine's own errors."""
+    with pytest.raises(ValueError, match=rf"^potential: .*{words}"):
+        raydamp.System(["x"], potential)
+    with pytest.raises(ValueError, match=rf"^damping\.dampers: .*{words}"):
+        raydamp.System(["x", "y"], "x^2 + y^2", damping={"dampers": [{"on": potential, "c": 1.0}]})
+
+
+def test_a_large_but_representable_power_is_exact():
+    system = raydamp.System(["x"], "(4*x)^100 + (x/10)^10")
+    assert system.potential(np.array([0.25])) == pytest.approx(1.0 + 0.025**10, rel=1e-14)
+    assert system.gradient(np.array([0.25]))[0] == pytest.approx(400.0 + 10 * 0.025**9 / 10, rel=1e-13)

@@ -14,6 +14,7 @@ import ctypes
 import hashlib
 import io
 import json
+import math
 import pickle
 import threading
 from collections.abc import Iterator
@@ -176,13 +177,48 @@ def _operations(outputs: list[se.Basic], limit: int) -> int:
     return len(seen)
 
 
+# Numbers no compiled function can compute with: complex ones (a negative base to a variable power
+# differentiates to log(-2)), infinities and NaN (0^x differentiates to log(0)).
+_NOT_REAL = frozenset({"ImaginaryUnit", "Complex", "ComplexDouble", "ComplexMPC", "ComplexInfinity", "Infinity",
+                       "NegativeInfinity", "NaN"})
+
+
+def _unusable_constant(outputs: list[se.Basic]) -> str | None:
+    """Why a number in outputs cannot be a double, or None. SymEngine keeps exact integers and rationals:
+    (4x)^600 becomes 4^600 x^600, and 4^600 overflows a double (the compiled value was inf * 0 = NaN), as
+    (x/3)^700's 3^-700 underflows to 0 (the value was 0)."""
+    seen: set[se.Basic] = set()
+    stack = list(outputs)
+    while stack:
+        node = stack.pop()
+        if node in seen:
+            continue
+        seen.add(node)
+        kind = type(node).__name__
+        if kind in _NOT_REAL:
+            return f"a value that is not a finite real number ({node})"
+        if isinstance(node, (se.Integer, se.Rational, se.RealDouble)):
+            value = float(node)
+            if not math.isfinite(value) or (value == 0.0 and node != 0):
+                shown = str(node) if len(str(node)) <= 40 else f"a number of {len(str(node))} digits"
+                return f"the constant {shown}, beyond a double's range"
+        stack.extend(node.args)
+    return None
+
+
 def _jit(inputs: list[se.Symbol], outputs: list[se.Basic], what: tuple[str, ...]) -> tuple[Any, int, int]:
-    """Compiled outputs(inputs); what is the spec's path the outputs come from (a too large one is its error)."""
-    outputs = [_without_half_powers(e) for e in outputs]
+    """Compiled outputs(inputs); what is the spec's path the outputs come from (a too large one is its error).
+    Counted first, then checked, then rewritten: the rewrite of a tree past the bound took over a minute."""
     if _operations(outputs, MAX_OPERATIONS) > MAX_OPERATIONS:
         raise SpecError(what, f"after differentiation more than {MAX_OPERATIONS} distinct operations in one compiled "
                               "function; write it with fewer couplings, or use a Chain or LinearStructure for a "
                               "large system")
+    unusable = _unusable_constant(outputs)
+    if unusable is not None:
+        raise SpecError(what, f"the compiled function (or its derivative) holds {unusable}; rewrite the "
+                              "expression (a negative or zero base to a variable power, or a huge power of a scaled "
+                              "coordinate: write (c*x)^n as c^n*x^n with c^n a representable number)")
+    outputs = [_without_half_powers(e) for e in outputs]
     fn = se.Lambdify(inputs, outputs, backend="llvm", cse=True, real=True)
     return (fn, *_address(fn))
 
@@ -274,13 +310,12 @@ def _compile(spec: SystemSpec) -> CompiledSystemFunctions:
     symbols.update(zip(spec.coordinates, q))
 
     potential = spec.potential.to_symengine(symbols)
+    pot_fn = _jit(q, [potential], ("potential",))[0]
     gradient = [se.diff(potential, qi) for qi in q]
+    grad_fn = _jit(q, gradient, ("potential",))[0]  # before the Hessian's product, which grows a power faster
     # Hess V v = grad_q (grad V . v): n derivatives of one scalar instead of n^2.
     directional = sum((g * vi for g, vi in zip(gradient, v)), se.Integer(0))
     hessian_product = [se.diff(directional, qi) for qi in q]
-
-    pot_fn = _jit(q, [potential], ("potential",))[0]
-    grad_fn = _jit(q, gradient, ("potential",))[0]
     hv_fn = _jit(q + v, hessian_product, ("potential",))[0]
 
     damper_fn = damper_norm = projection_fn = fused_fn = None
