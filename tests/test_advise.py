@@ -114,18 +114,25 @@ def test_bad_arguments(building, arguments, message):
         raydamp.advise(building[0], *arguments)
 
 
-def test_a_tolerance_beyond_what_integrate_runs(building):
-    """tolerance=1e-300 recommended a run of a 77-digit step count (integrate runs at most 2^62 steps). A method
-    needing more is marked "steps" and never recommended; when every method does, a ValueError says so."""
+def test_a_run_beyond_what_integrate_runs(building):
+    """tolerance=1e-300 recommended a run of a 77-digit step count (integrate runs at most 2^62 steps), and a
+    t_end of 1e300 or an omega of 1e300 raised an OverflowError or a ZeroDivisionError. A method needing more
+    steps is marked "steps" and never recommended; when every method does, a ValueError says so; and below
+    MIN_TOLERANCE rounding sets the error (asked for 1e-20, gauss4 gave 1.4e-14), so it is refused."""
+    from raydamp.run.advise import MIN_TOLERANCE
     from raydamp.run.integrate import MAX_STEPS
 
-    advice = raydamp.advise(building[0], 10.0, 1e-40, measure=False)
+    advice = raydamp.advise(building[0], 1e12, MIN_TOLERANCE, measure=False)
     over = [row for row in advice.rows if row.limited_by == "steps"]
     assert over and all(row.order == 2 and row.steps > MAX_STEPS for row in over)
     assert advice.recommended.order == 4 and advice.recommended.steps <= MAX_STEPS
     assert "steps" in str(advice)
-    with pytest.raises(ValueError, match=r"^tolerance: no method reaches 1e-300 by t_end = 10"):
-        raydamp.advise(building[0], 10.0, 1e-300, measure=False)
+    for t_end, extra in ((1e300, {}), (10.0, {"omega": 1e300})):
+        with pytest.raises(ValueError, match=r"^tolerance: no method reaches 1e-06 by t_end"):
+            raydamp.advise(building[0], t_end, 1e-6, measure=False, **extra)
+    for tolerance in (1e-20, 5e-324):
+        with pytest.raises(ValueError, match=r"^tolerance must be at least 1e-13"):
+            raydamp.advise(building[0], 10.0, tolerance, measure=False)
 
 
 def test_cli(building, tmp_path, capsys):

@@ -56,6 +56,8 @@ ERROR_MODEL = (
     ("midpoint", None, 2, 1 / 12, False),
     ("gauss4", None, 4, 1 / 720, False),
 )
+# Below this, rounding over a run sets the error, whatever the method and its step (an audit: 1e-14 measured).
+MIN_TOLERANCE = 1e-13
 # An explicit method steps at most at this fraction of its stability limit.
 STABILITY_MARGIN = 0.95
 _DENSE_BELOW = 500          # DOF: frequencies from a dense eigensolver below this
@@ -179,6 +181,9 @@ def advise(structure: Model, t_end: float, tolerance: float, *, omega: float | N
     tolerance = real("tolerance", tolerance, positive=True)
     if tolerance >= 1:
         raise ValueError(f"tolerance must be below 1 (an error relative to the initial amplitude), got {tolerance}")
+    if tolerance < MIN_TOLERANCE:  # a run of doubles does not get closer: asked for 1e-20, gauss4 gave 1.4e-14
+        raise ValueError(f"tolerance must be at least {MIN_TOLERANCE:g}: below it rounding, not the method, sets "
+                         f"the error, got {tolerance:g}")
     omega_1, omega_max = _frequency_range(structure)
     if omega is None:
         omega = omega_1
@@ -187,14 +192,16 @@ def advise(structure: Model, t_end: float, tolerance: float, *, omega: float | N
     rows = []
     for method, tableau, order, constant, explicit in ERROR_MODEL:
         h_max = limits[(method, tableau)] if explicit else math.inf
-        h_tol = (tolerance / (constant * omega * t_end)) ** (1 / order) / omega
+        with np.errstate(all="ignore"):  # an extreme t_end or omega: a step that under- or overflows
+            h_tol = float(np.float64(tolerance) / (constant * omega * t_end)) ** (1 / order) / omega
         h = min(h_tol, STABILITY_MARGIN * h_max, t_end)
         limited = "unstable" if h_max == 0 else "stability" if h < h_tol and h < t_end else "tolerance"
         if limited == "unstable":
             rows.append(MethodAdvice(method, tableau, order, 0.0, math.nan, limited, 0, math.nan, math.nan, None,
                                      math.nan, math.nan, math.inf))
             continue
-        steps = max(1, math.ceil(t_end / h * (1 - 1e-12)))
+        ratio = t_end / h if h > 0 else math.inf
+        steps = max(1, math.ceil(ratio * (1 - 1e-12))) if math.isfinite(ratio) else MAX_STEPS + 1
         if steps > MAX_STEPS:  # more than integrate runs: the table said 10^75 steps and recommended one
             rows.append(MethodAdvice(method, tableau, order, h_max, h, "steps", steps, math.nan, math.nan, None,
                                      math.nan, math.nan, math.inf))
