@@ -415,3 +415,42 @@ def test_a_run_at_a_temperature(module_server) -> None:
         page.wait_for_selector("#errors:not([hidden])", timeout=30_000)
         assert page.inner_text("#errors").startswith("temperature")
         assert page.eval_on_selector("#temperature", "input => input.classList.contains('invalid')")
+
+
+def test_a_decimated_plot_ends_at_the_last_point_and_names_are_text(module_server) -> None:
+    """Audit: past 5,000 saved points the page fetched every k-th one, and the last (the run's end, or a
+    blow-up's last finite state) was not drawn unless k divided the count; a system's name went to Plotly,
+    which reads <b> and <a> in a trace's name as its own markup."""
+    name = '<b>bold</b> <a href="x">link</a>'
+    spec = {"system": {"coordinates": ["x"], "potential": "x^2/2", "damping": {"scalar": 1.0}, "eps": 0.1,
+                       "name": name},
+            "method": "3s", "step_size": 0.01, "n_steps": 10_003, "initial_state": {"q": [1.0], "p": [0.0]}}
+    job_id = module_server.submit(spec)
+    job = module_server.wait_finished(job_id)
+    assert job["status"] == "completed" and job["summary"]["saved_points"] == 10_004  # drawn every 3rd
+    with open_page(_base(module_server)) as page:
+        _ready(page)
+        page.wait_for_selector(f'#jobs tr[data-job="{job_id}"] button.show', timeout=30_000)
+        page.click(f'#jobs tr[data-job="{job_id}"] button.show')
+        page.wait_for_function("id => { const plots = document.getElementById('plots');"
+                               " return plots.dataset.job === id && plots.dataset.ready === 'true'; }",
+                               arg=job_id, timeout=RUN_TIMEOUT_MS)
+        energy = _traces(page, "energy")[0]
+        assert energy["x"][-1] == job["summary"]["t_final"] and len(energy["x"]) == 3336  # 3,335 every 3rd + last
+        assert page.is_hidden("#jobs-more")  # fewer than 100 jobs: nothing more to say
+
+        # A blow-up's message names its step: the page said it twice ("... at step 10 ... (step 10)").
+        blown = module_server.submit({**spec, "system": {**spec["system"], "potential": "-x^4"}, "n_steps": 100,
+                                      "step_size": 0.1, "initial_state": {"q": [2.0], "p": [0.0]}})
+        failed = module_server.wait_finished(blown)
+        assert failed["status"] == "failed" and failed["failed_step"] is not None
+        page.click("#refresh")
+        page.wait_for_selector(f'#jobs tr[data-job="{blown}"] button.show', timeout=30_000)
+        page.click(f'#jobs tr[data-job="{blown}"] button.show')
+        page.wait_for_function("id => document.getElementById('plots').dataset.job === id"
+                               " && document.getElementById('plots').dataset.ready === 'true'", arg=blown,
+                               timeout=RUN_TIMEOUT_MS)
+        shown = page.text_content("#job-error")
+        assert shown == failed["error"] and shown.count(f"step {failed['failed_step']}") == 1, shown
+        # Escaped for Plotly, which then shows the name as written (its legend, its hover), not as markup.
+        assert energy["name"].startswith("&lt;b&gt;bold&lt;/b&gt; &lt;a href=\"x\"&gt;link&lt;/a&gt; 3s"), energy["name"]

@@ -430,7 +430,10 @@ function showSummary(summary) {
 async function showFinished(job) {
   if (job.error) {
     $("job-error").hidden = false;
-    $("job-error").textContent = job.error + (job.failed_step !== null ? ` (step ${job.failed_step})` : "");
+    // The solver's message names its step already ("... at step 10"): said once.
+    const step = job.failed_step ?? null;
+    const named = step === null || job.error.includes(`step ${step}`);
+    $("job-error").textContent = job.error + (named ? "" : ` (step ${step})`);
   }
   if (job.summary) showSummary(job.summary);
   if (!job.trajectory) { $("plots").dataset.ready = "true"; return; } // nothing was computed
@@ -444,6 +447,14 @@ async function showFinished(job) {
   const points = job.summary ? job.summary.saved_points : PLOT_POINTS;
   const every = Math.max(1, Math.ceil(points / PLOT_POINTS));
   const trajectory = await getJSON(`${job.trajectory}?every=${every}`);
+  if (every > 1 && (points - 1) % every !== 0) {
+    // Decimated, the last saved point (the run's end, or a blow-up's last finite state) is not among
+    // every-th ones: it is fetched and drawn too.
+    const last = await getJSON(`${job.trajectory}?start=${points - 1}`);
+    for (const [key, values] of Object.entries(last)) {
+      if (Array.isArray(values) && Array.isArray(trajectory[key])) trajectory[key].push(...values);
+    }
+  }
   if ($("job-id").textContent !== job.id) return;
   draw(job, trajectory);
   $("plots").dataset.ready = "true";
@@ -471,8 +482,11 @@ function label(job) {
   const composed = spec.composition ? ` ∘ ${spec.composition}` : "";
   const tableau = spec.tableau ? "/" + (typeof spec.tableau === "string" ? spec.tableau : "own tableau") : "";
   const load = spec.ground_motion ? " + ground motion" : spec.load ? " + load" : "";
-  return `${system} ${spec.method}${tableau}${composed} h=${spec.h ?? spec.step_size}${load}`;
+  return plotlyText(`${system} ${spec.method}${tableau}${composed} h=${spec.h ?? spec.step_size}${load}`);
 }
+
+// Plotly reads a trace's name as its own HTML subset (<b>, <a href>): a system's name is shown as written.
+const plotlyText = (text) => text.replace(/&/g, "&amp;").replace(/</g, "&lt;").replace(/>/g, "&gt;");
 
 const column = (rows, k) => rows.map((row) => row[k]);
 const layout = (title, x, y, extra = {}) => ({
@@ -599,6 +613,8 @@ async function refreshJobs() {
     remove.addEventListener("click", () => deleteJob(job.id));
     actions.append(show, " ", remove);
   }
+  // The newest 100: say so when there may be more (the API lists up to max_list_limit, by status too).
+  $("jobs-more").hidden = list.jobs.length < 100;
   if (list.jobs.some((job) => !FINAL.has(job.status))) refreshTimer = setTimeout(refreshJobs, 2000);
 }
 
