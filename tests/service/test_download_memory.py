@@ -121,7 +121,7 @@ def test_a_client_that_stops_reading_gives_its_large_fetch_slot_back(start_serve
     import socket
 
     server = start_server(RAYDAMP_MAX_LARGE_FETCHES="1", RAYDAMP_LARGE_FETCH_BYTES=str(2**20),
-                          RAYDAMP_SEND_TIMEOUT_SECONDS="3")
+                          RAYDAMP_SEND_TIMEOUT_SECONDS="2")
     job_id = server.submit({"model": "damped_pendulum", "method": "3s", "h": 0.01, "n_steps": 200_000,
                             "initial_state": {"q": [1.0], "p": [0.0]}})  # 8 MB stored, some 20 MB of JSON
     assert server.wait_finished(job_id)["status"] == "completed"
@@ -139,7 +139,7 @@ def test_a_client_that_stops_reading_gives_its_large_fetch_slot_back(start_serve
         assert stalled.recv(12) == b"HTTP/1.1 200"  # its response began: it holds the slot; then nothing is read
         assert status() == 429
         deadline = time.monotonic() + 60
-        # 3 s without a piece leaving, then the stalled response is dropped. Whole fetches: one that got the
+        # 2 s without a piece leaving, then the stalled response is dropped. Whole fetches: one that got the
         # slot and was closed unread would hold it a moment longer.
         while (response := server.client.get(url)).status_code == 429:
             assert time.monotonic() < deadline, "the stalled fetch kept its slot"
