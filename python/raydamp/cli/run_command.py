@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import json
 import shutil
-import signal
 import sys
 import threading
 from pathlib import Path
@@ -16,6 +15,7 @@ from pathlib import Path
 from ..jobs import job_arguments
 from ..results.io.solution import FORMATS
 from ..run.integrate import CancelToken, integrate
+from .ctrl_c import ctrl_c_cancels
 from .output_paths import file_problem
 from .thermal_options import THERMAL_KEYS, with_thermal_options
 
@@ -52,8 +52,7 @@ def _integrate_until_interrupted(model, q0, p0, progress, options: dict):
 
     Python runs a signal handler only in the main thread, between bytecodes; the step loop holds
     the main thread in C++ (the GIL released) for the whole run. So the run goes on a worker
-    thread while the main thread waits in short joins, where the handler runs at once. A second
-    Ctrl-C interrupts as usual (KeyboardInterrupt), for a run that does not stop."""
+    thread while the main thread waits in short joins, where the handler runs at once."""
     if threading.current_thread() is not threading.main_thread():  # no signal handler can be installed here
         return integrate(model, q0, p0, progress=progress, **options)
     cancel = CancelToken()
@@ -65,18 +64,11 @@ def _integrate_until_interrupted(model, q0, p0, progress, options: dict):
         except BaseException as error:  # handed to the main thread, which reports it
             outcome["error"] = error
 
-    def interrupt(signum, frame) -> None:
-        cancel.cancel()
-        signal.signal(signal.SIGINT, signal.default_int_handler)
-
     worker = threading.Thread(target=run, name="raydamp-run", daemon=True)
-    previous = signal.signal(signal.SIGINT, interrupt)
-    try:
+    with ctrl_c_cancels(cancel):
         worker.start()
         while worker.is_alive():
             worker.join(0.1)
-    finally:
-        signal.signal(signal.SIGINT, previous if previous is not None else signal.SIG_DFL)
     if "error" in outcome:
         raise outcome["error"]
     return outcome["solution"]

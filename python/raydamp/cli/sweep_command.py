@@ -8,9 +8,7 @@ from __future__ import annotations
 
 import json
 import os
-import signal
 import sys
-import threading
 import time
 from pathlib import Path
 
@@ -22,6 +20,7 @@ from ..results.io.sweep import save_sweep
 from ..run.cluster import local_cluster
 from ..run.integrate import CancelToken
 from ..run.sweep import check_sweep, parse_grid_item, sweep
+from .ctrl_c import ctrl_c_cancels
 from .output_paths import file_problem
 from .run_command import read_spec
 from .thermal_options import THERMAL_KEYS, with_thermal_options
@@ -121,24 +120,15 @@ def sweep_file(spec_path: str, grid_items: list[str], *, out: str | None = None,
         return _fail(str(error))
     start = time.perf_counter()
     # Ctrl-C cancels the sweep as cancel= does: it returns the finished chunks, the other members
-    # "cancelled", and they are written (its loop waits in Python, so the handler runs at once). A
-    # second Ctrl-C interrupts as usual.
+    # "cancelled", and they are written (its loop waits in Python, so the handler runs at once).
     token = CancelToken()
-
-    def interrupt(signum, frame) -> None:
-        token.cancel()
-        signal.signal(signal.SIGINT, signal.default_int_handler)
-
-    previous = signal.signal(signal.SIGINT, interrupt) if threading.current_thread() is threading.main_thread() \
-        else None
     try:
-        ds = sweep(spec, grid, client=client, chunk_size=chunk_size, progress=True if progress else None,
-                   store=out if zarr_out else None, cancel=token)
+        with ctrl_c_cancels(token):
+            ds = sweep(spec, grid, client=client, chunk_size=chunk_size, progress=True if progress else None,
+                       store=out if zarr_out else None, cancel=token)
     except ValueError as error:
         return _fail(f"{spec_path}: {error}")
     finally:
-        if previous is not None:
-            signal.signal(signal.SIGINT, previous)
         for thing in close:
             thing.close()
     print(_summary(ds, time.perf_counter() - start))
