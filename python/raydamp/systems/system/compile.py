@@ -163,17 +163,26 @@ def _without_half_powers(expr: se.Basic) -> se.Basic:
 # 17,000, from a 790-byte potential) half a minute (issue 27, F1). A Chain or LinearStructure carries
 # large systems without expressions.
 MAX_OPERATIONS = 8_000
+# And their terms: a sum or product of n terms is one node but n - 1 instructions. The Hessian product of
+# q0*q1*...*q69 is 5,040 nodes holding 333,000 factors, and took 14 s; of 50 coordinates, 120,000 and 3.7 s.
+MAX_TERMS = 150_000
 
 
-def _operations(outputs: list[se.Basic], limit: int) -> int:
-    """Distinct sub-expressions of outputs, counted up to limit + 1."""
+def _operations(outputs: list[se.Basic], limit: int, terms_limit: int = MAX_TERMS) -> int:
+    """Distinct sub-expressions of outputs, counted up to limit + 1; limit + 1 as soon as their terms (a node of
+    n arguments counted n - 1, anything else 1) pass terms_limit."""
     seen: set[se.Basic] = set()
+    terms = 0
     stack = list(outputs)
     while stack and len(seen) <= limit:
         node = stack.pop()
         if node not in seen:
             seen.add(node)
-            stack.extend(node.args)
+            args = node.args
+            terms += max(1, len(args) - 1)
+            if terms > terms_limit:
+                return limit + 1
+            stack.extend(args)
     return len(seen)
 
 
@@ -210,7 +219,8 @@ def _jit(inputs: list[se.Symbol], outputs: list[se.Basic], what: tuple[str, ...]
     """Compiled outputs(inputs); what is the spec's path the outputs come from (a too large one is its error).
     Counted first, then checked, then rewritten: the rewrite of a tree past the bound took over a minute."""
     if _operations(outputs, MAX_OPERATIONS) > MAX_OPERATIONS:
-        raise SpecError(what, f"after differentiation more than {MAX_OPERATIONS} distinct operations in one compiled "
+        raise SpecError(what, f"after differentiation more than {MAX_OPERATIONS} distinct operations (or {MAX_TERMS} "
+                              "terms of sums and products) in one compiled "
                               "function; write it with fewer couplings, or use a Chain or LinearStructure for a "
                               "large system")
     unusable = _unusable_constant(outputs)
