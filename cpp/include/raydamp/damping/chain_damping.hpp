@@ -81,6 +81,7 @@ class ChainDamping {
   ChainDamping() = default;
 
   // bonds/bond_c: damped bonds and their coefficients; sites/site_c: damped sites.
+  template <int = 0>  // instantiated only where used: see raydamp.hpp
   ChainDamping(ChainBoundary boundary, int n, double mass, double eps, const std::vector<int>& bonds,
                const std::vector<double>& bond_c, const std::vector<int>& sites, const std::vector<double>& site_c) {
     if (bonds.size() != bond_c.size()) throw std::invalid_argument("dampers.c: one coefficient per bond");

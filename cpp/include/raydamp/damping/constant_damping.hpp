@@ -32,6 +32,7 @@ struct ConstantDamping {
     mutable SmallVector scratch;  // per workspace, so flows of one run never allocate
   };
 
+  template <int = 0>  // instantiated only where used: see raydamp.hpp
   ConstantDamping(const Eigen::MatrixXd& mass, const Eigen::MatrixXd& d, double eps) {
     const auto n = mass.rows();
     if (n > kMaxDenseDim)
@@ -52,6 +53,7 @@ struct ConstantDamping {
   // The largest eigenvalue of A (the amplification guard's rho).
   double spectral_radius() const { return lambda.size() ? lambda.maxCoeff() : 0.0; }
 
+  template <int = 0>  // instantiated only where used: see raydamp.hpp
   Factors factors(double t) const {
     Factors f;
     f.t = t;

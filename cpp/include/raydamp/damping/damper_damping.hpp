@@ -75,6 +75,7 @@ class DamperDamping {
   // norm: a = grad g^T M^{-1} grad g of the one dashpot when it is the same at every
   // q (NaN: it varies, or several dashpots).
   // projection: P(q, u) of the one dashpot, (q, u) in, n out; used only with a constant norm.
+  template <int = 0>  // instantiated only where used: see raydamp.hpp
   DamperDamping(const Eigen::MatrixXd& mass, double eps, std::vector<double> coefficients, CompiledFunction gradients,
                 double norm = std::numeric_limits<double>::quiet_NaN(), CompiledFunction projection = {})
       : eps_(eps), c_(std::move(coefficients)), gradients_(gradients), n_(static_cast<int>(mass.rows())), norm_(norm),
@@ -264,6 +265,7 @@ class DamperDamping {
   }
 
   // S = eps sum_i c_i (L^{-1} grad g_i)(L^{-1} grad g_i)^T = V diag(lambda) V^T.
+  template <int = 0>  // instantiated only where used: see raydamp.hpp
   void eigen(const Buffer& g, SmallVector& lambda, SmallMatrix& vectors) const {
     SmallMatrix s = SmallMatrix::Zero(n_, n_);
     for (std::size_t i = 0; i < c_.size(); ++i) {

@@ -13,6 +13,7 @@ namespace raydamp {
 struct MassCholesky {
   Eigen::MatrixXd lower, lower_inverse, inverse;  // L, L^{-1}, M^{-1}
 
+  template <int = 0>  // instantiated only where used: see raydamp.hpp
   explicit MassCholesky(const Eigen::MatrixXd& mass) {
     Eigen::LLT<Eigen::MatrixXd> llt(mass);
     if (llt.info() != Eigen::Success) throw std::invalid_argument("mass must be symmetric positive definite");

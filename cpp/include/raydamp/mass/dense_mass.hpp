@@ -15,6 +15,7 @@ struct DenseMass {
   Eigen::MatrixXd lower;    // L with L L^T = M (Cholesky): a root of M for thermal noise
 
   // Refuses (naming `argument`) an M that is not symmetric positive definite.
+  template <int = 0>  // instantiated only where used: see raydamp.hpp
   explicit DenseMass(const Eigen::MatrixXd& mass, const char* argument = "mass") : m(mass) {
     const auto n = mass.rows();
     if (n == 0 || mass.cols() != n || !mass.allFinite())
