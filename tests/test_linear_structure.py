@@ -136,6 +136,38 @@ def test_chebyshev_degree_grows_like_the_square_root_of_t_beta_l(small_plate):
     assert 4 <= degrees[2] / degrees[1] <= 15
 
 
+
+def _wide_spectrum(beta: float) -> raydamp.LinearStructure:
+    """60 uncoupled modes, omega from 1 to 1e7 (M = I): t beta L passes 10^6 at an h near the stability limit."""
+    omega = np.geomspace(1.0, 1e7, 60)
+    return raydamp.LinearStructure(scipy.sparse.identity(60, format="csc"), scipy.sparse.diags(omega ** 2).tocsc(),
+                                   alpha=0.0, beta=beta)
+
+
+@pytest.mark.parametrize("method", ["baoab", "2s", "3s"])
+def test_a_steep_damping_flow_keeps_the_lowest_mode(method):
+    # At t beta L above about 1.25e6 the damping flow's 32 first Chebyshev samples of exp(-t beta lambda) all
+    # underflowed, and its series was zero: every mode's p was set to 0, that of omega = 1 (decay factor about 1)
+    # too, with status "completed" (p_1 = -5.6e-15 for baoab here). Measured now: 2.4e-10 from the exact decay
+    # (4.8e-10 for 3s, two flows a step): the rounding of a series of degree about 6,000; 1e-8 allowed.
+    s = _wide_spectrum(beta=0.1)  # 5% damping at omega = 1
+    h = 1.5 / 1e7
+    assert h * s.beta * s.spectral_bound > 1.25e6
+    assert min(s.chebyshev_degrees(h)) > 1000
+    p0 = np.zeros(60)
+    p0[0] = 1.0
+    sol = raydamp.integrate(s, np.zeros(60), p0, method=method, h=h, n_steps=10)
+    assert sol.status == "completed"
+    t = 10 * h  # the mode (k = 1, c = beta = 0.1) moves p by -c p t - k q t: q stays O(t) = 1.5e-6
+    assert abs(sol.p[-1, 0] - np.exp(-0.1 * t)) < 1e-8
+
+
+def test_a_damping_flow_past_the_degree_bound_is_refused_naming_h():
+    # The same spectrum with ten times the damping: t beta L = 1.6e7 needs more than 8192 degrees.
+    s = _wide_spectrum(beta=1.0)
+    with pytest.raises(ValueError, match="needs a Chebyshev degree above 8192.*smaller h"):
+        raydamp.integrate(s, np.zeros(60), np.ones(60), method="baoab", h=1.5 / 1e7, n_steps=10)
+
 # -- the plate: order, energy balance, modal solution ------------------------------------------------
 
 @pytest.fixture(scope="module")

@@ -54,6 +54,11 @@ inline std::vector<double> chebyshev_interpolant(const std::vector<double>& valu
   return c;
 }
 
+[[noreturn]] inline void refuse_degree(const char* what) {
+  throw std::invalid_argument(std::string(what) + ": needs a Chebyshev degree above " +
+                              std::to_string(kMaxChebyshevDegree) + " (t beta lambda_max too large); take a smaller h");
+}
+
 }  // namespace detail
 
 // The series of g(y) on [-1, 1]: the number of samples doubles until the upper half
@@ -74,8 +79,16 @@ ChebyshevSeries chebyshev_series(G g, const char* what, double tolerance = kCheb
     ChebyshevSeries s;
     s.scale = scale;
     if (scale == 0.0) {
-      s.c = {0.0};
-      return s;
+      // Zero at every sample: g is zero, or so steep that the samples missed it. The points never reach
+      // the ends of [-1, 1], where exp(-t(alpha + beta lambda)) is largest (lambda = 0): at t beta L above
+      // about 1.25e6 its 32 samples all underflowed, and the zero series set every mode's p to 0, the
+      // lowest (whose factor is about 1) too. Then more samples are taken, up to the degree bound.
+      if (g(-1.0) == 0.0 && g(1.0) == 0.0) {
+        s.c = {0.0};
+        return s;
+      }
+      if (n > kMaxChebyshevDegree) detail::refuse_degree(what);
+      continue;
     }
     std::vector<double> c = detail::chebyshev_interpolant(values);
     // Each computed coefficient carries rounding of about eps sqrt(N) max |g| (a sum of N
@@ -91,9 +104,7 @@ ChebyshevSeries chebyshev_series(G g, const char* what, double tolerance = kCheb
     }
     const bool below_tolerance = upper <= 0.5 * tolerance * scale;
     if (!below_tolerance && upper_max > noise) {
-      if (n > kMaxChebyshevDegree)
-        throw std::invalid_argument(std::string(what) + ": needs a Chebyshev degree above " +
-                                    std::to_string(kMaxChebyshevDegree) + " (t beta lambda_max too large); take a smaller h");
+      if (n > kMaxChebyshevDegree) detail::refuse_degree(what);
       continue;
     }
     const double floor = below_tolerance ? 0.0 : noise;
