@@ -344,6 +344,46 @@ def test_3s_at_a_temperature_draws_one_path_whatever_is_saved():
     np.testing.assert_array_equal(runs[0].q[-1], runs[2].q[-1])
 
 
+
+@pytest.mark.parametrize("method", ["baoab", "2s"])
+def test_two_dashpots_at_a_temperature_draw_one_path_whatever_is_saved(method):
+    # Several dashpots draw their noise through the modes of S(q). It was L V diag(s) xi, V as the eigensolver
+    # gave it, defined up to its columns' signs: steps merged (save_every=7) or not (save_every=1), 1e-16 apart in
+    # q, drew noise 1.6e-2 apart. Now the root is symmetric in the modes, L V diag(s) V^T xi: measured 5e-15.
+    damped = raydamp.System(["x", "y"], "x^2 + y^4/4 + x*y/3",
+                            damping={"dampers": [{"on": "x - y", "c": 0.5}, {"on": "x*y", "c": 0.2}]}, eps=1.0)
+    runs = [raydamp.integrate(damped, [0.3, -0.2], [0.1, 0.4], method=method, h=0.05, n_steps=400,
+                              save_every=every, temperature=0.4, seed=2024, stream=3) for every in (1, 7)]
+    np.testing.assert_allclose(runs[1].q[:-1], runs[0].q[::7], rtol=0, atol=1e-12)  # (and the last step's row)
+    np.testing.assert_allclose(runs[1].q[-1], runs[0].q[-1], rtol=0, atol=1e-12)
+    # A blow-up is found where it happens, whatever is saved: a block of merged steps that blew up is replayed
+    # unmerged, and a replay that stayed finite ended the run anyway, "non_finite" at the block's end (step 1401
+    # with a finite state saved, where save_every=1 ran on to step 6048).
+    well = raydamp.System(["x", "y"], "x^2/2 + y^2/2 - 0.01*x^4",
+                          damping={"dampers": [{"on": "x - y", "c": 0.5}, {"on": "x*y", "c": 0.2}]}, eps=1.0)
+    ends = [raydamp.integrate(well, [0.0, 0.0], [0.0, 0.0], method=method, h=0.05, n_steps=20_000,
+                              save_every=every, temperature=1.5, seed=7, stream=2) for every in (20_000, 1)]
+    assert ends[0].status == ends[1].status
+    assert ends[0].failed_step == ends[1].failed_step  # (the last states, a blow-up's, may differ in size)
+
+
+def test_the_temperatures_of_a_member_and_of_a_loaded_run_rebuild_its_model(tmp_path):
+    # They needed "the model of the run", which only integrate's own Solution carried: an ensemble's member and
+    # a loaded file (both with their provenance) were a ValueError.
+    from raydamp.analysis import configurational_temperature
+
+    model = DampedPendulum(eps=0.5)
+    ens = raydamp.integrate_ensemble(model, [[0.5], [1.0]], [0.0], parameters={"eps": [0.5, 0.8]}, method="baoab",
+                                     h=0.05, n_steps=4000, save_every=10, temperature=0.5, seed=11)
+    alone = raydamp.integrate(DampedPendulum(eps=0.8), [1.0], [0.0], method="baoab", h=0.05, n_steps=4000,
+                              save_every=10, temperature=0.5, seed=11, stream=1)
+    member = ens.member(1)
+    assert kinetic_temperature(member, burn_in=50) == kinetic_temperature(alone, burn_in=50)
+    assert configurational_temperature(member, burn_in=50) == configurational_temperature(alone, burn_in=50)
+    alone.save(tmp_path / "run.nc")
+    loaded = raydamp.load(tmp_path / "run.nc")
+    assert kinetic_temperature(loaded, burn_in=50) == kinetic_temperature(alone, burn_in=50)
+
 def test_a_load_history_of_one_column_on_a_one_coordinate_model():
     model = DampedPendulum()
     rows = raydamp.Load.series([0.0, 1.0], [[0.0], [2.0]])

@@ -162,7 +162,10 @@ class DamperDamping {
   // Ornstein-Uhlenbeck flow. M - E M E^T = L (I - e^{-2tS}) L^T with S = L^{-1} eps D L^{-T}.
   // One dashpot: S = lambda v v^T, v = L^{-1} grad g / sqrt(a), lambda = eps c a, so
   //   M - E M E^T = (1 - e^{-2 t lambda}) / a grad g grad g^T = 2 t eps c phi1(-2 t lambda) grad g grad g^T,
-  // one normal along grad g (exact at a = 0, where grad g = 0). Several: N = L V diag(sqrt(1 - e^{-2t lambda_i})).
+  // one normal along grad g (exact at a = 0, where grad g = 0). Several: N = L V diag(sqrt(1 - e^{-2t lambda_i})) V^T,
+  // the root symmetric in the modes: the eigensolver's V is defined up to the signs of its columns (and a rotation
+  // within a repeated eigenvalue), and with N = L V diag(...) alone a rounding-level change of q could flip the
+  // noise drawn (merged and unmerged steps of one run, 1e-16 apart, drew noise 1.6e-2 apart).
   Eigen::Index noise_count(Eigen::Index n) const { return c_.size() == 1 ? 1 : n; }
   template <class Q, class Mass, class X, class P>
   void add_noise(const Q& q, const Factors& f, const Mass&, double sigma, const X& xi, P& p) const {
@@ -175,8 +178,8 @@ class DamperDamping {
       p += (sigma * std::sqrt(2.0 * f.t * eps_c_ * phi1(x)) * xi[0]) * grad;
       return;
     }
-    SmallVector y(n_);
-    for (int i = 0; i < n_; ++i) y[i] = std::sqrt(-std::expm1(-2.0 * f.t * at.rates[i])) * xi[i];
+    SmallVector y = at.vectors.transpose() * xi;
+    for (int i = 0; i < n_; ++i) y[i] *= std::sqrt(-std::expm1(-2.0 * f.t * at.rates[i]));
     p += sigma * (lower_ * (at.vectors * y));
   }
 
