@@ -27,9 +27,9 @@ def _rows(solution, burn_in: float):
 
 
 def _model(solution):
-    if not isinstance(solution.origin, tuple):
-        raise ValueError("solution: needs the model of the run (a solution from integrate)")
-    return solution.origin[0]
+    if not hasattr(solution, "_model"):
+        raise ValueError(f"solution: expected a raydamp.Solution, got {type(solution).__name__}")
+    return solution._model("solution")
 
 
 def kinetic_temperature(solution, burn_in: float = 0.0) -> float:

@@ -186,9 +186,19 @@ class Solution:
         return out + self.load.ground_part().values(model, self.t)
 
     def _model(self, what: str):
-        if not isinstance(self.origin, tuple):
-            raise ValueError(f"{what}: needs the model of the run (a solution from integrate, not a loaded file)")
-        return self.origin[0]
+        """The run's model: its own, or rebuilt from the provenance (a loaded file, an ensemble's member)."""
+        if isinstance(self.origin, tuple):
+            return self.origin[0]
+        if not isinstance(self.origin, dict):
+            raise ValueError(f"{what}: needs the model of the run (a solution from integrate, or one with its "
+                             "provenance)")
+        from ..jobs.build import model_from_spec
+        from ..jobs.spec import ModelSpec
+
+        try:
+            return model_from_spec({key: self.origin[key] for key in ModelSpec.model_fields if key in self.origin})
+        except ValueError as error:
+            raise ValueError(f"{what}: the run's model could not be rebuilt from its provenance: {error}") from None
 
     def summary(self) -> dict[str, Any]:
         """The scalar results as plain JSON-ready values, the fields of :class:`raydamp.jobs.JobSummary`
