@@ -116,3 +116,26 @@ def test_a_job_without_method_gets_the_same_choice_and_its_provenance_runs_again
     model, q, p, options = job_arguments(sol.provenance)       # method_reason is set aside as provenance
     assert options["method"] == "midpoint"
     assert np.array_equal(raydamp.integrate(model, q, p, **options).q, sol.q)
+
+
+def test_at_a_temperature_past_the_explicit_limit_the_default_is_an_error_naming_h(chain2000):
+    # Only the explicit splittings take a temperature (exact noise flows): past their stability limit the default
+    # ran 3s, which blew up (status non_finite at step 165 in an audit) with no reason recorded.
+    q0, p0 = start(chain2000)
+    with pytest.raises(ValueError, match=r"^h: h omega_max = 2\.4 >= 2 .*take h < 1$"):
+        raydamp.integrate(chain2000, q0, p0, h=1.2, n_steps=200, temperature=0.1, seed=1)
+    sol = raydamp.integrate(chain2000, q0, p0, h=0.5, n_steps=200, temperature=0.1, seed=1)
+    assert sol.success and sol.method == "3s"
+    assert sol.provenance["method_reason"].startswith("3s: the default at a temperature")
+
+
+def test_an_ensemble_chooses_as_integrate_does(chain2000):
+    # integrate_ensemble's method defaulted to "3s": past the explicit limit its members "completed" at |q| = 1e150.
+    q0, p0 = start(chain2000)
+    ens = raydamp.integrate_ensemble(chain2000, np.stack([q0, 0.5 * q0]), p0, h=1.2, n_steps=200, threads=1)
+    assert ens.method == "midpoint" and all(s == "completed" for s in ens.status)
+    assert ens.provenance["method_reason"].startswith("midpoint: h omega_max = 2.4 >= 2")
+    alone = raydamp.integrate(chain2000, 0.5 * q0, p0, h=1.2, n_steps=200)
+    np.testing.assert_array_equal(ens.q_final[1], alone.q[-1])
+    pendulums = raydamp.integrate_ensemble(DampedPendulum(eps=0.1), [[1.0], [2.0]], [0.0], h=0.1, n_steps=10)
+    assert pendulums.method == "3s"

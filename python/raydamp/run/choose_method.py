@@ -45,8 +45,9 @@ class Choice(NamedTuple):
     reason: str | None
 
 
-def choose_method(model, method: str | None, tableau, composition, h: float) -> Choice:
-    """What integrate runs for ``method`` (None: choose) with this tableau and composition at step ``h``."""
+def choose_method(model, method: str | None, tableau, composition, h: float, thermal: bool = False) -> Choice:
+    """What integrate runs for ``method`` (None: choose) with this tableau and composition at step ``h``;
+    thermal: at a temperature, where only the splittings with exact noise flows (3s, 2s, baoab) run."""
     if method is not None:
         return Choice(method, tableau, None)
     if tableau is not None or composition is not None:
@@ -54,7 +55,8 @@ def choose_method(model, method: str | None, tableau, composition, h: float) -> 
     from ..systems.structure import LinearStructure
 
     if not isinstance(model, LinearStructure):
-        return Choice(DEFAULT_METHOD, None, f"3s: the default for a {type(model).__name__}")
+        return Choice(DEFAULT_METHOD, None, f"3s: the default for a {type(model).__name__}"
+                                            f"{' at a temperature' if thermal else ''}")
     try:
         h = float(h)
     except (TypeError, ValueError):
@@ -62,6 +64,15 @@ def choose_method(model, method: str | None, tableau, composition, h: float) -> 
     if not (math.isfinite(h) and h > 0):
         return Choice(DEFAULT_METHOD, None, "3s: the default (h is checked next)")
     omega_max = math.sqrt(model.spectral_bound)
+    if thermal:
+        # Every method with exact noise flows is explicit: past their stability limit none can run (3s ran and
+        # blew up, as if the caller had named it).
+        if h * omega_max >= 2.0:
+            raise ValueError(f"h: h omega_max = {h * omega_max:.4g} >= 2 (omega_max^2 <= spectral_bound = "
+                             f"{model.spectral_bound:.6g}): at a temperature the methods that run (3s, 2s, baoab, "
+                             f"with exact noise flows) are explicit and unstable there; take h < {2 / omega_max:.6g}")
+        return Choice(DEFAULT_METHOD, None, f"3s: the default at a temperature (OABAO, exact noise flows); h omega_max "
+                                            f"= {h * omega_max:.4g} < 2")
     if h * omega_max >= 2.0:
         return Choice("midpoint", None, f"midpoint: h omega_max = {h * omega_max:.4g} >= 2 (omega_max^2 <= "
                                         f"spectral_bound = {model.spectral_bound:.6g}), beyond the stability limit "

@@ -13,6 +13,7 @@ from .._validation import MAX_SEED, integer, real, thermal
 from ..loads import Load
 from ..results.ensemble_solution import EnsembleSolution
 from ..systems.models import Model
+from .choose_method import choose_method
 from .integrate import MAX_SAVED_BYTES, MAX_STEPS, CancelToken, _catalogue, span
 
 __all__ = ["integrate_ensemble", "member_parameters"]
@@ -70,7 +71,7 @@ def _parameter_arrays(system: Model, parameters, members: int) -> dict[str, np.n
     return out
 
 
-def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] | None = None, method: str = "3s",
+def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] | None = None, method: str | None = None,
                        h: float, t_end: float | None = None, n_steps: int | None = None, save_every: int = 1,
                        tableau: str | None = None, composition: str | None = None, threads: int | None = None,
                        progress: Callable[[int, int], object] | None = None,
@@ -92,7 +93,7 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
         from their parameter tables; a System is rebuilt once per distinct parameter set before
         the run (a change of eps alone reuses its compiled functions; other parameters recompile it).
     method, h, t_end, n_steps, save_every, tableau, composition : as :func:`raydamp.integrate`,
-        shared by every member. A LinearStructure's implicit "midpoint" and "gauss4" factorise
+        shared by every member (method None chooses as integrate does, the reason in the provenance). A LinearStructure's implicit "midpoint" and "gauss4" factorise
         M + c C + c^2 K once per sub-step length for the whole ensemble (once, twice with a
         shortened last step), before the members run; the members share the factors read-only,
         each solving in buffers of its own.
@@ -124,6 +125,8 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
     if not isinstance(system, Model):
         raise ValueError(f"system must be a raydamp model or System, got {system!r}")
     names, with_tableau = _catalogue()
+    method, tableau, method_reason = choose_method(system, method, tableau, composition, h,
+                                                   thermal=temperature is not None and temperature != 0)
     if not isinstance(method, str) or method not in names:
         raise ValueError(f"method: unknown method {method!r} (known: {', '.join(names)})")
     if tableau is not None and not isinstance(tableau, str):
@@ -185,6 +188,8 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
     composition_name = None if resolved_composition == "none" else resolved_composition
     options = {"method": method, "tableau": tableau, "composition": composition_name, "h": h, "t_end": t_end,
                "n_steps": None if t_end is not None else n_steps, "save_every": save_every, "work": False}
+    if method_reason is not None:
+        options["method_reason"] = method_reason
     if vector_sine:
         options["vector_sine"] = True
     if loads:

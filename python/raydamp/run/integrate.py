@@ -79,7 +79,9 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
     method : None (default) chooses: "3s", except for a :class:`raydamp.LinearStructure` on which 3s
         is a trap (h omega_max >= 2: "midpoint"; 3s's damping flow a long Chebyshev series: "rks" with
         tableau "midpoint"), recorded with the reason in ``provenance["method_reason"]``
-        (:mod:`raydamp.run.choose_method`; :func:`raydamp.advise` compares every method). Or "3s", "2s", "rks", "rksb", "sv", "heun", "rk4" or "rk" (any
+        (:mod:`raydamp.run.choose_method`; :func:`raydamp.advise` compares every method). At a
+        temperature "3s" (a LinearStructure at h omega_max >= 2, where every method with exact noise
+        flows is unstable, is a ValueError naming h). Or "3s", "2s", "rks", "rksb", "sv", "heun", "rk4" or "rk" (any
         explicit tableau on the whole system, default "rk4"); for a
         :class:`raydamp.LinearStructure` also the implicit, unconditionally stable
         "midpoint" (order 2; Newmark average acceleration) and "gauss4" (order 4), which
@@ -151,9 +153,8 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
     if not isinstance(model, Model):
         raise ValueError(f"model must be a raydamp model (e.g. raydamp.models.DampedPendulum()), got {model!r}")
     names, with_tableau = _catalogue()
-    if method is None and temperature is not None and temperature != 0:
-        method = "3s"  # at a temperature the choice is among the methods with exact noise flows: 3s (OABAO)
-    method, tableau, method_reason = choose_method(model, method, tableau, composition, h)
+    method, tableau, method_reason = choose_method(model, method, tableau, composition, h,
+                                                   thermal=temperature is not None and temperature != 0)
     if not isinstance(method, str) or method not in names:
         raise ValueError(f"method: unknown method {method!r} (known: {', '.join(names)})")
     tableau_name, tableau = _tableau(tableau)
