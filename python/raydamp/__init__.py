@@ -31,3 +31,16 @@ __all__ = ["__version__", "models", "Load", "GroundMotion", "System", "Chain", "
            "integrate_ensemble", "EnsembleSolution", "sweep",
            "check_sweep", "parse_grid_item", "SweepPlan", "load", "rayleigh_coefficients", "modal_damping_ratio",
            "methods", "tableaux", "compositions", "MethodInfo", "TableauInfo", "CompositionInfo"]
+
+# Subpackages a user reaches as attributes (raydamp.analysis.kinetic_temperature, as the README writes it),
+# imported when first used: raydamp.analysis needs SciPy (the analysis extra), and `import raydamp` needs NumPy
+# alone. (Without this, raydamp.analysis after `import raydamp` was an AttributeError.)
+_SUBPACKAGES = frozenset({"analysis", "cli", "jobs", "loads", "methods", "reproduce", "results", "run", "systems"})
+
+
+def __getattr__(name: str):
+    if name in _SUBPACKAGES:
+        import importlib
+
+        return importlib.import_module(f".{name}", __name__)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
