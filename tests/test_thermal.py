@@ -384,6 +384,19 @@ def test_the_temperatures_of_a_member_and_of_a_loaded_run_rebuild_its_model(tmp_
     loaded = raydamp.load(tmp_path / "run.nc")
     assert kinetic_temperature(loaded, burn_in=50) == kinetic_temperature(alone, burn_in=50)
 
+
+def test_a_seed_or_stream_without_a_temperature_is_refused_naming_it():
+    # They were dropped silently (the provenance said seed None), where the CLI and the job JSON refuse them.
+    model = DampedPendulum(eps=0.5)
+    for kwargs, name in (({"seed": 5}, "seed"), ({"stream": 5}, "stream")):
+        with pytest.raises(ValueError, match=f"^{name}: given without a temperature"):
+            raydamp.integrate(model, [0.5], [0.0], h=0.1, n_steps=10, **kwargs)
+    with pytest.raises(ValueError, match="^first_stream: given without a temperature"):
+        raydamp.integrate_ensemble(model, [[0.5], [1.0]], [0.0], h=0.1, n_steps=10, first_stream=3)
+    # A temperature of 0 may carry them (a sweep over temperatures from 0 passes one seed to every member).
+    quiet = raydamp.integrate(model, [0.5], [0.0], h=0.1, n_steps=10, temperature=0.0, seed=5)
+    assert quiet.provenance.get("temperature") is None
+
 def test_a_load_history_of_one_column_on_a_one_coordinate_model():
     model = DampedPendulum()
     rows = raydamp.Load.series([0.0, 1.0], [[0.0], [2.0]])

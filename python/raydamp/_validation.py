@@ -79,6 +79,11 @@ def thermal(temperature, seed, stream: int = 0, stream_name: str = "stream") -> 
     without a seed gets a fresh one from the operating system (kept in the run's provenance, so the run can
     be repeated)."""
     kT = 0.0 if temperature is None else real("temperature", temperature, nonnegative=True)
+    if temperature is None:  # (a temperature of 0 may carry them: a sweep over temperatures from 0)
+        for name, value in (("seed", seed), (stream_name, None if stream == 0 else stream)):
+            if value is not None:
+                raise ValueError(f"{name}: given without a temperature, and a run without one draws no noise; "
+                                 "give temperature=, or leave it out")
     if seed is None:
         import secrets
 

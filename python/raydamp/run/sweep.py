@@ -88,8 +88,8 @@ def _base(spec: Mapping[str, Any]) -> tuple[Model, np.ndarray, np.ndarray, dict[
     else:
         options.pop("stream", None)  # no noise: nothing is drawn
     if options.get("method") is None:  # a job without a method: chosen as integrate chooses (3s at a temperature)
-        options["method"] = "3s" if options.get("temperature") else choose_method(
-            model, None, options.get("tableau"), options.get("composition"), float(options["h"]))[0]
+        options["method"] = choose_method(model, None, options.get("tableau"), options.get("composition"),
+                                          float(options["h"]), thermal=bool(options.get("temperature")))[0]
     options.setdefault("save_every", 1)
     if isinstance(model, System) and model._python is not None:
         raise ValueError("spec.system: a System built from Python functions cannot be sent to workers; "
