@@ -122,7 +122,7 @@ def test_at_a_temperature_past_the_explicit_limit_the_default_is_an_error_naming
     # Only the explicit splittings take a temperature (exact noise flows): past their stability limit the default
     # ran 3s, which blew up (status non_finite at step 165 in an audit) with no reason recorded.
     q0, p0 = start(chain2000)
-    with pytest.raises(ValueError, match=r"^h: h omega_max = 2\.4 >= 2 .*take h < 1$"):
+    with pytest.raises(ValueError, match=r"^h: h omega_max may reach h sqrt\(spectral_bound\) = 2\.4 >= 2 .*take h < 1, or name the method"):
         raydamp.integrate(chain2000, q0, p0, h=1.2, n_steps=200, temperature=0.1, seed=1)
     sol = raydamp.integrate(chain2000, q0, p0, h=0.5, n_steps=200, temperature=0.1, seed=1)
     assert sol.success and sol.method == "3s"
@@ -139,3 +139,24 @@ def test_an_ensemble_chooses_as_integrate_does(chain2000):
     np.testing.assert_array_equal(ens.q_final[1], alone.q[-1])
     pendulums = raydamp.integrate_ensemble(DampedPendulum(eps=0.1), [[1.0], [2.0]], [0.0], h=0.1, n_steps=10)
     assert pendulums.method == "3s"
+
+
+def test_a_damping_flow_past_the_series_bound_makes_the_default_rks_midpoint():
+    # 60 modes, omega from 1 to 1e7: at h = 1.5e-7 and beta = 0.25, t beta L is about 4e6, past what a Chebyshev
+    # series of degree 8192 resolves. The default let that refusal through ("take a smaller h") where rks-midpoint,
+    # the choice for a long series, runs at any h rho (found in review).
+    omega = np.geomspace(1.0, 1e7, 60)
+    s = raydamp.LinearStructure(sparse.identity(60, format="csc"), sparse.diags(omega ** 2).tocsc(), alpha=0.0,
+                                beta=0.25)
+    with pytest.raises(ValueError, match="needs a Chebyshev degree above 8192"):
+        s.chebyshev_degrees(1.5e-7)
+    p0 = np.zeros(60)
+    p0[0] = 1.0
+    sol = raydamp.integrate(s, np.zeros(60), p0, h=1.5e-7, n_steps=10)
+    assert sol.success and (sol.method, sol.tableau) == ("rks", "midpoint")
+    assert "degree above 8192" in sol.provenance["method_reason"]
+    assert abs(sol.p[-1, 0] - np.exp(-0.25 * 1.5e-6)) < 1e-9
+    # advise let the same refusal through; such a method's row now says "series" and is not recommended.
+    advice = raydamp.advise(s, t_end=1e-5, tolerance=1e-6, measure=False)
+    assert advice.row("3s").limited_by == "series" and advice.row("3s").seconds == float("inf")
+    assert advice.recommended.label != "3s"

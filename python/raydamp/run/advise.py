@@ -75,7 +75,8 @@ class MethodAdvice:
     order: int
     h_max: float              # stability limit (inf: A-stable; 0: unstable at every step tried)
     h: float                  # the step it would take for the tolerance (nan when it cannot run)
-    limited_by: str           # "tolerance", "stability", "unstable" or "steps" (more than integrate runs)
+    limited_by: str           # "tolerance", "stability", "unstable", "steps" (more than integrate runs) or "series"
+    #                           (its damping flow over h needs a Chebyshev series past degree 8192: not run)
     steps: int
     error: float              # predicted error at h
     h_rho: float              # h (alpha + beta L): the damping's stiffness over one step
@@ -207,7 +208,12 @@ def advise(structure: Model, t_end: float, tolerance: float, *, omega: float | N
                                      math.nan, math.nan, math.inf))
             continue
         h = t_end / steps
-        degree = max(structure.chebyshev_degrees(h)) if method in ("3s", "2s") and structure.eps else None
+        try:
+            degree = max(structure.chebyshev_degrees(h)) if method in ("3s", "2s") and structure.eps else None
+        except ValueError:  # the damping flow over h is past the Chebyshev series' degree bound: 3s and 2s refuse it
+            rows.append(MethodAdvice(method, tableau, order, h_max, h, "series", steps, math.nan, math.nan, None,
+                                     math.nan, math.nan, math.inf))
+            continue
         per_step, setup = _trial(structure, method, tableau, h) if measure else (math.nan, math.nan)
         seconds = setup + steps * per_step if measure else float(steps)
         rows.append(MethodAdvice(method, tableau, order, h_max, h, limited, steps,
@@ -301,8 +307,13 @@ def _modal_copies(structure: LinearStructure, frequencies: np.ndarray) -> list[L
 def _stable_copy(modal: LinearStructure, method: str, tableau: str | None, h: float) -> bool:
     """No mode of the modal copy grows over one step of method at h."""
     ones, zeros = np.ones(modal.dim), np.zeros(modal.dim)
-    a = integrate(modal, ones, zeros, method=method, tableau=tableau, h=h, n_steps=1)
-    b = integrate(modal, zeros, ones, method=method, tableau=tableau, h=h, n_steps=1)
+    try:
+        a = integrate(modal, ones, zeros, method=method, tableau=tableau, h=h, n_steps=1)
+        b = integrate(modal, zeros, ones, method=method, tableau=tableau, h=h, n_steps=1)
+    except ValueError as error:  # a damping flow past the Chebyshev series' degree bound: not usable at h
+        if "Chebyshev degree" in str(error):
+            return False
+        raise
     if not (a.success and b.success):
         return False
     # mode i's step matrix [[a_q, b_q], [a_p, b_p]]: eigenvalues (a_q + b_p)/2 +- sqrt(((a_q - b_p)/2)^2

@@ -66,22 +66,27 @@ def choose_method(model, method: str | None, tableau, composition, h: float, the
     omega_max = math.sqrt(model.spectral_bound)
     if thermal:
         # Every method with exact noise flows is explicit: past their stability limit none can run (3s ran and
-        # blew up, as if the caller had named it).
+        # blew up, as if the caller had named it). spectral_bound is an upper bound of omega_max^2 (by up to
+        # about 12%): an h just below 2 / omega_max may run, named.
         if h * omega_max >= 2.0:
-            raise ValueError(f"h: h omega_max = {h * omega_max:.4g} >= 2 (omega_max^2 <= spectral_bound = "
-                             f"{model.spectral_bound:.6g}): at a temperature the methods that run (3s, 2s, baoab, "
-                             f"with exact noise flows) are explicit and unstable there; take h < {2 / omega_max:.6g}")
+            raise ValueError(f"h: h omega_max may reach h sqrt(spectral_bound) = {h * omega_max:.4g} >= 2 "
+                             f"(spectral_bound = {model.spectral_bound:.6g} >= omega_max^2): at a temperature the "
+                             "methods that run (3s, 2s, baoab, with exact noise flows) are explicit and unstable "
+                             f"there; take h < {2 / omega_max:.6g}, or name the method to run at this h")
         return Choice(DEFAULT_METHOD, None, f"3s: the default at a temperature (OABAO, exact noise flows); h omega_max "
                                             f"= {h * omega_max:.4g} < 2")
     if h * omega_max >= 2.0:
         return Choice("midpoint", None, f"midpoint: h omega_max = {h * omega_max:.4g} >= 2 (omega_max^2 <= "
                                         f"spectral_bound = {model.spectral_bound:.6g}), beyond the stability limit "
                                         "of 3s and every explicit method; midpoint is A-stable, order 2")
-    degree = max(model.chebyshev_degrees(h))
+    try:
+        degree = max(model.chebyshev_degrees(h))
+    except ValueError:  # a flow past the series' degree bound: 3s cannot run at this h, rks-midpoint can
+        degree = math.inf
     limit = DEGREE_LIMIT[model.mass_kind]
     if degree >= limit:
         return Choice("rks", "midpoint", f"rks with tableau midpoint: 3s's beta K damping flow over h would be a "
-                                         f"Chebyshev series of degree {degree} (h rho = "
+                                         f"Chebyshev series of degree {degree if degree < math.inf else 'above 8192'} (h rho = "
                                          f"{h * model.damping_rate_bound:.4g}; from {limit} on, with a {model.mass_kind} "
                                          "M, it costs more per step than rks-midpoint's one sparse solve, at the "
                                          "same stability limit and error)")

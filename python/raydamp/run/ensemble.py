@@ -126,7 +126,7 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
         raise ValueError(f"system must be a raydamp model or System, got {system!r}")
     names, with_tableau = _catalogue()
     method, tableau, method_reason = choose_method(system, method, tableau, composition, h,
-                                                   thermal=temperature is not None and temperature != 0)
+                                                   thermal=temperature is not None and real("temperature", temperature, nonnegative=True) > 0)
     if not isinstance(method, str) or method not in names:
         raise ValueError(f"method: unknown method {method!r} (known: {', '.join(names)})")
     if tableau is not None and not isinstance(tableau, str):
