@@ -389,6 +389,12 @@ def test_the_temperatures_of_a_member_and_of_a_loaded_run_rebuild_its_model(tmp_
     alone.save(tmp_path / "run.nc")
     loaded = raydamp.load(tmp_path / "run.nc")
     assert kinetic_temperature(loaded, burn_in=20) == kinetic_temperature(alone, burn_in=20)
+    # The summaries too: a member's and a loaded run's said None (no model at hand), as if run without noise.
+    expected = alone.summary()["kinetic_temperature"]
+    assert expected is not None
+    assert member.summary()["kinetic_temperature"] == pytest.approx(expected, rel=1e-14)
+    assert loaded.summary()["kinetic_temperature"] == pytest.approx(expected, rel=1e-14)
+    assert ens.member(0).summary()["kinetic_temperature"] != pytest.approx(expected, rel=1e-3)
 
 
 def test_a_seed_or_stream_without_a_temperature_is_refused_naming_it():

@@ -23,14 +23,22 @@ def kinetic_temperature_of(model, p: np.ndarray) -> float:
 
 def summary_kinetic_temperature(solution) -> float | None:
     """The kinetic temperature over the second half of a run's saved points (the first half is its
-    burn-in), at most SUMMARY_ROWS of them evenly spaced; None for a run without noise, one that saved
-    only some coordinates, or a loaded solution (its model is not at hand)."""
-    if not isinstance(solution.origin, tuple) or solution.origin[3].get("thermal") is None:
+    burn-in), at most SUMMARY_ROWS of them evenly spaced; None for a run without noise, or one that saved
+    only some coordinates. An ensemble's member or a loaded run reads its temperature and model from its
+    provenance (None when the model cannot be rebuilt, as a structure whose uploaded files are not at hand)."""
+    origin = solution.origin
+    if isinstance(origin, tuple):
+        noisy = origin[3].get("thermal") is not None
+    else:
+        noisy = isinstance(origin, dict) and bool(origin.get("temperature"))
+    if not noisy or solution.dofs is not None:
         return None
-    if solution.dofs is not None:
+    try:
+        model = solution._model("kinetic_temperature")
+    except ValueError:
         return None
     t = solution.t
     rows = np.flatnonzero(t >= t[0] + 0.5 * (t[-1] - t[0]))
     if rows.size > SUMMARY_ROWS:
         rows = rows[np.linspace(0, rows.size - 1, SUMMARY_ROWS).round().astype(int)]
-    return kinetic_temperature_of(solution.origin[0], solution.p[rows])
+    return kinetic_temperature_of(model, solution.p[rows])
