@@ -148,7 +148,7 @@ def test_a_damping_flow_past_the_series_bound_makes_the_default_rks_midpoint():
     omega = np.geomspace(1.0, 1e7, 60)
     s = raydamp.LinearStructure(sparse.identity(60, format="csc"), sparse.diags(omega ** 2).tocsc(), alpha=0.0,
                                 beta=0.25)
-    with pytest.raises(ValueError, match="needs a Chebyshev degree above 8192"):
+    with pytest.raises(raydamp.ChebyshevDegreeError, match="needs a Chebyshev degree above 8192"):
         s.chebyshev_degrees(1.5e-7)
     p0 = np.zeros(60)
     p0[0] = 1.0

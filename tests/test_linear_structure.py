@@ -165,8 +165,16 @@ def test_a_steep_damping_flow_keeps_the_lowest_mode(method):
 def test_a_damping_flow_past_the_degree_bound_is_refused_naming_h():
     # The same spectrum with ten times the damping: t beta L = 1.6e7 needs more than 8192 degrees.
     s = _wide_spectrum(beta=1.0)
-    with pytest.raises(ValueError, match="needs a Chebyshev degree above 8192.*smaller h"):
+    with pytest.raises(raydamp.ChebyshevDegreeError, match="needs a Chebyshev degree above 8192.*smaller h"):
         raydamp.integrate(s, np.zeros(60), np.ones(60), method="baoab", h=1.5 / 1e7, n_steps=10)
+    assert issubclass(raydamp.ChebyshevDegreeError, ValueError)
+    # An ensemble's member keeps the type under its number (choose_method and advise tell the refusal by it).
+    with pytest.raises(raydamp.ChebyshevDegreeError, match="^member 0: damping flow: needs a Chebyshev degree"):
+        raydamp.integrate_ensemble(s, np.zeros((2, 60)), np.ones((2, 60)), method="3s", h=1.5 / 1e7, n_steps=10)
+    # Other refusals stay plain ValueErrors.
+    with pytest.raises(ValueError) as refused:
+        raydamp.integrate(s, np.zeros(60), np.ones(60), method="3s", h=-1.0, n_steps=10)
+    assert not isinstance(refused.value, raydamp.ChebyshevDegreeError)
 
 # -- the plate: order, energy balance, modal solution ------------------------------------------------
 

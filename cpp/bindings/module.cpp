@@ -3,11 +3,15 @@
 
 #include <stdexcept>
 
+#include "raydamp/damping/chebyshev.hpp"
+
 namespace py = pybind11;
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "raydamp's compiled core (private: use the raydamp package)";
   m.attr("__version__") = RAYDAMP_VERSION;
+  // Named in Python as raydamp.ChebyshevDegreeError (documented there).
+  py::register_exception<raydamp::ChebyshevDegreeError>(m, "ChebyshevDegreeError", PyExc_ValueError);
   raydamp::bindings::bind_catalogue(m);
   raydamp::bindings::bind_load(m);
   raydamp::bindings::bind_models(m);

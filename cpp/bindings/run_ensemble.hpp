@@ -101,14 +101,14 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
       try {
         built.push_back(with_parameters(*model, slots, values.data(i, 0)));
       } catch (const std::invalid_argument& e) {
-        throw std::invalid_argument("member " + std::to_string(i) + ": parameters." + e.what());
+        rethrow_prefixed("member " + std::to_string(i) + ": parameters.", e);
       }
       model = &built.back();
     }
     try {
       require_applicable(entry, model->eps);
     } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument("member " + std::to_string(i) + ": " + e.what());
+      rethrow_prefixed("member " + std::to_string(i) + ": ", e);
     }
     member_model[i] = model;
   }
@@ -209,7 +209,7 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
           member_spec.stream = first_stream + static_cast<std::uint64_t>(i);
           store(i, integrate_model<Method>(*member_model[i], tab, comp, initial(i), member_spec, member_control));
         } catch (const std::invalid_argument& e) {
-          throw std::invalid_argument("member " + std::to_string(i) + ": " + e.what());
+          rethrow_prefixed("member " + std::to_string(i) + ": ", e);
         }
       };
       if (lanes && loaded) {  // the lanes' step has no clock: one by one

@@ -66,7 +66,7 @@ void run_lanes(const DampedPendulum& member, const LaneBatch& batch, const Butch
     try {
       check_amplification<Method>(member, Vector<1>(q0[i]), tab, comp, spec.h);
     } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument("member " + std::to_string(i) + ": " + e.what());
+      rethrow_prefixed("member " + std::to_string(i) + ": ", e);
     }
   }
   const PendulumLanes model(member, lanes, vector_sine);

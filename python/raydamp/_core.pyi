@@ -5,9 +5,10 @@ from __future__ import annotations
 import collections.abc
 import numpy
 import numpy.typing
+from raydamp import ChebyshevDegreeError
 import scipy.sparse
 import typing
-__all__: list[str] = ['CancelToken', 'Chain', 'DampedPendulum', 'ElasticPendulum', 'LinearStructure_consistent', 'LinearStructure_lumped', 'Load', 'MAX_AMPLIFICATION', 'System_dense_constant', 'System_dense_dampers', 'System_dense_isotropic', 'System_scalar_constant', 'System_scalar_dampers', 'System_scalar_isotropic', 'compositions', 'define_tableau', 'methods', 'models', 'resolve', 'resolve_composition', 'splitting', 'tableaux']
+__all__: list[str] = ['CancelToken', 'Chain', 'ChebyshevDegreeError', 'DampedPendulum', 'ElasticPendulum', 'LinearStructure_consistent', 'LinearStructure_lumped', 'Load', 'MAX_AMPLIFICATION', 'System_dense_constant', 'System_dense_dampers', 'System_dense_isotropic', 'System_scalar_constant', 'System_scalar_dampers', 'System_scalar_isotropic', 'compositions', 'define_tableau', 'methods', 'models', 'resolve', 'resolve_composition', 'splitting', 'tableaux']
 class Load:
     def __init__(self, n: typing.SupportsInt | typing.SupportsIndex, terms: list, owners: typing.Any = None) -> None:
         ...

@@ -30,6 +30,8 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
+from ..systems.series import ChebyshevDegreeError
+
 __all__ = ["DEFAULT_METHOD", "DEGREE_LIMIT", "Choice", "choose_method"]
 
 DEFAULT_METHOD = "3s"
@@ -81,7 +83,7 @@ def choose_method(model, method: str | None, tableau, composition, h: float, the
                                         "of 3s and every explicit method; midpoint is A-stable, order 2")
     try:
         degree = max(model.chebyshev_degrees(h))
-    except ValueError:  # a flow past the series' degree bound: 3s cannot run at this h, rks-midpoint can
+    except ChebyshevDegreeError:  # a flow past the series' degree bound: 3s cannot run at this h, rks-midpoint can
         degree = math.inf
     limit = DEGREE_LIMIT[model.mass_kind]
     if degree >= limit:

@@ -191,7 +191,8 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
                                           save_every, work, progress, cancel, save_dofs=[] if dofs is None else dofs,
                                           load=core_load, temperature=kT, seed=seed, stream=stream)
     except ValueError as error:  # the core names the method it runs ("rk" for "rk4"): the caller's name here
-        raise ValueError(re.sub(r"^temperature: method '[^']*'", f"temperature: method {method!r}", str(error))) \
+        # of the same type (a ChebyshevDegreeError stays one)
+        raise type(error)(re.sub(r"^temperature: method '[^']*'", f"temperature: method {method!r}", str(error))) \
             from None
     wall = time.perf_counter() - start
     message = out["message"]

@@ -253,7 +253,8 @@ class LinearStructure(SharedModel):
         return self._core_model.damping_rate_bound
 
     def chebyshev_degrees(self, t: float) -> tuple[int, int]:
-        """(degree of exp(-t C M^{-1}), degree of t phi1(-t C M^{-1})): products with K per flow of length t."""
+        """(degree of exp(-t C M^{-1}), degree of t phi1(-t C M^{-1})): products with K per flow of length t.
+        Raises :class:`raydamp.ChebyshevDegreeError` past degree 8192 (t beta lambda_max above about 1e7)."""
         return tuple(self._core_model.chebyshev_degrees(real("t", t)))
 
     # -- the plain form -------------------------------------------------------

@@ -23,6 +23,19 @@ namespace raydamp {
 inline constexpr double kChebyshevTolerance = 1e-13;
 inline constexpr int kMaxChebyshevDegree = 8192;
 
+// A flow whose series needs more than kMaxChebyshevDegree terms at this sub-step length (t beta lambda_max
+// above about 1e7): raydamp.ChebyshevDegreeError in Python, a ValueError that choose_method and advise tell
+// apart from other refusals (the step is too long for 3s, 2s and baoab on this structure, not invalid).
+struct ChebyshevDegreeError : std::invalid_argument {
+  using std::invalid_argument::invalid_argument;
+};
+
+// Rethrows e with a prefix (a member's number), keeping its type.
+[[noreturn]] inline void rethrow_prefixed(const std::string& prefix, const std::invalid_argument& e) {
+  if (dynamic_cast<const ChebyshevDegreeError*>(&e)) throw ChebyshevDegreeError(prefix + e.what());
+  throw std::invalid_argument(prefix + e.what());
+}
+
 struct ChebyshevSeries {
   std::vector<double> c;  // c_0 .. c_degree (c_0 already halved)
   double scale = 0.0;     // max |f| at the sample points
@@ -55,7 +68,7 @@ inline std::vector<double> chebyshev_interpolant(const std::vector<double>& valu
 }
 
 [[noreturn]] inline void refuse_degree(const char* what) {
-  throw std::invalid_argument(std::string(what) + ": needs a Chebyshev degree above " +
+  throw ChebyshevDegreeError(std::string(what) + ": needs a Chebyshev degree above " +
                               std::to_string(kMaxChebyshevDegree) + " (t beta lambda_max too large); take a smaller h");
 }
 
