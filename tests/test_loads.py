@@ -214,3 +214,39 @@ def test_ground_motion_on_a_ten_storey_frame_matches_the_exact_response():
     v = np.linalg.solve(M, sol.p.T).T
     np.testing.assert_allclose(acc, -np.linalg.solve(M, (K @ sol.q.T + (alpha * M + beta * K) @ v.T)).T,
                                rtol=1e-9, atol=1e-9 * np.max(np.abs(acc)))
+
+
+def test_a_loaded_file_and_an_ensemble_member_keep_their_load(tmp_path):
+    # Their load was None: load_values() gave zeros and absolute_acceleration() said "this run had no ground
+    # motion" (a numbers audit). It is rebuilt from the provenance, as the model is.
+    M, K, alpha, beta = shear_frame()
+    model = raydamp.LinearStructure(M, K, alpha=alpha, beta=beta)
+    t_rec, a_g = synthetic_record(seconds=2.0, dt=0.01)
+    motion = raydamp.GroundMotion((t_rec, a_g), np.ones(10), factor=9.81)
+    sol = raydamp.integrate(model, np.zeros(10), np.zeros(10), method="gauss4", h=0.01, t_end=2.0, save_every=5,
+                            load=motion)
+    forces, absolute = sol.load_values(), sol.absolute_acceleration()
+    assert np.max(np.abs(forces)) > 1.0
+    for suffix in ("nc", "npz"):
+        sol.save(tmp_path / f"run.{suffix}")
+        loaded = raydamp.load(tmp_path / f"run.{suffix}")
+        np.testing.assert_allclose(loaded.load_values(), forces, rtol=1e-14, atol=0)
+        np.testing.assert_allclose(loaded.absolute_acceleration(), absolute, rtol=1e-12,
+                                   atol=1e-12 * np.max(np.abs(absolute)))
+    # Members with their own load amplitude: each member's load is its own.
+    harmonic = raydamp.Load.harmonic(np.ones(10), 3.0)
+    ens = raydamp.integrate_ensemble(model, np.zeros(10), np.zeros(10), method="3s", h=0.01, t_end=1.0,
+                                     load=harmonic, parameters={"load.amplitude": [1.0, 2.5]})
+    for i, amplitude in enumerate((1.0, 2.5)):
+        alone = raydamp.integrate(model, np.zeros(10), np.zeros(10), method="3s", h=0.01, t_end=1.0,
+                                  load=harmonic.with_parameters(amplitude=amplitude))
+        np.testing.assert_array_equal(ens.member(i).load_values(), alone.load_values())
+    # A load that cannot be rebuilt (a record uploaded to the service, named by its id) is an error saying so.
+    import dataclasses
+
+    spec = {**sol.provenance, "load": {"file": {"id": "5f0c", "direction": [1.0] * 10}}}
+    uploaded = dataclasses.replace(sol, load=None, origin=spec)
+    assert uploaded.load is None
+    for what in ("load_values", "absolute_acceleration"):
+        with pytest.raises(ValueError, match=f"^{what}: the run's load could not be rebuilt from its provenance"):
+            getattr(uploaded, what)()

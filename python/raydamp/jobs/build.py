@@ -165,16 +165,22 @@ def planned_steps(spec: JobSpec) -> int:
 
 def job_load(spec: JobSpec, files: FileResolver | None = None):
     """The job's load (its "load" plus its "ground_motion"), or None; a JobError names the path."""
+    try:
+        return load_from(spec.load, spec.ground_motion, files)
+    except ValueError as error:
+        raise JobError(head_path(str(error)), str(error)) from None
+
+
+def load_from(load: Any, ground_motion: Any, files: FileResolver | None = None):
+    """The load of a job's "load" and "ground_motion" JSON (either may be None), or None; a ValueError names
+    the path."""
     from ..loads import GroundMotion, Load
 
     parts = []
-    try:
-        if spec.load is not None:
-            parts.append(Load.from_dict(spec.load, name="load", files=files))
-        if spec.ground_motion is not None:
-            parts.append(GroundMotion.from_dict(spec.ground_motion, files=files))
-    except ValueError as error:
-        raise JobError(head_path(str(error)), str(error)) from None
+    if load is not None:
+        parts.append(Load.from_dict(load, name="load", files=files))
+    if ground_motion is not None:
+        parts.append(GroundMotion.from_dict(ground_motion, files=files))
     return sum(parts) if parts else None
 
 

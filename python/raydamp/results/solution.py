@@ -43,7 +43,8 @@ class Solution:
     work : (N,) damping work W(t) if the run was asked for it (``work=True``), else None.
     load_work : (N,) the load's work W_f(t) = int f . qdot dt for a run with a load and ``work=True``,
         else None.
-    load : the run's :class:`raydamp.Load` (or GroundMotion), or None.
+    load : the run's :class:`raydamp.Load` (or GroundMotion), or None; a loaded file's and an
+        ensemble member's are rebuilt from the provenance.
     dofs : the indices of the saved coordinates when the run saved only some (``save_dofs``),
         else None.
     composition : the composition the method was raised to higher order with, or None.
@@ -80,6 +81,25 @@ class Solution:
     # (model, q0, p0, options) of the run, turned into `provenance` when asked for (cheap
     # runs stay cheap); or the provenance dict itself, for a loaded solution.
     origin: Any = field(default=None, compare=False)
+
+    def __post_init__(self) -> None:
+        # A loaded file's or an ensemble member's load, rebuilt from its provenance as _model rebuilds the model:
+        # without it load_values() gave zeros and absolute_acceleration() said the run had no ground motion.
+        origin = self.origin
+        if self.load is None and isinstance(origin, dict) and (origin.get("load") or origin.get("ground_motion")):
+            from ..jobs.build import load_from
+
+            try:
+                object.__setattr__(self, "load", load_from(origin.get("load"), origin.get("ground_motion")))
+            except (ValueError, OSError) as error:  # a record file gone, an uploaded file (the service's)
+                object.__setattr__(self, "_load_missing", f"{type(error).__name__}: {error}")
+
+    def _run_load(self, what: str):
+        """The run's load (None: it had none); a ValueError when it had one that could not be rebuilt."""
+        missing = getattr(self, "_load_missing", None)
+        if self.load is None and missing is not None:
+            raise ValueError(f"{what}: the run's load could not be rebuilt from its provenance ({missing})")
+        return self.load
 
     @property
     def provenance(self) -> dict[str, Any] | None:
@@ -163,27 +183,29 @@ class Solution:
     def load_values(self) -> np.ndarray:
         """f(t) at the saved times, (N, n) over every coordinate (zeros without a load)."""
         model = self._model("load_values")
-        if self.load is None:
+        load = self._run_load("load_values")
+        if load is None:
             return np.zeros((self.t.size, model.dim))
-        return self.load.values(model, self.t)
+        return load.values(model, self.t)
 
     def absolute_acceleration(self) -> np.ndarray:
         """Under a ground motion: the absolute acceleration q''(t) + r a_g(t) at the saved times,
         (N, n), with q'' = M^{-1} (f(t) - grad V(q) - eps D M^{-1} p) from the saved state (a run
         saving every coordinate)."""
         model = self._model("absolute_acceleration")
-        if self.load is None or not getattr(self.load, "is_ground_motion", False):
+        load = self._run_load("absolute_acceleration")
+        if load is None or not getattr(load, "is_ground_motion", False):
             raise ValueError("absolute_acceleration: this run had no ground motion")
         if self.dofs is not None:
             raise ValueError("absolute_acceleration: needs every coordinate saved (save_dofs=None)")
-        f = self.load.values(model, self.t)
+        f = load.values(model, self.t)
         core = model._core_model
         out = np.empty_like(self.q)
         for k in range(self.t.size):
             force = f[k] - np.asarray(core.gradient(self.q[k])).ravel() - np.asarray(
                 core.damping_rate(self.q[k], self.p[k])).ravel()
             out[k] = np.asarray(core.velocity(force)).ravel()
-        return out + self.load.ground_part().values(model, self.t)
+        return out + load.ground_part().values(model, self.t)
 
     def _model(self, what: str):
         """The run's model: its own, or rebuilt from the provenance (a loaded file, an ensemble's member)."""
