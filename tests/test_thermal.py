@@ -178,8 +178,14 @@ def test_kinetic_temperature_of_an_oscillator_matches_the_discrete_value(method)
     p2m = ens.p_final[:, 0] ** 2 / m
     exact = S[1, 1] / m
     assert abs(p2m.mean() - exact) <= 4 * p2m.std() / np.sqrt(members)
-    if method == "3s":  # 3s's saved momentum is sampled at kT exactly (its last sub-flow is the OU flow)
-        assert exact == pytest.approx(kT, rel=1e-12)
+    # The README's figures: 3s samples p at kT exactly (its last sub-flow is the OU flow) and q at
+    # kT/k (1 - (h omega)^2 / 4); baoab the mirror image.
+    shrunk = 1 - (h * np.sqrt(k / m)) ** 2 / 4
+    exact_p, exact_q = (kT, kT / k * shrunk) if method == "3s" else (kT * shrunk, kT / k)
+    assert exact == pytest.approx(exact_p, rel=1e-12)
+    assert S[0, 0] == pytest.approx(exact_q, rel=1e-12)
+    q2 = ens.q_final[:, 0] ** 2
+    assert abs(q2.mean() - exact_q) <= 4 * q2.std() / np.sqrt(members)
 
 
 def test_same_seed_same_run_and_members_equal_their_single_runs():

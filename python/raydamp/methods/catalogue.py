@@ -50,7 +50,8 @@ def methods() -> list[MethodInfo]:
     tableau they accept; ``default`` marks the one used when ``tableau=None``;
     ``damped`` is False for 'sv', which refuses models with eps > 0;
     ``symmetric`` marks the symmetric order-2 steps a composition can raise to
-    higher order (see :func:`compositions`).
+    higher order (see :func:`compositions`): 'gauss4' is symmetric (time-reversible)
+    too, but of order 4, which none of the compositions' coefficients are made for.
     Orders are computed from the tableau's order conditions, not typed in.
     'midpoint' and 'gauss4' are implicit steps of a :class:`raydamp.LinearStructure`'s
     whole linear system and run that kind only (:func:`linear_structure_methods`).
