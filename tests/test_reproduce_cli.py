@@ -32,3 +32,21 @@ def test_reproduce_quick_writes_figures_and_report(tmp_path):
 def test_cli_needs_a_command():
     run = subprocess.run([sys.executable, "-m", "raydamp"], capture_output=True, text=True, timeout=60)
     assert run.returncode == 2 and "reproduce" in run.stderr
+
+
+def test_a_failed_claim_that_is_not_the_papers_makes_the_exit_status_1(tmp_path, monkeypatch, capsys):
+    # It exited 0 whatever failed: a script or CI could not tell a claim the code no longer meets.
+    import raydamp.reproduce
+    from raydamp.cli.commands import main
+    from raydamp.reproduce.claims import Claim
+
+    papers = Claim("Sec. 6.2 (data)", "the data is an equilibrium", "k = 1: 0.3", "< 1e-12", False, paper_error=True)
+    ours = Claim("Fig. 1", "dissipation hardly depends on h", "spread 0.2", "< 0.05", False)
+    held = Claim("Fig. 2", "order 2", "2.0", "within 0.1", True)
+    for claims, status in (([held, papers], 0), ([held, papers, ours], 1), ([held], 0)):
+        monkeypatch.setattr(raydamp.reproduce, "run", lambda out, quick, progress, claims=claims: claims)
+        assert main(["reproduce", "--out", str(tmp_path / "out"), "--no-progress"]) == status
+        printed = capsys.readouterr().out
+        assert f"{sum(c.passed for c in claims)} of {len(claims)} claims hold" in printed
+        assert ("FAIL Fig. 1: dissipation hardly depends on h\n" in printed) == (ours in claims)
+        assert ("FAIL Sec. 6.2 (data): the data is an equilibrium (the paper's" in printed) == (papers in claims)

@@ -110,7 +110,10 @@ def main(argv: list[str] | None = None) -> int:
         failed = [c for c in claims if not c.passed]
         print(f"{len(claims) - len(failed)} of {len(claims)} claims hold; report: {args.out}/REPORT.md")
         for c in failed:
-            print(f"  FAIL {c.where}: {c.claim}")
+            print(f"  FAIL {c.where}: {c.claim}" + (" (the paper's; the report's note explains it)"
+                                                    if c.paper_error else ""))
+        # A script or CI running it learns of a claim the code no longer meets from the exit status.
+        return 1 if any(not c.paper_error for c in failed) else 0
     return 0
 
 
