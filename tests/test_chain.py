@@ -209,6 +209,22 @@ def test_json_round_trip_and_mode_start():
     assert sol.q.shape == (11, 2)
 
 
+def test_an_undamped_chain_runs_again_from_its_provenance_and_sweeps():
+    # Chain.to_dict() writes an undamped chain's dampers as {}, which the job schema refused ("system.dampers.c:
+    # missing"): its provenance could not rebuild it, nor could check_sweep or sweep take it (an API audit).
+    chain = Chain(8, bond="fput", parameters={"alpha": 0.25})
+    q0, p0 = chain.normal_mode(1)
+    sol = raydamp.integrate(chain, q0, p0, h=0.1, n_steps=20)
+    assert sol.provenance["system"]["dampers"] == {}
+    model, q, p, options = job_arguments(sol.provenance)
+    np.testing.assert_array_equal(raydamp.integrate(model, q, p, **options).q, sol.q)
+    plan = raydamp.check_sweep({"model": chain, "q0": q0, "p0": p0, "h": 0.1, "n_steps": 20}, {"h": [0.1, 0.05]})
+    assert plan.members == 2
+    # With dampers, c is still required.
+    with pytest.raises(ValueError, match="system.dampers.c: missing"):
+        job_arguments({**sol.provenance, "system": {**sol.provenance["system"], "dampers": {"bonds": [2]}}})
+
+
 @pytest.mark.parametrize("kwargs, message", [
     ({"n": 10, "dampers": {"bonds": [11], "c": 0.1}}, r"dampers.bonds\[0\]: bond 11 is not in this fixed chain \(0..10\)"),
     ({"n": 10, "boundary": "free", "dampers": {"bonds": [0], "c": 0.1}}, r"dampers.bonds\[0\]: bond 0"),

@@ -133,8 +133,10 @@ class ChainDampers(Input):
                                                      description="damped bonds (bond b joins sites b-1 and b)")
     sites: Annotated[list[Annotated[int, Field(ge=0)]], indices(MAX_VECTOR)] = Field(default_factory=list, max_length=MAX_VECTOR,
                                                      description="sites with on-site friction")
-    c: FiniteFloat | Annotated[list[FiniteFloat], Field(max_length=2 * MAX_VECTOR), numbers(2 * MAX_VECTOR)] = Field(
-        description="the dashpot coefficient, or one per damper (bonds, then sites)")
+    # Optional for a chain without dampers ({} is Chain.to_dict()'s form of an undamped chain); required, by
+    # raydamp.Chain, once there are bonds or sites.
+    c: (FiniteFloat | Annotated[list[FiniteFloat], Field(max_length=2 * MAX_VECTOR), numbers(2 * MAX_VECTOR)]
+        | None) = Field(None, description="the dashpot coefficient, or one per damper (bonds, then sites)")
 
 
 class ChainOnSiteInput(Input):
