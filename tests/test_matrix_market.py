@@ -10,6 +10,7 @@ import pytest
 import scipy.io
 import scipy.sparse
 
+import raydamp
 from raydamp.systems.matrix_market import MatrixMarketHeader, read_header
 from raydamp.systems.structure import read_matrix
 
@@ -43,6 +44,21 @@ def test_a_header_announcing_more_than_the_file_holds_is_refused(tmp_path):
     # A general dense file stores rows x cols entries of at least 2 bytes each.
     with pytest.raises(ValueError, match="^matrix: the header announces 1000000 entries, more than a file of 57 bytes"):
         read_header(b"%%MatrixMarket matrix array real general\n1000 1000\n1\n2\n3\n")
+
+
+def test_a_huge_dimension_with_few_entries_is_refused_before_reading(tmp_path):
+    # 59 bytes announcing 10^11 x 10^11 with one entry: scipy went on to allocate 745 GiB of column pointers
+    # (a MemoryError, or the machine's memory) - an API audit.
+    huge = b"%%MatrixMarket matrix coordinate real general\n100000000000 100000000000 1\n1 1 1.0\n"
+    (tmp_path / "huge.mtx").write_bytes(huge)
+    with pytest.raises(ValueError, match=r"^M: the header announces a 100000000000 x 100000000000 matrix with 1 "
+                                          r"stored entries: mostly empty rows, whose column pointers alone would take "
+                                          r"745 GiB"):
+        raydamp.LinearStructure(str(tmp_path / "huge.mtx"), np.eye(2))
+    # Empty rows are allowed while their pointers stay small: 5 masses, one spring.
+    few = b"%%MatrixMarket matrix coordinate real symmetric\n5 5 1\n2 2 4.0\n"
+    assert read_header(few).shape == (5, 5)
+    assert read_matrix(io.BytesIO(few)).shape == (5, 5)
 
 
 def test_a_dense_symmetric_file_stores_its_lower_triangle():

@@ -16,6 +16,10 @@ from dataclasses import dataclass
 __all__ = ["MatrixMarketHeader", "read_header"]
 
 _MIN_LINE = {"coordinate": 4, "array": 2}  # the shortest line an entry can take, in bytes
+# A coordinate file's size bounds its entries, not its dimension: "10^11 x 10^11, 1 entry" in 59 bytes made the
+# sparse form's column pointers alone 745 GiB. A structure's M stores its diagonal and a mesh's K about as much,
+# so a dimension above twice the entries is mostly empty rows: allowed while the pointers stay small.
+_EMPTY_ROWS_ALLOWED = 10_000_000
 
 
 @dataclass(frozen=True)
@@ -68,5 +72,10 @@ def read_header(source, name: str = "matrix") -> MatrixMarketHeader:
     stored = _stored_entries(rows, cols, entries, layout, symmetry)
     if stored > size // _MIN_LINE[layout]:
         raise ValueError(f"{name}: the header announces {stored} entries, more than a file of {size} bytes can hold")
+    n = max(rows, cols)
+    if layout == "coordinate" and n > _EMPTY_ROWS_ALLOWED and n > 2 * stored:
+        raise ValueError(f"{name}: the header announces a {rows} x {cols} matrix with {stored} stored entries: mostly "
+                         f"empty rows, whose column pointers alone would take {8 * (n + 1) / 2**30:.3g} GiB (a "
+                         "structure's M stores its whole diagonal)")
     return MatrixMarketHeader(shape=(int(rows), int(cols)), entries=int(stored), layout=layout, field=field,
                               symmetry=symmetry)
