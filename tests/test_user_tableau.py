@@ -126,6 +126,8 @@ _DROP = object()
     ({"c": [0, 0.5, math.nan]}, r"tableau.c\[2\] must be finite"),
     ({"c": [0, 0.5]}, r"tableau.c must have 3 entries"),
     ({"b": []}, r"tableau.b must have 1 to 16 weights"),
+    # A short b beside 3 rows of A and 3 entries of c: it was "tableau.c must have 2 entries" (an API audit).
+    ({"b": [0.5, 0.5]}, r"^tableau.b must have 3 weights \(the number of stages"),
     ({"b": True}, r"tableau.b must be a list of numbers"),
     ({"c": _DROP}, r"tableau.c: missing"),
     ({"B": [1]}, r"tableau.B: unknown key"),

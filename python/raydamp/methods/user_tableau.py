@@ -37,8 +37,15 @@ def _row(path: str, value: Any, length: int | None) -> list[float]:
             raise ValueError(f"{path}[{i}] must be finite, got {float(entry)!r}")
         out.append(float(entry))
     if length is not None and len(out) != length:
-        raise ValueError(f"{path} must have {length} entries (the number of weights in b), got {len(out)}")
+        raise ValueError(f"{path} must have {length} entries (the number of stages), got {len(out)}")
     return out
+
+
+def _stages(tableau: Mapping[str, Any]) -> int:
+    """The number of stages: what two of len(A), len(b), len(c) agree on, else len(b). It was len(b) alone: a b
+    shorter than A and c was reported as a c too long."""
+    lengths = [len(tableau[key]) for key in ("b", "A", "c") if isinstance(tableau[key], (list, tuple, np.ndarray))]
+    return max(lengths, key=lengths.count) if lengths else 0
 
 
 def plain_tableau(tableau: Mapping[str, Any]) -> dict[str, Any]:
@@ -52,13 +59,16 @@ def plain_tableau(tableau: Mapping[str, Any]) -> dict[str, Any]:
     b = _row("tableau.b", tableau["b"], None)
     if not 1 <= len(b) <= MAX_STAGES:
         raise ValueError(f"tableau.b must have 1 to {MAX_STAGES} weights, got {len(b)}")
-    s = len(b)
+    s = _stages(tableau)
+    if len(b) != s:
+        raise ValueError(f"tableau.b must have {s} weights (the number of stages: the rows of A and the entries "
+                         f"of c), got {len(b)}")
     c = _row("tableau.c", tableau["c"], s)
     rows = tableau["A"]
     if isinstance(rows, np.ndarray):
         rows = rows.tolist()
     if not isinstance(rows, (list, tuple)) or len(rows) != s:
-        raise ValueError(f"tableau.A must be {s} rows of {s} numbers (s = len(b)), got {_short(rows)}")
+        raise ValueError(f"tableau.A must be {s} rows of {s} numbers (s = the number of stages), got {_short(rows)}")
     a = [_row(f"tableau.A[{i}]", row, s) for i, row in enumerate(rows)]
     plain: dict[str, Any] = {"A": a, "b": b, "c": c}
     if tableau.get("order") is not None:
