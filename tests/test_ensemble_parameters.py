@@ -60,6 +60,25 @@ def test_bool_vector_and_load_parameters_are_refused():
                                    load=raydamp.Load.harmonic([1.0], 1.0), parameters={"load.amplitude": [True, 2]})
 
 
+@pytest.mark.parametrize("values, shown", [(["0.1", "0.5"], "'0.1'"), (np.array(["0.1"]), "'0.1'"), ([b"0.1"], "b'0.1'"),
+                                           ([0.1, None], "None"), ([1 + 2j], r"\(1\+2j\)")],
+                         ids=["strings", "string-array", "bytes", "none", "complex"])
+def test_parameters_that_are_not_real_numbers_are_refused(values, shown):
+    # Strings were parsed as numbers ("0.1" ran as eps = 0.1) where integrate(eps="0.1") refuses them (API audit).
+    with pytest.raises(ValueError, match=rf"^parameters\.eps must be an array of real numbers, got {shown}"):
+        raydamp.integrate_ensemble(DampedPendulum(), [[0.5]] * len(values), [0.0], h=0.1, t_end=1,
+                                   parameters={"eps": values})
+
+
+def test_ragged_states_and_misshapen_vector_parameters_are_named():
+    # NumPy's "inhomogeneous shape" and "could not be broadcast" messages named no argument (API audit).
+    with pytest.raises(ValueError, match=r"^q0 must be an array of shape \(members, 1\) of real numbers, got rows"):
+        raydamp.integrate_ensemble(DampedPendulum(), [[1.0], [1.0, 2.0]], [0.0], h=0.1, n_steps=2)
+    with pytest.raises(ValueError, match=r"^parameters\.g must have shape \(1, 3\), got \(2,\)"):
+        raydamp.integrate_ensemble(ElasticPendulum(), [ELASTIC_Q0], [0.0, 0, 0], h=0.1, n_steps=2,
+                                   parameters={"g": [1.0, 2.0]})
+
+
 def test_load_parameters_on_a_load_with_no_terms_are_checked():
     # They were once ignored, unknown names included, and ens.parameters came back empty.
     with pytest.raises(ValueError, match=r"parameters\.load\.bogus: this load has no parameter 'bogus' "

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numbers
 import time
 from collections.abc import Callable, Mapping
 from typing import Any
@@ -9,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from .. import _core
-from .._validation import MAX_SEED, integer, real, thermal
+from .._validation import MAX_SEED, _short, integer, real, thermal
 from ..loads import Load
 from ..results.ensemble_solution import EnsembleSolution
 from ..systems.models import Model
@@ -61,7 +62,7 @@ def _parameter_arrays(system: Model, parameters, members: int) -> dict[str, np.n
                              f"{'' if known else '; its members differ by initial state: build one model per value'})")
         shape = (members,) if known[name] == 1 else (members, known[name])
         array = _floats(f"parameters.{name}", values, "an array of real numbers")
-        if array.ndim == len(shape) - 1:
+        if array.ndim == len(shape) - 1 and array.shape == shape[1:]:
             array = np.broadcast_to(array, shape)
         if array.shape != shape:
             raise ValueError(f"parameters.{name} must have shape {shape}, got {array.shape}")
@@ -139,8 +140,13 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
     n = system.dim
     members = None
     for name, value in (("q0", q0), ("p0", p0)):
-        if np.ndim(value) == 2:
-            members = np.shape(value)[0]
+        try:
+            shape = np.shape(value)
+        except ValueError:  # ragged: NumPy's "inhomogeneous shape" named no argument
+            raise ValueError(f"{name} must be an array of shape (members, {n}) of real numbers, got rows of "
+                             "different lengths") from None
+        if len(shape) == 2:
+            members = shape[0]
             break
     if load is not None and not isinstance(load, Load):
         raise ValueError(f"load must be a raydamp.Load or None, got {type(load).__name__}")
@@ -263,29 +269,35 @@ def _load_parameter_arrays(load: Load, varied: dict[str, Any], members: int) -> 
 
 
 def _floats(name: str, values, expected: str) -> np.ndarray:
-    """``values`` as a float array. Bools are refused, as integrate refuses eps=True: np.asarray would
-    read True as 1.0, and a mask passed by mistake would run as parameters."""
-    flag = _first_bool(values)
-    if flag is not None:
-        raise ValueError(f"{name} must be {expected}, got the bool {bool(flag)}")
+    """``values`` as a float array. Bools and strings are refused, as integrate refuses eps=True and
+    eps="0.1": np.asarray would read True as 1.0 (a mask passed by mistake would run as parameters) and
+    "0.1" as 0.1."""
+    odd = _first_non_number(values)
+    if odd is not _ALL_NUMBERS:
+        raise ValueError(f"{name} must be {expected}, got {'the bool ' if isinstance(odd, (bool, np.bool_)) else ''}"
+                         f"{_short(odd)}")
     try:
         return np.asarray(values, dtype=float)
     except (TypeError, ValueError):
         raise ValueError(f"{name} must be {expected}") from None
 
 
-def _first_bool(values):
-    """The first bool in ``values`` (a scalar, a nested list or an array), or None. A list mixing bools
-    and floats converts to floats, so the elements are looked at, not the converted dtype."""
+_ALL_NUMBERS = object()
+
+
+def _first_non_number(values):
+    """The first element of ``values`` (a scalar, a nested list or an array) that is a bool or not a real
+    number (None among them), or _ALL_NUMBERS. A list mixing bools and floats converts to floats, so the
+    elements are looked at, not the converted dtype."""
     if isinstance(values, np.ndarray) and values.dtype != object:
-        return values.flat[0] if values.dtype.kind == "b" and values.size else None
-    if isinstance(values, (bool, np.bool_)):
-        return values
+        return values.flat[0].item() if values.dtype.kind not in "iuf" and values.size else _ALL_NUMBERS
     try:
         elements = np.asarray(values, dtype=object)
     except (TypeError, ValueError):
-        return None  # ragged: the float conversion refuses it with the argument's name
-    return next((x for x in elements.flat if isinstance(x, (bool, np.bool_))), None)
+        return _ALL_NUMBERS  # ragged: the float conversion refuses it with the argument's name
+    odd = next((x for x in elements.flat if isinstance(x, (bool, np.bool_)) or not isinstance(x, numbers.Real)),
+               _ALL_NUMBERS)
+    return odd.item() if isinstance(odd, np.generic) else odd
 
 
 def _parameter_members(system: Model, parameters, load_parameters: dict[str, Any]) -> int | None:
