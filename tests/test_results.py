@@ -120,6 +120,10 @@ def test_plots_return_axes_with_the_data(elastic, orbit):
     pendulum = raydamp.integrate(DampedPendulum(), [1.0], [0.0], h=0.1, n_steps=10)
     with pytest.raises(ValueError, match=r"^projection: needs a system of at least two coordinates"):
         pendulum.plot.projection()
+    # A 3-D run that saved one coordinate: it said "a system of at least two coordinates" (API audit).
+    one = raydamp.integrate(ElasticPendulum(), [0, 1, 0], [1, 0, 0], h=0.1, n_steps=3, save_dofs=[2])
+    with pytest.raises(ValueError, match=r"^projection: the run saved one coordinate \(z, save_dofs\)"):
+        one.plot.projection()
     matplotlib.pyplot.close("all")
 
 

@@ -87,6 +87,9 @@ class SolutionPlots:
         """The path in the plane of two coordinates (names or indices), for 2-D and 3-D systems."""
         sol = self._sol
         if sol.q.shape[1] < 2:
+            if sol.dofs is not None:  # the system has more; the run saved one (it said "a system of one")
+                raise ValueError(f"projection: the run saved one coordinate ({sol.coordinates[0]}, save_dofs); "
+                                 "a projection needs two saved; use phase() for one")
             raise ValueError("projection: needs a system of at least two coordinates; use phase() for one")
         i, j = self._coordinate(x, "x"), self._coordinate(y, "y")
         ax = _axes(ax)
