@@ -202,6 +202,20 @@ def test_bad_damping_is_refused_naming_the_path(damping, path):
         raydamp.System(["x", "y"], "x^2", damping=damping, eps=0.1)
 
 
+def test_eps_without_damping_is_refused_naming_eps():
+    # It ran undamped, silently (energy kept to O(h^2) where the user asked for eps = 0.5; an API audit), as an
+    # ensemble's parameters.eps on such a system was already refused. eps = 0 stays the undamped default.
+    for build in (lambda eps: raydamp.System(1, "q0^2/2", eps=eps),
+                  lambda eps: raydamp.System.from_functions(1, potential=lambda q: 0.5 * q[0] ** 2,
+                                                            gradient=lambda q: q, eps=eps)):
+        with pytest.raises(ValueError, match=r"^eps: 0.5 given, but this system has no damping for it to scale"):
+            build(0.5)
+        assert build(0.0).eps == 0.0
+    with pytest.raises(ValueError, match=r"^system.eps: 0.5 given, but this system has no damping"):
+        raydamp.jobs.build.job_arguments({"system": {"coordinates": 1, "potential": "q0^2/2", "eps": 0.5}, "h": 0.1,
+                                          "n_steps": 3, "initial_state": {"q": [1.0], "p": [0.0]}})
+
+
 def test_configuration_dependent_mass_is_explained():
     with pytest.raises(ValueError, match=r"^mass: .*outside the class.*Cartesian coordinates"):
         raydamp.System(["a", "b"], "-cos(a) - cos(b)", mass=[["2", "cos(a-b)"], ["cos(a-b)", "1"]])

@@ -20,7 +20,8 @@ from typing import Any
 import numpy as np
 
 from .errors import SpecError
-from .spec import MAX_COORDINATES, MAX_DAMPERS, MAX_DENSE_DAMPING, MAX_MOMENTA, SystemSpec, _damping, _mass, _real
+from .spec import (MAX_COORDINATES, MAX_DAMPERS, MAX_DENSE_DAMPING, MAX_MOMENTA, SystemSpec, _damping, _mass, _real,
+                   damping_strength)
 
 __all__ = ["PythonFunctions", "build_from_functions"]
 
@@ -126,7 +127,7 @@ def build_from_functions(n, *, potential, gradient, mass=1.0, damping=None, eps=
         d_form, d_scalar, d_matrix = "dampers", 0.0, np.zeros((0, 0))
     else:
         d_form, d_scalar, d_matrix, _ = _damping(damping, n, m, {})
-    eps = _real(("eps",), eps, nonnegative=True)
+    eps = damping_strength(eps, d_form)
     momenta = dict(momenta or {})
     if len(momenta) > MAX_MOMENTA:
         raise SpecError(("momenta",), f"at most {MAX_MOMENTA} momentum maps")

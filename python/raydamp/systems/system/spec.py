@@ -231,6 +231,16 @@ def _damping(value, n: int, mass: np.ndarray, names) -> tuple[str | None, float,
     return form, 0.0, np.zeros((0, 0)), tuple(dampers)
 
 
+def damping_strength(eps, damping_form: str | None) -> float:
+    """eps, >= 0, and 0 for a system without damping: eps > 0 there ran undamped, silently (an ensemble's eps
+    on such a system was already refused)."""
+    eps = _real(("eps",), eps, nonnegative=True)
+    if eps and damping_form is None:
+        raise SpecError(("eps",), f"{eps!r} given, but this system has no damping for it to scale (damping is "
+                                  'None); give damping, e.g. {"scalar": 1.0} for D = M, or leave eps at 0')
+    return eps
+
+
 def normalise(*, coordinates, potential, parameters=None, mass=1.0, damping=None, eps=0.0, momenta=None,
               name=None) -> SystemSpec:
     """Validate a system description; raises SpecError naming the field."""
@@ -252,7 +262,7 @@ def normalise(*, coordinates, potential, parameters=None, mass=1.0, damping=None
     expr = _expression(("potential",), potential, names)
     m, mass_form = _mass(mass, n)
     d_form, d_scalar, d_matrix, dampers = _damping(damping, n, m, names)
-    eps = _real(("eps",), eps, nonnegative=True)
+    eps = damping_strength(eps, d_form)
     moms: dict[str, Expression] = {}
     if momenta is None:
         momenta = {}
