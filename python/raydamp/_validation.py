@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-import numbers
+from numbers import Integral, Real
 
 import numpy as np
 
@@ -24,7 +24,7 @@ def _short(value) -> str:
 def real(name: str, value, *, positive: bool = False, nonnegative: bool = False) -> float:
     # Exact-type fast path first: the ABC check costs microseconds on every short call.
     if type(value) is not float and type(value) is not int and (
-            isinstance(value, bool) or not isinstance(value, numbers.Real)):
+            isinstance(value, bool) or not isinstance(value, Real)):
         raise ValueError(f"{name} must be a real number, got {_short(value)}")
     x = float(value)
     if not math.isfinite(x):
@@ -39,7 +39,7 @@ def real(name: str, value, *, positive: bool = False, nonnegative: bool = False)
 def integer(name: str, value, *, minimum: int = 1, maximum: int | None = None) -> int:
     # 10.0 is refused like 10.5: a count given as a float is usually a computed value that was
     # meant to be rounded, and h=True is refused the same way.
-    if type(value) is not int and (isinstance(value, bool) or not isinstance(value, numbers.Integral)):
+    if type(value) is not int and (isinstance(value, bool) or not isinstance(value, Integral)):
         raise ValueError(f"{name} must be an integer, got {_short(value)}")
     if value < minimum:
         raise ValueError(f"{name} must be >= {minimum}, got {value}")
@@ -134,3 +134,26 @@ def steps_for(t_end: float, h: float) -> tuple[int, float]:
         n = max(1, math.ceil(ratio))
         h_last = t_end - (n - 1) * h
     return n, h_last
+
+
+def instance(name: str, value, kind, what: str):
+    """``value`` when it is a ``kind``; otherwise a ValueError naming ``name`` and ``what`` was expected
+    (a wrong object reached an attribute lookup or an index first: AttributeError, IndexError)."""
+    if not isinstance(value, kind):
+        raise ValueError(f"{name}: expected {what}, got {type(value).__name__}")
+    return value
+
+
+def real_array(name: str, value) -> np.ndarray:
+    """An array of real numbers of any shape (a scipy.sparse matrix made dense), as floats. Only numbers:
+    np.asarray(dtype=float) read "1" as 1.0, and failed on "x" or an object with a message naming nothing."""
+    if hasattr(value, "toarray") and type(value).__module__.startswith("scipy.sparse"):
+        value = value.toarray()
+    try:
+        array = np.asarray(value)
+    except (TypeError, ValueError):
+        array = None
+    if array is None or array.dtype.kind not in "iuf":
+        raise ValueError(f"{name} must be an array of real numbers, got {_short(value)}")
+    return array.astype(float)
+

@@ -6,7 +6,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._validation import _short, vector
+from .._validation import _short, instance, real, real_array, vector
 from ..loads import Load
 from ..results.solution import Solution
 from ..systems.models import Model
@@ -26,8 +26,10 @@ def reference_solution(model: Model, q0, p0, t_eval, *, load: Load | None = None
     finite, non-decreasing, from t = 0, ending after it)."""
     from scipy.integrate import solve_ivp
 
-    n = model.dim
+    n = _model(model).dim
     t_eval = _times(t_eval)
+    # SciPy takes them unchecked: a NaN, an inf or rtol = atol = 0 ran forever.
+    rtol, atol = real("rtol", rtol, positive=True), real("atol", atol, nonnegative=True)
     core = model._core_model
     if load is not None and not isinstance(load, Load):
         raise ValueError(f"load must be a raydamp.Load or None, got {type(load).__name__}")
@@ -50,6 +52,10 @@ def reference_solution(model: Model, q0, p0, t_eval, *, load: Load | None = None
     return ReferenceSolution(sol.t, q, p, energy)
 
 
+def _model(model) -> Model:
+    return instance("model", model, Model, "a raydamp model (e.g. raydamp.models.DampedPendulum())")
+
+
 def _times(t_eval) -> np.ndarray:
     try:
         t = np.asarray(t_eval, dtype=float)
@@ -65,8 +71,14 @@ def _times(t_eval) -> np.ndarray:
 def energy_error(model: Model, solution: Solution, reference: ReferenceSolution | None = None) -> np.ndarray:
     """H_num(t) - H_ref(t) at the solution's saved times; the reference, when not given, is driven by the
     solution's load too (without it, a forced run's "error" was the load's effect)."""
+    _model(model)
+    instance("solution", solution, Solution, "a raydamp.Solution")
     if reference is None:
+        if solution.dofs is not None:  # its first row is not the whole initial state
+            raise ValueError("solution: the reference needs every coordinate saved (save_dofs=None), or give "
+                             "reference=")
         reference = reference_solution(model, solution.q[0], solution.p[0], solution.t, load=solution.load)
+    instance("reference", reference, ReferenceSolution, "a ReferenceSolution (from reference_solution) or None")
     if reference.t.shape != solution.t.shape or not np.allclose(reference.t, solution.t, rtol=0, atol=1e-9):
         raise ValueError("reference: its times differ from the solution's saved times")
     return solution.energy - reference.energy
@@ -80,6 +92,19 @@ def modified_energy(model: Model, q, p, h: float) -> np.ndarray:
     from the symmetric BCH formula (paper Lemma 4.4 gives the form). Stormer-Verlet
     conserves it to O(h^4); 3s makes it decay monotonically at small h (Theorem 4.6).
     Rows of q and p are states."""
-    q = np.atleast_2d(np.asarray(q, dtype=float))
-    p = np.atleast_2d(np.asarray(p, dtype=float))
-    return np.asarray(model._core_model.modified_energy_sv(q, p, float(h)))
+    n = _model(model).dim
+    h = real("h", h, nonnegative=True)  # a NaN gave NaNs back
+    q, p = _states("q", q, n), _states("p", p, n)
+    if q.shape != p.shape:
+        raise ValueError(f"p: {p.shape[0]} rows of momenta for {q.shape[0]} rows of positions")
+    return np.asarray(model._core_model.modified_energy_sv(q, p, h))
+
+
+def _states(name: str, value, n: int) -> np.ndarray:
+    """Rows of ``n`` finite numbers ((rows, n), or one state (n,))."""
+    array = np.atleast_2d(real_array(name, value))
+    if array.ndim != 2 or array.shape[1] != n:
+        raise ValueError(f"{name} must have rows of {n} numbers for this model, got shape {np.shape(value)}")
+    if not np.isfinite(array).all():
+        raise ValueError(f"{name} must be finite")
+    return array

@@ -13,11 +13,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._validation import real_array
+
 __all__ = ["piecewise_linear_response"]
 
 
 def _square(name: str, value, n: int | None) -> np.ndarray:
-    matrix = np.atleast_2d(np.asarray(value, dtype=float))
+    matrix = np.atleast_2d(real_array(name, value))  # a scipy.sparse matrix made dense, as LinearStructure takes
     if matrix.ndim != 2 or matrix.shape[0] != matrix.shape[1] or (n is not None and matrix.shape[0] != n):
         size = "a square matrix" if n is None else f"an {n} x {n} matrix (or a number when n = 1)"
         raise ValueError(f"{name} must be {size}, got shape {np.shape(value)}")
@@ -27,7 +29,7 @@ def _square(name: str, value, n: int | None) -> np.ndarray:
 
 
 def _vector(name: str, value, n: int) -> np.ndarray:
-    out = np.atleast_1d(np.asarray(value, dtype=float))
+    out = np.atleast_1d(real_array(name, value))
     if out.shape != (n,) or not np.isfinite(out).all():
         raise ValueError(f"{name} must be {n} finite numbers, got shape {np.shape(value)}")
     return out
@@ -57,8 +59,8 @@ def piecewise_linear_response(M, C, K, direction, t, values, q0=None, p0=None) -
     n = M.shape[0]
     C, K = _square("C", C, n), _square("K", K, n)
     d = _vector("direction", direction, n)
-    t = np.asarray(t, dtype=float)
-    a = np.asarray(values, dtype=float)
+    t = real_array("t", t)
+    a = real_array("values", values)
     if t.ndim != 1 or t.size < 2 or not np.isfinite(t).all():
         raise ValueError(f"t must be at least two finite sample times, got shape {t.shape}")
     if a.shape != t.shape or not np.isfinite(a).all():

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._validation import real
 from ..results.temperature import kinetic_temperature_of
 
 __all__ = ["kinetic_temperature", "configurational_temperature"]
@@ -20,6 +21,7 @@ __all__ = ["kinetic_temperature", "configurational_temperature"]
 def _rows(solution, burn_in: float):
     if solution.dofs is not None:
         raise ValueError("solution: temperatures need every coordinate saved (save_dofs=None)")
+    burn_in = real("burn_in", burn_in, nonnegative=True)  # a string was NumPy's UFuncTypeError
     keep = solution.t >= solution.t[0] + burn_in
     if not keep.any():
         raise ValueError(f"burn_in: {burn_in} leaves no saved row")

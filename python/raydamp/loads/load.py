@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import ctypes
 import functools
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -26,6 +26,8 @@ from .records import read_record
 
 __all__ = ["Load", "set_load_parameters"]
 
+_TERMS = (T.Harmonic, T.Series, T.ExpressionTerm)
+
 
 class Load:
     """A force f(t) = sum of terms s_k(t) d_k over the coordinates; ``integrate(..., load=...)``.
@@ -40,7 +42,16 @@ class Load:
     __slots__ = ("terms", "amplitude")
 
     def __init__(self, terms=(), amplitude: float = 1.0):
-        object.__setattr__(self, "terms", tuple(terms))
+        # Checked here: Load([1, 2]) or Load("ab") was an AttributeError only when integrated, Load(None) a TypeError.
+        if isinstance(terms, (str, bytes, Mapping)) or not isinstance(terms, Iterable):
+            raise ValueError(f"terms must be a sequence of load terms (build a load with Load.harmonic, Load.series, "
+                             f"Load.expression or Load.from_file), got {_short(terms)}")
+        terms = tuple(terms)
+        for i, term in enumerate(terms):
+            if not isinstance(term, _TERMS):
+                raise ValueError(f"terms[{i}]: expected a load term (the terms of a Load made by Load.harmonic, "
+                                 f"Load.series, Load.expression or Load.from_file), got {_short(term)}")
+        object.__setattr__(self, "terms", terms)
         object.__setattr__(self, "amplitude", real("amplitude", amplitude))
 
     def __setattr__(self, name, value):
@@ -70,6 +81,9 @@ class Load:
     def expression(cls, text: str, parameters: Mapping[str, float] | None = None, direction=None) -> Load:
         """s(t) from ``text``, an expression of ``t`` and the ``parameters`` (parsed by raydamp's own
         parser, compiled to machine code), times ``direction``."""
+        if parameters is not None and not isinstance(parameters, Mapping):  # dict([1]): "dictionary update ..."
+            raise ValueError(f"parameters must be a dict of parameter values (e.g. {{'a': 1.0}}), got "
+                             f"{_short(parameters)}")
         parameters = dict(parameters or {})
         for name, value in parameters.items():
             if not isinstance(name, str) or not name.isidentifier() or name in ("t", "pi"):

@@ -8,11 +8,14 @@ names the file and what is wrong in it.
 from __future__ import annotations
 
 import io
+import os
 import re
 from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
+
+from .._validation import _short
 
 __all__ = ["read_record", "parse_at2", "parse_columns", "from_array", "Record", "record_format", "parse_record",
            "with_times", "describe_record", "FORMATS"]
@@ -45,6 +48,8 @@ def _fortran_float(text: str) -> float:
 
 def read_record(path, *, dt: float | None = None, name: str = "path") -> tuple[np.ndarray, np.ndarray]:
     """(t, values) of the file at ``path``, read by its suffix: .AT2, .npy, else text columns."""
+    if not isinstance(path, (str, os.PathLike)):  # None was Path's TypeError
+        raise ValueError(f"{name} must be a file path, got {_short(path)}")
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"{name}: no such file {str(path)!r}")

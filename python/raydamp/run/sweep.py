@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from .._core import __version__
-from .._validation import MAX_SEED, integer, real, thermal, vector
+from .._validation import MAX_SEED, _short, integer, real, thermal, vector
 from ..results.ensemble_solution import STATUSES
 from ..jobs import STEP_SIZE_ALIAS, JobSpec, job_arguments, model_from_spec
 from ..loads import Load
@@ -131,6 +131,8 @@ def parse_grid_item(text: str) -> tuple[str, Any]:
     """One command-line grid entry: ``name=start:stop:num`` (num values, ends included; append
     ``:log`` for a geometric range) or ``name=v1,v2,...`` (numbers, or names for method,
     composition and tableau). Returns (name, values) for :func:`sweep`'s ``grid``."""
+    if not isinstance(text, str):  # None was an AttributeError (no partition)
+        raise ValueError(f"text must be a string name=start:stop:num or name=v1,v2,..., got {_short(text)}")
     name, sep, values = text.partition("=")
     name = name.strip()
     if not sep or not name or not values.strip():
@@ -734,6 +736,9 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
         raise ValueError(f"store: expected a path ending in .zarr, got {store!r}")
     if cancel is not None and not hasattr(cancel, "cancelled"):
         raise ValueError(f"cancel must be a raydamp.CancelToken, got {cancel!r}")
+    if client is not None and not callable(getattr(client, "map", None)):  # "tcp://x" was 'str' has no 'map'
+        raise ValueError(f"client must be a dask.distributed.Client (e.g. Client(\"tcp://scheduler:8786\")) or None, "
+                         f"got {_short(client)}")
     # The driver checks everything, every axis value included, before anything is sent: a bad
     # argument is reported here, naming it, rather than from a worker.
     plan = check_sweep(spec, grid, chunk_size=chunk_size, max_members=max_members)

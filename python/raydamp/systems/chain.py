@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 
 from .. import _core
-from .._validation import _short, integer, real
+from .._validation import _short, integer, real, real_array, vector
 from .models import SharedModel
 
 __all__ = ["Chain", "BOND_FAMILIES", "chain_mode_energies", "MAX_SITES"]
@@ -152,7 +152,7 @@ class Chain(SharedModel):
 
     def mass_product(self, r) -> np.ndarray:
         """M r: every site has mass ``mass``."""
-        return self.mass * np.asarray(r, dtype=float)
+        return self.mass * vector("r", r, self.n)  # another length was broadcast, or scaled as it was
 
     def __repr__(self) -> str:
         return (f"Chain(n={self.n}, bond={self.bond!r}, parameters={self.bond_parameters!r}, mass={self.mass!r}, "
@@ -218,9 +218,9 @@ class Chain(SharedModel):
         (fixed: DST-I, modes k = 1..n; free: DCT-II, k = 0..n-1; periodic: real Fourier, each
         wavenumber k = 0..n//2 with its pair). They sum to the harmonic part of H (with an on-site
         potential, its quadratic part U''(0) q^2/2 included: E_k = P_k^2/(2m) + m omega_k^2 Q_k^2/2)."""
-        q = np.asarray(q, dtype=float)
-        p = np.asarray(p, dtype=float)
-        if q.shape != p.shape or q.shape[-1] != self.n:
+        # Numbers only: None was a 0-d NaN (an IndexError on its shape), "abcd" NumPy's message naming nothing.
+        q, p = real_array("q", q), real_array("p", p)
+        if q.ndim == 0 or q.shape != p.shape or q.shape[-1] != self.n:
             raise ValueError(f"q, p: expected arrays with last dimension n = {self.n}, got {q.shape} and {p.shape}")
         Q = _transform(self.boundary, q)
         P = _transform(self.boundary, p)

@@ -16,7 +16,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from .. import _core
-from .._validation import real, vector
+from .._validation import _short, real, vector
 from .kinds import MemberModels, plain
 
 __all__ = ["Model", "SharedModel", "BuiltinModel", "DampedPendulum", "ElasticPendulum", "MODELS", "describe_models", "make_model"]
@@ -120,12 +120,15 @@ class Model:
     def vector_field(self, q, p) -> tuple[np.ndarray, np.ndarray]:
         """(q', p') = (M^{-1} p, -grad V(q) - eps D(q) M^{-1} p): for reference solvers."""
         core = self._core_model
+        q, p = vector("q", q, self.dim), vector("p", p, self.dim)  # as energy() does: else the binding's TypeError
         qdot = np.asarray(core.velocity(p)).reshape(self.dim)
         pdot = -np.asarray(core.gradient(q)).reshape(self.dim) - np.asarray(core.damping_rate(q, p)).reshape(self.dim)
         return qdot, pdot
 
     def flow(self, name: str, q, p, t: float) -> tuple[np.ndarray, np.ndarray]:
         """Apply one exact sub-flow ('drift', 'kick', 'damp' or 'kick_damp') for time t."""
+        if not isinstance(name, str):  # the core names an unknown string; anything else was the binding's TypeError
+            raise ValueError(f"name must be a sub-flow's name (drift, kick, damp, kick_damp), got {_short(name)}")
         q1, p1 = self._core_model.flow(name, vector("q", q, self.dim), vector("p", p, self.dim), real("t", t))
         return np.asarray(q1).reshape(self.dim), np.asarray(p1).reshape(self.dim)
 
@@ -326,9 +329,12 @@ def describe_models() -> list[dict[str, Any]]:
 
 def make_model(name: str, parameters: dict[str, Any] | None = None) -> Model:
     """Build a model by name; unknown names and parameters raise ValueError naming them."""
-    if name not in MODELS:
-        raise ValueError(f"model: unknown model {name!r} (known: {', '.join(MODELS)})")
+    if not isinstance(name, str) or name not in MODELS:  # a list was dict lookup's TypeError (unhashable)
+        raise ValueError(f"model: unknown model {_short(name)} (known: {', '.join(MODELS)})")
     cls = MODELS[name]
+    if parameters is not None and not isinstance(parameters, Mapping):  # dict('eps') said "dictionary update ..."
+        raise ValueError(f"parameters must be a dict of parameter values (e.g. {{'eps': 0.1}}), got "
+                         f"{_short(parameters)}")
     parameters = dict(parameters or {})
     known = [p["name"] for p in cls._parameter_table]
     for key in parameters:

@@ -62,7 +62,7 @@ from typing import Any
 import numpy as np
 
 from .. import _core
-from .._validation import _short, real
+from .._validation import _short, real, vector
 from .matrix_market import read_header
 from .models import SharedModel
 
@@ -235,7 +235,7 @@ class LinearStructure(SharedModel):
 
     def mass_product(self, r) -> np.ndarray:
         """M r."""
-        return self._mass @ np.asarray(r, dtype=float)
+        return self._mass @ vector("r", r, self.dim)  # scipy's "dimension mismatch" named nothing
 
     @property
     def mass_kind(self) -> str:
@@ -352,6 +352,9 @@ def _coo_plain(matrix) -> dict[str, Any]:
     return {"shape": list(coo.shape), "rows": coo.row.tolist(), "cols": coo.col.tolist(), "values": coo.data.tolist()}
 
 
+_FLOAT_MAX_INT = int(np.finfo(float).max)  # an int past it does not convert to a float
+
+
 def _numbers(path: str, value, *, integer: bool = False) -> np.ndarray:
     if not isinstance(value, list):
         raise ValueError(f"{path}: must be a list of numbers")
@@ -362,7 +365,13 @@ def _numbers(path: str, value, *, integer: bool = False) -> np.ndarray:
     for i, x in enumerate(value):
         if isinstance(x, bool) or not isinstance(x, kinds):
             raise ValueError(f"{path}[{i}]: must be {'an integer' if integer else 'a number'}, got {x!r}")
-    array = np.asarray(value, dtype=np.int64 if integer else float)
+    try:
+        array = np.asarray(value, dtype=np.int64 if integer else float)
+    except OverflowError:  # an integer such as 10**400: name the entry, not "int too large to convert to float"
+        limit = 2**63 if integer else _FLOAT_MAX_INT
+        i = next(i for i, x in enumerate(value) if not -limit <= x < limit)
+        raise ValueError(f"{path}[{i}]: an integer of {abs(value[i]).bit_length()} bits, beyond the largest "
+                         f"{'64-bit integer' if integer else 'float'}") from None
     if not integer and not np.isfinite(array).all():
         raise ValueError(f"{path}[{int(np.argmin(np.isfinite(array)))}]: must be finite")
     return array

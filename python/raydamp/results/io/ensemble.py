@@ -66,7 +66,11 @@ def ensemble_to_xarray(ens: EnsembleSolution):
 def ensemble_from_xarray(ds) -> EnsembleSolution:
     """An EnsembleSolution from ``ensemble_to_xarray``'s Dataset, provenance included."""
     attrs = dict(ds.attrs)
-    status = tuple(STATUSES[int(c)] for c in ds["status"].values)
+    codes = np.asarray(ds["status"].values)
+    if codes.size and not ((codes >= 0) & (codes < len(STATUSES))).all():  # was STATUSES[c]'s IndexError
+        raise ValueError(f"status: codes must be 0..{len(STATUSES) - 1} ({' '.join(STATUSES)}), got "
+                         f"{int(codes[(codes < 0) | (codes >= len(STATUSES))][0])}")
+    status = tuple(STATUSES[int(c)] for c in codes)
     steps = np.asarray(ds["steps"].values, np.int64)
     messages = json.loads(attrs["messages"])
     message = tuple(messages.get(str(i), f"completed {steps[i]} steps") for i in range(len(status)))
