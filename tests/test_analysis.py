@@ -236,3 +236,13 @@ def test_analysis_refuses_what_it_cannot_read():
             reference_solution(pendulum, [1.0], [0.0], t_eval)  # an IndexError, or NumPy's own message
     with pytest.raises(ValueError, match=r"^t must be a time or a 1-D array of times"):
         raydamp.Load.harmonic([1.0], 1.0).values(pendulum, [[0.0, 1.0]])  # the binding's TypeError
+
+
+@pytest.mark.parametrize("tolerances, name", [({"rtol": float("nan")}, "rtol"), ({"atol": float("nan")}, "atol"),
+                                              ({"rtol": float("inf")}, "rtol"), ({"rtol": 0.0, "atol": 0.0}, "rtol"),
+                                              ({"rtol": "x"}, "rtol"), ({"atol": -1.0}, "atol")])
+def test_reference_solution_checks_its_tolerances(tolerances, name):
+    # SciPy took them unchecked: NaN, inf or rtol = atol = 0 ran for minutes (over 120 s for one time unit of a
+    # pendulum); "x" was a UFuncTypeError and a negative atol SciPy's message naming the other (API audit).
+    with pytest.raises(ValueError, match=rf"^{name} must be"):
+        reference_solution(DampedPendulum(), [1.0], [0.0], [0.0, 1.0], **tolerances)
