@@ -13,6 +13,7 @@ import sys
 import uvicorn
 from pydantic import ValidationError
 
+from . import db_lock
 from .app import create_app
 from .config import Settings, is_loopback
 from .jobs import JobStore
@@ -60,6 +61,12 @@ def main(argv: list[str] | None = None) -> None:
     except StoreUnavailable as error:
         _refuse(str(error))
     store.close()
+    try:
+        # Kept (the lifespan counts a second hold): no other service takes the file in between. Opening the
+        # store takes no lock and changes no job (the lifespan's recovery, after its own hold, does).
+        db_lock.hold(settings.db)
+    except (db_lock.DatabaseInUse, OSError) as error:
+        _refuse(str(error))
     # Threads serialising trajectories hand the GIL back every millisecond rather than every five, so
     # the event loop (which answers /healthz and accepts submissions) is not kept waiting behind them.
     sys.setswitchinterval(0.001)

@@ -13,6 +13,7 @@ from fastapi import FastAPI
 from fastapi.exceptions import RequestValidationError
 from starlette.exceptions import HTTPException
 
+from . import db_lock
 from .checks import CheckPool
 from .config import Settings
 from .errors import http_error_handler, validation_error_handler
@@ -34,30 +35,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
-        database = Database(settings.db)  # one file, one table per kind of task, one runner per kind
-        store, sweeps = JobStore(database), SweepStore(database)
-        store.open()
-        sweeps.open()
-        # The check processes compile users' systems, for the submissions and for the runs of jobs and sweeps.
-        app.state.checks = checks = CheckPool(settings)
-        runner = Runner(store, settings, store.work(settings, checks))
-        sweep_runner = Runner(sweeps, settings, sweeps.work(settings, checks))
-        app.state.store, app.state.runner = store, runner
-        app.state.sweeps, app.state.sweep_runner = sweeps, sweep_runner
-        checks.start()
-        runner.start()
-        sweep_runner.start()
-        # Everything built so far (modules, FastAPI's routes and schemas, raydamp's catalogue) lives as
-        # long as the process: out of the collector's sight, a full collection walks only what requests
-        # allocate (it walked ~10^5 objects, a pause in the POST latency's tail).
-        gc.freeze()
+        db_lock.hold(settings.db)  # before the recovery, which would re-queue another service's running jobs
         try:
-            yield
+            async with _serving(app, settings):
+                yield
         finally:
-            checks.stop()
-            sweep_runner.stop()
-            runner.stop()
-            database.close()
+            db_lock.release(settings.db)
 
     # /docs is ours (routes/page.py), with Swagger UI served locally; ReDoc would load from a CDN.
     app = FastAPI(title="raydamp", version=raydamp.__version__, lifespan=lifespan, docs_url=None, redoc_url=None,
@@ -72,6 +55,34 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     page.mount_assets(app)
     _document_limits(app, settings)
     return app
+
+
+@asynccontextmanager
+async def _serving(app: FastAPI, settings: Settings) -> AsyncIterator[None]:
+    database = Database(settings.db)  # one file, one table per kind of task, one runner per kind
+    store, sweeps = JobStore(database), SweepStore(database)
+    store.open()
+    sweeps.open()
+    # The check processes compile users' systems, for the submissions and for the runs of jobs and sweeps.
+    app.state.checks = checks = CheckPool(settings)
+    runner = Runner(store, settings, store.work(settings, checks))
+    sweep_runner = Runner(sweeps, settings, sweeps.work(settings, checks))
+    app.state.store, app.state.runner = store, runner
+    app.state.sweeps, app.state.sweep_runner = sweeps, sweep_runner
+    checks.start()
+    runner.start()
+    sweep_runner.start()
+    # Everything built so far (modules, FastAPI's routes and schemas, raydamp's catalogue) lives as
+    # long as the process: out of the collector's sight, a full collection walks only what requests
+    # allocate (it walked ~10^5 objects, a pause in the POST latency's tail).
+    gc.freeze()
+    try:
+        yield
+    finally:
+        checks.stop()
+        sweep_runner.stop()
+        runner.stop()
+        database.close()
 
 
 def _document_limits(app: FastAPI, settings: Settings) -> None:
