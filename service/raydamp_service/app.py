@@ -110,6 +110,11 @@ def _document_limits(app: FastAPI, settings: Settings) -> None:
                     responses["413"] = {"description": f"the file is over max_file_bytes = {settings.max_file_bytes}"}
                 elif operation.get("requestBody"):
                     responses["413"] = {"description": f"the body is over max_body_bytes = {settings.max_body_bytes}"}
+                if operation.get("requestBody"):
+                    responses["408"] = {"description": f"the body did not arrive within body_seconds = "
+                                                       f"{settings.body_seconds:g} s"}
+                    responses.setdefault("429", {"description": "max_large_bodies large bodies are being handled; "
+                                                                "retry after Retry-After seconds"})
                 if settings.token is not None and needs_token(path):
                     operation["security"] = [{"bearer": []}]
                     responses["401"] = {"description": "no or wrong Authorization: Bearer <token>"}

@@ -47,6 +47,9 @@ class Settings(BaseSettings):
     # A body is parsed and validated on the event loop (70 ms for a 1.7 MB structure): large ones a few at a time.
     large_body_bytes: int = Field(256 * 2**10, ge=1, description="a request body above this is large")
     max_large_bodies: int = Field(2, ge=1, description="large request bodies handled at once; more get 429")
+    # Two uploads that announced 300 KiB and sent nothing held both large-body places for as long as they liked.
+    body_seconds: float = Field(120.0, gt=0, description="a request body must arrive within this many seconds of "
+                                                         "the request's headers, or the request gets 408")
     max_queued: int = Field(1000, ge=1, description="queued jobs beyond this get 429 with Retry-After")
     retry_after_seconds: int = Field(5, ge=1, description="the Retry-After of a 429")
     max_steps: int = Field(10**8, ge=1)

@@ -6,7 +6,9 @@ without the token, or with a body over the limit is answered before its body is 
 
 from __future__ import annotations
 
+import asyncio
 import hmac
+
 from starlette.datastructures import Headers
 from starlette.responses import JSONResponse
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
@@ -34,8 +36,8 @@ def file_too_large(limit: int) -> str:
     return f"the file is larger than max_file_bytes = {limit} bytes (RAYDAMP_MAX_FILE_BYTES)"
 
 
-class _BodyTooLarge(Exception):
-    pass
+class _BodyRefused(Exception):
+    """The body is over its limit, or late: the app's reading of it is cut short."""
 
 
 def host_name(header: str) -> str:
@@ -55,6 +57,7 @@ class RequestGuard:
         self.max_file = settings.max_file_bytes
         self.large_body, self.max_large = settings.large_body_bytes, settings.max_large_bodies
         self.retry_after = str(settings.retry_after_seconds)
+        self.body_seconds = settings.body_seconds
         self.large_bodies = 0  # being handled now (one event loop: no lock needed)
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
@@ -119,29 +122,41 @@ class RequestGuard:
                                        "(RAYDAMP_MAX_BODY_BYTES)"}, status_code=413)
 
     async def _with_body_limit(self, scope: Scope, receive: Receive, send: Send) -> None:
-        """A body without Content-Length (chunked) is counted as it arrives."""
+        """A body without Content-Length (chunked) is counted as it arrives; the whole body must arrive within
+        body_seconds (later receives, a response's wait for the client to leave, have no deadline)."""
         received = 0
-        too_large = False
+        refused: JSONResponse | None = None
         limit = self._limit(scope)
+        deadline = asyncio.get_running_loop().time() + self.body_seconds
+        body_done = False
 
         async def counting_receive() -> Message:
-            nonlocal received, too_large
-            message = await receive()
+            nonlocal received, refused, body_done
+            if body_done:
+                return await receive()
+            try:
+                message = await asyncio.wait_for(receive(), max(0.0, deadline - asyncio.get_running_loop().time()))
+            except asyncio.TimeoutError:
+                refused = JSONResponse({"detail": f"the request body did not arrive within body_seconds = "
+                                                  f"{self.body_seconds:g} s (RAYDAMP_BODY_SECONDS)"}, status_code=408,
+                                       headers={"Connection": "close"})
+                raise _BodyRefused from None
             if message["type"] == "http.request":
                 received += len(message.get("body", b""))
+                body_done = not message.get("more_body", False)
                 if received > limit:
-                    too_large = True
-                    raise _BodyTooLarge
+                    refused = self._too_large(scope)
+                    raise _BodyRefused
             return message
 
         async def guarded_send(message: Message) -> None:
-            if not too_large:  # whatever the app made of the interrupted read is replaced by the 413
+            if refused is None:  # whatever the app made of the interrupted read is replaced by the refusal
                 await send(message)
 
         try:
             await self.app(scope, counting_receive, guarded_send)
-        except _BodyTooLarge:
+        except _BodyRefused:
             pass
-        if too_large:
-            await self._too_large(scope)(scope, receive, send)
+        if refused is not None:
+            await refused(scope, receive, send)
 

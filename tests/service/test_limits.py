@@ -155,3 +155,31 @@ def test_large_bodies_are_handled_a_few_at_once(tmp_path):
     assert third.status_code == 429 and third.headers["retry-after"] == "5", third.text
     assert "max_large_bodies" in third.json()["detail"]
     assert [r.status_code for r in done] == [200, 200, 200] and again.status_code == 200 and left == 0
+
+
+def test_a_body_that_does_not_arrive_is_408_and_gives_back_its_place(start_server):
+    """Two uploads that announced 300 KiB and sent nothing held both max_large_bodies places for as long as
+    their connections lived: every honest large request got 429 (a service audit). Past body_seconds each
+    gets 408, and a large request then passes."""
+    import socket
+    import time
+
+    server = start_server(RAYDAMP_BODY_SECONDS="1")
+    idle = []
+    for _ in range(2):
+        connection = socket.create_connection(("127.0.0.1", server.port))
+        connection.sendall(b"POST /v1/jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
+                           b"Content-Length: 307200\r\n\r\n{")
+        idle.append(connection)
+    time.sleep(0.3)
+    big = {"model": "damped_pendulum", "h": 0.1, "n_steps": 10, "initial_state": {"q": [1.0], "p": [0.0]},
+           "name_padding": "x" * 300_000}
+    assert server.client.post("/v1/jobs", json=big).status_code == 429  # both places held meanwhile
+    for connection in idle:
+        connection.settimeout(10)
+        answer = connection.recv(4096).decode()
+        assert answer.startswith("HTTP/1.1 408") and "body_seconds = 1 s" in answer, answer[:300]
+        connection.close()
+    time.sleep(0.1)
+    answered = server.client.post("/v1/jobs", json=big)
+    assert answered.status_code == 422 and answered.json()["detail"][0]["loc"][-1] == "name_padding", answered.text
