@@ -41,7 +41,7 @@ from .files import ParsedFiles
 from .problems import JobError, RaydampCall, build_call, check_spec, check_sweep_spec
 from .schemas import JobSpec, SweepSpec
 
-__all__ = ["CheckPool", "ChecksBusy", "build_for_run", "checked_inline", "isolated"]
+__all__ = ["CheckPool", "ChecksBusy", "PlotOverBudget", "build_for_run", "checked_inline", "isolated"]
 
 log = logging.getLogger("raydamp_service.checks")
 
@@ -54,6 +54,10 @@ _START_SECONDS = 60.0
 
 class ChecksBusy(Exception):
     """max_pending_checks checks are running or waiting, or no process came free within the time budget."""
+
+
+class PlotOverBudget(Exception):
+    """A plot's drawing passed a check's time or memory budget; the message says which settings."""
 
 
 def isolated(spec: JobSpec) -> bool:
@@ -137,6 +141,13 @@ _WARM_UP = (
 
 
 def _warm_up(settings: Settings) -> None:
+    try:  # matplotlib and its fonts, imported and loaded before the memory budget applies (as for the systems)
+        import raydamp
+        from raydamp.models import DampedPendulum
+
+        raydamp.integrate(DampedPendulum(), [1.0], [0.0], h=0.1, n_steps=2).plot.png("energy", width=200, height=150)
+    except Exception:  # noqa: BLE001 - a warm-up only; a real plot reports its own errors
+        log.warning("check warm-up: a plot", exc_info=True)
     for system in _WARM_UP:
         spec = {**system, "method": "3s", "h": 0.01, "n_steps": 2, "initial_state": {"rest": True}}
         try:
@@ -151,7 +162,21 @@ def _compiled(spec: JobSpec) -> tuple[str, bytes] | None:
     return spec.system.build().compiled_form() if isinstance(spec.system, SystemInput) else None
 
 
+def _plot(task: tuple) -> tuple[str | None, bytes | None]:
+    """(None, the PNG) of a stored trajectory's plot, or (raydamp's refusal, None): a plot this run cannot
+    have (a projection of one coordinate, an unknown coordinate)."""
+    from .downloads import stored_solution
+
+    record, arrays, spec, kind, options = task
+    try:
+        return None, stored_solution(record, arrays, spec).plot.png(kind, **options)
+    except ValueError as error:
+        return str(error), None
+
+
 def _check(kind: str, spec: Any, settings: Settings, files: ParsedFiles) -> Any:
+    if kind == "plot":
+        return _plot(spec)
     if kind == "job":
         check_spec(spec, settings, files=files)
         return _compiled(spec)
@@ -277,6 +302,28 @@ class CheckPool:
         members, compiled = self._run("sweep", spec, ("job", "system"))
         _load(compiled)
         return members
+
+    def plot(self, record, arrays, spec: JobSpec, kind: str, options: dict[str, Any]) -> bytes:
+        """A stored trajectory's plot as PNG, drawn in a check process: matplotlib holds the interpreter lock
+        while it draws (a 3000 x 3000 phase plot held /healthz for 2 s, thirty at once for 4.6 s) and the memory
+        it took stayed with the server (22.5 GB after thirty; a service audit). Raises ValueError (a plot this
+        run cannot have), ChecksBusy, or PlotOverBudget."""
+        if not self._pending.acquire(blocking=False):
+            raise ChecksBusy
+        try:
+            status, value = self._answer("plot", (record, arrays, spec, kind, options))
+        finally:
+            self._pending.release()
+        if status == "ok":
+            refused, png = value
+            if refused is not None:
+                raise ValueError(refused)
+            return png
+        if status == "error":
+            raise RuntimeError(f"drawing a plot failed: {value}")
+        raise PlotOverBudget(f"drawing this plot took more than check_seconds = {self._settings.check_seconds:g} s "
+                             f"or check_memory_bytes = {self._settings.check_memory_bytes / 2**20:.0f} MiB; ask for "
+                             "fewer pixels (width, height)")
 
     def compile(self, spec: JobSpec) -> None:
         """Compile a job's expression system in a check process, within the budgets, and load its functions

@@ -21,14 +21,14 @@ from raydamp.jobs import validation_error
 from starlette.background import BackgroundTask
 from starlette.concurrency import run_in_threadpool
 
-from ..checks import CheckPool, ChecksBusy, checked_inline
+from ..checks import CheckPool, ChecksBusy, PlotOverBudget, checked_inline
 from ..deps import RunnerDep, SettingsDep, StoreDep
 from ..files import file_resolver
 from ..problems import JobError, RaydampCall
 from ..runner import Runner
 from ..schemas import JobCreated, JobList, JobListItem, JobSpec, JobStatus, JobView, Trajectory
 from ..config import Settings
-from ..downloads import stored_solution, write_file
+from ..downloads import write_file
 from ..jobs import JobRecord, JobStore
 from ..store import FINAL_STATUSES
 from ..timed_send import TimedFileResponse, TimedStreamingResponse
@@ -229,8 +229,9 @@ _PLOT_POINTS = 20_000  # points drawn at most: a plot of more is decimated evenl
             responses={**_NOT_FOUND, 200: {"content": {"image/png": {}}, "description": "a PNG image"},
                        409: {"description": "the job has no trajectory (yet)"},
                        422: {"description": "a plot this system cannot have (a projection of one coordinate), "
-                                            "or an unknown coordinate"},
-                       429: {"description": "max_large_fetches large fetches are being served; retry after "
+                                            "an unknown coordinate, or one whose drawing passes a check's budget"},
+                       429: {"description": "max_large_fetches large fetches are being served, or "
+                                            "max_pending_checks checks and plots are under way; retry after "
                                             "Retry-After seconds"}})
 def get_plot(job_id: str, kind: Literal["energy", "phase", "projection"], request: Request, store: StoreDep,
              settings: SettingsDep,
@@ -251,7 +252,7 @@ def get_plot(job_id: str, kind: Literal["energy", "phase", "projection"], reques
         selection = Selection(0, stored.points, max(1, -(-stored.points // points)))
         lease = FetchLease(_large_slot(request, settings, len(selection) * stored.row_bytes))
         try:
-            sol = stored_solution(record, read_arrays(connection, stored, selection), spec)
+            arrays = read_arrays(connection, stored, selection)
         finally:
             lease.release()
     finally:
@@ -260,8 +261,14 @@ def get_plot(job_id: str, kind: Literal["energy", "phase", "projection"], reques
     def pick(value: str | None):  # a coordinate's name, or its index (ASCII digits: int() refuses "²")
         return int(value) if value is not None and value.isascii() and value.isdecimal() else value
 
-    try:
-        png = sol.plot.png(kind, width=width, height=height, coordinate=pick(coordinate), x=pick(x), y=pick(y))
+    options = {"width": width, "height": height, "coordinate": pick(coordinate), "x": pick(x), "y": pick(y)}
+    try:  # drawn in a check process (CheckPool.plot says why)
+        png = request.app.state.checks.plot(record, arrays, spec, kind, options)
+    except ChecksBusy:
+        raise checks_busy(request.app.state.settings) from None
+    except PlotOverBudget as error:
+        raise RequestValidationError([{"type": "value_error", "loc": ("query", "width"), "msg": str(error),
+                                       "input": width}]) from None
     except ValueError as error:
         field = str(error).partition(": ")[0]  # raydamp names the argument: coordinate, x, y, or the plot's kind
         loc = ("query", field) if field in ("coordinate", "x", "y") else ("path", "kind")
