@@ -18,6 +18,7 @@ from .checks import CheckPool
 from .config import Settings
 from .errors import http_error_handler, validation_error_handler
 from .guard import RequestGuard, needs_token
+from .head import HeadAsGet
 from .jobs import JobStore
 from .routes import catalogue, files, health, jobs, page, sweeps
 from .runner import Runner
@@ -43,11 +44,15 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             db_lock.release(settings.db)
 
     # /docs is ours (routes/page.py), with Swagger UI served locally; ReDoc would load from a CDN.
+    # redirect_slashes off: "/v1/jobs/" was a 307 to a Location built from the Host header (an open redirect with
+    # trusted_hosts "*", and plain http behind a TLS proxy); the routes have no trailing slash, so it is a 404.
     app = FastAPI(title="raydamp", version=raydamp.__version__, lifespan=lifespan, docs_url=None, redoc_url=None,
+                  redirect_slashes=False,
                   summary="Damped Hamiltonian integrations as jobs: submit, poll, fetch the trajectory.")
     app.state.settings = settings
     app.state.large_fetches = threading.Semaphore(settings.max_large_fetches)
     app.add_middleware(RequestGuard, settings=settings)
+    app.add_middleware(HeadAsGet)  # outermost: the guard sees the HEAD as the GET it runs as
     app.add_exception_handler(RequestValidationError, validation_error_handler)
     app.add_exception_handler(HTTPException, http_error_handler)
     for router in ROUTERS:

@@ -37,3 +37,35 @@ def test_an_undocumented_path_keeps_its_routes_methods(module_server):
     assert response.status_code == 405 and response.headers["allow"] == "GET"
     response = module_server.client.post("/")  # the page: not in /openapi.json
     assert response.status_code == 405 and response.headers["allow"] == "GET"
+
+
+def test_head_answers_as_get_without_a_body(module_server):
+    # Every GET route answered HEAD with 405 (curl -I, link checkers; a service audit).
+    client = module_server.client
+    job_id = module_server.submit({"model": "damped_pendulum", "h": 0.1, "n_steps": 100,
+                                   "initial_state": {"q": [1.0], "p": [0.0]}})
+    module_server.wait_finished(job_id)
+    for path in ("/healthz", "/", "/docs", "/openapi.json", "/v1/jobs", "/v1/models", f"/v1/jobs/{job_id}",
+                 f"/v1/jobs/{job_id}/trajectory", f"/v1/jobs/{job_id}/trajectory?format=csv",
+                 "/v1/jobs/0123456789abcdef0123456789abcdef"):
+        head, get = client.head(path), client.get(path)
+        assert (head.status_code, head.headers["content-type"]) == (get.status_code, get.headers["content-type"]), path
+        assert head.content == b"" and get.content, path
+
+
+def test_a_head_gives_back_its_large_fetch_slot(start_server):
+    # One slot, and every trajectory of this job is large: five HEADs in turn, then a GET, each get it.
+    server = start_server(RAYDAMP_LARGE_FETCH_BYTES="1024", RAYDAMP_MAX_LARGE_FETCHES="1")
+    job_id = server.submit({"model": "damped_pendulum", "h": 0.1, "n_steps": 1000,
+                            "initial_state": {"q": [1.0], "p": [0.0]}})
+    server.wait_finished(job_id)
+    for _ in range(5):
+        assert server.client.head(f"/v1/jobs/{job_id}/trajectory").status_code == 200
+    response = server.client.get(f"/v1/jobs/{job_id}/trajectory")
+    assert response.status_code == 200 and len(response.json()["t"]) == 1001
+
+
+def test_a_trailing_slash_is_404_not_a_redirect_built_from_host(module_server):
+    # It was a 307 to http://<the request's Host>/v1/jobs: an open redirect with trusted_hosts "*" (service audit).
+    response = module_server.client.get("/v1/jobs/", follow_redirects=False)
+    assert response.status_code == 404 and "location" not in response.headers
