@@ -13,7 +13,7 @@ import sys
 import uvicorn
 from pydantic import ValidationError
 
-from . import db_lock
+from . import db_lock, header_deadline
 from .app import create_app
 from .config import Settings, is_loopback
 from .jobs import JobStore
@@ -72,7 +72,8 @@ def main(argv: list[str] | None = None) -> None:
     sys.setswitchinterval(0.001)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     # One process only: the job queue and the cancel tokens live in it.
-    uvicorn.run(create_app(settings), host=settings.host, port=settings.port, access_log=settings.access_log)
+    uvicorn.run(create_app(settings), host=settings.host, port=settings.port, access_log=settings.access_log,
+                http=header_deadline.protocol(settings.header_seconds))
 
 
 if __name__ == "__main__":

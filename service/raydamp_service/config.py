@@ -47,6 +47,9 @@ class Settings(BaseSettings):
     # A body is parsed and validated on the event loop (70 ms for a 1.7 MB structure): large ones a few at a time.
     large_body_bytes: int = Field(256 * 2**10, ge=1, description="a request body above this is large")
     max_large_bodies: int = Field(2, ge=1, description="large request bodies handled at once; more get 429")
+    header_seconds: float = Field(10.0, gt=0, description="a connection whose request headers have not all arrived "
+                                                          "this long after it opened (or after its previous "
+                                                          "response) is closed")
     # Two uploads that announced 300 KiB and sent nothing held both large-body places for as long as they liked.
     body_seconds: float = Field(120.0, gt=0, description="a request body must arrive within this many seconds of "
                                                          "the request's headers, or the request gets 408")

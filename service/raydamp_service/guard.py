@@ -135,8 +135,9 @@ class RequestGuard:
             if body_done:
                 return await receive()
             try:
-                message = await asyncio.wait_for(receive(), max(0.0, deadline - asyncio.get_running_loop().time()))
-            except asyncio.TimeoutError:
+                async with asyncio.timeout_at(deadline):  # a timer, not a task of its own as wait_for makes
+                    message = await receive()
+            except TimeoutError:
                 refused = JSONResponse({"detail": f"the request body did not arrive within body_seconds = "
                                                   f"{self.body_seconds:g} s (RAYDAMP_BODY_SECONDS)"}, status_code=408,
                                        headers={"Connection": "close"})
