@@ -84,6 +84,11 @@ class Settings(BaseSettings):
     max_large_fetches: int = Field(2, ge=1, description="large trajectory fetches served at once; more get 429")
     send_timeout_seconds: float = Field(60.0, gt=0, description="a trajectory or file response whose client reads "
                                                                 "nothing for this long is dropped, with its slot")
+    # Two clients reading a 193 MB trajectory at 50 KB/s sent every piece in time and held both large-fetch
+    # places for an hour (a service audit): past send_timeout_seconds, a response must average this rate.
+    min_send_bytes_per_second: int = Field(128 * 2**10, ge=0, description="a trajectory, file or sweep result "
+                                           "whose client reads slower than this on average (after the first "
+                                           "send_timeout_seconds) is dropped, with its slot; 0: no floor")
     max_plot_bytes: int = Field(16 * 2**20, ge=2**16, description="stored bytes a plot reads at most (its points "
                                                                   "decimated evenly to fit)")
 

@@ -26,25 +26,36 @@ class _Stalled(Exception):
 
 
 class _TimedSend:
-    """A response whose every send must complete within `send_seconds`."""
+    """A response whose every send must complete within `send_seconds`, and which, once `send_seconds` have
+    passed, must have been read at `min_rate` bytes per second on average (0: no floor)."""
 
     send_seconds: float
+    min_rate: float = 0.0
     source: Any = None  # a streamed body's iterator, closed when the client stalls
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        loop = asyncio.get_running_loop()
+        started, sent = loop.time(), 0
+
         async def within(message: Message) -> None:
+            nonlocal sent
+            elapsed = loop.time() - started
+            if self.min_rate and elapsed > self.send_seconds and sent < self.min_rate * elapsed:
+                raise _Stalled  # read, but too slowly to give back its slot within a bounded time
             try:
                 await asyncio.wait_for(send(message), self.send_seconds)
             except TimeoutError:
                 raise _Stalled from None
+            sent += len(message.get("body", b""))
 
         try:
             await super().__call__(scope, receive, within)
         except Exception as error:
             if not _stalled(error):
                 raise
-            log.warning("%s %s: the client read nothing for %g s (send_timeout_seconds); response dropped",
-                        scope.get("method"), scope.get("path"), self.send_seconds)
+            log.warning("%s %s: the client read nothing for %g s (send_timeout_seconds), or slower than %g bytes/s "
+                        "(min_send_bytes_per_second); response dropped", scope.get("method"), scope.get("path"),
+                        self.send_seconds, self.min_rate)
             close = getattr(self.source, "close", None)
             if close is not None:
                 try:
@@ -64,12 +75,12 @@ def _stalled(error: BaseException) -> bool:
 
 
 class TimedStreamingResponse(_TimedSend, StreamingResponse):
-    def __init__(self, content, *args, send_seconds: float, **kwargs):
+    def __init__(self, content, *args, send_seconds: float, min_rate: float = 0.0, **kwargs):
         super().__init__(content, *args, **kwargs)
-        self.source, self.send_seconds = content, send_seconds
+        self.source, self.send_seconds, self.min_rate = content, send_seconds, min_rate
 
 
 class TimedFileResponse(_TimedSend, FileResponse):
-    def __init__(self, *args, send_seconds: float, **kwargs):
+    def __init__(self, *args, send_seconds: float, min_rate: float = 0.0, **kwargs):
         super().__init__(*args, **kwargs)
-        self.send_seconds = send_seconds
+        self.send_seconds, self.min_rate = send_seconds, min_rate

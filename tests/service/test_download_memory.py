@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from starlette.background import BackgroundTask
 
 SITES, STEPS = 400, 10_000  # 10,001 points x (3 + 2 x 400) floats: 64 MB stored
 CHAIN = {"system": {"kind": "chain", "n": SITES, "bond": "fput"}, "method": "3s", "h": 0.05, "n_steps": STEPS,
@@ -147,3 +148,43 @@ def test_a_client_that_stops_reading_gives_its_large_fetch_slot_back(start_serve
         assert response.status_code == 200 and len(response.content) > 2**20
     finally:
         stalled.close()
+
+
+
+@pytest.mark.parametrize("min_rate, dropped", [(1e6, True), (0.0, False)])
+def test_a_client_that_reads_too_slowly_gives_its_large_fetch_slot_back(min_rate, dropped):
+    """Two clients reading a 193 MB trajectory at 50 KB/s sent every piece within send_timeout_seconds and held
+    both large-fetch slots for an hour: every other large fetch got 429 (a service audit). Past
+    send_timeout_seconds, a response read slower than min_send_bytes_per_second on average is dropped, its
+    body's source closed and its slot given back. In-process: a client taking 20 ms a 10 kB piece (500 kB/s)."""
+    import asyncio
+
+    from raydamp_service.timed_send import TimedStreamingResponse
+
+    produced, released = [], []
+
+    def pieces():
+        for i in range(100):
+            produced.append(i)
+            yield b"x" * 10_000
+
+    async def scenario():
+        response = TimedStreamingResponse(pieces(), send_seconds=0.3, min_rate=min_rate,
+                                          background=BackgroundTask(lambda: released.append(True)))
+        received = asyncio.Event()
+
+        async def receive():
+            await received.wait()  # the client never leaves
+            return {"type": "http.disconnect"}
+
+        async def send(message):
+            await asyncio.sleep(0.02)
+
+        await response({"type": "http", "method": "GET", "path": "/v1/jobs/x/trajectory"}, receive, send)
+
+    asyncio.run(scenario())
+    assert released == [True]  # the slot is given back either way
+    if dropped:  # after 0.3 s, at 500 kB/s against a floor of 1 MB/s: about 15 of the 100 pieces
+        assert 5 < len(produced) < 40, len(produced)
+    else:
+        assert len(produced) == 100

@@ -146,7 +146,8 @@ def get_trajectory(job_id: str, request: Request, store: StoreDep, settings: Set
     # Not validated against the response model: the pieces are written to have exactly its schema.
     return TimedStreamingResponse(trajectory_chunks(connection, stored, selection, lease),
                                   media_type="application/json", background=BackgroundTask(lease.release),
-                                  send_seconds=settings.send_timeout_seconds)
+                                  send_seconds=settings.send_timeout_seconds,
+                                  min_rate=settings.min_send_bytes_per_second)
 
 
 def _opened(record: JobRecord, store: JobStore):
@@ -219,7 +220,8 @@ def _trajectory_file(record: JobRecord, store: JobStore, request: Request, setti
         connection.close()
     return TimedFileResponse(path, media_type=media_type, background=BackgroundTask(download.release),
                              headers={"Content-Disposition": f'attachment; filename="{record.id}-{path.name}"'},
-                             send_seconds=settings.send_timeout_seconds)
+                             send_seconds=settings.send_timeout_seconds,
+                                  min_rate=settings.min_send_bytes_per_second)
 
 
 _PLOT_POINTS = 20_000  # points drawn at most: a plot of more is decimated evenly

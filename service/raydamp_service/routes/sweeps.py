@@ -122,7 +122,8 @@ def get_result(sweep_id: str, request: Request,
     return TimedStreamingResponse(_pieces(connection, rowid, size), media_type="application/x-netcdf",
                                   headers={"Content-Disposition": f'attachment; filename="sweep-{sweep_id}.nc"',
                                            "Content-Length": str(size)},
-                                  send_seconds=request.app.state.settings.send_timeout_seconds)
+                                  send_seconds=request.app.state.settings.send_timeout_seconds,
+                                  min_rate=request.app.state.settings.min_send_bytes_per_second)
 
 
 @router.post("/{sweep_id}/cancel", status_code=202, response_model=SweepView,
