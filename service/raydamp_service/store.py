@@ -30,7 +30,8 @@ if TYPE_CHECKING:
     from .config import Settings
     from .runner import Work
 
-__all__ = ["Database", "TaskStore", "TaskRecord", "StoreUnavailable", "FINAL_STATUSES", "UNFINISHED_SQL", "now"]
+__all__ = ["Database", "TaskStore", "TaskRecord", "StoreUnavailable", "FileGone", "FINAL_STATUSES", "UNFINISHED_SQL",
+           "now"]
 
 FINAL_STATUSES = frozenset({"completed", "failed", "cancelled"})
 _FINAL_SQL = "('completed', 'failed', 'cancelled')"
@@ -170,6 +171,48 @@ class Database:
         self._space_pending = bool(busy)
 
 
+class FileGone(LookupError):
+    """An uploaded file a submission names was deleted between its check and its insert."""
+
+    def __init__(self, file_id: str):
+        super().__init__(f"the uploaded file {file_id} was deleted while this submission was being checked; "
+                         "upload it again")
+
+
+def uploaded_files(spec: Any) -> tuple[str, ...]:
+    """The ids of the uploads a spec names: {"file": "<id>"} (a matrix, an initial state) and {"file": {"id":
+    ...}} (a record). Lists of numbers (a structure's COO entries) are not walked."""
+    found: list[str] = []
+
+    def walk(value: Any) -> None:
+        if isinstance(value, dict):
+            for key, inner in value.items():
+                if key == "file" and isinstance(inner, str):
+                    found.append(inner)
+                elif key == "file" and isinstance(inner, dict) and isinstance(inner.get("id"), str):
+                    found.append(inner["id"])
+                else:
+                    walk(inner)
+        elif isinstance(value, list) and value and isinstance(value[0], (dict, list)):
+            for inner in value:
+                walk(inner)
+
+    walk(spec)
+    return tuple(dict.fromkeys(found))
+
+
+def _require_files(db: sqlite3.Connection, files: tuple[str, ...]) -> None:
+    """In the insert's transaction: a file the check read and a DELETE removed since is FileGone (the DELETE
+    found no task naming it yet: its 204 and the submission's 202 both went out, and the run failed later)."""
+    if not files:
+        return
+    present = {row[0] for row in db.execute(f"SELECT id FROM files WHERE id IN ({', '.join('?' * len(files))})",
+                                            files)}
+    missing = next((file_id for file_id in files if file_id not in present), None)
+    if missing is not None:
+        raise FileGone(missing)
+
+
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class TaskRecord:
     """A task's row: the lifecycle's columns. A kind's record adds its own, with their values at creation as
@@ -283,6 +326,7 @@ class TaskStore(Generic[Record]):
         values = {"id": uuid.uuid4().hex, "status": "queued", "spec": json.dumps(spec), "created_at": now(), **columns}
         insert = f"INSERT INTO {self.TABLE} ({', '.join(values)}) VALUES ({', '.join('?' * len(values))})"
         counted = ("queued", self.TABLE)
+        files = uploaded_files(spec)
 
         def write(db: sqlite3.Connection, batch: dict) -> Record | None:
             # The queued tasks are counted once per transaction (within the write lock, so no other writer
@@ -294,6 +338,7 @@ class TaskStore(Generic[Record]):
             if max_queued is not None and queued >= max_queued:
                 batch[counted] = queued
                 return None
+            _require_files(db, files)
             db.execute(insert, tuple(values.values()))
             if queued is not None:
                 batch[counted] = queued + 1

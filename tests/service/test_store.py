@@ -201,3 +201,33 @@ def test_the_saved_arrays_are_listed_once(store):
         expected += 4 * StoredTrajectory.of(arrays).row_bytes
     assert expected == 8 * 4 * (3 * (1 + 2 + 2 + 1 + 1) + 0 + 1 + 2)
     assert store.stored_bytes() == expected
+
+
+def test_a_submission_whose_file_was_deleted_meanwhile_is_not_stored(store):
+    # Submitted while a DELETE of its file ran: the check read the file, the DELETE found no job naming it yet
+    # (204), the insert went in (202), and the run failed later with "no uploaded file" (3 of 25 tries in a
+    # service audit). The insert now checks, in its transaction, that the files it names are still there.
+    import asyncio
+
+    from raydamp_service.store import FileGone, uploaded_files
+
+    kept = store.add_file("M.mtx", b"%%MatrixMarket matrix coordinate real general\n1 1 1\n1 1 1.0\n", (1, 1), 1)
+    gone = store.add_file("K.mtx", b"%%MatrixMarket matrix coordinate real general\n1 1 1\n1 1 2.0\n", (1, 1), 1)
+    record = store.add_file("a_g.txt", b"0 0\n1 1\n", record=None, shape=(2, 2))
+    spec = {"system": {"kind": "linear_structure", "M": {"file": kept.id}, "K": {"file": gone.id},
+                       "f": {"coo": {"shape": [1], "rows": [0], "cols": [0], "values": [1.0]}}},
+            "ground_motion": {"acceleration": {"file": {"id": record.id, "factor": 9.81}}},
+            "initial_state": {"q": {"file": kept.id}}}
+    assert uploaded_files(spec) == (kept.id, gone.id, record.id)
+    assert store.delete_file(gone.id) == "deleted"
+    with pytest.raises(FileGone, match=f"the uploaded file {gone.id} was deleted"):
+        store.create(spec)
+
+    async def committed():
+        return await store.create_committed(spec, None, lambda stored: None)
+
+    with pytest.raises(FileGone):
+        asyncio.run(committed())
+    assert store.recent(10) == []
+    spec["system"]["K"] = {"file": kept.id}
+    assert store.create(spec) is not None

@@ -70,6 +70,7 @@ def with_seed(spec: JobSpec) -> JobSpec:
 
 @router.post("", status_code=202, response_model=JobCreated,
              responses={422: {"description": "the spec is invalid; detail[].loc names the field"},
+                        409: {"description": "an uploaded file the spec names was deleted while it was checked"},
                         429: {"description": "max_queued jobs are waiting, or max_pending_checks checks of "
                                              "systems are under way; retry after Retry-After seconds"}})
 async def submit_job(spec: JobSpec, request: Request, response: Response) -> JobCreated:

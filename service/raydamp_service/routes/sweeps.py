@@ -52,6 +52,7 @@ SWEEPS = Tasks("sweep", "/v1/sweeps", _view)
 @router.post("", status_code=202, response_model=SweepCreated,
              responses={422: {"description": "the spec or grid is invalid; detail[].loc names the field"},
                         503: {"description": "this installation has no Dask (the sweep extra)"},
+                        409: {"description": "an uploaded file the spec names was deleted while it was checked"},
                         429: {"description": "max_queued_sweeps sweeps are waiting, or max_pending_checks checks of "
                                              "systems are under way; retry after Retry-After seconds"}})
 def submit_sweep(spec: SweepSpec, request: Request, response: Response, settings: SettingsDep,

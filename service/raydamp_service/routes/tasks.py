@@ -14,7 +14,7 @@ from fastapi.exceptions import RequestValidationError
 from ..config import Settings
 from ..problems import JobError
 from ..runner import Runner
-from ..store import FINAL_STATUSES, TaskStore
+from ..store import FINAL_STATUSES, FileGone, TaskStore
 
 __all__ = ["Tasks", "invalid", "check_limit", "checks_busy"]
 
@@ -68,7 +68,10 @@ class Tasks:
     def queue(self, request: Request, response: Response, store: TaskStore, runner: Runner, spec: Any, limit: int,
               setting: str, settings: Settings, **columns: Any) -> Any:
         """Store the checked spec as queued and hand it to the runner; 429 when limit are waiting."""
-        record = store.create(spec.model_dump(mode="json"), limit, **columns)
+        try:
+            record = store.create(spec.model_dump(mode="json"), limit, **columns)
+        except FileGone as error:
+            raise HTTPException(409, detail=str(error)) from None
         if record is not None:
             runner.submit(record.id)
         return self._queued(request, response, record, limit, setting, settings)
@@ -82,7 +85,10 @@ class Tasks:
         def hand_over(stored: Any) -> None:
             runner.submit(stored.id, prepare(stored) if prepare is not None else stored)
 
-        record = await store.create_committed(spec.model_dump(mode="json"), limit, hand_over, **columns)
+        try:
+            record = await store.create_committed(spec.model_dump(mode="json"), limit, hand_over, **columns)
+        except FileGone as error:
+            raise HTTPException(409, detail=str(error)) from None
         return self._queued(request, response, record, limit, setting, settings)
 
     def _queued(self, request: Request, response: Response, record: Any, limit: int, setting: str,
