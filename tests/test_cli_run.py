@@ -79,6 +79,10 @@ def test_blow_up_exits_non_zero_naming_the_step_and_keeps_the_points(tmp_path):
                  "initial_state": {"q": [1.0], "p": [0.0]}}), "step_size: Input should be greater than 0"),
     (json.dumps({"system": {"coordinates": ["x"], "potential": "__import__('os')"}, "method": "3s",
                  "step_size": 0.1, "n_steps": 10, "initial_state": {"q": [1.0], "p": [0.0]}}), "system.potential: "),
+    # A CLI and service audit: a key twice ran with the last (h = 10 here); deep nesting was a RecursionError.
+    ('{"model": "damped_pendulum", "h": 0.1, "h": 10, "n_steps": 10, "initial_state": {"rest": true}}',
+     "the key 'h' appears twice in one object"),
+    ("[" * 100_000 + "]" * 100_000, "nested too deeply to read"),
 ])
 def test_bad_specs_exit_2_with_a_message(tmp_path, content, message):
     (tmp_path / "spec.json").write_text(content)
@@ -265,3 +269,15 @@ def test_a_structures_matrix_file_is_a_path_for_raydamp_run(tmp_path):
     np.testing.assert_array_equal(raydamp.load(tmp_path / "k.npz").q, local.q)
     missing = _run(tmp_path, {**spec, "system": {**system, "K": {"file": "nope.mtx"}}})
     assert missing.returncode == 2 and "system.K.file" in missing.stderr and "Traceback" not in missing.stderr
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full")
+def test_an_output_that_fails_to_write_says_so_and_still_draws_the_plot(tmp_path):
+    # A full disk while writing --out was a traceback and exit code 1 (as if the run had stopped early), and
+    # the plot was not drawn (a CLI and service audit).
+    (tmp_path / "full.csv").symlink_to("/dev/full")
+    done = subprocess.run([*RAYDAMP, "run", str(EXAMPLE), "--out", "full.csv", "--plot", "energy.png",
+                           "--no-progress"], cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
+    assert "raydamp run: could not write full.csv: No space left on device" in done.stderr
+    assert (tmp_path / "energy.png").read_bytes().startswith(b"\x89PNG")

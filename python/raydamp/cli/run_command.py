@@ -90,13 +90,24 @@ def _summary_table(summary: dict) -> str:
 
 
 def read_spec(spec_path: str):
-    """The JSON a job file holds; ValueError naming the file when it cannot be read or parsed."""
+    """The JSON a job file holds; ValueError naming the file when it cannot be read or parsed, or names a key
+    twice (JSON takes the last silently: {"h": 0.1, "h": 10} ran at h = 10, where an unknown key is refused)."""
+    def unique(pairs: list[tuple[str, object]]) -> dict:
+        seen: dict = {}
+        for key, value in pairs:
+            if key in seen:
+                raise ValueError(f"{spec_path}: the key {key!r} appears twice in one object")
+            seen[key] = value
+        return seen
+
     try:
-        return json.loads(Path(spec_path).read_text())
+        return json.loads(Path(spec_path).read_text(), object_pairs_hook=unique)
     except OSError as error:
         raise ValueError(f"{spec_path}: {error.strerror}") from None
     except (json.JSONDecodeError, UnicodeDecodeError) as error:
         raise ValueError(f"{spec_path}: not JSON ({error})") from None
+    except RecursionError:  # a traceback before: 100,000 nested brackets
+        raise ValueError(f"{spec_path}: nested too deeply to read (a job file is a few levels deep)") from None
 
 
 def run_file(spec_path: str, *, out: str | None = None, plot: str | None = None, progress: bool = True,
@@ -125,18 +136,35 @@ def run_file(spec_path: str, *, out: str | None = None, plot: str | None = None,
     # the noise's temperature, seed and stream: what repeats this run (a seed drawn here is shown only here)
     thermal = {key: provenance[key] for key in THERMAL_KEYS if key in provenance}
     print(_summary_table({**sol.summary(), **thermal}))
+    # A write that fails (a full disk) says so and goes on to the other output, with exit code 2: it was a
+    # traceback and exit code 1, as if the run had stopped early, and the plot was not drawn.
+    written = True
     if out is not None:
-        sol.save(out)
-        print(f"wrote {out}")
+        written = _write(out, lambda: sol.save(out)) and written
     if plot is not None:
-        import matplotlib
+        def draw() -> None:
+            import matplotlib
 
-        matplotlib.use("Agg")
-        ax = sol.plot.energy()
-        ax.figure.savefig(plot, dpi=120)
-        print(f"wrote {plot}")
+            matplotlib.use("Agg")
+            ax = sol.plot.energy()
+            ax.figure.savefig(plot, dpi=120)
+
+        written = _write(plot, draw) and written
+    if not written:
+        return 2
     if not sol.success:
         print(f"raydamp run: stopped early ({sol.status}) at step {sol.failed_step or sol.steps}: {sol.message}",
               file=sys.stderr)
         return 1
     return 0
+
+
+def _write(path: str, write) -> bool:
+    """write(), then "wrote path"; False, with the reason on stderr, when it fails."""
+    try:
+        write()
+    except OSError as error:
+        print(f"raydamp run: could not write {path}: {error.strerror or error}", file=sys.stderr)
+        return False
+    print(f"wrote {path}")
+    return True
