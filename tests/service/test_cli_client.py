@@ -37,6 +37,10 @@ def test_jobs_list_show_fetch_delete(start_server, tmp_path):
     assert np.array_equal(sol.q[:, 0], [row[0] for row in ref["q"]])
     assert sol.provenance["method"] == "3s"
     assert cli(server, "jobs", "fetch", job_id, "--out", str(tmp_path / "x.h5")).returncode == 2
+    # An id is one path segment: "<id>?x" asked for the job <id>, and "a b" was reported as no service.
+    for odd in (f"{job_id}?x", "a b", "../files"):
+        answered = cli(server, "jobs", "show", odd)
+        assert answered.returncode == 1 and "answered 404" in answered.stderr, (odd, answered.stderr)
     deleted = cli(server, "jobs", "delete", job_id)
     assert deleted.returncode == 0 and "removed" in deleted.stdout
     gone = cli(server, "jobs", "show", job_id)

@@ -180,7 +180,7 @@ def _fetch(kind: str, args, base: str, token: str | None, root: str) -> int:
         raise _LocalFile(f"--out: unknown format {suffix!r} (known: {', '.join(allowed)})")
     if problem := file_problem(args.out):  # before the request: the service is not asked for nothing
         raise _LocalFile(f"--out {args.out}: {problem}")
-    path = f"{root}/{args.id}/trajectory" if kind == "jobs" else f"{root}/{args.id}/result"
+    path = f"{root}/{_quoted(args.id)}/trajectory" if kind == "jobs" else f"{root}/{_quoted(args.id)}/result"
     written = _download(_request(base, token, "GET", path, {"format": allowed[suffix]}), args.out)
     print(f"wrote {args.out} ({written} bytes)")
     return 0
@@ -199,6 +199,11 @@ def _list(kind: str, args, base: str, token: str | None, root: str) -> int:
     return 0
 
 
+def _quoted(task_id: str) -> str:
+    """An id as one path segment: "a?b" asked for job "a", and "a b" was reported as no service (CLI audit)."""
+    return urllib.parse.quote(task_id, safe="")
+
+
 def _act(kind: str, args, base: str, token: str | None) -> int:
     root = f"/v1/{kind}"
     if args.action == "list":
@@ -206,12 +211,12 @@ def _act(kind: str, args, base: str, token: str | None) -> int:
     if args.action == "fetch":
         return _fetch(kind, args, base, token, root)
     if args.action == "show":
-        print(json.dumps(_json(_request(base, token, "GET", f"{root}/{args.id}")), indent=2))
+        print(json.dumps(_json(_request(base, token, "GET", f"{root}/{_quoted(args.id)}")), indent=2))
     elif args.action == "cancel":
-        view = _json(_request(base, token, "POST", f"{root}/{args.id}/cancel"))
+        view = _json(_request(base, token, "POST", f"{root}/{_quoted(args.id)}/cancel"))
         print(f"{args.id}: {_field(view, 'status')} (cancel requested)")
     elif args.action == "delete":
-        response = _request(base, token, "DELETE", f"{root}/{args.id}")
+        response = _request(base, token, "DELETE", f"{root}/{_quoted(args.id)}")
         print(f"{args.id}: removed" if response.status == 204 else
               f"{args.id}: {_field(_json(response), 'status')}, cancel requested; delete again once it has stopped")
     return 0
