@@ -39,8 +39,10 @@ class Settings(BaseSettings):
     # Host (DNS rebinding); checking Host stops that, and a token stops other local users.
     token: SecretStr | None = Field(None, description="when set, every /v1 request needs Authorization: Bearer "
                                                       "<token>; required to bind a non-loopback address")
+    # At least one: an empty list (RAYDAMP_TRUSTED_HOSTS=) started a service answering 400 to everything.
     trusted_hosts: Annotated[list[str], NoDecode] = Field(
-        list(LOOPBACK_NAMES), description="Host header names accepted (comma-separated; '*' accepts any)")
+        list(LOOPBACK_NAMES), min_length=1, description="Host header names accepted (comma-separated; '*' accepts "
+                                                        "any)")
 
     # Bounds on what one job may ask for, so that no request can exhaust memory or disk.
     max_body_bytes: int = Field(2 * 2**20, ge=1024, description="a larger request body gets 413 before parsing")

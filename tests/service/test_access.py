@@ -114,3 +114,20 @@ def test_a_second_service_on_the_same_database_refuses_to_start(start_server, ru
     job = server.job(job_id)
     assert job["status"] == "running" and job["attempts"] == 1
     assert server.client.post(f"/v1/jobs/{job_id}/cancel").status_code == 202
+
+
+def test_an_empty_trusted_hosts_refuses_to_start(tmp_path, run_service):
+    # RAYDAMP_TRUSTED_HOSTS= started a service that answered 400 to every request, /healthz too (service audit).
+    line = _one_line(run_service("--port", "0", RAYDAMP_DB=str(tmp_path / "db.sqlite3"), RAYDAMP_TRUSTED_HOSTS=""))
+    assert line.startswith("raydamp-service: bad setting RAYDAMP_TRUSTED_HOSTS")
+
+
+def test_raydamp_serve_takes_the_services_options(tmp_path):
+    # `raydamp serve` had no --workers, which python -m raydamp_service has and its help said they were the same.
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-m", "raydamp", "serve", "--workers", "0", "--port", "0"],
+                          env={**os.environ, "RAYDAMP_DB": str(tmp_path / "db.sqlite3")}, capture_output=True,
+                          text=True, timeout=60)
+    assert done.returncode == 2 and "bad setting RAYDAMP_WORKERS" in done.stderr, done.stderr
