@@ -50,3 +50,17 @@ def test_a_failed_claim_that_is_not_the_papers_makes_the_exit_status_1(tmp_path,
         assert f"{sum(c.passed for c in claims)} of {len(claims)} claims hold" in printed
         assert ("FAIL Fig. 1: dissipation hardly depends on h\n" in printed) == (ours in claims)
         assert ("FAIL Sec. 6.2 (data): the data is an equilibrium (the paper's" in printed) == (papers in claims)
+
+
+def test_ctrl_c_ends_reproduce_with_one_line(tmp_path, monkeypatch, capsys):
+    # A KeyboardInterrupt traceback before (CLI audit); the shell's convention for SIGINT is exit status 130.
+    import raydamp.reproduce
+    from raydamp.cli.commands import main
+
+    def interrupted(out, quick, progress):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(raydamp.reproduce, "run", interrupted)
+    assert main(["reproduce", "--out", str(tmp_path / "out"), "--no-progress"]) == 130
+    assert capsys.readouterr().err == (f"raydamp reproduce: interrupted; the figures made so far are in "
+                                       f"{tmp_path / 'out'} (no REPORT.md)\n")

@@ -106,7 +106,12 @@ def main(argv: list[str] | None = None) -> int:
             print(f"raydamp reproduce needs the analysis extra (pip install 'raydamp[analysis]'): {exc}",
                   file=sys.stderr)
             return 2
-        claims = run(args.out, quick=args.quick, progress=not args.no_progress)
+        try:
+            claims = run(args.out, quick=args.quick, progress=not args.no_progress)
+        except KeyboardInterrupt:  # a traceback before; the figures made so far stay in --out
+            print(f"raydamp reproduce: interrupted; the figures made so far are in {args.out} (no REPORT.md)",
+                  file=sys.stderr)
+            return 130
         failed = [c for c in claims if not c.passed]
         print(f"{len(claims) - len(failed)} of {len(claims)} claims hold; report: {args.out}/REPORT.md")
         for c in failed:
