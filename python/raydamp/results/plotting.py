@@ -110,19 +110,23 @@ class SolutionPlots:
         for name, pixels in (("width", width), ("height", height)):
             if isinstance(pixels, bool) or not isinstance(pixels, (int, np.integer)) or pixels < 1:
                 raise ValueError(f"{name}: a positive number of pixels, got {pixels!r}")
+        import matplotlib
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
 
         dpi = 100
-        figure = Figure(figsize=(width / dpi, height / dpi), dpi=dpi, layout="constrained")
-        FigureCanvasAgg(figure)
-        ax = figure.add_subplot()
-        if kind == "energy":
-            self.energy(ax=ax)
-        elif kind == "phase":
-            self.phase(coordinate if coordinate is not None else 0, ax=ax)
-        else:
-            self.projection(x if x is not None else 0, y if y is not None else 1, ax=ax)
-        out = io.BytesIO()
-        figure.savefig(out, format="png", dpi=dpi)
+        # Agg rasterises a path of 20,000 points whole by default: a 3000 x 3000 phase plot took 551 MB at its
+        # peak and 2.0 s; in pieces of 1000 points, 62 MB and 1.6 s (benchmarks/bench_service_plots.py).
+        with matplotlib.rc_context({"agg.path.chunksize": 1000}):
+            figure = Figure(figsize=(width / dpi, height / dpi), dpi=dpi, layout="constrained")
+            FigureCanvasAgg(figure)
+            ax = figure.add_subplot()
+            if kind == "energy":
+                self.energy(ax=ax)
+            elif kind == "phase":
+                self.phase(coordinate if coordinate is not None else 0, ax=ax)
+            else:
+                self.projection(x if x is not None else 0, y if y is not None else 1, ax=ax)
+            out = io.BytesIO()
+            figure.savefig(out, format="png", dpi=dpi)
         return out.getvalue()
