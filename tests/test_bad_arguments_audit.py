@@ -188,3 +188,19 @@ def test_sweep_names_item_and_client():
     job = {"model": "damped_pendulum", "q0": [1.0], "p0": [0.0], "h": 0.1, "n_steps": 5}
     message = refused("client", raydamp.sweep, job, {"eps": [0.1]}, client="tcp://x")  # 'str' has no 'map'
     assert "dask.distributed.Client" in message
+
+
+def test_strings_and_bools_are_not_read_as_numbers_or_flags():
+    # Each ran (API audit): q0 [True, 0.5, 1.0] as [1.0, 0.5, 1.0]; allow_indefinite_stiffness="no" and
+    # measure="no" as True (a non-empty string is truthy); a sweep axis of strings as numbers, None as NaN.
+    refused("q0", raydamp.integrate, ElasticPendulum(), [True, 0.5, 1.0], [1.0, 0.0, 0.0], h=0.1, n_steps=1)
+    refused("allow_indefinite_stiffness", raydamp.LinearStructure, np.eye(2), -np.eye(2),
+            allow_indefinite_stiffness="no")
+    structure = raydamp.LinearStructure(np.eye(2), np.diag([1.0, 4.0]), alpha=0.1)
+    refused("measure", raydamp.advise, structure, t_end=10.0, tolerance=1e-3, measure="no")
+    job = {"model": "damped_pendulum", "q0": [1.0], "p0": [0.0], "h": 0.1, "n_steps": 5}
+    for axis, shown in ((["0.1"], "'0.1'"), ([0.1, None], "None")):
+        message = refused("grid.eps[", raydamp.check_sweep, job, {"eps": axis})
+        assert message.endswith(f"expected a real number, got {shown}"), message
+    refused("grid.h", raydamp.check_sweep, job, {"h": np.array(["0.1"])})
+    assert raydamp.check_sweep(job, {"eps": np.array([0.1, 0.2])}).grid == {"eps": [0.1, 0.2]}

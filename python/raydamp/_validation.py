@@ -59,6 +59,9 @@ def vector(name: str, value, dim: int) -> np.ndarray:
             array = None
         if array is None or array.dtype.kind not in "iuf":
             raise ValueError(f"{name} must be an array of {dim} real numbers, got {_short(value)}") from None
+        # A list mixing bools and numbers converts to floats (True -> 1.0): [True, 0.5, 1.0] ran as 1.0.
+        if isinstance(value, (list, tuple)) and any(isinstance(x, (bool, np.bool_)) for x in value):
+            raise ValueError(f"{name} must be an array of {dim} real numbers, got a bool in {_short(value)}")
         array = array.astype(float)
     if array.ndim == 0 and dim == 1:
         array = array.reshape(1)
@@ -157,3 +160,10 @@ def real_array(name: str, value) -> np.ndarray:
         raise ValueError(f"{name} must be an array of real numbers, got {_short(value)}")
     return array.astype(float)
 
+
+
+def flag(name: str, value) -> bool:
+    """True or False (NumPy's too); a string such as "no" was truthy, so it ran as True."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{name} must be True or False, got {_short(value)}")
+    return bool(value)

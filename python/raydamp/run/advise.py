@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from .._validation import MAX_STEPS, real
+from .._validation import MAX_STEPS, flag, real
 from ..systems.models import Model
 from ..systems.series import ChebyshevDegreeError
 from ..systems.structure import LinearStructure
@@ -181,6 +181,7 @@ def advise(structure: Model, t_end: float, tolerance: float, *, omega: float | N
                          "raydamp.analysis (convergence) instead")
     t_end = real("t_end", t_end, positive=True)
     tolerance = real("tolerance", tolerance, positive=True)
+    measure = flag("measure", measure)
     if tolerance >= 1:
         raise ValueError(f"tolerance must be below 1 (an error relative to the initial amplitude), got {tolerance}")
     if tolerance < MIN_TOLERANCE:  # a run of doubles does not get closer: asked for 1e-20, gauss4 gave 1.4e-14

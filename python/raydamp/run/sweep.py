@@ -11,6 +11,7 @@ from __future__ import annotations
 import ast
 import json
 import math
+import numbers
 import re
 import sys
 import threading
@@ -191,13 +192,17 @@ def _axis(name: str, values) -> np.ndarray:
 
 
 def _refuse_bools(name: str, values) -> None:
-    """A bool in a numeric axis is refused, as integrate refuses h=True: np.asarray would read True as 1.0."""
-    if isinstance(values, np.ndarray) and values.dtype.kind == "b":
-        raise ValueError(f"grid.{name}: expected a list of real numbers, got an array of bools")
+    """A bool or a string in a numeric axis is refused, as integrate refuses h=True and h="0.1": np.asarray
+    would read True as 1.0 and "0.1" as 0.1."""
+    if isinstance(values, np.ndarray) and values.dtype.kind not in "iufO":
+        what = "bools" if values.dtype.kind == "b" else str(values.dtype)
+        raise ValueError(f"grid.{name}: expected a list of real numbers, got an array of {what}")
     if isinstance(values, (list, tuple)) or (isinstance(values, np.ndarray) and values.dtype == object):
         for i, v in enumerate(values):
             if isinstance(v, (bool, np.bool_)):
                 raise ValueError(f"grid.{name}[{i}]: expected a real number, got the bool {bool(v)}")
+            if not isinstance(v, numbers.Real):
+                raise ValueError(f"grid.{name}[{i}]: expected a real number, got {_short(v)}")
 
 
 class GridTooLarge(ValueError):

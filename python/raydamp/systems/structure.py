@@ -62,7 +62,7 @@ from typing import Any
 import numpy as np
 
 from .. import _core
-from .._validation import _short, real, vector
+from .._validation import _short, flag, real, vector
 from .matrix_market import read_header
 from .models import SharedModel
 
@@ -203,7 +203,8 @@ class LinearStructure(SharedModel):
         except ValueError as error:  # the core names M, K or f first
             raise ValueError(str(error)) from None
         object.__setattr__(self, "_core_model", core)
-        object.__setattr__(self, "allow_indefinite_stiffness", bool(allow_indefinite_stiffness))
+        allow_indefinite_stiffness = flag("allow_indefinite_stiffness", allow_indefinite_stiffness)
+        object.__setattr__(self, "allow_indefinite_stiffness", allow_indefinite_stiffness)
         if not allow_indefinite_stiffness:
             _require_semidefinite(stiffness, mass, core.spectral_bound)
         self._freeze()
