@@ -356,3 +356,16 @@ def test_a_large_but_representable_power_is_exact():
     system = raydamp.System(["x"], "(4*x)^100 + (x/10)^10")
     assert system.potential(np.array([0.25])) == pytest.approx(1.0 + 0.025**10, rel=1e-14)
     assert system.gradient(np.array([0.25]))[0] == pytest.approx(400.0 + 10 * 0.025**9 / 10, rel=1e-13)
+
+
+def test_from_functions_refuses_complex_values():
+    # The imaginary part was dropped with only a ComplexWarning and the run "completed" (API audit).
+    at_q0 = raydamp.System.from_functions(2, potential=lambda q: 0.0, gradient=lambda q: q + 1j)
+    with pytest.raises(ValueError, match=r"^gradient: returned complex numbers at q0 = \[1.0, 0.0\]"):
+        raydamp.integrate(at_q0, [1.0, 0.0], [0.0, 0.0], h=0.1, n_steps=2)
+    later = raydamp.System.from_functions(2, potential=lambda q: 0.0,
+                                          gradient=lambda q: q + (1j if q[0] > 1.05 else 0))
+    sol = raydamp.integrate(later, [1.0, 0.0], [1.0, 0.0], h=0.1, n_steps=5)
+    assert sol.status == "non_finite" and sol.message.endswith("gradient raised ValueError: returned complex "
+                                                               "numbers; it must return real ones")
+    assert np.isfinite(sol.q).all() and sol.q[-1, 0] <= 1.05 + 0.1

@@ -58,6 +58,8 @@ class PythonFunctions:
             try:
                 x = np.ctypeslib.as_array(inp, shape=(n_in,)).copy()
                 value = fn(x[:split], x[split:]) if split else fn(x)
+                if np.iscomplexobj(value):  # float() would drop the imaginary part, with only a warning
+                    raise ValueError("returned complex numbers; it must return real ones")
                 y = np.asarray(value, dtype=float).reshape(-1)
                 if y.size != n_out:
                     raise ValueError(f"returned {y.size} values, expected {n_out}")

@@ -282,7 +282,13 @@ class System(Model):
         pieces += [(("damping", "dampers", i, "gradient"), g, q.size) for i, (g, _) in enumerate(direct["dampers"])]
         for path, fn, size in pieces:
             try:
-                value = np.asarray(fn(q.copy()), dtype=float).reshape(-1)
+                value = fn(q.copy())
+                if np.iscomplexobj(value):  # float() would drop the imaginary part, with only a warning
+                    raise SpecError(path, f"returned complex numbers at {name} = {q.tolist()}; it must return real "
+                                          "ones")
+                value = np.asarray(value, dtype=float).reshape(-1)
+            except SpecError:
+                raise
             except Exception as error:  # noqa: BLE001 - the user's code; say what it raised
                 raise SpecError(path, f"raised {type(error).__name__} at {name} = {q.tolist()}: {error}") from error
             if value.size != size:
