@@ -369,3 +369,12 @@ def test_from_functions_refuses_complex_values():
     assert sol.status == "non_finite" and sol.message.endswith("gradient raised ValueError: returned complex "
                                                                "numbers; it must return real ones")
     assert np.isfinite(sol.q).all() and sol.q[-1, 0] <= 1.05 + 0.1
+
+
+def test_a_parameter_no_expression_uses_is_refused_naming_it():
+    # Accepted silently (an ensemble or sweep over it changed nothing), where Load.expression refuses one (API
+    # audit). One used only by a dashpot or a momentum map is used.
+    with pytest.raises(ValueError, match=r"^parameters.k: is used by none of the potential, the dampers"):
+        raydamp.System(["x"], "x^2/2", parameters={"k": 1.0})
+    raydamp.System(["x", "y"], "x^2/2 + y^2/2", parameters={"a": 2.0, "w": 3.0},
+                   damping={"dampers": [{"on": "a*(x - y)"}]}, eps=0.1, momenta={"J": "w*p_x"})

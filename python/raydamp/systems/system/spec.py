@@ -281,5 +281,9 @@ def normalise(*, coordinates, potential, parameters=None, mass=1.0, damping=None
         moms[key] = _expression(("momenta", key), text, with_momenta)
     if name is not None and (not isinstance(name, str) or len(name) > 200):
         raise SpecError(("name",), "must be a string of at most 200 characters")
+    used = expr.names.union(*(d.on.names for d in dampers), *(e.names for e in moms.values()))
+    unused = [key for key in params if key not in used]
+    if unused:  # accepted silently (a sweep over it changed nothing), where Load.expression refuses one
+        raise SpecError(("parameters", unused[0]), "is used by none of the potential, the dampers and the momenta")
     return SystemSpec(coords, as_count, expr, params, m, mass_form, d_form, d_scalar, d_matrix, dampers, eps, moms,
                       name)
