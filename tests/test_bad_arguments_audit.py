@@ -204,3 +204,15 @@ def test_strings_and_bools_are_not_read_as_numbers_or_flags():
         assert message.endswith(f"expected a real number, got {shown}"), message
     refused("grid.h", raydamp.check_sweep, job, {"h": np.array(["0.1"])})
     assert raydamp.check_sweep(job, {"eps": np.array([0.1, 0.2])}).grid == {"eps": [0.1, 0.2]}
+
+
+def test_a_zarr_path_that_is_a_file_is_refused_naming_it(tmp_path):
+    # FileExistsError from Zarr (API audit); a store that is already a directory is replaced, as documented.
+    (tmp_path / "taken.zarr").write_text("not a store")
+    ens = raydamp.integrate_ensemble(DampedPendulum(), [[1.0], [2.0]], [0.0], h=0.1, n_steps=3)
+    refused("path: ", ens.save, tmp_path / "taken.zarr")
+    job = {"model": "damped_pendulum", "q0": [1.0], "p0": [0.0], "h": 0.1, "n_steps": 3}
+    refused("store: ", raydamp.sweep, job, {"eps": [0.1]}, store=str(tmp_path / "taken.zarr"))
+    ens.save(tmp_path / "ok.zarr")
+    ens.save(tmp_path / "ok.zarr")
+    np.testing.assert_array_equal(raydamp.load(tmp_path / "ok.zarr").q, ens.q)

@@ -167,3 +167,12 @@ def flag(name: str, value) -> bool:
     if not isinstance(value, (bool, np.bool_)):
         raise ValueError(f"{name} must be True or False, got {_short(value)}")
     return bool(value)
+
+
+def replaceable_store(name: str, path) -> None:
+    """A Zarr store's path must be a directory (replaced) or free: a plain file there was FileExistsError."""
+    import os
+
+    if os.path.exists(path) and not os.path.isdir(path):
+        raise ValueError(f"{name}: {os.fspath(path)!r} is a file, not a Zarr store (a directory); remove it or "
+                         "choose another path")

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from .._core import __version__
-from .._validation import MAX_SEED, _short, integer, real, thermal, vector
+from .._validation import MAX_SEED, _short, integer, real, replaceable_store, thermal, vector
 from ..results.ensemble_solution import STATUSES
 from ..jobs import STEP_SIZE_ALIAS, JobSpec, job_arguments, model_from_spec
 from ..loads import Load
@@ -739,6 +739,8 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
         raise ValueError(f"progress must be True, a callable or None, got {progress!r}")
     if store is not None and not str(store).endswith(".zarr"):
         raise ValueError(f"store: expected a path ending in .zarr, got {store!r}")
+    if store is not None:
+        replaceable_store("store", store)
     if cancel is not None and not hasattr(cancel, "cancelled"):
         raise ValueError(f"cancel must be a raydamp.CancelToken, got {cancel!r}")
     if client is not None and not callable(getattr(client, "map", None)):  # "tcp://x" was 'str' has no 'map'

@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from ..._validation import replaceable_store
 from ..ensemble_solution import STATUSES, EnsembleSolution
 
 __all__ = ["ensemble_to_xarray", "ensemble_from_xarray", "save_ensemble", "ENSEMBLE_FORMATS"]
@@ -98,6 +99,7 @@ def save_ensemble(ens: EnsembleSolution, path) -> None:
     if suffix == ".nc":
         ensemble_to_xarray(ens).to_netcdf(path, engine="h5netcdf")
     elif suffix == ".zarr":
+        replaceable_store("path", path)
         # Zarr format 2: its string arrays (the dof names) have a settled spec, unlike format 3 yet.
         ensemble_to_xarray(ens).to_zarr(path, mode="w", zarr_format=2)
     else:
