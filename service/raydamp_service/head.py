@@ -1,9 +1,9 @@
 """HEAD wherever GET works (RFC 9110: a GET route answers HEAD with the same status and headers, no body).
 FastAPI's routes answer HEAD with 405; curl -I, link checkers and proxies' health checks send it.
 
-The request runs as its GET; the body is dropped, and once the headers are sent the route is told the
-client has gone, so a streamed trajectory stops being produced (its slot is still given back: the
-response's background task runs as for any client that leaves)."""
+The request runs as its GET, marked in its scope (HEAD); the body is dropped, and once the headers are sent
+the route is told the client has gone, so a streamed trajectory stops being produced. A trajectory's HEAD
+takes no large-fetch slot (routes/jobs.py): it reads no body."""
 
 from __future__ import annotations
 
@@ -11,7 +11,9 @@ import asyncio
 
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-__all__ = ["HeadAsGet"]
+__all__ = ["HEAD", "HeadAsGet"]
+
+HEAD = "raydamp.head"  # in the scope of a HEAD run as its GET: a route may skip what only the body needs
 
 
 class HeadAsGet:
@@ -40,4 +42,4 @@ class HeadAsGet:
                 started.set()
             # the body's pieces are dropped: the response ended with its headers
 
-        await self.app({**scope, "method": "GET"}, head_receive, head_send)
+        await self.app({**scope, "method": "GET", HEAD: True}, head_receive, head_send)

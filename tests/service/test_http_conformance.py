@@ -53,16 +53,21 @@ def test_head_answers_as_get_without_a_body(module_server):
         assert head.content == b"" and get.content, path
 
 
-def test_a_head_gives_back_its_large_fetch_slot(start_server):
-    # One slot, and every trajectory of this job is large: five HEADs in turn, then a GET, each get it.
+def test_a_head_takes_no_large_fetch_slot(start_server):
+    # One slot, and every trajectory of this job is large: a HEAD reads no body, so it needs none (and a HEAD
+    # that took one gave it back only after its client had the answer: the next request could find it taken).
     server = start_server(RAYDAMP_LARGE_FETCH_BYTES="1024", RAYDAMP_MAX_LARGE_FETCHES="1")
-    job_id = server.submit({"model": "damped_pendulum", "h": 0.1, "n_steps": 1000,
-                            "initial_state": {"q": [1.0], "p": [0.0]}})
+    job_id = server.submit({"model": "damped_pendulum", "h": 0.01, "n_steps": 200_000,  # some 20 MB of JSON:
+                            "initial_state": {"q": [1.0], "p": [0.0]}})  # more than the sockets buffer
     server.wait_finished(job_id)
     for _ in range(5):
         assert server.client.head(f"/v1/jobs/{job_id}/trajectory").status_code == 200
     response = server.client.get(f"/v1/jobs/{job_id}/trajectory")
-    assert response.status_code == 200 and len(response.json()["t"]) == 1001
+    assert response.status_code == 200 and len(response.json()["t"]) == 200_001
+    with server.client.stream("GET", f"/v1/jobs/{job_id}/trajectory") as holding:  # unread: holds the slot
+        assert holding.status_code == 200
+        assert server.client.get(f"/v1/jobs/{job_id}/trajectory").status_code == 429
+        assert server.client.head(f"/v1/jobs/{job_id}/trajectory").status_code == 200
 
 
 def test_a_trailing_slash_is_404_not_a_redirect_built_from_host(module_server):

@@ -29,6 +29,7 @@ from ..runner import Runner
 from ..schemas import JobCreated, JobList, JobListItem, JobSpec, JobStatus, JobView, Trajectory
 from ..config import Settings
 from ..downloads import write_file
+from ..head import HEAD
 from ..jobs import JobRecord, JobStore
 from ..store import FINAL_STATUSES
 from ..timed_send import TimedFileResponse, TimedStreamingResponse
@@ -175,7 +176,7 @@ def _spec(record: JobRecord) -> JobSpec:
 
 def _large_slot(request: Request, settings: Settings, selected_bytes: int) -> threading.Semaphore | None:
     """The large-fetch slot a fetch, file or plot reading this many stored bytes needs (None for a small one)."""
-    if selected_bytes <= settings.large_fetch_bytes:
+    if selected_bytes <= settings.large_fetch_bytes or request.scope.get(HEAD):
         return None
     semaphore = request.app.state.large_fetches
     if not semaphore.acquire(blocking=False):
