@@ -53,11 +53,8 @@ def vector(name: str, value, dim: int) -> np.ndarray:
     if isinstance(value, np.ndarray) and value.dtype == np.float64:
         array = value
     else:
-        try:
-            array = np.asarray(value)
-        except (TypeError, ValueError):
-            array = None
-        if array is None or array.dtype.kind not in "iuf":
+        array = numeric_array(value)
+        if array is None:
             raise ValueError(f"{name} must be an array of {dim} real numbers, got {_short(value)}") from None
         # A list mixing bools and numbers converts to floats (True -> 1.0): [True, 0.5, 1.0] ran as 1.0.
         if isinstance(value, (list, tuple)) and any(isinstance(x, (bool, np.bool_)) for x in value):
@@ -147,16 +144,23 @@ def instance(name: str, value, kind, what: str):
     return value
 
 
+def numeric_array(value) -> np.ndarray | None:
+    """value as an array when its entries are real numbers (ints or floats, not bools), else None: the callers
+    refuse it in their own words. np.asarray(value, dtype=float) would read "1" as 1.0 and None as NaN."""
+    try:
+        array = np.asarray(value)
+    except (TypeError, ValueError):
+        return None
+    return array if array.dtype.kind in "iuf" else None
+
+
 def real_array(name: str, value) -> np.ndarray:
     """An array of real numbers of any shape (a scipy.sparse matrix made dense), as floats. Only numbers:
     np.asarray(dtype=float) read "1" as 1.0, and failed on "x" or an object with a message naming nothing."""
     if hasattr(value, "toarray") and type(value).__module__.startswith("scipy.sparse"):
         value = value.toarray()
-    try:
-        array = np.asarray(value)
-    except (TypeError, ValueError):
-        array = None
-    if array is None or array.dtype.kind not in "iuf":
+    array = numeric_array(value)
+    if array is None:
         raise ValueError(f"{name} must be an array of real numbers, got {_short(value)}")
     return array.astype(float)
 

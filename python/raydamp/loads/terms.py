@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from .._validation import _short, real
+from .._validation import _short, numeric_array, real
 
 __all__ = ["Ground", "Harmonic", "Series", "ExpressionTerm", "times", "history", "direction"]
 
@@ -57,11 +57,8 @@ def direction(name: str, value) -> np.ndarray | Ground | None:
 
 
 def _floats(name: str, value, ndim) -> np.ndarray:
-    try:
-        array = np.asarray(value)
-    except (TypeError, ValueError):
-        array = None
-    if array is None or array.dtype.kind not in "iuf":
+    array = numeric_array(value)
+    if array is None:
         raise ValueError(f"{name} must be an array of numbers, got {_short(value)}")
     allowed = (ndim,) if isinstance(ndim, int) else ndim
     if array.ndim not in allowed:

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from .. import _core
-from .._validation import MAX_SEED, _short, integer, real, thermal
+from .._validation import MAX_SEED, _short, integer, numeric_array, real, thermal
 from ..loads import Load
 from ..results.ensemble_solution import EnsembleSolution
 from ..systems.models import Model
@@ -27,11 +27,8 @@ def member_parameters(system: Model) -> tuple[str, ...]:
 
 def _states(name: str, value, members: int | None, n: int) -> np.ndarray:
     """(members, n) finite floats; a single state (n,) is repeated for every member."""
-    try:
-        array = np.asarray(value)
-    except (TypeError, ValueError):
-        array = None
-    if array is None or array.dtype.kind not in "iuf":
+    array = numeric_array(value)
+    if array is None:
         raise ValueError(f"{name} must be an array of shape (members, {n}) of real numbers")
     array = array.astype(float)
     if array.ndim == 1 and array.shape == (n,) and members is not None:
