@@ -156,3 +156,12 @@ def test_a_user_tableau_runs_as_in_python(server):
     final = server.client.get(f"/v1/jobs/{job_id}/trajectory", params={"start": sol.t.size - 1}).json()
     assert final["q"][0][0] == sol.q[-1, 0] and final["p"][0][0] == sol.p[-1, 0]
     server.client.delete(f"/v1/jobs/{job_id}")  # the module's last test expects no jobs
+
+
+def test_a_key_named_twice_is_422_not_the_last_value(module_server):
+    # {"h": 0.1, ..., "h": 10} ran at h = 10 (a service audit), where an unknown key is refused; a sweep too.
+    body = '{"model": "damped_pendulum", "h": 0.1, "n_steps": 10, "h": 10, "initial_state": {"rest": true}}'
+    for path, content in (("/v1/jobs", body), ("/v1/sweeps", '{"job": ' + body + ', "grid": {"eps": [0.1]}}')):
+        response = module_server.client.post(path, content=content, headers={"Content-Type": "application/json"})
+        assert response.status_code == 422, response.text
+        assert response.json()["detail"][0]["ctx"]["error"] == "the key 'h' appears twice in one object"

@@ -35,8 +35,9 @@ from ..store import FINAL_STATUSES
 from ..timed_send import TimedFileResponse, TimedStreamingResponse
 from .tasks import Tasks, check_limit, checks_busy, invalid
 from ..trajectory_stream import FetchLease, Selection, read_arrays, trajectory_chunks
+from ..json_body import UniqueKeysRoute
 
-router = APIRouter(prefix="/v1/jobs", tags=["jobs"])
+router = APIRouter(prefix="/v1/jobs", tags=["jobs"], route_class=UniqueKeysRoute)
 
 _NOT_FOUND = {404: {"description": "no job with this id"}}
 

@@ -15,9 +15,10 @@ from ..runner import Runner
 from ..schemas import JobStatus, SweepCreated, SweepList, SweepListItem, SweepSpec, SweepView
 from ..sweeps import SweepRecord, SweepStore
 from ..timed_send import TimedStreamingResponse
+from ..json_body import UniqueKeysRoute
 from .tasks import Tasks, check_limit, checks_busy, invalid
 
-router = APIRouter(prefix="/v1/sweeps", tags=["sweeps"])
+router = APIRouter(prefix="/v1/sweeps", tags=["sweeps"], route_class=UniqueKeysRoute)
 
 _NOT_FOUND = {404: {"description": "no sweep with this id"}}
 _PIECE = 1 << 20  # bytes per piece of a streamed result
