@@ -1,5 +1,5 @@
-"""Request bodies whose JSON names a key twice in one object are refused (422), not read with the last value
-winning: {"h": 0.1, ..., "h": 10} ran at h = 10 (a service audit), where an unknown key is refused. FastAPI reads
+"""Request bodies whose JSON names a key twice in one object are refused (422, as a body that is not JSON is),
+not read with the last value winning: {"h": 0.1, ..., "h": 10} ran at h = 10 (a service audit), where an unknown key is refused. FastAPI reads
 a body through Request.json(); the routers that take JSON bodies use this route class, whose Request parses it
 with a hook that refuses a repeated key (as `raydamp run` does for a job file)."""
 
@@ -28,7 +28,12 @@ def _unique(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
 class _UniqueKeysRequest(Request):
     async def json(self) -> Any:
         if not hasattr(self, "_json"):
-            self._json = json.loads(await self.body(), object_pairs_hook=_unique)
+            try:
+                self._json = json.loads(await self.body(), object_pairs_hook=_unique)
+            except json.JSONDecodeError:
+                raise
+            except ValueError as error:  # an integer of over 4300 digits: a 400 naming nothing, as a 422 now
+                raise json.JSONDecodeError(str(error), "", 0) from None
         return self._json
 
 

@@ -109,7 +109,8 @@ def test_overflowing_number_is_422(server):
 @pytest.mark.parametrize("body", [b'{"model": "damped_pendulum",', b"not json", b"[1, 2]", b"",
                                   # a 400 without a loc before, as FastAPI answers what json.loads refuses
                                   # other than by a JSONDecodeError
-                                  b"[" * 5000 + b"]" * 5000, b'{"model": "\xff"}'])
+                                  b"[" * 5000 + b"]" * 5000, b'{"model": "\xff"}',
+                                  b'{"n_steps": ' + b"9" * 5001 + b"}"])  # over Python's 4300 digits (an audit)
 def test_malformed_body_is_422(server, body):
     response = server.client.post("/v1/jobs", content=body, headers={"content-type": "application/json"})
     assert response.status_code == 422, response.text
