@@ -400,3 +400,18 @@ def test_friction_on_every_site_under_a_load_equals_numpy(method):
                             load=raydamp.Load.harmonic(amplitude, omega))
     assert sol.success
     assert np.abs(sol.q[-1] - q).max() < 1e-12 and np.abs(sol.p[-1] - p).max() < 1e-12
+
+
+def test_a_chain_without_dampers_is_undamped_whatever_its_eps():
+    # Chain(8) (eps 1 by default, nothing damped) refused sv with "eps = 1 > 0": the README passes eps=0.0 to get
+    # round it (a Chain audit). It runs, and equals 3s on the same chain (the same steps when nothing is damped).
+    chain = Chain(8, bond="fput", parameters={"alpha": 0.25})
+    q0, p0 = chain.normal_mode(1)
+    sv = raydamp.integrate(chain, q0, p0, method="sv", h=0.05, n_steps=200)
+    three = raydamp.integrate(Chain(8, bond="fput", parameters={"alpha": 0.25}, eps=0.0), q0, p0, method="3s",
+                              h=0.05, n_steps=200)
+    assert sv.success and np.abs(sv.q - three.q).max() < 1e-13
+    assert chain.eps == 1.0 and chain.to_dict()["eps"] == 1.0  # what was given is what the provenance says
+    damped = Chain(8, bond="fput", parameters={"alpha": 0.25}, dampers={"bonds": [3], "c": 0.1})
+    with pytest.raises(ValueError, match="method"):
+        raydamp.integrate(damped, q0, p0, method="sv", h=0.05, n_steps=10)

@@ -28,6 +28,12 @@ Bond families and their parameters (defaults):
     morse           V = depth (1 - e^{-a r})^2                           depth=1, a=1
     lennard_jones   V = depth((s/d)^12 - 2 (s/d)^6 + 1), d = s + r       depth=1, spacing s=1
     expression      V given as text in r: {"potential": "r^2/2 + g*r^6", "g": 0.1}
+A Lennard-Jones bond is defined for d = s + r > 0: one squeezed through zero length (a step too long for
+the motion) is not finite there, and the run stops "non_finite" at that step, keeping what it computed.
+A chain without dampers is undamped whatever its eps (its default 1 scales nothing): sv runs it.
+At a temperature the noise enters where the dampers act: a harmonic chain's mode with a node there is never
+thermalised (friction on one site of a periodic chain leaves half the modes alone: per-site <p^2>/m then
+settles at kT/2), which is the physics, not a sampling error.
 
 On-site potentials U(q_i) (``on_site=``; each site held to its rest position, which breaks
 the conservation of sum p):
@@ -113,7 +119,10 @@ class Chain(SharedModel):
         c = d.get("c", 0.0)
         c_list = list(c) if isinstance(c, list) else [c] * (len(bonds) + len(sites))
         core_on_site, core_on_site_parameters = _core_on_site(self.on_site)
-        self._core_model = _core.Chain(n, boundary, bond, numeric, self.mass, self.eps, bonds, c_list[:len(bonds)],
+        # Without dampers eps has nothing to act on; the core's eps decides whether sv may run (Chain(4) refused
+        # it, "eps = 1 > 0", though nothing was damped: the default eps is 1), as for an undamped System.
+        core_eps = self.eps if bonds or sites else 0.0
+        self._core_model = _core.Chain(n, boundary, bond, numeric, self.mass, core_eps, bonds, c_list[:len(bonds)],
                                        sites, c_list[len(bonds):], functions, keep, core_on_site,
                                        core_on_site_parameters)
         self.momentum_names = ("P",) if self._core_model.n_momenta else ()
