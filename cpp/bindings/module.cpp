@@ -3,7 +3,7 @@
 
 #include <stdexcept>
 
-#include "raydamp/damping/chebyshev.hpp"
+#include "raydamp/errors.hpp"
 
 namespace py = pybind11;
 

@@ -14,6 +14,7 @@
 
 #include "run.hpp"
 #include "run_lanes.hpp"
+#include "raydamp/errors.hpp"
 #include "raydamp/ensemble.hpp"
 
 namespace raydamp::bindings {

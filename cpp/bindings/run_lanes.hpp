@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "raydamp/errors.hpp"
 #include "raydamp/raydamp.hpp"
 #include "raydamp/models/pendulum_lanes.hpp"
 

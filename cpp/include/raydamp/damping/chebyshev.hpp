@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "raydamp/errors.hpp"
+
 namespace raydamp {
 
 // The truncated series leaves out at most this much (sum of the dropped |c_k|)
@@ -22,19 +24,6 @@ namespace raydamp {
 // norm; with the three-term recurrence's rounding it keeps the flows within 1e-12.
 inline constexpr double kChebyshevTolerance = 1e-13;
 inline constexpr int kMaxChebyshevDegree = 8192;
-
-// A flow whose series needs more than kMaxChebyshevDegree terms at this sub-step length (t beta lambda_max
-// above about 1e7): raydamp.ChebyshevDegreeError in Python, a ValueError that choose_method and advise tell
-// apart from other refusals (the step is too long for 3s, 2s and baoab on this structure, not invalid).
-struct ChebyshevDegreeError : std::invalid_argument {
-  using std::invalid_argument::invalid_argument;
-};
-
-// Rethrows e with a prefix (a member's number), keeping its type.
-[[noreturn]] inline void rethrow_prefixed(const std::string& prefix, const std::invalid_argument& e) {
-  if (dynamic_cast<const ChebyshevDegreeError*>(&e)) throw ChebyshevDegreeError(prefix + e.what());
-  throw std::invalid_argument(prefix + e.what());
-}
 
 struct ChebyshevSeries {
   std::vector<double> c;  // c_0 .. c_degree (c_0 already halved)
