@@ -3,8 +3,10 @@ and 422s that survive hostile input. Each case is a reproducer from the service 
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
+import socket
 from concurrent.futures import ThreadPoolExecutor
 
 import httpx
@@ -157,21 +159,30 @@ def test_large_bodies_are_handled_a_few_at_once(tmp_path):
     assert [r.status_code for r in done] == [200, 200, 200] and again.status_code == 200 and left == 0
 
 
+@contextlib.contextmanager
+def _half_sent(port: int, count: int, start: bytes):
+    """count connections that sent start and nothing more; closed at the end whatever happened (a socket left
+    open failed a later test with its ResourceWarning)."""
+    connections = []
+    try:
+        for _ in range(count):
+            connections.append(socket.create_connection(("127.0.0.1", port)))
+            connections[-1].sendall(start)
+        yield connections
+    finally:
+        for connection in connections:
+            connection.close()
+
+
 def test_a_body_that_does_not_arrive_is_408_and_gives_back_its_place(start_server):
     """Two uploads that announced 300 KiB and sent nothing held both max_large_bodies places for as long as
     their connections lived: every honest large request got 429 (a service audit). Past body_seconds each
     gets 408, and a large request then passes."""
-    import socket
     import time
 
     server = start_server(RAYDAMP_BODY_SECONDS="1")
-    idle = []
-    try:
-        for _ in range(2):
-            connection = socket.create_connection(("127.0.0.1", server.port))
-            idle.append(connection)
-            connection.sendall(b"POST /v1/jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
-                               b"Content-Length: 307200\r\n\r\n{")
+    with _half_sent(server.port, 2, b"POST /v1/jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json"
+                                    b"\r\nContent-Length: 307200\r\n\r\n{") as idle:
         time.sleep(0.3)
         big = {"model": "damped_pendulum", "h": 0.1, "n_steps": 10, "initial_state": {"q": [1.0], "p": [0.0]},
                "name_padding": "x" * 300_000}
@@ -182,9 +193,6 @@ def test_a_body_that_does_not_arrive_is_408_and_gives_back_its_place(start_serve
             while piece := connection.recv(4096):  # the headers and the body may come apart; then the close
                 answer += piece
             assert answer.startswith(b"HTTP/1.1 408") and b"body_seconds = 1 s" in answer, answer[:300]
-    finally:
-        for connection in idle:
-            connection.close()
     time.sleep(0.1)
     answered = server.client.post("/v1/jobs", json=big)
     assert answered.status_code == 422 and answered.json()["detail"][0]["loc"][-1] == "name_padding", answered.text
@@ -194,16 +202,10 @@ def test_half_sent_headers_are_dropped_after_header_seconds(start_server):
     """A connection that sent "G" and nothing more was held for as long as its client liked: two clients with
     10,500 each made the server drop 463 of 731 /healthz probes (a service audit). Past header_seconds it is
     closed; a request whose headers arrived in time is served whatever its length, and keep-alive still works."""
-    import socket
     import time
 
     server = start_server(RAYDAMP_HEADER_SECONDS="1")
-    half = []
-    try:
-        for _ in range(50):
-            connection = socket.create_connection(("127.0.0.1", server.port))
-            half.append(connection)
-            connection.sendall(b"G")
+    with _half_sent(server.port, 50, b"G") as half:
         # A keep-alive client whose second request is sent within the deadline of the first response's end.
         with httpx.Client(base_url=f"http://127.0.0.1:{server.port}") as client:
             assert client.get("/healthz").status_code == 200
@@ -214,7 +216,4 @@ def test_half_sent_headers_are_dropped_after_header_seconds(start_server):
             connection.settimeout(10)
             assert connection.recv(100) == b""  # closed by the server, answering nothing
         assert time.monotonic() - started < 5
-    finally:
-        for connection in half:
-            connection.close()
     assert server.client.get("/healthz").status_code == 200
