@@ -54,7 +54,11 @@ class Settings(BaseSettings):
                                                           "response) is closed")
     # Two uploads that announced 300 KiB and sent nothing held both large-body places for as long as they liked.
     body_seconds: float = Field(120.0, gt=0, description="a request body must arrive within this many seconds of "
-                                                         "the request's headers, or the request gets 408")
+                                                         "the request's headers (plus its bytes at "
+                                                         "min_body_bytes_per_second), or the request gets 408")
+    # A fixed deadline refused an honest 64 MiB upload over a link under 4.5 Mbit/s: each byte received buys time.
+    min_body_bytes_per_second: int = Field(64 * 2**10, ge=0, description="each byte of a body received extends its "
+                                           "deadline by 1 / this many seconds (0: body_seconds alone)")
     max_queued: int = Field(1000, ge=1, description="queued jobs beyond this get 429 with Retry-After")
     retry_after_seconds: int = Field(5, ge=1, description="the Retry-After of a 429")
     max_steps: int = Field(10**8, ge=1)

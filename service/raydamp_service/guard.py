@@ -57,7 +57,7 @@ class RequestGuard:
         self.max_file = settings.max_file_bytes
         self.large_body, self.max_large = settings.large_body_bytes, settings.max_large_bodies
         self.retry_after = str(settings.retry_after_seconds)
-        self.body_seconds = settings.body_seconds
+        self.body_seconds, self.body_rate = settings.body_seconds, settings.min_body_bytes_per_second
         self.large_bodies = 0  # being handled now (one event loop: no lock needed)
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
@@ -123,7 +123,8 @@ class RequestGuard:
 
     async def _with_body_limit(self, scope: Scope, receive: Receive, send: Send) -> None:
         """A body without Content-Length (chunked) is counted as it arrives; the whole body must arrive within
-        body_seconds (later receives, a response's wait for the client to leave, have no deadline)."""
+        body_seconds, plus 1 / min_body_bytes_per_second for each byte received (later receives, a response's
+        wait for the client to leave, have no deadline)."""
         received = 0
         refused: JSONResponse | None = None
         limit = self._limit(scope)
@@ -131,7 +132,7 @@ class RequestGuard:
         body_done = False
 
         async def counting_receive() -> Message:
-            nonlocal received, refused, body_done
+            nonlocal received, refused, body_done, deadline
             if body_done:
                 return await receive()
             try:
@@ -143,7 +144,10 @@ class RequestGuard:
                                        headers={"Connection": "close"})
                 raise _BodyRefused from None
             if message["type"] == "http.request":
-                received += len(message.get("body", b""))
+                piece = len(message.get("body", b""))
+                received += piece
+                if self.body_rate:  # an upload that keeps coming keeps its connection
+                    deadline += piece / self.body_rate
                 body_done = not message.get("more_body", False)
                 if received > limit:
                     refused = self._too_large(scope)

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import re
 import sqlite3
 import threading
 import uuid
@@ -179,6 +180,11 @@ class FileGone(LookupError):
                          "upload it again")
 
 
+# Objects whose keys are the user's names (a momentum map called "file" is no upload) are not walked.
+_NAMED_BY_THE_USER = frozenset({"momenta", "parameters", "grid"})
+_UPLOAD_ID = re.compile(r"[0-9a-f]{32}")  # FileStore.add_file: uuid4().hex
+
+
 def uploaded_files(spec: Any) -> tuple[str, ...]:
     """The ids of the uploads a spec names: {"file": "<id>"} (a matrix, an initial state) and {"file": {"id":
     ...}} (a record). Lists of numbers (a structure's COO entries) are not walked."""
@@ -187,10 +193,13 @@ def uploaded_files(spec: Any) -> tuple[str, ...]:
     def walk(value: Any) -> None:
         if isinstance(value, dict):
             for key, inner in value.items():
+                if key in _NAMED_BY_THE_USER:
+                    continue
+                if key == "file" and isinstance(inner, dict):
+                    inner = inner.get("id")
                 if key == "file" and isinstance(inner, str):
-                    found.append(inner)
-                elif key == "file" and isinstance(inner, dict) and isinstance(inner.get("id"), str):
-                    found.append(inner["id"])
+                    if _UPLOAD_ID.fullmatch(inner):
+                        found.append(inner)
                 else:
                     walk(inner)
         elif isinstance(value, list) and value and isinstance(value[0], (dict, list)):

@@ -53,7 +53,7 @@ def test_head_answers_as_get_without_a_body(module_server):
         assert head.content == b"" and get.content, path
 
 
-def test_a_head_takes_no_large_fetch_slot(start_server):
+def test_a_json_head_takes_no_large_fetch_slot_and_a_files_does(start_server):
     # One slot, and every trajectory of this job is large: a HEAD reads no body, so it needs none (and a HEAD
     # that took one gave it back only after its client had the answer: the next request could find it taken).
     server = start_server(RAYDAMP_LARGE_FETCH_BYTES="1024", RAYDAMP_MAX_LARGE_FETCHES="1")
@@ -68,6 +68,9 @@ def test_a_head_takes_no_large_fetch_slot(start_server):
         assert holding.status_code == 200
         assert server.client.get(f"/v1/jobs/{job_id}/trajectory").status_code == 429
         assert server.client.head(f"/v1/jobs/{job_id}/trajectory").status_code == 200
+        # A file's HEAD writes the file before its headers: it takes a slot like its GET (a review found 50 such
+        # HEADs at once writing 50 files).
+        assert server.client.head(f"/v1/jobs/{job_id}/trajectory?format=csv").status_code == 429
 
 
 def test_a_trailing_slash_is_404_not_a_redirect_built_from_host(module_server):

@@ -217,3 +217,36 @@ def test_half_sent_headers_are_dropped_after_header_seconds(start_server):
             assert connection.recv(100) == b""  # closed by the server, answering nothing
         assert time.monotonic() - started < 5
     assert server.client.get("/healthz").status_code == 200
+
+
+def test_a_slow_but_steady_body_is_not_cut_by_the_body_deadline(tmp_path):
+    """One deadline for the whole body refused an honest 64 MiB upload over a link under 4.5 Mbit/s (a review):
+    each piece received extends it by its bytes at min_body_bytes_per_second. In-process: 10 pieces of 2000 bytes,
+    0.15 s apart (13 kB/s), against body_seconds 0.5: at a floor of 10,000 bytes/s each piece buys 0.2 s and the
+    body passes; at 20,000 bytes/s (0.1 s a piece) it falls behind and gets 408, as it does with no floor."""
+    import asyncio
+
+    from raydamp_service.config import Settings
+    from raydamp_service.guard import RequestGuard
+
+    async def scenario(rate: int) -> int:
+        async def app(scope, receive, send):
+            while (await receive()).get("more_body"):
+                pass
+            await send({"type": "http.response.start", "status": 200, "headers": []})
+            await send({"type": "http.response.body", "body": b"{}"})
+
+        guard = RequestGuard(app, Settings(db=tmp_path / "jobs.sqlite3", body_seconds=0.5,
+                                           min_body_bytes_per_second=rate))
+
+        async def pieces():
+            for _ in range(10):
+                await asyncio.sleep(0.15)
+                yield b"x" * 2000
+
+        async with httpx.AsyncClient(transport=httpx.ASGITransport(app=guard), base_url="http://127.0.0.1") as client:
+            return (await client.post("/v1/jobs", content=pieces())).status_code
+
+    assert asyncio.run(scenario(10_000)) == 200
+    assert asyncio.run(scenario(20_000)) == 408
+    assert asyncio.run(scenario(0)) == 408

@@ -219,6 +219,11 @@ def test_a_submission_whose_file_was_deleted_meanwhile_is_not_stored(store):
             "ground_motion": {"acceleration": {"file": {"id": record.id, "factor": 9.81}}},
             "initial_state": {"q": {"file": kept.id}}}
     assert uploaded_files(spec) == (kept.id, gone.id, record.id)
+    # Only upload ids where uploads go: a momentum map the user named "file" is none (a review: every such job
+    # got 409), nor a record's path.
+    assert uploaded_files({"system": {"coordinates": ["x", "y"], "potential": "x^2 + y^2",
+                                      "momenta": {"file": "x*p_y - y*p_x"}}, "parameters": {"file": 1.0},
+                           "load": {"file": {"path": "/data/a_g.AT2"}}}) == ()
     assert store.delete_file(gone.id) == "deleted"
     with pytest.raises(FileGone, match=f"the uploaded file {gone.id} was deleted"):
         store.create(spec)

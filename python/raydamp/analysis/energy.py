@@ -77,7 +77,8 @@ def energy_error(model: Model, solution: Solution, reference: ReferenceSolution 
         if solution.dofs is not None:  # its first row is not the whole initial state
             raise ValueError("solution: the reference needs every coordinate saved (save_dofs=None), or give "
                              "reference=")
-        reference = reference_solution(model, solution.q[0], solution.p[0], solution.t, load=solution.load)
+        reference = reference_solution(model, solution.q[0], solution.p[0], solution.t,
+                                       load=solution._run_load("energy_error"))
     instance("reference", reference, ReferenceSolution, "a ReferenceSolution (from reference_solution) or None")
     if reference.t.shape != solution.t.shape or not np.allclose(reference.t, solution.t, rtol=0, atol=1e-9):
         raise ValueError("reference: its times differ from the solution's saved times")

@@ -44,7 +44,8 @@ class Solution:
     load_work : (N,) the load's work W_f(t) = int f . qdot dt for a run with a load and ``work=True``,
         else None.
     load : the run's :class:`raydamp.Load` (or GroundMotion), or None; a loaded file's and an
-        ensemble member's are rebuilt from the provenance.
+        ensemble member's is rebuilt from the provenance by ``load_values()``, ``absolute_acceleration()`` and
+        ``raydamp.analysis.energy_error``, which need it.
     dofs : the indices of the saved coordinates when the run saved only some (``save_dofs``),
         else None.
     composition : the composition the method was raised to higher order with, or None.
@@ -82,24 +83,25 @@ class Solution:
     # runs stay cheap); or the provenance dict itself, for a loaded solution.
     origin: Any = field(default=None, compare=False)
 
-    def __post_init__(self) -> None:
-        # A loaded file's or an ensemble member's load, rebuilt from its provenance as _model rebuilds the model:
-        # without it load_values() gave zeros and absolute_acceleration() said the run had no ground motion.
-        origin = self.origin
-        if self.load is None and isinstance(origin, dict) and (origin.get("load") or origin.get("ground_motion")):
-            from ..jobs.build import load_from
-
-            try:
-                object.__setattr__(self, "load", load_from(origin.get("load"), origin.get("ground_motion")))
-            except (ValueError, OSError) as error:  # a record file gone, an uploaded file (the service's)
-                object.__setattr__(self, "_load_missing", f"{type(error).__name__}: {error}")
-
     def _run_load(self, what: str):
-        """The run's load (None: it had none); a ValueError when it had one that could not be rebuilt."""
-        missing = getattr(self, "_load_missing", None)
-        if self.load is None and missing is not None:
-            raise ValueError(f"{what}: the run's load could not be rebuilt from its provenance ({missing})")
-        return self.load
+        """The run's load, None if it had none: its own, or (a loaded file, an ensemble member) rebuilt from the
+        provenance when first asked, as _model rebuilds the model (load_values() gave zeros and
+        absolute_acceleration() said "no ground motion"). Not at construction: a member or a file opened for its
+        arrays would compile an expression load, or read a record path the file names, for nothing. A ValueError
+        names ``what`` when the load cannot be rebuilt (an uploaded record's id, a record file gone)."""
+        origin = self.origin
+        if self.load is not None or not isinstance(origin, dict) or not (origin.get("load")
+                                                                         or origin.get("ground_motion")):
+            return self.load
+        from ..jobs.build import load_from
+
+        try:
+            load = load_from(origin.get("load"), origin.get("ground_motion"))
+        except (ValueError, OSError) as error:
+            raise ValueError(f"{what}: the run's load could not be rebuilt from its provenance "
+                             f"({type(error).__name__}: {error})") from None
+        object.__setattr__(self, "load", load)  # once: a frozen dataclass's field, filled as a cache
+        return load
 
     @property
     def provenance(self) -> dict[str, Any] | None:

@@ -191,9 +191,10 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
                                           save_every, work, progress, cancel, save_dofs=[] if dofs is None else dofs,
                                           load=core_load, temperature=kT, seed=seed, stream=stream)
     except ValueError as error:  # the core names the method it runs ("rk" for "rk4"): the caller's name here
-        # of the same type (a ChebyshevDegreeError stays one)
-        raise type(error)(re.sub(r"^temperature: method '[^']*'", f"temperature: method {method!r}", str(error))) \
-            from None
+        named = re.sub(r"^temperature: method '[^']*'", f"temperature: method {method!r}", str(error))
+        if named == str(error):
+            raise  # as it came (a ChebyshevDegreeError stays one, a progress callback's own error its own)
+        raise ValueError(named) from None
     wall = time.perf_counter() - start
     message = out["message"]
     explain = getattr(model, "_explain_failure", None)

@@ -142,7 +142,10 @@ def get_trajectory(job_id: str, request: Request, store: StoreDep, settings: Set
     connection, stored = _opened(record, store)
     selection = Selection(*slice(start, stop, every).indices(stored.points))
     try:
-        lease = FetchLease(_large_slot(request, settings, len(selection) * stored.row_bytes))
+        # A HEAD of the streamed JSON reads no body (the stream stops at the headers): no slot. A file's HEAD
+        # takes one, as its file is written before the headers go out.
+        lease = FetchLease(None if request.scope.get(HEAD) else
+                           _large_slot(request, settings, len(selection) * stored.row_bytes))
     except HTTPException:
         connection.close()
         raise
@@ -177,7 +180,7 @@ def _spec(record: JobRecord) -> JobSpec:
 
 def _large_slot(request: Request, settings: Settings, selected_bytes: int) -> threading.Semaphore | None:
     """The large-fetch slot a fetch, file or plot reading this many stored bytes needs (None for a small one)."""
-    if selected_bytes <= settings.large_fetch_bytes or request.scope.get(HEAD):
+    if selected_bytes <= settings.large_fetch_bytes:
         return None
     semaphore = request.app.state.large_fetches
     if not semaphore.acquire(blocking=False):
