@@ -11,28 +11,21 @@ from typing import Any
 
 from fastapi import Request, Response
 from fastapi.routing import APIRoute
+from raydamp.jobs.build import unique_keys
 
 __all__ = ["UniqueKeysRoute"]
-
-
-def _unique(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
-    seen: dict[str, Any] = {}
-    for key, value in pairs:
-        if key in seen:
-            # FastAPI answers a JSONDecodeError with its 422 (loc ["body", position], the message in ctx.error)
-            raise json.JSONDecodeError(f"the key {key!r} appears twice in one object", "", 0)
-        seen[key] = value
-    return seen
 
 
 class _UniqueKeysRequest(Request):
     async def json(self) -> Any:
         if not hasattr(self, "_json"):
             try:
-                self._json = json.loads(await self.body(), object_pairs_hook=_unique)
+                self._json = json.loads(await self.body(), object_pairs_hook=unique_keys)
             except json.JSONDecodeError:
                 raise
-            except ValueError as error:  # an integer of over 4300 digits: a 400 naming nothing, as a 422 now
+            except ValueError as error:
+                # A key named twice (unique_keys), an integer of over 4300 digits (a 400 naming nothing before):
+                # FastAPI answers a JSONDecodeError with its 422 (loc ["body", position], the message in ctx.error).
                 raise json.JSONDecodeError(str(error), "", 0) from None
         return self._json
 

@@ -13,6 +13,7 @@ import threading
 from pathlib import Path
 
 from ..jobs import job_arguments
+from ..jobs.build import unique_keys
 from ..results.io.solution import FORMATS
 from ..run.integrate import CancelToken, integrate
 from .ctrl_c import ctrl_c_cancels
@@ -92,20 +93,14 @@ def _summary_table(summary: dict) -> str:
 def read_spec(spec_path: str):
     """The JSON a job file holds; ValueError naming the file when it cannot be read or parsed, or names a key
     twice (JSON takes the last silently: {"h": 0.1, "h": 10} ran at h = 10, where an unknown key is refused)."""
-    def unique(pairs: list[tuple[str, object]]) -> dict:
-        seen: dict = {}
-        for key, value in pairs:
-            if key in seen:
-                raise ValueError(f"{spec_path}: the key {key!r} appears twice in one object")
-            seen[key] = value
-        return seen
-
     try:
-        return json.loads(Path(spec_path).read_text(), object_pairs_hook=unique)
+        return json.loads(Path(spec_path).read_text(), object_pairs_hook=unique_keys)
     except OSError as error:
         raise ValueError(f"{spec_path}: {error.strerror}") from None
     except (json.JSONDecodeError, UnicodeDecodeError) as error:
         raise ValueError(f"{spec_path}: not JSON ({error})") from None
+    except ValueError as error:  # unique_keys: a key named twice
+        raise ValueError(f"{spec_path}: {error}") from None
     except RecursionError:  # a traceback before: 100,000 nested brackets
         raise ValueError(f"{spec_path}: nested too deeply to read (a job file is a few levels deep)") from None
 

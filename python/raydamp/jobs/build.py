@@ -22,7 +22,7 @@ from .forms import ModeState, RestState, VectorFile
 from .spec import JobSpec, ModelSpec, client_path
 from .system_forms import FileResolver
 
-__all__ = ["JobCall", "parse_job", "build_job", "planned_steps", "job_arguments", "model_from_spec", "error_at",
+__all__ = ["JobCall", "unique_keys", "parse_job", "build_job", "planned_steps", "job_arguments", "model_from_spec", "error_at",
            "validation_error", "PROVENANCE_KEYS"]
 
 # What a Solution's provenance adds to the job (a saved result's provenance runs as a job).
@@ -58,6 +58,18 @@ def validation_error(error: ValidationError) -> JobError:
     elif item["type"] == "extra_forbidden":
         message = "unknown key"
     return JobError(loc, f"{_path_text(loc) or 'job'}: {message}")
+
+
+def unique_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """json.loads' object_pairs_hook for a job's JSON (a file for `raydamp run`, a service request body): a key
+    named twice in one object is a ValueError. JSON itself keeps the last silently: {"h": 0.1, "h": 10} ran at
+    h = 10, where an unknown key is refused."""
+    seen: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in seen:
+            raise ValueError(f"the key {key!r} appears twice in one object")
+        seen[key] = value
+    return seen
 
 
 def parse_job(data: Any) -> JobSpec:

@@ -19,7 +19,7 @@ import numpy as np
 import symengine as se
 
 from .. import _core
-from .._validation import _short, real
+from .._validation import _short, flag, real
 from ..systems.expressions import parse
 from . import terms as T
 from .records import read_record
@@ -73,8 +73,7 @@ class Load:
         values = T.history("values", values, t.size)
         if values.ndim == 2 and direction is not None:
             raise ValueError("direction: values given as a vector per time (shape (T, n)) take no direction")
-        if not isinstance(hold, bool):
-            raise ValueError(f"hold must be True or False, got {_short(hold)}")
+        hold = flag("hold", hold)
         return cls([T.Series(t, values, T.direction("direction", direction), hold)])
 
     @classmethod

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from .. import _core
-from .._validation import MAX_SEED, _short, integer, numeric_array, real, thermal
+from .._validation import MAX_SEED, _short, flag, integer, numeric_array, real, thermal
 from ..loads import Load
 from ..results.ensemble_solution import EnsembleSolution
 from ..systems.models import Model
@@ -170,8 +170,7 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
         raise ValueError(f"progress must be callable or None, got {progress!r}")
     if cancel is not None and not isinstance(cancel, _core.CancelToken):
         raise ValueError(f"cancel must be a raydamp.CancelToken or None, got {cancel!r}")
-    if not isinstance(vector_sine, bool):
-        raise ValueError(f"vector_sine must be True or False, got {vector_sine!r}")
+    vector_sine = flag("vector_sine", vector_sine)
     rows = n_steps // save_every + 2
     row_bytes = 8 * (1 + 2 * n + len(system.momentum_names))
     if members * rows * row_bytes > MAX_SAVED_BYTES:

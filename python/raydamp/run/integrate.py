@@ -10,7 +10,7 @@ from collections.abc import Callable, Mapping
 from .. import _core
 import numpy as np
 
-from .._validation import MAX_STEPS, _short, integer, real, span, steps_for, thermal, vector
+from .._validation import MAX_STEPS, _short, flag, integer, real, span, steps_for, thermal, vector
 from ..loads import Load
 from ..methods.user_tableau import resolve_user_tableau
 from ..results.solution import Solution
@@ -170,8 +170,7 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
     n_steps, h_last = span(h, t_end, n_steps)
     if progress is not None and not callable(progress):
         raise ValueError(f"progress must be callable or None, got {progress!r}")
-    if not isinstance(work, bool):
-        raise ValueError(f"work must be True or False, got {work!r}")
+    work = flag("work", work)
     if cancel is not None and not isinstance(cancel, _core.CancelToken):
         raise ValueError(f"cancel must be a raydamp.CancelToken or None, got {cancel!r}")
     if load is not None and not isinstance(load, Load):
