@@ -90,6 +90,10 @@ class SparseRayleighDamping {
     // lambda = L (1 + y) / 2 maps [-1, 1] onto [0, L].
     const double half = 0.5 * bound_, a = alpha_, b = beta_;
     auto rate = [=](double y) { return a + b * half * (1.0 + y); };
+    // The degree needed is about 4.8 sqrt(t beta L) (4789 at t beta L = 1e6), so past 4 sqrt(t beta L) > the
+    // bound the series below would refuse anyway, after O(N^2) work at every doubling (0.4 s each): refuse at
+    // once. advise's bisection of stability limits meets this refusal dozens of times.
+    if (t > 0.0 && 4.0 * std::sqrt(t * b * bound_) > kMaxChebyshevDegree) detail::refuse_degree("damping flow");
     auto fresh = std::make_shared<Series>();
     fresh->t = t;
     fresh->exp = chebyshev_series([&](double y) { return std::exp(-t * rate(y)); }, "damping flow");
