@@ -13,11 +13,12 @@ import sys
 import uvicorn
 from pydantic import ValidationError
 
-from . import db_lock, header_deadline
+from .edge import deadlines
 from .app import create_app
 from .config import Settings, is_loopback
-from .jobs import JobStore
-from .store import StoreUnavailable
+from .kinds.jobs import JobStore
+from .tasks import lock
+from .tasks.store import StoreUnavailable
 
 
 def _refuse(message: str) -> None:
@@ -65,8 +66,8 @@ def main(argv: list[str] | None = None) -> None:
     try:
         # Kept (the lifespan counts a second hold): no other service takes the file in between. Opening the
         # store takes no lock and changes no job (the lifespan's recovery, after its own hold, does).
-        db_lock.hold(settings.db)
-    except (db_lock.DatabaseInUse, OSError) as error:
+        lock.hold(settings.db)
+    except (lock.DatabaseInUse, OSError) as error:
         _refuse(str(error))
     # Threads serialising trajectories hand the GIL back every millisecond rather than every five, so
     # the event loop (which answers /healthz and accepts submissions) is not kept waiting behind them.
@@ -74,7 +75,7 @@ def main(argv: list[str] | None = None) -> None:
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     # One process only: the job queue and the cancel tokens live in it.
     uvicorn.run(create_app(settings), host=settings.host, port=settings.port, access_log=settings.access_log,
-                http=header_deadline.protocol(settings.header_seconds))
+                http=deadlines.protocol(settings.header_seconds))
 
 
 if __name__ == "__main__":

@@ -13,17 +13,16 @@ from fastapi import FastAPI
 from fastapi.exceptions import RequestValidationError
 from starlette.exceptions import HTTPException
 
-from . import db_lock
-from .checks import CheckPool
+from .checks.pool import CheckPool
 from .config import Settings
-from .errors import http_error_handler, validation_error_handler
-from .guard import RequestGuard, needs_token
-from .head import HeadAsGet
-from .jobs import JobStore
+from .edge.guard import RequestGuard, needs_token
+from .edge.http import HeadAsGet, http_error_handler, validation_error_handler
+from .kinds.jobs import JobStore
 from .routes import catalogue, files, health, jobs, page, sweeps
-from .runner import Runner
-from .store import Database
-from .sweeps import SweepStore
+from .tasks import lock
+from .tasks.runner import Runner
+from .tasks.store import Database
+from .kinds.sweeps import SweepStore
 
 __all__ = ["ROUTERS", "create_app"]
 
@@ -36,12 +35,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
-        db_lock.hold(settings.db)  # before the recovery, which would re-queue another service's running jobs
+        lock.hold(settings.db)  # before the recovery, which would re-queue another service's running jobs
         try:
             async with _serving(app, settings):
                 yield
         finally:
-            db_lock.release(settings.db)
+            lock.release(settings.db)
 
     # /docs is ours (routes/page.py), with Swagger UI served locally; ReDoc would load from a CDN.
     # redirect_slashes off: "/v1/jobs/" was a 307 to a Location built from the Host header (an open redirect with
@@ -56,9 +55,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.add_exception_handler(RequestValidationError, validation_error_handler)
     app.add_exception_handler(HTTPException, http_error_handler)
     for router in ROUTERS:
-        app.include_router(router)
+        app.include_router(router, responses=_guarded(settings, router is files.router))
     page.mount_assets(app)
-    _document_limits(app, settings)
+    _document_settings(app, settings)
     return app
 
 
@@ -90,39 +89,32 @@ async def _serving(app: FastAPI, settings: Settings) -> AsyncIterator[None]:
         database.close()
 
 
-def _document_limits(app: FastAPI, settings: Settings) -> None:
-    """What the guard and the settings enforce, said in /openapi.json (for clients and fuzzers): the
-    list limit's maximum, the answers every operation may give before its route runs, the token."""
+def _guarded(settings: Settings, uploads: bool) -> dict[int | str, dict[str, Any]]:
+    """The answers the guard (edge/) may give before any route runs, for /openapi.json."""
+    limit = (f"the file is over max_file_bytes = {settings.max_file_bytes}" if uploads else
+             f"the body is over max_body_bytes = {settings.max_body_bytes}")
+    return {400: {"description": "the Host is not one of trusted_hosts"}, 413: {"description": limit},
+            408: {"description": f"the body did not arrive within body_seconds = {settings.body_seconds:g} s"},
+            429: {"description": "max_large_bodies large bodies are being handled; retry after Retry-After seconds"},
+            **({401: {"description": "no or wrong Authorization: Bearer <token>"}} if settings.token else {})}
+
+
+def _document_settings(app: FastAPI, settings: Settings) -> None:
+    """What only the settings know, in /openapi.json: the list limit's maximum, and the token."""
     generate = app.openapi
 
     def openapi() -> dict[str, Any]:
-        if app.openapi_schema is not None:
-            return app.openapi_schema
-        schema = generate()
-        for listing in ("/v1/jobs", "/v1/sweeps", "/v1/files"):
-            for parameter in schema["paths"][listing]["get"]["parameters"]:
-                if parameter["name"] == "limit":
-                    parameter["schema"]["maximum"] = settings.max_list_limit
-        schema["paths"]["/v1/jobs"]["post"]["responses"]["400"] = {
-            "description": "the body is not UTF-8 text, or the Host is not one of trusted_hosts"}
-        if settings.token is not None:
-            schema.setdefault("components", {})["securitySchemes"] = {"bearer": {"type": "http", "scheme": "bearer"}}
-        for path, operations in schema["paths"].items():
-            for operation in operations.values():
-                responses = operation["responses"]
-                responses.setdefault("400", {"description": "the Host is not one of trusted_hosts"})
-                if path == "/v1/files" and operation.get("requestBody"):
-                    responses["413"] = {"description": f"the file is over max_file_bytes = {settings.max_file_bytes}"}
-                elif operation.get("requestBody"):
-                    responses["413"] = {"description": f"the body is over max_body_bytes = {settings.max_body_bytes}"}
-                if operation.get("requestBody"):
-                    responses["408"] = {"description": f"the body did not arrive within body_seconds = "
-                                                       f"{settings.body_seconds:g} s"}
-                    responses.setdefault("429", {"description": "max_large_bodies large bodies are being handled; "
-                                                                "retry after Retry-After seconds"})
-                if settings.token is not None and needs_token(path):
-                    operation["security"] = [{"bearer": []}]
-                    responses["401"] = {"description": "no or wrong Authorization: Bearer <token>"}
-        return schema
+        if app.openapi_schema is None:
+            schema = generate()
+            for listing in ("/v1/jobs", "/v1/sweeps", "/v1/files"):
+                for parameter in schema["paths"][listing]["get"]["parameters"]:
+                    if parameter["name"] == "limit":
+                        parameter["schema"]["maximum"] = settings.max_list_limit
+            if settings.token is not None:
+                schema["components"]["securitySchemes"] = {"bearer": {"type": "http", "scheme": "bearer"}}
+                for path, operations in schema["paths"].items():
+                    for operation in operations.values():
+                        operation["security"] = [{"bearer": []}] if needs_token(path) else []
+        return app.openapi_schema
 
     app.openapi = openapi  # type: ignore[method-assign]

@@ -35,28 +35,22 @@ class Settings(BaseSettings):
     port: int = Field(8000, ge=0, le=65535)
     workers: int = Field(2, ge=1, le=64, description="runs executed at once")
 
-    # Who may talk to the service. A browser page can make a request to 127.0.0.1 with a foreign
-    # Host (DNS rebinding); checking Host stops that, and a token stops other local users.
     token: SecretStr | None = Field(None, description="when set, every /v1 request needs Authorization: Bearer "
                                                       "<token>; required to bind a non-loopback address")
-    # At least one: an empty list (RAYDAMP_TRUSTED_HOSTS=) started a service answering 400 to everything.
     trusted_hosts: Annotated[list[str], NoDecode] = Field(
         list(LOOPBACK_NAMES), min_length=1, description="Host header names accepted (comma-separated; '*' accepts "
                                                         "any)")
 
     # Bounds on what one job may ask for, so that no request can exhaust memory or disk.
     max_body_bytes: int = Field(2 * 2**20, ge=1024, description="a larger request body gets 413 before parsing")
-    # A body is parsed and validated on the event loop (70 ms for a 1.7 MB structure): large ones a few at a time.
     large_body_bytes: int = Field(256 * 2**10, ge=1, description="a request body above this is large")
     max_large_bodies: int = Field(2, ge=1, description="large request bodies handled at once; more get 429")
     header_seconds: float = Field(10.0, gt=0, description="a connection whose request headers have not all arrived "
                                                           "this long after it opened (or after its previous "
                                                           "response) is closed")
-    # Two uploads that announced 300 KiB and sent nothing held both large-body places for as long as they liked.
     body_seconds: float = Field(120.0, gt=0, description="a request body must arrive within this many seconds of "
                                                          "the request's headers (plus its bytes at "
                                                          "min_body_bytes_per_second), or the request gets 408")
-    # A fixed deadline refused an honest 64 MiB upload over a link under 4.5 Mbit/s: each byte received buys time.
     min_body_bytes_per_second: int = Field(64 * 2**10, ge=0, description="each byte of a body received extends its "
                                            "deadline by 1 / this many seconds (0: body_seconds alone)")
     max_queued: int = Field(1000, ge=1, description="queued jobs beyond this get 429 with Retry-After")
@@ -90,18 +84,16 @@ class Settings(BaseSettings):
     max_large_fetches: int = Field(2, ge=1, description="large trajectory fetches served at once; more get 429")
     send_timeout_seconds: float = Field(60.0, gt=0, description="a trajectory or file response whose client reads "
                                                                 "nothing for this long is dropped, with its slot")
-    # Two clients reading a 193 MB trajectory at 50 KB/s sent every piece in time and held both large-fetch
-    # places for an hour (a service audit): past send_timeout_seconds, a response must average this rate.
     min_send_bytes_per_second: int = Field(128 * 2**10, ge=0, description="a trajectory, file or sweep result "
                                            "whose client reads slower than this on average (after the first "
                                            "send_timeout_seconds) is dropped, with its slot; 0: no floor")
     max_plot_bytes: int = Field(16 * 2**20, ge=2**16, description="stored bytes a plot reads at most (its points "
                                                                   "decimated evenly to fit)")
 
-    # Checks of a submitted system (compiling its functions, parsing the files it names, one trial step) run in
-    # worker processes, each within a time and a memory budget; past either the submission gets 422 on `system`.
+    # The heavy checks (a system's compile and trial step, an upload's parse, a plot) run in worker processes
+    # (checks/pool.py), each task within a CPU and a memory budget and a wall-clock ceiling of 4 CPU budgets.
     check_workers: int = Field(2, ge=1, le=16, description="processes that check submitted systems")
-    check_seconds: float = Field(10.0, gt=0, description="time budget of one check")
+    check_seconds: float = Field(10.0, gt=0, description="CPU time budget of one check")
     check_memory_bytes: int = Field(2**30, ge=2**26, description="memory budget of one check: address space a "
                                                                  "check process may add to what it holds at start")
     max_pending_checks: int = Field(8, ge=1, description="checks running or waiting for a process; more get 429")
@@ -122,8 +114,6 @@ class Settings(BaseSettings):
     max_sweep_bytes: int = Field(256 * 2**20, ge=1, le=900_000_000, description="a sweep's result size at most")
     max_queued_sweeps: int = Field(20, ge=1, description="queued sweeps beyond this get 429 with Retry-After")
 
-    # One line per request on stdout (uvicorn's access log); off saves about 0.1 ms of the server's CPU per
-    # request (benchmarks/bench_service_load.py prints both).
     access_log: bool = Field(True, description="log every request (method, path, status) on stdout")
 
     # How often a run's progress is also written to the database (GET reads memory first).

@@ -3,19 +3,16 @@ definition for the service, `raydamp run` and a Solution's provenance)."""
 
 from __future__ import annotations
 
-import hashlib
-import json
-import sqlite3
 from datetime import datetime
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field
 from pydantic_core import core_schema
 from raydamp.jobs import JobSpec, SweepSpec
 from raydamp.jobs.summary import JobSummary  # the library's: Solution.summary()
 
 __all__ = [
-    "JobSpec", "SweepSpec", "normalise_stored", "FileInfo", "FileList",
+    "JobSpec", "SweepSpec", "FileInfo", "FileList",
     "JobStatus", "JobCreated", "JobSummary", "JobView", "JobListItem", "JobList", "Trajectory",
     "SweepCreated", "SweepView", "SweepListItem", "SweepList",
     "ParameterInfo", "ModelInfo", "MethodInfo", "CompositionInfo", "Health",
@@ -37,25 +34,6 @@ class _Stored:
 
     def __get_pydantic_json_schema__(self, schema: core_schema.CoreSchema, handler: Any) -> dict[str, Any]:
         return handler(self.model.__pydantic_core_schema__)
-
-
-def normalise_stored(db: sqlite3.Connection, table: str, model: type[BaseModel]) -> None:
-    """Bring the specs a table holds to the model's JSON of today (views send them as stored: _Stored), once
-    per change of the model's schema: a spec stored before a field was added then shows the field's default,
-    as it did when every view validated it again. One that no longer validates is left as it was."""
-    key = f"{table}.spec schema"
-    schema = hashlib.sha256(json.dumps(model.model_json_schema(), sort_keys=True).encode()).hexdigest()
-    if db.execute("SELECT 1 FROM service WHERE key = ? AND value = ?", (key, schema)).fetchone():
-        return
-    for (task_id,) in db.execute(f"SELECT id FROM {table}").fetchall():
-        text = db.execute(f"SELECT spec FROM {table} WHERE id = ?", (task_id,)).fetchone()[0]
-        try:
-            normal = json.dumps(model.model_validate(json.loads(text)).model_dump(mode="json"))
-        except (ValidationError, ValueError):
-            continue
-        if normal != text:
-            db.execute(f"UPDATE {table} SET spec = ? WHERE id = ?", (normal, task_id))
-    db.execute("INSERT OR REPLACE INTO service (key, value) VALUES (?, ?)", (key, schema))
 
 
 def _spec_as_model(schema: dict[str, Any]) -> None:

@@ -209,7 +209,7 @@ def start_module_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator:
 @pytest.fixture
 def store(tmp_path):
     """A job store in a fresh database, opened, closed after the test (in-process tests of the store)."""
-    from raydamp_service.jobs import JobStore
+    from raydamp_service.kinds.jobs import JobStore
 
     store = JobStore(tmp_path / "jobs.sqlite3")
     store.open()

@@ -101,15 +101,24 @@ def test_a_read_only_database_refuses_to_start_with_one_line(tmp_path, run_servi
     assert "readonly" in line.replace(" ", "") or "permission" in line.lower()
 
 
-def test_a_second_service_on_the_same_database_refuses_to_start(start_server, run_service):
+@pytest.mark.parametrize("name", ["same", "hard link", "symlink"])
+def test_a_second_service_on_the_same_database_refuses_to_start(start_server, run_service, tmp_path, name):
     # It ran its recovery first: the first service's running job went back to "queued" (attempts 2) and both
     # services ran it at once (a CLI and service audit). Now it refuses with one line, and the job is untouched.
+    # Through another name of the same file (issue 44, N5) as well: a hard link beside it, a symlink elsewhere.
     server = start_server(RAYDAMP_MAX_STEPS=str(10**10))
     long_run = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "h": 0.001,
                 "n_steps": 4 * 10**9, "save_every": 10**6, "initial_state": {"q": [1.0], "p": [0.0]}}
     job_id = server.submit(long_run)
     server.wait_for(job_id, lambda job: job["status"] == "running")
-    line = _one_line(run_service("--port", "0", RAYDAMP_DB=str(server.db)))
+    other = {"same": server.db, "hard link": server.db.with_name("linked.sqlite3"),
+             "symlink": tmp_path / "elsewhere" / "named.sqlite3"}[name]
+    if name == "hard link":
+        os.link(server.db, other)
+    elif name == "symlink":
+        other.parent.mkdir()
+        other.symlink_to(server.db)
+    line = _one_line(run_service("--port", "0", RAYDAMP_DB=str(other)))
     assert line.startswith("raydamp-service: another raydamp service (pid ") and "RAYDAMP_DB" in line
     job = server.job(job_id)
     assert job["status"] == "running" and job["attempts"] == 1

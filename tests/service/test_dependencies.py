@@ -36,8 +36,8 @@ def test_every_route_dependency_runs_on_the_event_loop():
 
 
 def test_a_builtin_submission_never_hops_to_the_thread_pool(tmp_path, monkeypatch):
-    """POST /v1/jobs of a built-in model checks it on the event loop (microseconds) and hands its insert to the
-    store's group commit: no hop to the thread pool (a hop cost about 0.15 ms of the server's CPU per job,
+    """POST /v1/jobs of a built-in model checks it on the event loop (microseconds) and inserts it there (one
+    short write): no hop to the thread pool (a hop cost about 0.15 ms of the server's CPU per job,
     benchmarks/bench_service_load.py). A user's system, whose check waits for a check process, hops once.
     Both are answered with a row already stored, and handed to the runner."""
     import asyncio

@@ -159,7 +159,7 @@ def test_a_client_that_reads_too_slowly_gives_its_large_fetch_slot_back(min_rate
     body's source closed and its slot given back. In-process: a client taking 20 ms a 10 kB piece (500 kB/s)."""
     import asyncio
 
-    from raydamp_service.timed_send import TimedStreamingResponse
+    from raydamp_service.edge.deadlines import TimedStreamingResponse
 
     produced, released = [], []
 

@@ -8,9 +8,9 @@ import json
 import sqlite3
 
 from raydamp.jobs import JobSpec, SweepSpec
-from raydamp_service.jobs import JobStore
-from raydamp_service.sweeps import SweepStore
-from raydamp_service.store import Database
+from raydamp_service.kinds.jobs import JobStore
+from raydamp_service.kinds.sweeps import SweepStore
+from raydamp_service.tasks.store import Database
 
 PENDULUM = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "h": 0.1, "n_steps": 10,
             "initial_state": {"q": [1.0], "p": [0.0]}}

@@ -120,7 +120,7 @@ def test_a_run_killed_by_a_crash_is_run_again_after_restart(start_server):
 
 
 def test_concurrent_submissions_answered_202_survive_a_sigkill_right_after(start_server):
-    """A 202 is sent once the row is committed (the group commit writes concurrent submissions together): 40
+    """A 202 is sent once the row is committed: 40
     submissions at once, SIGKILL as soon as the last 202 is in, and after the restart every one of them is
     there and runs exactly once; nothing else appears."""
     import concurrent.futures

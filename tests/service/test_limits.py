@@ -126,7 +126,7 @@ def test_large_bodies_are_handled_a_few_at_once(tmp_path):
     import asyncio
 
     from raydamp_service.config import Settings
-    from raydamp_service.guard import RequestGuard
+    from raydamp_service.edge.guard import RequestGuard
 
     async def scenario():
         release, holding = asyncio.Event(), []
@@ -227,7 +227,7 @@ def test_a_slow_but_steady_body_is_not_cut_by_the_body_deadline(tmp_path):
     import asyncio
 
     from raydamp_service.config import Settings
-    from raydamp_service.guard import RequestGuard
+    from raydamp_service.edge.guard import RequestGuard
 
     async def scenario(rate: int) -> int:
         async def app(scope, receive, send):

@@ -7,7 +7,7 @@ import io
 import threading
 
 import pytest
-from raydamp_service.files import ParsedFiles
+from raydamp_service.checks.uploads import ParsedFiles
 
 sparse = pytest.importorskip("scipy.sparse")
 scipy_io = pytest.importorskip("scipy.io")

@@ -300,7 +300,7 @@ def test_a_10_000_dof_chain_started_from_uploaded_files(module_server):
 def test_records_are_parsed_once_by_their_content():
     """The resolver (files.ParsedFiles) reads a stored record by its content alone, as the check processes
     do: an .AT2 gives its (t, values), a one-column file (None, values); each parsed once per id."""
-    from raydamp_service.files import ParsedFiles
+    from raydamp_service.checks.uploads import ParsedFiles
 
     class Store:
         def __init__(self, files):
@@ -324,7 +324,7 @@ def test_records_are_parsed_once_by_their_content():
 def test_a_files_table_from_before_records_gains_its_columns(tmp_path):
     import sqlite3
 
-    from raydamp_service.jobs import JobStore
+    from raydamp_service.kinds.jobs import JobStore
 
     db = tmp_path / "old.sqlite3"
     with sqlite3.connect(db) as connection:  # the files table as matrices-only services wrote it
@@ -365,3 +365,40 @@ def test_a_temperature_without_a_seed_gets_one_stored_with_the_job(module_server
     assert response.status_code == 202, response.text
     stored = module_server.client.get(response.headers["location"]).json()["spec"]
     assert isinstance(stored["seed"], int) and stored["temperature"] == 0.5
+
+
+def _rss_kib(pid: int) -> int:
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1])
+    raise LookupError("VmRSS")
+
+
+def test_a_record_upload_is_parsed_outside_the_server(module_server):
+    """Issue 44, N1: a record was parsed in the server's thread pool, a Python float per value: the server grew by
+    about 86 bytes per byte uploaded (a 4 MiB column: +345 MB) and kept it. Now a check process parses it, under
+    its budgets; the server holds the bytes received (and a copy for the pipe), not their values as objects."""
+    import threading
+
+    content = b"0.25\n" * (2 * 2**20 // 5)  # 2 MiB, 419,430 samples: +180 MB in the server before
+    pid = module_server.process.pid
+    assert upload(module_server, "warm.csv", "0.5\n0.25\n").status_code == 201
+    baseline = _rss_kib(pid)
+    peak, done = [baseline], threading.Event()
+
+    def sample() -> None:
+        while not done.is_set():
+            peak.append(_rss_kib(pid))
+            done.wait(0.005)
+
+    sampler = threading.Thread(target=sample)
+    sampler.start()
+    try:
+        response = upload(module_server, "column.csv", content)
+    finally:
+        done.set()
+        sampler.join()
+    assert response.status_code == 201, response.text
+    assert response.json()["samples"] == 2 * 2**20 // 5
+    grown = (max(peak) - baseline) / 1024
+    assert grown <= 3 * len(content) / 2**20 + 24, f"the server grew by {grown:.0f} MiB for a 2 MiB upload"

@@ -7,7 +7,7 @@ import time
 
 import pytest
 from raydamp_service.config import Settings
-from raydamp_service.runner import Runner
+from raydamp_service.tasks.runner import Runner
 
 LONG_RUN = {  # about a minute of steps: always still running when the test acts
     "model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "step_size": 0.001,
@@ -57,7 +57,7 @@ def test_shutdown_hands_running_and_queued_jobs_back(store, tmp_path):
 def test_a_run_of_milliseconds_reports_only_its_end(store, tmp_path, monkeypatch, n_steps, calls):
     """raydamp calls progress about 100 times a run, each taking the interpreter lock from the C++ loop; below
     10^5 steps x coordinates (a pendulum: 10^5 steps) the run gets no callback and reports 1.0 at its end."""
-    from raydamp_service.runner import Run
+    from raydamp_service.tasks.runner import Run
 
     reports = []
     report = Run.report
@@ -102,20 +102,20 @@ def test_a_submitted_builtin_job_is_built_once_for_its_check_and_its_run(tmp_pat
     import httpx
     import numpy as np
     import raydamp
-    import raydamp_service.checks
-    import raydamp_service.problems
+    import raydamp_service.checks.pool
+    import raydamp_service.checks.limits
     from raydamp.models import make_model
     from raydamp_service.app import create_app
 
     built = []
-    build_call = raydamp_service.problems.build_call
+    build_call = raydamp_service.checks.limits.build_call
 
     def counted(*args, **kwargs):
         built.append(1)
         return build_call(*args, **kwargs)
 
-    monkeypatch.setattr(raydamp_service.problems, "build_call", counted)
-    monkeypatch.setattr(raydamp_service.checks, "build_call", counted)  # a run builds its call there
+    monkeypatch.setattr(raydamp_service.checks.limits, "build_call", counted)
+    monkeypatch.setattr(raydamp_service.checks.pool, "build_call", counted)  # a run builds its call there
     spec = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "h": 0.01, "n_steps": 100,
             "initial_state": {"q": [0.9 * math.pi], "p": [0.0]}}
 

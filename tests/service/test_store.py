@@ -8,7 +8,7 @@ from datetime import datetime, timezone
 
 import numpy as np
 import pytest
-from raydamp_service.jobs import JobStore, TrajectoryArrays
+from raydamp_service.kinds.jobs import JobStore, TrajectoryArrays
 
 SPEC = {"model": "damped_pendulum", "method": "3s"}
 
@@ -182,7 +182,7 @@ def test_the_saved_arrays_are_listed_once(store):
 
     import raydamp
     from raydamp_service.schemas import Trajectory
-    from raydamp_service.stored_arrays import SAVED, StoredTrajectory
+    from raydamp_service.trajectories.arrays import SAVED, StoredTrajectory
 
     names = [a.name for a in SAVED]
     assert [f.name for f in dataclasses.fields(TrajectoryArrays)] == names == list(Trajectory.model_fields)
@@ -207,9 +207,7 @@ def test_a_submission_whose_file_was_deleted_meanwhile_is_not_stored(store):
     # Submitted while a DELETE of its file ran: the check read the file, the DELETE found no job naming it yet
     # (204), the insert went in (202), and the run failed later with "no uploaded file" (3 of 25 tries in a
     # service audit). The insert now checks, in its transaction, that the files it names are still there.
-    import asyncio
-
-    from raydamp_service.store import FileGone, uploaded_files
+    from raydamp_service.tasks.store import FileGone, uploaded_files
 
     kept = store.add_file("M.mtx", b"%%MatrixMarket matrix coordinate real general\n1 1 1\n1 1 1.0\n", (1, 1), 1)
     gone = store.add_file("K.mtx", b"%%MatrixMarket matrix coordinate real general\n1 1 1\n1 1 2.0\n", (1, 1), 1)
@@ -227,12 +225,75 @@ def test_a_submission_whose_file_was_deleted_meanwhile_is_not_stored(store):
     assert store.delete_file(gone.id) == "deleted"
     with pytest.raises(FileGone, match=f"the uploaded file {gone.id} was deleted"):
         store.create(spec)
-
-    async def committed():
-        return await store.create_committed(spec, None, lambda stored: None)
-
-    with pytest.raises(FileGone):
-        asyncio.run(committed())
     assert store.recent(10) == []
     spec["system"]["K"] = {"file": kept.id}
     assert store.create(spec) is not None
+
+
+def committed(store: JobStore) -> dict[str, str]:
+    """id -> status as another connection sees the file: what has been committed, not only written."""
+    with sqlite3.connect(store.path) as db:
+        return dict(db.execute("SELECT id, status FROM jobs").fetchall())
+
+
+def submit_at_once(store: JobStore, count: int, max_queued: int | None, handed: list[str]) -> list:
+    """count submissions one after another, as the event loop makes them; the id of each row stored is handed."""
+    records = [store.create({**SPEC, "n_steps": i}, max_queued) for i in range(count)]
+    handed += [record.id for record in records if record is not None]
+    return records
+
+
+def test_the_queue_bound_is_exact_for_submissions_at_once(store):
+    handed: list[str] = []
+    store.create(SPEC)  # one queued already
+    records = submit_at_once(store, 30, 7, handed)
+    accepted = [record for record in records if record is not None]
+    assert len(accepted) == 6 and records.count(None) == 24
+    assert len(committed(store)) == 7 and sorted(handed) == sorted(record.id for record in accepted)
+
+
+def test_the_queue_bound_counts_afresh_after_a_cancel_and_a_restart(store, tmp_path):
+    handed: list[str] = []
+    first = submit_at_once(store, 3, 3, handed)
+    assert None not in first
+    assert submit_at_once(store, 1, 3, handed) == [None]  # full
+    store.request_cancel(first[0].id)
+    second = submit_at_once(store, 2, 3, handed)
+    assert second[0] is not None and second[1] is None  # the cancelled one's place, and no more
+    store.claim(first[1].id)  # running: no longer queued
+    store.close()
+
+    again = JobStore(tmp_path / "jobs.sqlite3")  # a restart: the count comes from the file, not from memory
+    again.open()
+    try:
+        assert again.recover() == [first[1].id, first[2].id, second[0].id]  # the running one queued again
+        assert submit_at_once(again, 1, 3, handed) == [None]
+        assert submit_at_once(again, 2, 4, handed)[1] is None
+        assert sum(status == "queued" for status in committed(again).values()) == 4
+    finally:
+        again.close()
+
+
+def test_a_quick_run_goes_from_queued_to_its_end_in_one_write_unless_cancelled_first(store):
+    """Runner._run_quick: a run of milliseconds is recorded without a claim, by one guarded write: queued ->
+    completed with attempts 1 and its start time; a cancel that came first wins."""
+    import numpy as np
+    from raydamp_service.kinds.jobs import TrajectoryArrays
+    from raydamp_service.tasks.store import now
+
+    arrays = TrajectoryArrays(t=np.arange(3.0), q=np.ones((3, 1)), p=np.zeros((3, 1)), energy=np.full(3, 2.0),
+                              momentum=np.empty((3, 0)), work=np.zeros(3))
+    ran, cancelled = store.create(SPEC), store.create(SPEC)
+    started = now()
+    assert store.finish(ran.id, "completed", summary={"steps": 2}, trajectory=arrays, unclaimed_since=started)
+    record = store.get(ran.id)
+    assert (record.status, record.attempts, record.started_at, record.progress, record.summary) == (
+        "completed", 1, started, 1.0, {"steps": 2})
+    assert record.started_at <= record.finished_at and committed(store)[ran.id] == "completed"
+    np.testing.assert_array_equal(store.trajectory(ran.id).q, arrays.q)
+
+    store.request_cancel(cancelled.id)  # while it ran: cancelled in the store at once
+    assert not store.finish(cancelled.id, "completed", summary={"steps": 2}, trajectory=arrays,
+                            unclaimed_since=now())
+    record = store.get(cancelled.id)
+    assert (record.status, record.attempts, record.summary, record.has_trajectory) == ("cancelled", 0, None, False)

@@ -330,7 +330,7 @@ def test_files_need_the_token_persist_across_restarts_and_have_a_quota(start_ser
 def test_an_older_database_gains_the_files_table(tmp_path):
     import sqlite3
 
-    from raydamp_service.jobs import JobStore
+    from raydamp_service.kinds.jobs import JobStore
 
     db = tmp_path / "old.sqlite3"
     with sqlite3.connect(db) as connection:  # the tables of a database from before uploads

@@ -9,8 +9,8 @@ import pytest
 
 from raydamp.jobs import JobSpec, JobError
 from raydamp_service.config import Settings
-from raydamp_service.jobs import StoredTrajectory
-from raydamp_service.problems import check_spec
+from raydamp_service.kinds.jobs import StoredTrajectory
+from raydamp_service.checks.limits import check_spec
 
 STEPS = 1000
 PENDULUM = {"model": "damped_pendulum", "parameters": {"eps": 0.1}, "method": "3s", "h": 0.1, "n_steps": STEPS,

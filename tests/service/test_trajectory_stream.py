@@ -11,7 +11,7 @@ import time
 from pathlib import Path
 
 import pytest
-from raydamp_service.trajectory_stream import FetchLease
+from raydamp_service.trajectories.stream import FetchLease
 
 PENDULUM = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "step_size": 0.01,
             "initial_state": {"q": [0.9 * math.pi], "p": [0.0]}}

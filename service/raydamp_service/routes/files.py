@@ -10,16 +10,20 @@ cannot be removed (409) until that job has finished or been cancelled.
 
 from __future__ import annotations
 
+from functools import partial
 from typing import Annotated
 
 from fastapi import APIRouter, File, HTTPException, Query, Request, Response, UploadFile
 from fastapi.exceptions import RequestValidationError
 
-from ..deps import SettingsDep, StoreDep
-from ..files import FileRecord, RecordFileInfo, UploadError, check_upload
-from ..guard import file_too_large
+from .deps import SettingsDep, StoreDep
+from ..checks.limits import JobError
+from ..checks.pool import ChecksBusy
+from ..checks.uploads import RecordFileInfo, check_upload
+from ..kinds.files import FileRecord
+from ..edge.guard import file_too_large
 from ..schemas import FileInfo, FileList
-from .tasks import check_limit
+from .tasks import check_limit, checks_busy
 
 router = APIRouter(prefix="/v1/files", tags=["files"])
 
@@ -62,11 +66,14 @@ def upload_file(file: Annotated[UploadFile, File(description="a Matrix Market (.
     content = file.file.read(limit + 1)
     if len(content) > limit:
         raise HTTPException(413, detail=file_too_large(limit))
-    try:
-        info = check_upload(content, _name(file.filename), max_dim=settings.max_structure_dim)
-    except UploadError as error:
-        raise RequestValidationError([{"type": "value_error", "loc": ("body", "file"), "msg": str(error),
+    try:  # parsed in a check process, under its budgets: never a Python object per value in the server
+        info = request.app.state.checks.call(partial(check_upload, max_dim=settings.max_structure_dim), content,
+                                             _name(file.filename), where=("body", "file"))
+    except JobError as error:
+        raise RequestValidationError([{"type": "value_error", "loc": error.loc, "msg": error.message,
                                        "input": _name(file.filename)}]) from None
+    except ChecksBusy as busy:
+        raise checks_busy(settings, busy) from None
     if isinstance(info, RecordFileInfo):
         record = store.add_file(_name(file.filename), content, max_total_bytes=settings.max_stored_file_bytes,
                                 record=info)

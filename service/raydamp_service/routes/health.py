@@ -5,7 +5,7 @@ from __future__ import annotations
 import raydamp
 from fastapi import APIRouter
 
-from ..deps import SettingsDep, StoreDep
+from .deps import SettingsDep, StoreDep
 from ..schemas import Health
 
 router = APIRouter(tags=["health"])

@@ -1,9 +1,9 @@
 """/v1/jobs: submit, list, inspect and cancel integration jobs, and fetch their trajectories.
 
-Handlers are plain functions (FastAPI runs them in its thread pool), so SQLite calls never
-hold up the event loop; no handler waits for a run. The submission is the exception: a coroutine whose
-insert goes to the store's group commit (group_commit.py), and whose check runs on the loop when it is
-a built-in model's (microseconds), else in the thread pool.
+Handlers are plain functions (FastAPI runs them in its thread pool), so SQLite reads never hold up the event
+loop; no handler waits for a run. The submission is the exception: a coroutine whose check runs on the loop
+when it is a built-in model's (microseconds), else in the thread pool, and whose insert (one short write, which
+WAL with synchronous=NORMAL commits without a sync) runs on the loop: a hop to the thread pool cost more.
 """
 
 from __future__ import annotations
@@ -21,21 +21,21 @@ from raydamp.jobs import validation_error
 from starlette.background import BackgroundTask
 from starlette.concurrency import run_in_threadpool
 
-from ..checks import CheckPool, ChecksBusy, PlotOverBudget, checked_inline
-from ..deps import RunnerDep, SettingsDep, StoreDep
-from ..files import file_resolver
-from ..problems import JobError, RaydampCall
-from ..runner import Runner
+from ..checks.pool import CheckPool, ChecksBusy, PlotOverBudget, checked_inline
+from .deps import RunnerDep, SettingsDep, StoreDep
+from ..kinds.files import file_resolver
+from ..checks.limits import JobError, RaydampCall
+from ..tasks.runner import Runner
 from ..schemas import JobCreated, JobList, JobListItem, JobSpec, JobStatus, JobView, Trajectory
 from ..config import Settings
-from ..downloads import write_file
-from ..head import HEAD
-from ..jobs import JobRecord, JobStore
-from ..store import FINAL_STATUSES
-from ..timed_send import TimedFileResponse, TimedStreamingResponse
+from ..trajectories.downloads import draw_plot, write_file
+from ..edge.http import HEAD
+from ..kinds.jobs import JobRecord, JobStore
+from ..tasks.store import FINAL_STATUSES
+from ..edge.deadlines import TimedFileResponse, TimedStreamingResponse
 from .tasks import Tasks, check_limit, checks_busy, invalid
-from ..trajectory_stream import FetchLease, Selection, read_arrays, trajectory_chunks
-from ..json_body import UniqueKeysRoute
+from ..trajectories.stream import FetchLease, Selection, read_arrays, trajectory_chunks
+from ..edge.http import UniqueKeysRoute
 
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"], route_class=UniqueKeysRoute)
 
@@ -71,7 +71,8 @@ def with_seed(spec: JobSpec) -> JobSpec:
 
 
 @router.post("", status_code=202, response_model=JobCreated,
-             responses={422: {"description": "the spec is invalid; detail[].loc names the field"},
+             responses={400: {"description": "the body is not UTF-8 text, or the Host is not one of trusted_hosts"},
+                        422: {"description": "the spec is invalid; detail[].loc names the field"},
                         409: {"description": "an uploaded file the spec names was deleted while it was checked"},
                         429: {"description": "max_queued jobs are waiting, or max_pending_checks checks of "
                                              "systems are under way; retry after Retry-After seconds"}})
@@ -87,10 +88,9 @@ async def submit_job(spec: JobSpec, request: Request, response: Response) -> Job
         call = _check(spec, store, settings, checks)
     else:  # waits for a check process, or reads uploaded files (whose arrays a queued job should not hold)
         call = await run_in_threadpool(_check, spec, store, settings, checks) and None
-    # The insert goes to the store's group commit (no thread pool hop either); the answer once it is committed.
     # The runner gets the row with the spec validated here and the built-in model's run the check built.
-    record = await JOBS.queue_committed(request, response, store, runner, spec, settings.max_queued, "max_queued",
-                                        settings, prepare=lambda stored: stored.checked(spec, call))
+    record = JOBS.queue(request, response, store, runner, spec, settings.max_queued, "max_queued", settings,
+                        prepare=lambda stored: stored.checked(spec, call))
     return JobCreated(id=record.id, status=record.status)
 
 
@@ -99,8 +99,8 @@ def _check(spec: JobSpec, store: JobStore, settings: Settings, checks: CheckPool
         return checks.job(spec, files=file_resolver(store))
     except JobError as error:
         raise invalid(error, spec.model_dump()) from None
-    except ChecksBusy:
-        raise checks_busy(settings) from None
+    except ChecksBusy as busy:
+        raise checks_busy(settings, busy) from None
 
 
 @router.get("", response_model=JobList)
@@ -254,26 +254,26 @@ def get_plot(job_id: str, kind: Literal["energy", "phase", "projection"], reques
     points and max_plot_bytes of stored floats are drawn, decimated evenly."""
     record = JOBS.existing(store, job_id)
     spec = _spec(record)
-    connection, stored = _opened(record, store)
-    try:
-        points = max(2, min(_PLOT_POINTS, settings.max_plot_bytes // stored.row_bytes))
-        selection = Selection(0, stored.points, max(1, -(-stored.points // points)))
-        lease = FetchLease(_large_slot(request, settings, len(selection) * stored.row_bytes))
-        try:
-            arrays = read_arrays(connection, stored, selection)
-        finally:
-            lease.release()
-    finally:
-        connection.close()
 
     def pick(value: str | None):  # a coordinate's name, or its index (ASCII digits: int() refuses "²")
         return int(value) if value is not None and value.isascii() and value.isdecimal() else value
 
     options = {"width": width, "height": height, "coordinate": pick(coordinate), "x": pick(x), "y": pick(y)}
-    try:  # drawn in a check process (CheckPool.plot says why)
-        png = request.app.state.checks.plot(record, arrays, spec, kind, options)
-    except ChecksBusy:
-        raise checks_busy(request.app.state.settings) from None
+    connection, stored = _opened(record, store)
+    try:  # a place among the checks, then a large-fetch slot, are taken before any stored array is read
+        points = max(2, min(_PLOT_POINTS, settings.max_plot_bytes // stored.row_bytes))
+        selection = Selection(0, stored.points, max(1, -(-stored.points // points)))
+
+        def read():
+            lease = FetchLease(_large_slot(request, settings, len(selection) * stored.row_bytes))
+            try:
+                return read_arrays(connection, stored, selection)
+            finally:
+                lease.release()
+
+        png = request.app.state.checks.plot(read, draw_plot, record, spec, kind, options)  # drawn in a check process
+    except ChecksBusy as busy:
+        raise checks_busy(settings, busy) from None
     except PlotOverBudget as error:
         raise RequestValidationError([{"type": "value_error", "loc": ("query", "width"), "msg": str(error),
                                        "input": width}]) from None
@@ -281,6 +281,8 @@ def get_plot(job_id: str, kind: Literal["energy", "phase", "projection"], reques
         field = str(error).partition(": ")[0]  # raydamp names the argument: coordinate, x, y, or the plot's kind
         loc = ("query", field) if field in ("coordinate", "x", "y") else ("path", "kind")
         raise RequestValidationError([{"type": "value_error", "loc": loc, "msg": str(error), "input": None}]) from None
+    finally:
+        connection.close()
     return Response(png, media_type="image/png")
 
 

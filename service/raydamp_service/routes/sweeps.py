@@ -8,14 +8,14 @@ from typing import Annotated, Literal
 from fastapi import APIRouter, HTTPException, Query, Request, Response
 
 from .jobs import with_seed
-from ..checks import ChecksBusy
-from ..deps import ChecksDep, SettingsDep
-from ..problems import JobError
-from ..runner import Runner
+from ..checks.pool import ChecksBusy
+from .deps import ChecksDep, SettingsDep
+from ..checks.limits import JobError
+from ..tasks.runner import Runner
 from ..schemas import JobStatus, SweepCreated, SweepList, SweepListItem, SweepSpec, SweepView
-from ..sweeps import SweepRecord, SweepStore
-from ..timed_send import TimedStreamingResponse
-from ..json_body import UniqueKeysRoute
+from ..kinds.sweeps import SweepRecord, SweepStore
+from ..edge.deadlines import TimedStreamingResponse
+from ..edge.http import UniqueKeysRoute
 from .tasks import Tasks, check_limit, checks_busy, invalid
 
 router = APIRouter(prefix="/v1/sweeps", tags=["sweeps"], route_class=UniqueKeysRoute)
@@ -70,8 +70,8 @@ def submit_sweep(spec: SweepSpec, request: Request, response: Response, settings
         members = checks.sweep(spec)
     except JobError as error:
         raise invalid(error) from None
-    except ChecksBusy:
-        raise checks_busy(settings) from None
+    except ChecksBusy as busy:
+        raise checks_busy(settings, busy) from None
     record = SWEEPS.queue(request, response, _sweeps(request), _runner(request), spec, settings.max_queued_sweeps,
                           "max_queued_sweeps", settings, members=members)
     return SweepCreated(id=record.id, status=record.status, members=record.members)

@@ -12,9 +12,9 @@ from fastapi import HTTPException, Request, Response
 from fastapi.exceptions import RequestValidationError
 
 from ..config import Settings
-from ..problems import JobError
-from ..runner import Runner
-from ..store import FINAL_STATUSES, FileGone, TaskStore
+from ..checks.limits import JobError
+from ..tasks.runner import Runner
+from ..tasks.store import FINAL_STATUSES, FileGone, TaskStore
 
 __all__ = ["Tasks", "invalid", "check_limit", "checks_busy"]
 
@@ -36,10 +36,10 @@ def _value_at(data: Any, loc: tuple[str | int, ...]) -> Any:
     return data
 
 
-def checks_busy(settings: Settings) -> HTTPException:
-    """The 429 of a submission whose system's check finds max_pending_checks checks under way."""
-    return HTTPException(429, detail=f"{settings.max_pending_checks} checks of submitted systems are running or "
-                         "waiting (max_pending_checks); retry later",
+def checks_busy(settings: Settings, error: Exception | None = None) -> HTTPException:
+    """The 429 of a check that finds max_pending_checks checks under way, or the machine too loaded to end it."""
+    return HTTPException(429, detail=str(error or "") or f"{settings.max_pending_checks} checks of submitted systems "
+                         "are running or waiting (max_pending_checks); retry later",
                          headers={"Retry-After": str(settings.retry_after_seconds)})
 
 
@@ -66,29 +66,15 @@ class Tasks:
         return record
 
     def queue(self, request: Request, response: Response, store: TaskStore, runner: Runner, spec: Any, limit: int,
-              setting: str, settings: Settings, **columns: Any) -> Any:
-        """Store the checked spec as queued and hand it to the runner; 429 when limit are waiting."""
+              setting: str, settings: Settings, prepare: Callable[[Any], Any] | None = None, **columns: Any) -> Any:
+        """Store the checked spec as queued and hand it to the runner (as prepare(record), if given); 429 when
+        limit are waiting."""
         try:
             record = store.create(spec.model_dump(mode="json"), limit, **columns)
         except FileGone as error:
             raise HTTPException(409, detail=str(error)) from None
         if record is not None:
-            runner.submit(record.id)
-        return self._queued(request, response, record, limit, setting, settings)
-
-    async def queue_committed(self, request: Request, response: Response, store: TaskStore, runner: Runner,
-                              spec: Any, limit: int, setting: str, settings: Settings,
-                              prepare: Callable[[Any], Any] | None = None, **columns: Any) -> Any:
-        """queue() through the store's group commit, from the event loop: answered once the row is committed
-        with the other submissions of the moment; the runner has it (as prepare(record), if given) even if
-        the client has gone."""
-        def hand_over(stored: Any) -> None:
-            runner.submit(stored.id, prepare(stored) if prepare is not None else stored)
-
-        try:
-            record = await store.create_committed(spec.model_dump(mode="json"), limit, hand_over, **columns)
-        except FileGone as error:
-            raise HTTPException(409, detail=str(error)) from None
+            runner.submit(record.id, prepare(record) if prepare is not None else record)
         return self._queued(request, response, record, limit, setting, settings)
 
     def _queued(self, request: Request, response: Response, record: Any, limit: int, setting: str,

@@ -6,14 +6,13 @@ kind names its table, its own columns, and how it stores its result.
 
 One connection per thread (sqlite3 connections are not for sharing), WAL so that readers never
 wait for the writer. Every state change is one UPDATE guarded by the state it expects, so a
-cancel and a worker's claim cannot both win. Submissions' inserts (create_committed) and the records
-of quick runs (finish with unclaimed_since) go through the database's group commit (group_commit.py):
-one writer thread commits those of the moment together.
+cancel and a worker's claim cannot both win.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import json
 import re
 import sqlite3
@@ -23,16 +22,12 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, ClassVar, Generic, TypeVar
+from typing import Any, ClassVar, Generic, TypeVar
 
-from .group_commit import GroupCommit, Waiter
-
-if TYPE_CHECKING:
-    from .config import Settings
-    from .runner import Work
+from pydantic import BaseModel, ValidationError
 
 __all__ = ["Database", "TaskStore", "TaskRecord", "StoreUnavailable", "FileGone", "FINAL_STATUSES", "UNFINISHED_SQL",
-           "now"]
+           "normalise_stored", "now"]
 
 FINAL_STATUSES = frozenset({"completed", "failed", "cancelled"})
 _FINAL_SQL = "('completed', 'failed', 'cancelled')"
@@ -73,7 +68,6 @@ class Database:
         self._lock = threading.Lock()
         self._write_lock = threading.Lock()
         self._space_pending = False  # freed pages not yet returned (a checkpoint met readers)
-        self._writer: GroupCommit | None = None
 
     def open(self, schema: str, upgrade: Callable[[sqlite3.Connection], None]) -> None:
         """Create or open the database with these tables (upgrade brings older ones up to them) and prove it
@@ -95,19 +89,7 @@ class Database:
             self.close()
             raise StoreUnavailable(self.path, error) from None
 
-    @property
-    def writer(self) -> GroupCommit:
-        """The thread committing concurrent submissions' inserts together (group_commit.py)."""
-        with self._lock:
-            if self._writer is None:
-                self._writer = GroupCommit(self)
-            return self._writer
-
     def close(self) -> None:
-        with self._lock:
-            writer, self._writer = self._writer, None
-        if writer is not None:
-            writer.stop()  # what it holds is committed before its connection closes
         with self._lock:
             for connection in self._connections:
                 connection.close()
@@ -170,6 +152,25 @@ class Database:
         finally:
             connection.execute("PRAGMA busy_timeout = 30000")
         self._space_pending = bool(busy)
+
+
+def normalise_stored(db: sqlite3.Connection, table: str, model: type[BaseModel]) -> None:
+    """Bring the specs a table holds to the model's JSON of today (views send them as stored: _Stored), once
+    per change of the model's schema: a spec stored before a field was added then shows the field's default,
+    as it did when every view validated it again. One that no longer validates is left as it was."""
+    key = f"{table}.spec schema"
+    schema = hashlib.sha256(json.dumps(model.model_json_schema(), sort_keys=True).encode()).hexdigest()
+    if db.execute("SELECT 1 FROM service WHERE key = ? AND value = ?", (key, schema)).fetchone():
+        return
+    for (task_id,) in db.execute(f"SELECT id FROM {table}").fetchall():
+        text = db.execute(f"SELECT spec FROM {table} WHERE id = ?", (task_id,)).fetchone()[0]
+        try:
+            normal = json.dumps(model.model_validate(json.loads(text)).model_dump(mode="json"))
+        except (ValidationError, ValueError):
+            continue
+        if normal != text:
+            db.execute(f"UPDATE {table} SET spec = ? WHERE id = ?", (normal, task_id))
+    db.execute("INSERT OR REPLACE INTO service (key, value) VALUES (?, ?)", (key, schema))
 
 
 class FileGone(LookupError):
@@ -281,10 +282,6 @@ class TaskStore(Generic[Record]):
     def close(self) -> None:
         self.db.close()
 
-    def work(self, settings: Settings) -> Work:
-        """How the kind's tasks run (runner.Runner runs them)."""
-        raise NotImplementedError
-
     # ---- reading ----
 
     def _record(self, row: sqlite3.Row) -> Record:
@@ -319,42 +316,18 @@ class TaskStore(Generic[Record]):
     # ---- state changes ----
 
     def create(self, spec: dict[str, Any], max_queued: int | None = None, **columns: Any) -> Record | None:
-        """A new queued task with the kind's columns; None (nothing written) when max_queued are already queued."""
-        with self.db.transaction() as db:
-            return self._insert(spec, max_queued, columns)(db, {})
-
-    async def create_committed(self, spec: dict[str, Any], max_queued: int | None, then: Callable[[Record], None],
-                               **columns: Any) -> Record | None:
-        """create() through the database's group commit: written with the other submissions of the moment and
-        returned once committed; then(record) runs after the commit, even if the caller has gone meanwhile."""
-        return await self.db.writer.write(self._insert(spec, max_queued, columns),
-                                          after=lambda record: record is not None and then(record))
-
-    def _insert(self, spec: dict[str, Any], max_queued: int | None, columns: dict[str, Any]
-                ) -> Callable[[sqlite3.Connection, dict], Record | None]:
+        """A new queued task with the kind's columns; None (nothing written) when max_queued are already queued, or
+        FileGone when an upload it names was deleted since its check."""
         values = {"id": uuid.uuid4().hex, "status": "queued", "spec": json.dumps(spec), "created_at": now(), **columns}
-        insert = f"INSERT INTO {self.TABLE} ({', '.join(values)}) VALUES ({', '.join('?' * len(values))})"
-        counted = ("queued", self.TABLE)
         files = uploaded_files(spec)
-
-        def write(db: sqlite3.Connection, batch: dict) -> Record | None:
-            # The queued tasks are counted once per transaction (within the write lock, so no other writer
-            # changes them meanwhile) and the count carried from insert to insert: a count per insert grew
-            # with the queue. Counted afresh by every transaction, it stays right across cancels and restarts.
-            queued = batch.get(counted)
-            if queued is None and max_queued is not None:
-                queued = db.execute(f"SELECT COUNT(*) FROM {self.TABLE} WHERE status = 'queued'").fetchone()[0]
-            if max_queued is not None and queued >= max_queued:
-                batch[counted] = queued
+        with self.db.transaction() as db:  # counted and inserted under the write lock: the bound is exact
+            if max_queued is not None and db.execute(
+                    f"SELECT COUNT(*) FROM {self.TABLE} WHERE status = 'queued'").fetchone()[0] >= max_queued:
                 return None
             _require_files(db, files)
-            db.execute(insert, tuple(values.values()))
-            if queued is not None:
-                batch[counted] = queued + 1
-            # The row as written, without reading it back nor parsing the JSON just written.
-            return self.RECORD(**{**values, "spec": spec})
-
-        return write
+            db.execute(f"INSERT INTO {self.TABLE} ({', '.join(values)}) VALUES ({', '.join('?' * len(values))})",
+                       tuple(values.values()))
+        return self.RECORD(**{**values, "spec": spec})  # the row as written, its JSON not parsed back
 
     def _change(self, task_id: str, expected: str, changes: str, *args: Any,
                 also: tuple[str, tuple] | None = None) -> bool:
@@ -385,32 +358,20 @@ class TaskStore(Generic[Record]):
         self._change(task_id, "('running')", f"{self.PROGRESS} = ?", progress)
 
     def finish(self, task_id: str, status: str, *, error: str | None = None, progress: float | None = None,
-               also: tuple[str, tuple] | None = None, unclaimed_since: str | None = None, **columns: Any
-               ) -> Waiter | None:
+               also: tuple[str, tuple] | None = None, unclaimed_since: str | None = None, **columns: Any) -> bool:
         """Record the end of a run: its result in the kind's columns (a dict as JSON), and one more statement
-        (a row of the kind's other table); all of it or none.
+        (a row of the kind's other table); all of it or none. True if the task changed.
 
         unclaimed_since: the run was made without a claim (a quick one: Runner), begun at that time. Then the
-        task goes from queued straight to its end (attempts + 1), unless a cancel came first (nothing is
-        written), through the group commit: returns its Waiter at once."""
+        task goes from queued straight to its end (attempts + 1) in this one write, unless a cancel came first."""
         assert status in FINAL_STATUSES
         values = tuple(json.dumps(value) if isinstance(value, dict) else value for value in columns.values())
         changes = (f"status = ?, error = ?, finished_at = ?, {self.PROGRESS} = COALESCE(?, {self.PROGRESS})"
                    f"{''.join(f', {name} = ?' for name in columns)}")
         if unclaimed_since is None:
-            self._change(task_id, UNFINISHED_SQL, changes, status, error, now(), progress, *values, also=also)
-            return None
-        update = (f"UPDATE {self.TABLE} SET {changes}, started_at = ?, attempts = attempts + 1 "
-                  "WHERE id = ? AND status = 'queued'")
-        args = (status, error, now(), progress, *values, unclaimed_since, task_id)
-
-        def write(db: sqlite3.Connection, batch: dict) -> bool:
-            changed = db.execute(update, args).rowcount
-            if changed and also is not None:
-                db.execute(*also)
-            return bool(changed)
-
-        return self.db.writer.post(write)
+            return self._change(task_id, UNFINISHED_SQL, changes, status, error, now(), progress, *values, also=also)
+        return self._change(task_id, "('queued')", changes + ", started_at = ?, attempts = attempts + 1", status,
+                            error, now(), progress, *values, unclaimed_since, also=also)
 
     def request_cancel(self, task_id: str) -> Record | None:
         """A queued task is cancelled at once; a running one is flagged (the runner stops it)."""

@@ -12,10 +12,10 @@ from typing import Annotated
 
 from fastapi import Depends, Request
 
-from .checks import CheckPool
-from .config import Settings
-from .jobs import JobStore
-from .runner import Runner
+from ..checks.pool import CheckPool
+from ..config import Settings
+from ..kinds.jobs import JobStore
+from ..tasks.runner import Runner
 
 __all__ = ["SettingsDep", "StoreDep", "RunnerDep", "ChecksDep", "get_settings", "get_store", "get_runner", "get_checks"]
 

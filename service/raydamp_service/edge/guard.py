@@ -13,7 +13,7 @@ from starlette.datastructures import Headers
 from starlette.responses import JSONResponse
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from .config import Settings
+from ..config import Settings
 
 __all__ = ["RequestGuard", "UNGUARDED_PATHS", "file_too_large", "needs_token"]
 

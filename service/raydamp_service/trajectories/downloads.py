@@ -18,17 +18,16 @@ import raydamp
 from raydamp.jobs import JobSpec
 from raydamp.results.io import write_solution
 
-from .jobs import JobRecord
-from .stored_arrays import SAVED, StoredTrajectory, TrajectoryArrays
-from .trajectory_stream import Selection, read_arrays, read_column
+from .arrays import SAVED, StoredTrajectory, TrajectoryArrays
+from .stream import Selection, read_arrays, read_column
 
-__all__ = ["stored_solution", "write_file"]
+__all__ = ["draw_plot", "stored_solution", "write_file"]
 
 MEDIA_TYPES = {"csv": "text/csv", "npz": "application/octet-stream", "netcdf": "application/x-netcdf"}
 SUFFIXES = {"csv": ".csv", "npz": ".npz", "netcdf": ".nc"}
 
 
-def stored_solution(record: JobRecord, arrays: TrajectoryArrays, spec: JobSpec) -> raydamp.Solution:
+def stored_solution(record, arrays: TrajectoryArrays, spec: JobSpec) -> raydamp.Solution:
     """The stored run as a Solution; its provenance is the job spec as submitted (spec: it validated)."""
     summary = record.summary or {}
     coordinates, momentum_names = spec.names(arrays.q.shape[1], arrays.momentum.shape[1], spec.save_dofs)
@@ -45,7 +44,7 @@ def stored_solution(record: JobRecord, arrays: TrajectoryArrays, spec: JobSpec) 
         dofs=None if spec.save_dofs is None else np.asarray(spec.save_dofs, dtype=np.int64))
 
 
-def write_file(record: JobRecord, spec: JobSpec, connection: sqlite3.Connection, stored: StoredTrajectory,
+def write_file(record, spec: JobSpec, connection: sqlite3.Connection, stored: StoredTrajectory,
                selection: Selection, fmt: Literal["csv", "npz", "netcdf"], directory: Path) -> tuple[Path, str]:
     """(path, media type) of the selected points written in directory by raydamp, which asks for them a slice
     at a time: rows [start, stop) of the selection are read from their blobs, never the whole of them. spec:
@@ -61,3 +60,12 @@ def write_file(record: JobRecord, spec: JobSpec, connection: sqlite3.Connection,
     path = directory / f"trajectory{SUFFIXES[fmt]}"
     write_solution(path, fmt, head, read, len(selection))
     return path, MEDIA_TYPES[fmt]
+
+
+def draw_plot(record, arrays: TrajectoryArrays, spec: JobSpec, kind: str, options: dict) -> tuple[str | None, bytes | None]:
+    """(None, the PNG) of a stored trajectory's plot, or (raydamp's refusal, None): a plot this run cannot have (a
+    projection of one coordinate, an unknown coordinate). Run in a check process (CheckPool.plot)."""
+    try:
+        return None, stored_solution(record, arrays, spec).plot.png(kind, **options)
+    except ValueError as error:
+        return str(error), None

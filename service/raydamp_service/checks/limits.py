@@ -16,7 +16,7 @@ from raydamp.jobs import (CooForm, DiagonalForm, JobCall, JobError, JobSpec, Lin
 from raydamp.run.integrate import row_bytes
 from raydamp.run.sweep import GridTooLarge
 
-from .config import Settings
+from ..config import Settings
 
 __all__ = ["JobError", "RaydampCall", "build_call", "check_spec", "check_sweep_spec", "planned_steps"]
 

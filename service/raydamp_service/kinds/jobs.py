@@ -9,16 +9,15 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from raydamp.jobs import JobSpec
 
-from .checks import CheckPool, build_for_run, checked_inline
-from .config import Settings
+from ..checks.pool import CheckPool, build_for_run, checked_inline
+from ..config import Settings
 from .files import FILE_COLUMNS_ADDED, FILES_TABLE, FileStore, file_resolver
-from .problems import RaydampCall, planned_steps
-from .runner import Outcome, Run
-from .schemas import JobSpec, normalise_stored
-from .group_commit import Waiter
-from .store import TaskRecord, TaskStore
-from .stored_arrays import SAVED, StoredTrajectory, TrajectoryArrays
+from ..checks.limits import RaydampCall, planned_steps
+from ..tasks.runner import Outcome, Run
+from ..tasks.store import TaskRecord, TaskStore, normalise_stored
+from ..trajectories.arrays import SAVED, StoredTrajectory, TrajectoryArrays
 
 __all__ = ["JobStore", "JobRecord", "JobWork", "TrajectoryArrays", "StoredTrajectory"]
 
@@ -118,7 +117,7 @@ class JobStore(TaskStore[JobRecord], FileStore):
 
     def finish(self, job_id: str, status: str, *, summary: dict[str, Any] | None = None, error: str | None = None,
                failed_step: int | None = None, trajectory: TrajectoryArrays | None = None,
-               progress: float | None = None, unclaimed_since: str | None = None) -> Waiter | None:
+               progress: float | None = None, unclaimed_since: str | None = None) -> bool:
         """Record the end of a run and its saved points in one transaction: all of it or none (unclaimed_since:
         TaskStore.finish)."""
         row = None if trajectory is None else (

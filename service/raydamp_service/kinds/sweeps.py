@@ -13,15 +13,15 @@ from typing import Any
 import numpy as np
 
 import raydamp
+from raydamp.jobs import SweepSpec
 from raydamp.results.ensemble_solution import STATUSES
 from raydamp.results.io.sweep import save_sweep
 from raydamp.run.cluster import local_cluster
 
-from .checks import CheckPool, build_for_run, isolated
-from .config import Settings
-from .runner import Outcome, Run
-from .store import TaskRecord, TaskStore
-from .schemas import SweepSpec, normalise_stored
+from ..checks.pool import CheckPool, build_for_run, isolated
+from ..config import Settings
+from ..tasks.runner import Outcome, Run
+from ..tasks.store import TaskRecord, TaskStore, normalise_stored
 
 __all__ = ["SweepStore", "SweepRecord", "SweepWork"]
 

@@ -14,26 +14,21 @@ import queue
 import sqlite3
 import threading
 import time
-from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol
 
 import raydamp
 
-from .config import Settings
+from ..config import Settings
 from .store import now
 
 if TYPE_CHECKING:
-    from .group_commit import Waiter
     from .store import TaskRecord, TaskStore
 
 __all__ = ["Runner", "Run", "Outcome", "Work"]
 
 log = logging.getLogger("raydamp_service.runner")
-
-_UNCOMMITTED = 8  # quick runs' records a worker hands to the group commit before waiting for the oldest
-
 
 @dataclass
 class Run:
@@ -163,15 +158,13 @@ class Runner:
     # ---- worker threads ----
 
     def _serve(self, tasks: queue.SimpleQueue) -> None:
-        committing: deque[Waiter] = deque()  # this thread's quick runs whose records are being committed
         while True:
             task = tasks.get()
             if task is None or self._stopping.is_set():
-                self._settle(committing, 0)
                 return  # a task still queued stays "queued" in the store and is recovered at the next start
             task_id, stored = task
             try:
-                self._run(task_id, stored, committing)
+                self._run(task_id, stored)
             except Exception as error:  # a worker outlives any one task
                 log.exception("%s %s: internal error", self._store.TABLE, task_id)
                 try:
@@ -179,15 +172,6 @@ class Runner:
                 except sqlite3.Error:
                     log.exception("%s %s: could not record the failure; it is re-run at the next start",
                                   self._store.TABLE, task_id)
-
-    def _settle(self, committing: deque[Waiter], keep: int) -> None:
-        """Wait for the oldest records being committed until at most `keep` remain."""
-        while len(committing) > keep:
-            try:
-                committing.popleft().wait()
-            except sqlite3.Error:  # still queued in the store: run again at the next start
-                log.exception("%s: could not record a quick run; it is run again at the next start",
-                              self._store.TABLE)
 
     def _retain(self) -> None:
         """The retention pass: at start, after runs finish (at most once a second), and periodically."""
@@ -211,9 +195,8 @@ class Runner:
         except sqlite3.Error:  # the stored progress is advisory; never stop a run for it
             log.warning("%s %s: could not save progress", self._store.TABLE, task_id, exc_info=True)
 
-    def _run(self, task_id: str, stored: TaskRecord | None, committing: deque[Waiter]) -> None:
-        """Run the task (stored: its row as submitted, else read here); a quick run's record being committed
-        joins `committing`."""
+    def _run(self, task_id: str, stored: TaskRecord | None) -> None:
+        """Run the task (stored: its row as submitted, else read here)."""
         run = Run(save=lambda progress: self._save_progress(task_id, progress),
                   every=self._settings.progress_save_seconds, fraction=self._work.fraction, stopping=self._stopping)
         # Registered before the claim, so a cancel arriving once the task is "running" always finds the token.
@@ -226,7 +209,7 @@ class Runner:
             if record is None or record.status != "queued":
                 return  # cancelled while queued (or removed)
             if self._work.quick(record):
-                self._run_quick(record, run, committing)
+                self._run_quick(record, run)
                 return
             record = self._store.claim(task_id)
             if record is None:
@@ -248,21 +231,16 @@ class Runner:
                 self._active.pop(task_id, None)
             self._retention_wake.set()
 
-    def _run_quick(self, record: TaskRecord, run: Run, committing: deque[Waiter]) -> None:
+    def _run_quick(self, record: TaskRecord, run: Run) -> None:
         """A run of milliseconds, made while its task is still "queued" in the store and recorded as it ends:
-        queued -> completed (or failed) and its result in one write, which the group commit adds to its next
-        transaction with the submissions and the other runs of the moment, while this thread goes on. A claim
-        and a finish were two transactions of their own, each more than the run. A cancel meanwhile wins (the
-        task is then cancelled in the store, and the write changes nothing); a crash before the commit leaves
-        the task queued, to run at the next start. At most _UNCOMMITTED such records per worker wait for
-        their commit (each holds its run's arrays: a few MB at most, the run being quick)."""
+        queued -> completed (or failed) and its result in one write, where a claim and a finish were two
+        transactions of their own, each more than the run. A cancel meanwhile wins (the write then changes
+        nothing); a crash before the write leaves the task queued, to run at the next start."""
         started = now()
         outcome = self._outcome(record, run)
-        if outcome.status == "cancelled" and run.interrupted:
-            return  # still queued in the store: it runs at the next start
-        self._settle(committing, _UNCOMMITTED - 1)
-        committing.append(self._store.finish(record.id, outcome.status, error=outcome.error,
-                                             progress=outcome.progress, unclaimed_since=started, **outcome.result))
+        if not (outcome.status == "cancelled" and run.interrupted):  # else still queued: it runs at the next start
+            self._store.finish(record.id, outcome.status, error=outcome.error, progress=outcome.progress,
+                               unclaimed_since=started, **outcome.result)
 
     def _outcome(self, record: TaskRecord, run: Run) -> Outcome:
         try:

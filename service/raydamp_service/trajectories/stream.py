@@ -16,12 +16,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .stored_arrays import SAVED, StoredTrajectory, TrajectoryArrays
+from .arrays import SAVED, StoredTrajectory, TrajectoryArrays
 
 __all__ = ["FetchLease", "Selection", "read_arrays", "read_column", "trajectory_chunks"]
 
 CHUNK_BYTES = 1 << 16  # floats read per piece. Small: json.dumps holds the GIL (and so the event loop) for a whole piece
-_ROW_READ_LIMIT = 1 << 16  # a decimation step wider than this reads its rows one by one
+_ROW_READ_LIMIT = 1 << 16  # bytes of one read of a blob
 
 
 class FetchLease:
@@ -97,16 +97,16 @@ def _json_rows(array: np.ndarray) -> str:
 
 
 def _read_rows(blob: sqlite3.Blob, first: int, count: int, every: int, width: int) -> np.ndarray:
-    """Rows first, first + every, ... (count of them) of a row-major float64 array `width` wide."""
+    """Rows first, first + every, ... (count of them) of a row-major float64 array `width` wide, read in spans of
+    about _ROW_READ_LIMIT bytes (a row at a time when one step is wider): what is held is the rows asked for."""
     row_bytes = 8 * width
-    if every * row_bytes <= _ROW_READ_LIMIT:
-        blob.seek(first * row_bytes)
-        span = np.frombuffer(blob.read(((count - 1) * every + 1) * row_bytes), dtype="<f8")
-        return span.reshape(-1, width)[::every]
+    per_read = max(1, _ROW_READ_LIMIT // (every * row_bytes))
     out = np.empty((count, width))
-    for i in range(count):
-        blob.seek((first + i * every) * row_bytes)
-        out[i] = np.frombuffer(blob.read(row_bytes), dtype="<f8")
+    for done in range(0, count, per_read):
+        rows = min(per_read, count - done)
+        blob.seek((first + done * every) * row_bytes)
+        span = np.frombuffer(blob.read(((rows - 1) * every + 1) * row_bytes), dtype="<f8")
+        out[done:done + rows] = span.reshape(-1, width)[::every]
     return out
 
 

@@ -1,0 +1,336 @@
+"""The heavy checks, in worker processes under budgets: never in the server's interpreter.
+
+A system's check compiles its functions (SymEngine's LLVM JIT holds the interpreter lock all the while),
+parses the files it names and takes one trial step; an upload is parsed; a plot is drawn. Each runs as a task
+of a pebble ProcessPool whose check_workers processes fork from a forkserver that has raydamp imported and
+warm up before their first task. Each task has three budgets:
+- CPU time, check_seconds, counted from the worker's CPU clock at the task's start. The kernel is the watchdog
+  (RLIMIT_CPU's soft limit is set to the clock plus the budget before each task: SIGXCPU ends a compile that
+  holds the interpreter lock) and the clock is read again after it. Past it: 422 naming the budget.
+- memory, check_memory_bytes of address space above what the warmed-up worker holds (RLIMIT_AS); a worker that
+  meets it ends, and pebble replaces it. Past it: 422 naming the budget.
+- wall time, _WALL_FACTOR x check_seconds (pebble's timeout: the worker is killed and replaced). Only a loaded
+  machine meets it with the CPU budget kept: 429 with Retry-After, not a refusal of the system.
+At most max_pending_checks tasks run or wait at once; more get 429.
+
+A check answers with the functions it compiled as bytes (System.compiled_form), which the server loads into
+raydamp's cache of compiled functions (load_compiled); a run then builds its System within compiled_elsewhere(),
+which refuses to compile. The bytes are machine code: they come only from this pool's own processes, over
+pebble's pipes; nothing a client sends reaches load_compiled.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import logging
+import math
+import multiprocessing
+import os
+import resource
+import signal
+import sqlite3
+import threading
+import time
+from concurrent.futures import TimeoutError as FutureTimeout
+from pathlib import Path
+from typing import Any
+
+from pebble import ProcessExpired, ProcessPool
+from raydamp.jobs import JobSpec, SweepSpec, SystemInput
+from raydamp.systems.system import NotCompiled, compiled_elsewhere, load_compiled
+
+from ..config import Settings
+from .limits import JobError, RaydampCall, build_call, check_spec, check_sweep_spec
+from .uploads import ParsedFiles, UploadError
+
+__all__ = ["CheckPool", "ChecksBusy", "PlotOverBudget", "build_for_run", "checked_inline", "isolated"]
+
+log = logging.getLogger("raydamp_service.checks")
+
+_BYTES_PER_PARSED_ENTRY = 12  # a CSC matrix: a float64 value and an int32 row index per stored entry
+_WALL_FACTOR = 4  # the wall-clock ceiling, in CPU budgets
+_MEMORY_EXIT = 3  # a worker's exit status after a MemoryError (its heap is not trusted afterwards)
+
+
+class ChecksBusy(Exception):
+    """No place for a check now (max_pending_checks, or the machine too loaded to finish it): retry later."""
+
+
+class PlotOverBudget(Exception):
+    """A plot's drawing passed a check's CPU or memory budget; the message says which settings."""
+
+
+def isolated(spec: JobSpec) -> bool:
+    """Whether a job's check runs in a check process: every user-defined system, and every job whose load has an
+    expression (compiled like a system's)."""
+    return spec.system is not None or _has_expression(spec.load) or _has_expression(spec.ground_motion)
+
+
+def checked_inline(spec: JobSpec) -> bool:
+    """Whether a job's check is light enough for the event loop: a built-in model without a load, its initial
+    state given as numbers (its check is arithmetic on at most max_dim coordinates and reads no file)."""
+    state = spec.initial_state
+    return (spec.system is None and spec.load is None and spec.ground_motion is None
+            and isinstance(getattr(state, "q", None), list) and isinstance(getattr(state, "p", None), list))
+
+
+def _has_expression(value) -> bool:
+    if isinstance(value, dict):
+        return "expression" in value or any(_has_expression(v) for v in value.values())
+    if isinstance(value, list):
+        return any(_has_expression(v) for v in value)
+    return False
+
+
+# ---- in a check process ----
+
+_files: ParsedFiles | None = None  # the uploads as this process has parsed them
+
+
+class _StoredFiles:
+    """The uploads as ParsedFiles reads them, through a read-only connection of the check process's own."""
+
+    def __init__(self, db: str):
+        self._db = db
+        self._connection: sqlite3.Connection | None = None
+
+    def file_content(self, file_id: str) -> bytes | None:
+        if self._connection is None:
+            self._connection = sqlite3.connect(Path(self._db).as_uri() + "?mode=ro", uri=True)
+        row = self._connection.execute("SELECT content FROM files WHERE id = ?", (file_id,)).fetchone()
+        return bytes(row[0]) if row else None
+
+
+def _status_bytes(field: str) -> int:
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith(field + ":"):
+            return int(line.split()[1]) * 1024
+    raise LookupError(field)
+
+
+# One small system of each kind, checked before the memory budget applies: what their checks load on first use
+# (SciPy's sparse solvers and their BLAS, LLVM, matplotlib's fonts) is then in place, not charged to a task.
+_WARM_UP = (
+    {"system": {"coordinates": 2, "potential": "q0^2 + q0*q1^3", "damping": {"dampers": [{"on": "q0 - q1"}]},
+                "eps": 0.1}},
+    {"system": {"kind": "chain", "n": 4, "bond": "expression", "parameters": {"potential": "r^2/2 + r^4/4"}}},
+    {"system": {"kind": "linear_structure", "M": {"diagonal": [1.0, 1.0]},
+                "K": {"coo": {"shape": [2, 2], "rows": [0, 0, 1, 1], "cols": [0, 1, 0, 1],
+                               "values": [2.0, -1.0, -1.0, 2.0]}},
+                "alpha": 0.1, "beta": 0.01}},
+)
+
+
+def _start_worker(settings: Settings) -> None:
+    """A check process's start: dies with the forkserver, warms up, then takes its memory budget."""
+    global _files
+    try:  # a check busy compiling never reads the pipe that would tell it the service has gone
+        ctypes.CDLL(None).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+    resource.setrlimit(resource.RLIMIT_CORE, (0, 0))  # SIGXCPU (the CPU budget) would write a core file
+    try:
+        import raydamp
+        from raydamp.models import DampedPendulum
+
+        raydamp.integrate(DampedPendulum(), [1.0], [0.0], h=0.1, n_steps=2).plot.png("energy", width=200, height=150)
+    except Exception:  # noqa: BLE001 - a warm-up only; a real plot reports its own errors
+        log.warning("check warm-up: a plot", exc_info=True)
+    for system in _WARM_UP:
+        spec = {**system, "method": "3s", "h": 0.01, "n_steps": 2, "initial_state": {"rest": True}}
+        try:
+            check_spec(JobSpec.model_validate(spec), settings)
+        except Exception:  # noqa: BLE001 - a warm-up only; a real check reports its own errors
+            log.warning("check warm-up: %s", spec, exc_info=True)
+    _, hard = resource.getrlimit(resource.RLIMIT_AS)
+    limit = _status_bytes("VmSize") + settings.check_memory_bytes
+    resource.setrlimit(resource.RLIMIT_AS, (limit if hard == resource.RLIM_INFINITY else min(limit, hard), hard))
+    _files = ParsedFiles(_StoredFiles(str(Path(settings.db).resolve())),
+                         settings.check_memory_bytes // 4 // _BYTES_PER_PARSED_ENTRY)
+
+
+def _task(function, args: tuple, cpu_seconds: float) -> tuple[str, Any]:
+    """Runs function(*args) within the CPU budget: ("ok", value), ("invalid", (loc, message)), ("refused", an
+    upload's reason), ("error", text) or ("cpu", seconds used); a MemoryError ends the process."""
+    started = time.process_time()
+    _, hard = resource.getrlimit(resource.RLIMIT_CPU)
+    soft = math.ceil(started + cpu_seconds)
+    resource.setrlimit(resource.RLIMIT_CPU, (soft if hard == resource.RLIM_INFINITY else min(soft, hard), hard))
+    try:
+        answer: tuple[str, Any] = ("ok", function(*args))
+    except JobError as error:
+        answer = ("invalid", (error.loc, error.message))
+    except UploadError as error:
+        answer = ("refused", str(error))
+    except MemoryError:
+        os._exit(_MEMORY_EXIT)
+    except Exception as error:  # noqa: BLE001 - reported to the server, which logs it as its own
+        answer = ("error", f"{type(error).__name__}: {error}")
+    finally:
+        resource.setrlimit(resource.RLIMIT_CPU, (hard, hard))
+    used = time.process_time() - started
+    return ("cpu", used) if used > cpu_seconds else answer
+
+
+def _compiled(spec: JobSpec) -> tuple[str, bytes] | None:
+    """(key, bytes) of the compiled functions of a job's expression system, for the server to load."""
+    return spec.system.build().compiled_form() if isinstance(spec.system, SystemInput) else None
+
+
+def _check_job(spec: JobSpec, settings: Settings) -> tuple[str, bytes] | None:
+    check_spec(spec, settings, files=_files)
+    return _compiled(spec)
+
+
+def _check_sweep(spec: SweepSpec, settings: Settings) -> tuple[int, tuple[str, bytes] | None]:
+    return check_sweep_spec(spec, settings).members, _compiled(spec.job)
+
+
+# ---- in the server ----
+
+
+def _load(compiled: tuple[str, bytes] | None) -> None:
+    """Load what a check process compiled (its answer, over our pipe: never from a client)."""
+    if compiled is not None:
+        load_compiled(*compiled)
+
+
+class CheckPool:
+    """check_workers processes that run the heavy checks, each task within the budgets."""
+
+    def __init__(self, settings: Settings):
+        self._settings = settings
+        self._pending = threading.BoundedSemaphore(settings.max_pending_checks)
+        self._pool: ProcessPool | None = None
+        self._closed = False
+
+    def start(self) -> None:
+        """Start the processes; the service answers while they warm up."""
+        context = multiprocessing.get_context("forkserver")
+        context.set_forkserver_preload([__name__])  # each process forks with raydamp imported
+        self._pool = ProcessPool(self._settings.check_workers, initializer=_start_worker,
+                                 initargs=(self._settings,), context=context)
+        self._pool.schedule(int)  # the processes start now: the first check need not wait for the forks
+
+    @property
+    def closed(self) -> bool:
+        """stop() was called: the processes are ended."""
+        return self._closed
+
+    def stop(self) -> None:
+        self._closed = True
+        if self._pool is not None:
+            self._pool.stop()
+            self._pool.join(timeout=10)
+
+    def job(self, spec: JobSpec, files=None) -> RaydampCall | None:
+        """Every check of a job (limits.check_spec); raises JobError naming the field, or ChecksBusy. The
+        functions the check compiled are loaded here, for the run. Returns the call a check made in this
+        process built (None for a check process's)."""
+        if not isolated(spec):
+            return check_spec(spec, self._settings, files=files)
+        _load(self._run(_check_job, (spec, self._settings), ("system",)))
+        return None
+
+    def sweep(self, spec: SweepSpec) -> int:
+        """Every check of a sweep (limits.check_sweep_spec); its number of members."""
+        if not isolated(spec.job):
+            return check_sweep_spec(spec, self._settings).members
+        members, compiled = self._run(_check_sweep, (spec, self._settings), ("job", "system"))
+        _load(compiled)
+        return members
+
+    def call(self, function, *args: Any, where: tuple[str, ...] = ("body",)) -> Any:
+        """function(*args) in a check process (a function of a higher layer, named by reference: a plot's
+        drawing, an upload's parse); JobError at `where` past a budget, ChecksBusy."""
+        return self._run(function, args, where)
+
+    def plot(self, read, draw, *args: Any) -> bytes:
+        """A stored trajectory's plot as PNG, draw(record, read(), *args) in a check process: matplotlib holds the
+        interpreter lock while it draws, and keeps the memory it took. read() runs once a place is taken, so a
+        refused plot reads nothing. Raises ValueError (a plot this run cannot have), ChecksBusy, or
+        PlotOverBudget."""
+        try:
+            refused, png = self._run(draw, args, ("query", "width"), read=read)
+        except JobError:
+            raise PlotOverBudget(f"drawing this plot took more than check_seconds = {self._settings.check_seconds:g}"
+                                 f" s or check_memory_bytes = {self._settings.check_memory_bytes / 2**20:.0f} MiB; "
+                                 "ask for fewer pixels (width, height)") from None
+        if refused is not None:
+            raise ValueError(refused)
+        return png
+
+    def compile(self, spec: JobSpec) -> None:
+        """Compile a job's expression system in a check process and load its functions here, for a run that did
+        not find them (NotCompiled). Waits for a place among the pending checks; JobError past a budget,
+        ChecksBusy if none came free within check_seconds."""
+        _load(self._run(_compiled, (spec,), ("system",), wait=True))
+
+    def _run(self, function, args: tuple, where: tuple[str, ...], wait: bool = False, read=None) -> Any:
+        budget = self._settings.check_seconds
+        if self._pool is None or not self._pending.acquire(blocking=wait, timeout=budget if wait else None):
+            raise ChecksBusy
+        try:
+            if read is not None:  # what the task needs from the server, read only once it has its place
+                args = (args[0], read(), *args[1:])
+            future = self._pool.schedule(_task, (function, args, budget), timeout=_WALL_FACTOR * budget)
+            try:
+                status, value = future.result(timeout=budget)  # waiting for a process: no longer than a budget
+            except FutureTimeout:
+                if not future.running() and future.cancel():
+                    raise ChecksBusy from None
+                status, value = future.result()
+        except FutureTimeout:  # pebble's: the wall-clock ceiling, the CPU budget not reached
+            raise ChecksBusy(f"the check took longer than {_WALL_FACTOR} x check_seconds = {_WALL_FACTOR * budget:g}"
+                             " s of wall-clock time, within its CPU budget: the service is loaded; retry later"
+                             ) from None
+        except ProcessExpired as error:
+            status, value = ("cpu", None) if error.exitcode == -signal.SIGXCPU else ("died", error.exitcode)
+        finally:
+            self._pending.release()
+        if status == "ok":
+            return value
+        if status == "invalid":
+            raise JobError(*value)
+        if status == "refused":
+            raise JobError(where, value)
+        if status == "error":
+            raise RuntimeError(f"a check failed: {value}")
+        path = ".".join(map(str, where[1:] if where[0] in ("body", "query") else where))
+        memory = self._settings.check_memory_bytes / 2**20
+        advice = ("upload a smaller file" if where[-1] == "file" else
+                  "write it with fewer couplings, or use a Chain or LinearStructure for a large system")
+        if status == "cpu":
+            raise JobError(where, f"{path}: checking this (compiling its functions, one trial step, or parsing it) "
+                           f"used more CPU than the time budget of {budget:g} s (check_seconds); {advice}")
+        ended = "" if value == _MEMORY_EXIT else f" (its check process ended with exit code {value})"
+        raise JobError(where, f"{path}: checking this needed more than the memory budget of {memory:.0f} MiB "
+                       f"(check_memory_bytes){ended}; {advice}")
+
+
+def build_for_run(checks: CheckPool | None, spec: JobSpec, run, files=None) -> RaydampCall | None:
+    """A run's call, its system built from functions a check process compiled: those the submission's check
+    loaded, else compiled now by a check process (waiting for a free one; a JobError past a budget fails the
+    run with its message). Never compiled in the server. None if the service stops meanwhile. Without check
+    processes (checks None), built here."""
+    if checks is None:
+        return build_call(spec, files=files)
+    try:
+        with compiled_elsewhere():
+            return build_call(spec, files=files)
+    except NotCompiled:
+        pass
+    while not (run.stopping.is_set() or checks.closed):
+        try:
+            checks.compile(spec)
+            break
+        except ChecksBusy:
+            continue
+        except JobError:
+            if checks.closed:  # its process was ended by the shutdown, not by a budget
+                return None
+            raise
+    else:
+        return None
+    with compiled_elsewhere():  # NotCompiled now would be a bug, reported as an internal error
+        return build_call(spec, files=files)

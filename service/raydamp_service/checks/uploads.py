@@ -1,0 +1,142 @@
+"""Uploaded files as raydamp reads them: an upload's check (a Matrix Market matrix by raydamp's reader, whose
+header is checked against the file's size before it reads, plus this service's size limit; a record by
+raydamp.loads.records), and ParsedFiles, each stored upload parsed once."""
+
+from __future__ import annotations
+
+import io
+import threading
+from collections import OrderedDict
+from dataclasses import dataclass
+from typing import Any
+
+from raydamp.loads.records import describe_record, parse_record, record_format
+from raydamp.systems.matrix_market import read_header
+from raydamp.systems.structure import read_matrix
+
+__all__ = ["UploadError", "MatrixFileInfo", "RecordFileInfo", "check_matrix_market", "check_record", "check_upload",
+           "ParsedFiles"]
+
+
+class UploadError(ValueError):
+    """An upload that is not a file this service can use; the message says why."""
+
+
+@dataclass(frozen=True)
+class MatrixFileInfo:
+    shape: tuple[int, int]
+    nnz: int
+
+
+@dataclass(frozen=True)
+class RecordFileInfo:
+    """A record's listing: its format, samples and columns (1: values only; 2: t, value), time range, dt."""
+
+    format: str
+    samples: int
+    columns: int
+    t_start: float | None
+    t_end: float | None
+    dt: float | None
+
+
+def check_record(content: bytes, name: str) -> RecordFileInfo:
+    """Read the upload as raydamp reads a load's record; raises UploadError with raydamp's reason (wrong NPTS,
+    a value that is not a number, DT <= 0, times not increasing, a value that is not finite)."""
+    try:
+        record, fmt = parse_record(content, name=name)
+    except ValueError as error:
+        raise UploadError(f"not a record raydamp can read: {error}") from None
+    described = describe_record(record)
+    return RecordFileInfo(format=fmt, samples=described["samples"], columns=1 if record.t is None else 2,
+                          t_start=described["t_start"], t_end=described["t_end"], dt=described["dt"])
+
+
+def check_upload(content: bytes, name: str, *, max_dim: int) -> MatrixFileInfo | RecordFileInfo:
+    """A matrix or a record, told apart by the name's suffix (.mtx, .AT2, .npy) and the content."""
+    if record_format(content, name) == "mtx":
+        return check_matrix_market(content, max_dim=max_dim, name=name)
+    return check_record(content, name)
+
+
+def check_matrix_market(content: bytes, *, max_dim: int, name: str = "the matrix") -> MatrixFileInfo:
+    """Read the upload as raydamp reads a structure's M or K (a real square matrix with finite entries, its
+    header first checked against the file's size), once the header shows at most max_dim rows. Raises
+    UploadError with raydamp's reason or the limit."""
+    try:
+        rows, cols = read_header(content, name).shape
+        if max(rows, cols) > max_dim:
+            raise UploadError(f"the matrix is {rows} x {cols}; this service runs structures of at most "
+                              f"max_structure_dim = {max_dim} coordinates")
+        matrix = read_matrix(io.BytesIO(content), name)
+    except UploadError:
+        raise
+    except ValueError as error:
+        raise UploadError(str(error)) from None
+    return MatrixFileInfo(shape=matrix.shape, nnz=int(matrix.nnz))
+
+
+class ParsedFiles:
+    """Uploaded files as raydamp reads them, parsed once per id (an upload never changes): eight
+    submissions naming one 46 MB file parsed it eight times, 10-13 s each and 2.3 GB (issue 27, F4).
+    A matrix is a scipy.sparse matrix; a record its (t, values), t None for one column of values.
+    A parse in progress is waited for, not repeated; at most max_entries stored entries (a matrix's
+    nonzeros, a record's numbers) are kept, the least recently used dropped first."""
+
+    def __init__(self, store: Any, max_entries: int):  # store.file_content(id): the bytes, or None
+        self._store, self._max = store, max_entries
+        self._lock = threading.Lock()
+        self._parsed: OrderedDict[str, tuple[threading.Lock, Any]] = OrderedDict()
+        self._size: dict[str, int] = {}
+
+    def __call__(self, file_id: str) -> Any:
+        with self._lock:
+            entry = self._parsed.get(file_id)
+            if entry is None:
+                entry = self._parsed[file_id] = (threading.Lock(), None)
+            self._parsed.move_to_end(file_id)
+        lock, _ = entry
+        with lock:  # one parse per id; the others wait for it
+            matrix = self._parsed.get(file_id, (None, None))[1]
+            if matrix is None:
+                content = self._store.file_content(file_id)
+                if content is None:
+                    with self._lock:
+                        self._parsed.pop(file_id, None)
+                    raise ValueError(f"no uploaded file with id {file_id!r} (POST /v1/files uploads one, GET "
+                                     "/v1/files lists them)")
+                try:
+                    matrix = _parse(content, file_id)
+                except BaseException:
+                    with self._lock:
+                        self._parsed.pop(file_id, None)
+                    raise
+                with self._lock:
+                    self._parsed[file_id] = (lock, matrix)
+                    self._size[file_id] = _entries(matrix)
+                    self._evict()
+        return matrix
+
+    def forget(self, file_id: str) -> None:
+        with self._lock:
+            self._parsed.pop(file_id, None)
+            self._size.pop(file_id, None)
+
+    def _evict(self) -> None:
+        while sum(self._size.values()) > self._max and len(self._parsed) > 1:
+            oldest = next(iter(self._parsed))
+            self._parsed.pop(oldest)
+            self._size.pop(oldest, None)
+
+
+def _parse(content: bytes, file_id: str) -> Any:
+    """A stored upload as raydamp takes it, by its content (which the upload checked agrees with its name)."""
+    if record_format(content) == "mtx":
+        return read_matrix(io.BytesIO(content))
+    return parse_record(content, source=f"file {file_id}")[0]
+
+
+def _entries(parsed: Any) -> int:
+    if isinstance(parsed, tuple):
+        return sum(part.size for part in parsed if part is not None)
+    return parsed.nnz

@@ -1,0 +1,150 @@
+"""What every answer needs beyond the routes: HEAD wherever GET works, JSON bodies that name no key twice, 422s
+that survive the input they echo, and 405s whose Allow is right.
+
+- HEAD (RFC 9110): the request runs as its GET, marked in its scope (HEAD); the body is dropped, and once the
+  headers are sent the route is told the client has gone, so a streamed trajectory stops being produced.
+- A body whose JSON names a key twice in one object is refused (422), not read with the last value winning:
+  {"h": 0.1, ..., "h": 10} ran at h = 10. The routers taking JSON use UniqueKeysRoute.
+- FastAPI echoes the offending input in each 422: NaN, Infinity or a lone surrogate in it would turn the 422 into
+  a 500, and a megabyte-long expression would come back whole. The echo is made encodable and cut short.
+- A 405 names in Allow every method the path takes (RFC 9110), not only those of its first route.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import math
+from collections.abc import Callable
+from typing import Any
+
+from fastapi import Request, Response
+from fastapi.encoders import jsonable_encoder
+from fastapi.exception_handlers import http_exception_handler
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse
+from fastapi.routing import APIRoute
+from raydamp.jobs import client_path
+from raydamp.jobs.build import unique_keys
+from starlette.exceptions import HTTPException
+from starlette.routing import Match
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
+
+__all__ = ["HEAD", "HeadAsGet", "UniqueKeysRoute", "http_error_handler", "validation_error_handler"]
+
+
+HEAD = "raydamp.head"  # in the scope of a HEAD run as its GET: a route may skip what only the body needs
+
+
+class HeadAsGet:
+    def __init__(self, app: ASGIApp):
+        self.app = app
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http" or scope["method"] != "HEAD":
+            await self.app(scope, receive, send)
+            return
+        started = asyncio.Event()
+        body_read = False
+
+        async def head_receive() -> Message:
+            nonlocal body_read
+            if not body_read:
+                body_read = True
+                return await receive()
+            await started.wait()
+            return {"type": "http.disconnect"}
+
+        async def head_send(message: Message) -> None:
+            if message["type"] == "http.response.start":
+                await send(message)
+                await send({"type": "http.response.body", "body": b"", "more_body": False})
+                started.set()
+            # the body's pieces are dropped: the response ended with its headers
+
+        await self.app({**scope, "method": "GET", HEAD: True}, head_receive, head_send)
+
+
+class _UniqueKeysRequest(Request):
+    async def json(self) -> Any:
+        if not hasattr(self, "_json"):
+            try:
+                self._json = json.loads(await self.body(), object_pairs_hook=unique_keys)
+            except json.JSONDecodeError:
+                raise
+            except ValueError as error:
+                # A key named twice (unique_keys), an integer of over 4300 digits (a 400 naming nothing before):
+                # FastAPI answers a JSONDecodeError with its 422 (loc ["body", position], the message in ctx.error).
+                raise json.JSONDecodeError(str(error), "", 0) from None
+        return self._json
+
+
+class UniqueKeysRoute(APIRoute):
+    def get_route_handler(self) -> Callable[[Request], Any]:
+        handler = super().get_route_handler()
+
+        async def unique_keys_handler(request: Request) -> Response:
+            return await handler(_UniqueKeysRequest(request.scope, request.receive))
+
+        return unique_keys_handler
+
+
+MAX_ECHO = 200  # characters of an echoed string; items of an echoed list or object
+
+
+MAX_MESSAGE = 2000  # a message lists the names it knows; it is ours, so only bounded
+
+
+def _text(value: str, limit: int = MAX_ECHO) -> str:
+    value = value.encode("utf-8", "backslashreplace").decode("utf-8")  # lone surrogates -> \ud800
+    return value if len(value) <= limit else value[:limit] + f"... ({len(value)} characters)"
+
+
+def _json_safe(value: Any) -> Any:
+    if isinstance(value, float) and not math.isfinite(value):
+        return str(value)  # "nan", "inf", "-inf"
+    if isinstance(value, str):
+        return _text(value)
+    if isinstance(value, dict):
+        return {_text(str(key)): _json_safe(item) for key, item in list(value.items())[:MAX_ECHO]}
+    if isinstance(value, (list, tuple)):
+        return [_json_safe(item) for item in list(value)[:MAX_ECHO]]
+    return value
+
+
+def _path(loc: list[Any]) -> list[Any]:
+    """The JSON path the client wrote (raydamp.jobs.client_path: without the tags of a field's form)."""
+    return ["body", *client_path(loc[1:])] if loc and loc[0] == "body" else loc
+
+
+def _error(item: dict[str, Any]) -> dict[str, Any]:
+    out = _json_safe({**item, "loc": _path(list(item.get("loc", [])))})
+    if isinstance(item.get("msg"), str):
+        out["msg"] = _text(item["msg"].removeprefix("Value error, "), MAX_MESSAGE)  # our messages speak for themselves
+    return out
+
+
+async def validation_error_handler(request: Request, error: RequestValidationError) -> JSONResponse:
+    # Cut short, then encoded: an error's input may be the whole body (a "missing" one's), which encoded
+    # first took 0.75 s for a body of 160,000 keys, on the event loop.
+    return JSONResponse(status_code=422, content={"detail": jsonable_encoder(
+        [_error(item) for item in error.errors()[:MAX_ECHO]])})
+
+
+async def http_error_handler(request: Request, error: HTTPException) -> Response:
+    """FastAPI's own answer to an HTTPException, with a 405's Allow listing every method of the path's routes."""
+    cause = error.__cause__
+    if error.status_code == 400 and isinstance(cause, (RecursionError, UnicodeDecodeError)):
+        # FastAPI's 400 "There was an error parsing the body", without a loc, for a body JSON's parser refused
+        # other than by a JSONDecodeError (which is a 422): the 422 of every other body that is not JSON.
+        why = "nested too deeply" if isinstance(cause, RecursionError) else "not UTF-8"
+        return JSONResponse(status_code=422, content={"detail": [{
+            "type": "json_invalid", "loc": ["body"], "msg": f"the body is not JSON this service can read ({why})",
+            "input": None}]})
+    if error.status_code == 405:  # Starlette's Allow names the methods of the first route whose path matched
+        methods = {method for route in request.app.routes if route.matches(request.scope)[0] == Match.PARTIAL
+                   for method in getattr(route, "methods", ()) if method != "HEAD"}
+        if methods:
+            error = HTTPException(405, detail=error.detail, headers={**(error.headers or {}),
+                                                                   "Allow": ", ".join(sorted(methods))})
+    return await http_exception_handler(request, error)

@@ -1,0 +1,139 @@
+"""Uploaded files: their table (a matrix for a linear structure's M or K, a record for a load, a ground motion or
+an initial state), kept as uploaded, and handed to raydamp parsed once (checks.uploads.ParsedFiles)."""
+
+from __future__ import annotations
+
+import functools
+import sqlite3
+import uuid
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from ..checks.uploads import ParsedFiles, RecordFileInfo
+from ..tasks.store import UNFINISHED_SQL, Database, now
+
+__all__ = ["FILES_TABLE", "FILE_COLUMNS_ADDED", "FileRecord", "FileStore", "file_resolver"]
+
+FILES_TABLE = """
+CREATE TABLE IF NOT EXISTS files (          -- uploads: a structure's {"file": id}, a load's {"file": {"id": id}}
+    seq INTEGER PRIMARY KEY AUTOINCREMENT,
+    id TEXT NOT NULL UNIQUE,
+    name TEXT NOT NULL,
+    bytes INTEGER NOT NULL,
+    rows INTEGER NOT NULL, cols INTEGER NOT NULL, nnz INTEGER NOT NULL,  -- a record: samples, columns, 0
+    created_at TEXT NOT NULL,
+    content BLOB NOT NULL,                  -- the file as uploaded
+    kind TEXT NOT NULL DEFAULT 'matrix',    -- matrix or record
+    format TEXT NOT NULL DEFAULT 'mtx',     -- mtx, at2, npy or columns (raydamp.loads.records.FORMATS)
+    t_start REAL, t_end REAL, dt REAL       -- a record's time range and uniform sample interval
+);
+"""
+# Columns a files table from before records lacks (JobStore._upgrade adds them).
+FILE_COLUMNS_ADDED = {"kind": "TEXT NOT NULL DEFAULT 'matrix'", "format": "TEXT NOT NULL DEFAULT 'mtx'",
+                      "t_start": "REAL", "t_end": "REAL", "dt": "REAL"}
+
+
+@dataclass(frozen=True)
+class FileRecord:
+    """A stored upload. shape and nnz: a matrix's; a record's shape is (samples, columns)."""
+
+    id: str
+    name: str
+    bytes: int
+    shape: tuple[int, int]
+    nnz: int
+    created_at: str
+    kind: str = "matrix"
+    format: str = "mtx"
+    t_start: float | None = None
+    t_end: float | None = None
+    dt: float | None = None
+
+
+_FILE_COLUMNS = "id, name, bytes, rows, cols, nnz, created_at, kind, format, t_start, t_end, dt"
+
+
+def _file_record(row: sqlite3.Row) -> FileRecord:
+    return FileRecord(id=row["id"], name=row["name"], bytes=row["bytes"], shape=(row["rows"], row["cols"]),
+                      nnz=row["nnz"], created_at=row["created_at"], kind=row["kind"], format=row["format"],
+                      t_start=row["t_start"], t_end=row["t_end"], dt=row["dt"])
+
+
+class FileStore:
+    """The uploads, in the database of the task store this is mixed into (jobs.JobStore): a file that one of
+    its tasks still to run names cannot be removed."""
+
+    db: Database
+    TABLE: str
+    PARSED_ENTRIES = 20_000_000  # stored entries kept parsed (about 240 MB as CSC) across uploads
+
+    @functools.cached_property
+    def parsed_files(self) -> ParsedFiles:
+        return ParsedFiles(self, self.PARSED_ENTRIES)
+
+    def add_file(self, name: str, content: bytes, shape: tuple[int, int] = (0, 0), nnz: int = 0,
+                 max_total_bytes: int = 0, *, record: RecordFileInfo | None = None) -> FileRecord | None:
+        """Store an upload: a matrix (its shape and nnz) or a record; None (nothing written) when it would take
+        the files past max_total_bytes (0: no bound)."""
+        if record is not None:
+            file = FileRecord(id=uuid.uuid4().hex, name=name, bytes=len(content), shape=(record.samples, record.columns),
+                              nnz=0, created_at=now(), kind="record", format=record.format, t_start=record.t_start,
+                              t_end=record.t_end, dt=record.dt)
+        else:
+            file = FileRecord(id=uuid.uuid4().hex, name=name, bytes=len(content), shape=tuple(shape), nnz=nnz,
+                              created_at=now())
+        with self.db.transaction() as db:
+            # Checked and inserted in one statement, under the write lock, as create() does for the queue.
+            inserted = db.execute(
+                "INSERT INTO files (id, name, bytes, rows, cols, nnz, created_at, content, kind, format, t_start, "
+                "t_end, dt) SELECT ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ? "
+                "WHERE ? = 0 OR (SELECT COALESCE(SUM(bytes), 0) FROM files) + ? <= ?",
+                (file.id, name, len(content), *file.shape, file.nnz, file.created_at, content, file.kind, file.format,
+                 file.t_start, file.t_end, file.dt, max_total_bytes, len(content), max_total_bytes)).rowcount
+        return file if inserted else None
+
+    def file(self, file_id: str) -> FileRecord | None:
+        row = self.db.connection().execute(f"SELECT {_FILE_COLUMNS} FROM files WHERE id = ?", (file_id,)).fetchone()
+        return _file_record(row) if row else None
+
+    def files(self, limit: int) -> list[FileRecord]:
+        """Newest first."""
+        rows = self.db.connection().execute(f"SELECT {_FILE_COLUMNS} FROM files ORDER BY seq DESC LIMIT ?",
+                                            (limit,)).fetchall()
+        return [_file_record(row) for row in rows]
+
+    def file_content(self, file_id: str) -> bytes | None:
+        row = self.db.connection().execute("SELECT content FROM files WHERE id = ?", (file_id,)).fetchone()
+        return bytes(row[0]) if row else None
+
+    def delete_file(self, file_id: str) -> str:
+        """"deleted", "missing", or "in_use" when a queued or running job refers to it (then nothing changes).
+
+        One statement: a job that names the file and is still to run keeps it, so a run never loses its
+        matrix. Specs are stored as JSON, where the id appears as the string "<id>"."""
+        with self.db.transaction() as db:
+            deleted = db.execute(
+                f"DELETE FROM files WHERE id = ? AND NOT EXISTS (SELECT 1 FROM {self.TABLE} WHERE status IN "
+                f"{UNFINISHED_SQL} AND instr(spec, ?) > 0)", (file_id, f'"{file_id}"')).rowcount
+            exists = not deleted and db.execute("SELECT 1 FROM files WHERE id = ?", (file_id,)).fetchone()
+        if deleted:
+            self.parsed_files.forget(file_id)
+            self.db.give_back_space()
+            return "deleted"
+        return "in_use" if exists else "missing"
+
+    def jobs_using_file(self, file_id: str, limit: int = 10) -> list[str]:
+        """Ids of queued or running jobs whose spec names the file."""
+        rows = self.db.connection().execute(
+            f"SELECT id FROM {self.TABLE} WHERE status IN {UNFINISHED_SQL} AND instr(spec, ?) > 0 "
+            "ORDER BY seq LIMIT ?", (f'"{file_id}"', limit)).fetchall()
+        return [row["id"] for row in rows]
+
+
+def file_resolver(store: FileStore) -> Callable[[str], Any]:
+    """files(ref) for raydamp's job (raydamp.jobs.build_job): a stored upload, parsed once (the store's
+    ParsedFiles): a matrix for a structure's M or K, a record's (t, values) for a load's or ground motion's
+    {"file": {"id": ...}}, a one-column record's values for an initial state's {"file": id}. An unknown id
+    is a ValueError that raydamp reports at the path that names it (system.K.file, load.file.id, ...)."""
+    return store.parsed_files
