@@ -57,18 +57,20 @@ def main(argv: list[str] | None = None) -> None:
     if not is_loopback(settings.host) and settings.token is None:
         _refuse(f"binding to {settings.host} lets other machines submit, read and cancel jobs: set RAYDAMP_TOKEN "
                 "to a secret that clients send as 'Authorization: Bearer <token>', or bind 127.0.0.1")
+    try:
+        # First, and kept (the lifespan counts a second hold): a second service opening the store through a
+        # hard link would write through a WAL of its own.
+        lock.hold(settings.db)
+    except lock.DatabaseInUse as error:
+        _refuse(str(error))
+    except OSError as error:
+        _refuse(str(StoreUnavailable(settings.db, error)))
     store = JobStore(settings.db)
     try:
         store.open()  # the lifespan opens it again; this is to fail here with one line, not a traceback
     except StoreUnavailable as error:
         _refuse(str(error))
     store.close()
-    try:
-        # Kept (the lifespan counts a second hold): no other service takes the file in between. Opening the
-        # store takes no lock and changes no job (the lifespan's recovery, after its own hold, does).
-        lock.hold(settings.db)
-    except (lock.DatabaseInUse, OSError) as error:
-        _refuse(str(error))
     # Threads serialising trajectories hand the GIL back every millisecond rather than every five, so
     # the event loop (which answers /healthz and accepts submissions) is not kept waiting behind them.
     sys.setswitchinterval(0.001)

@@ -11,7 +11,8 @@ warm up before their first task. Each task has three budgets:
   meets it ends, and pebble replaces it. Past it: 422 naming the budget.
 - wall time, _WALL_FACTOR x check_seconds (pebble's timeout: the worker is killed and replaced). Only a loaded
   machine meets it with the CPU budget kept: 429 with Retry-After, not a refusal of the system.
-At most max_pending_checks tasks run or wait at once; more get 429.
+At most max_pending_checks tasks run or wait at once, and a task waits for a process at most _START_SECONDS;
+past either, 429.
 
 A check answers with the functions it compiled as bytes (System.compiled_form), which the server loads into
 raydamp's cache of compiled functions (load_compiled); a run then builds its System within compiled_elsewhere(),
@@ -50,6 +51,7 @@ log = logging.getLogger("raydamp_service.checks")
 _BYTES_PER_PARSED_ENTRY = 12  # a CSC matrix: a float64 value and an int32 row index per stored entry
 _WALL_FACTOR = 4  # the wall-clock ceiling, in CPU budgets
 _MEMORY_EXIT = 3  # a worker's exit status after a MemoryError (its heap is not trusted afterwards)
+_START_SECONDS = 60.0  # how long a task waits for a process (one replacing a killed one warms up first)
 
 
 class ChecksBusy(Exception):
@@ -275,11 +277,11 @@ class CheckPool:
                 args = (args[0], read(), *args[1:])
             future = self._pool.schedule(_task, (function, args, budget), timeout=_WALL_FACTOR * budget)
             try:
-                status, value = future.result(timeout=budget)  # waiting for a process: no longer than a budget
+                status, value = future.result(timeout=max(budget, _START_SECONDS))  # waiting for a process
             except FutureTimeout:
                 if not future.running() and future.cancel():
                     raise ChecksBusy from None
-                status, value = future.result()
+                status, value = future.result(timeout=_WALL_FACTOR * budget + _START_SECONDS)  # pebble's ceiling
         except FutureTimeout:  # pebble's: the wall-clock ceiling, the CPU budget not reached
             raise ChecksBusy(f"the check took longer than {_WALL_FACTOR} x check_seconds = {_WALL_FACTOR * budget:g}"
                              " s of wall-clock time, within its CPU budget: the service is loaded; retry later"

@@ -125,8 +125,7 @@ def _error(item: dict[str, Any]) -> dict[str, Any]:
 
 
 async def validation_error_handler(request: Request, error: RequestValidationError) -> JSONResponse:
-    # Cut short, then encoded: an error's input may be the whole body (a "missing" one's), which encoded
-    # first took 0.75 s for a body of 160,000 keys, on the event loop.
+    # Cut short, then encoded: an error's input may be the whole body (a "missing" one's).
     return JSONResponse(status_code=422, content={"detail": jsonable_encoder(
         [_error(item) for item in error.errors()[:MAX_ECHO]])})
 

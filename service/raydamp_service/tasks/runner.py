@@ -91,8 +91,7 @@ class Runner:
         self._work: Work = work if work is not None else store.work(settings)
         # (id, the row as just stored by a submission, or None: read it from the store), or None: stop.
         self._queue: queue.SimpleQueue[tuple[str, TaskRecord | None] | None] = queue.SimpleQueue()
-        # Quick runs' own lane: behind two long runs on the workers, a job of milliseconds waited for them
-        # (an audit's small job waited over 120 s behind two million-site chains).
+        # Quick runs' own lane: a job of milliseconds does not wait behind long runs.
         self._quick: queue.SimpleQueue[tuple[str, TaskRecord | None] | None] = queue.SimpleQueue()
         self._threads: list[threading.Thread] = []
         self._active: dict[str, Run] = {}

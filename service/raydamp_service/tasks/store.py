@@ -343,7 +343,7 @@ class TaskStore(Generic[Record]):
 
     def claim(self, task_id: str) -> Record | None:
         """queued -> running; None if the task is no longer queued (cancelled meanwhile). One statement, which
-        returns the row it changed (a claim per job: a second query was a tenth of a small job's server time)."""
+        returns the row it changed."""
         if sqlite3.sqlite_version_info < (3, 35):  # before RETURNING: the UPDATE, then the row read back
             claimed = self._change(task_id, "('queued')", f"status = 'running', started_at = ?, {self.PROGRESS} = 0, "
                                    "attempts = attempts + 1", now())

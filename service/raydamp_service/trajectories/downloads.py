@@ -3,8 +3,7 @@
 No numerics or formats here: the stored arrays become a raydamp.Solution carrying the job's spec as its
 provenance, and raydamp writes the file (raydamp.results.io.write_solution) or draws the plot
 (sol.plot.png). The file is written a slice of rows at a time, raydamp asking for each slice and this
-module reading it from the stored blobs, so a download holds a bounded part of the trajectory whatever
-its length (issue 27, F3: four downloads of a 960 MB trajectory read whole took the service past 6 GB).
+module reading it from the stored blobs, so a download holds a bounded part of the trajectory.
 """
 
 from __future__ import annotations
