@@ -175,3 +175,39 @@ def test_plots_are_drawn_outside_the_servers_process(server, jobs):
         assert response.status_code == 200 and response.content.startswith(b"\x89PNG")
     maps = Path(f"/proc/{server.process.pid}/maps").read_text()
     assert "_backend_agg" not in maps and "matplotlib" not in maps
+
+
+def test_a_refused_plot_reads_no_stored_array(tmp_path, monkeypatch):
+    """Issue 44, N3: forty plots at once on a large job each read its decimated trajectory in the server before
+    32 of them got 429 (+2.7 GB). A plot now takes its place among the checks, then its large-fetch slot, and only
+    then reads; a refused one reads nothing."""
+    import asyncio
+    import time
+
+    import httpx
+    import raydamp_service.routes.jobs as routes
+    from raydamp_service.app import create_app
+    from raydamp_service.config import Settings
+
+    reads = []
+    read_arrays = routes.read_arrays
+    monkeypatch.setattr(routes, "read_arrays", lambda *args: (reads.append(1), read_arrays(*args))[1])
+
+    async def plots() -> tuple[int, int, dict[str, str]]:
+        app = create_app(Settings(db=tmp_path / "jobs.sqlite3", check_workers=1, max_pending_checks=1))
+        async with app.router.lifespan_context(app), httpx.AsyncClient(
+                transport=httpx.ASGITransport(app=app), base_url="http://127.0.0.1") as client:
+            job_id = (await client.post("/v1/jobs", json=PENDULUM)).json()["id"]
+            deadline = time.monotonic() + 60
+            while (await client.get(f"/v1/jobs/{job_id}")).json()["status"] != "completed":
+                assert time.monotonic() < deadline
+                await asyncio.sleep(0.02)
+            app.state.checks._pending.acquire()  # the one place among the checks is taken
+            refused = await client.get(f"/v1/jobs/{job_id}/plots/energy.png")
+            before = len(reads)
+            app.state.checks._pending.release()
+            return refused.status_code, before, dict(refused.headers)
+
+    status, reads_when_refused, headers = asyncio.run(plots())
+    assert status == 429 and headers["retry-after"] == "5"
+    assert reads_when_refused == 0

@@ -275,7 +275,7 @@ def warm_pool(tmp_path_factory):
 def test_a_checks_cpu_budget_ends_a_busy_check_with_a_422_naming_it(warm_pool, monkeypatch):
     """Issue 44 item 6: the budget is the CPU time of the task, counted from the worker's clock at its start
     (RLIMIT_CPU accumulates over a reused worker's tasks). A check that never ends is stopped by the kernel
-    (SIGXCPU), even inside a C call holding the interpreter lock, and the process replaced."""
+    (a profiling timer's SIGPROF), even inside a C call holding the interpreter lock, and the process replaced."""
     from raydamp_service.checks import pool as checks
 
     monkeypatch.setattr(checks, "_WALL_FACTOR", 1000)  # only the CPU budget can end it

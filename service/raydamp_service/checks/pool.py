@@ -5,8 +5,8 @@ parses the files it names and takes one trial step; an upload is parsed; a plot 
 of a pebble ProcessPool whose check_workers processes fork from a forkserver that has raydamp imported and
 warm up before their first task. Each task has three budgets:
 - CPU time, check_seconds, counted from the worker's CPU clock at the task's start. The kernel is the watchdog
-  (RLIMIT_CPU's soft limit is set to the clock plus the budget before each task: SIGXCPU ends a compile that
-  holds the interpreter lock) and the clock is read again after it. Past it: 422 naming the budget.
+  (a profiling timer of the budget, armed for each task: its SIGPROF ends a compile that holds the interpreter
+  lock; RLIMIT_CPU would count every task of the worker) and the clock is read again after it. Past it: 422.
 - memory, check_memory_bytes of address space above what the warmed-up worker holds (RLIMIT_AS); a worker that
   meets it ends, and pebble replaces it. Past it: 422 naming the budget.
 - wall time, _WALL_FACTOR x check_seconds (pebble's timeout: the worker is killed and replaced). Only a loaded
@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import ctypes
 import logging
-import math
 import multiprocessing
 import os
 import resource
@@ -130,7 +129,6 @@ def _start_worker(settings: Settings) -> None:
         ctypes.CDLL(None).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
     except (OSError, AttributeError):
         pass
-    resource.setrlimit(resource.RLIMIT_CORE, (0, 0))  # SIGXCPU (the CPU budget) would write a core file
     try:
         import raydamp
         from raydamp.models import DampedPendulum
@@ -155,9 +153,7 @@ def _task(function, args: tuple, cpu_seconds: float) -> tuple[str, Any]:
     """Runs function(*args) within the CPU budget: ("ok", value), ("invalid", (loc, message)), ("refused", an
     upload's reason), ("error", text) or ("cpu", seconds used); a MemoryError ends the process."""
     started = time.process_time()
-    _, hard = resource.getrlimit(resource.RLIMIT_CPU)
-    soft = math.ceil(started + cpu_seconds)
-    resource.setrlimit(resource.RLIMIT_CPU, (soft if hard == resource.RLIM_INFINITY else min(soft, hard), hard))
+    signal.setitimer(signal.ITIMER_PROF, cpu_seconds)  # SIGPROF, whose default action ends the process
     try:
         answer: tuple[str, Any] = ("ok", function(*args))
     except JobError as error:
@@ -169,7 +165,7 @@ def _task(function, args: tuple, cpu_seconds: float) -> tuple[str, Any]:
     except Exception as error:  # noqa: BLE001 - reported to the server, which logs it as its own
         answer = ("error", f"{type(error).__name__}: {error}")
     finally:
-        resource.setrlimit(resource.RLIMIT_CPU, (hard, hard))
+        signal.setitimer(signal.ITIMER_PROF, 0)
     used = time.process_time() - started
     return ("cpu", used) if used > cpu_seconds else answer
 
@@ -287,7 +283,7 @@ class CheckPool:
                              " s of wall-clock time, within its CPU budget: the service is loaded; retry later"
                              ) from None
         except ProcessExpired as error:
-            status, value = ("cpu", None) if error.exitcode == -signal.SIGXCPU else ("died", error.exitcode)
+            status, value = ("cpu", None) if error.exitcode == -signal.SIGPROF else ("died", error.exitcode)
         finally:
             self._pending.release()
         if status == "ok":

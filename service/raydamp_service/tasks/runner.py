@@ -30,6 +30,7 @@ __all__ = ["Runner", "Run", "Outcome", "Work"]
 
 log = logging.getLogger("raydamp_service.runner")
 
+
 @dataclass
 class Run:
     """A task being run: its cancel token, and its live progress in its kind's measure (done / total, or the
