@@ -27,7 +27,7 @@ from fastapi.routing import APIRoute
 from raydamp.jobs import client_path
 from raydamp.jobs.build import unique_keys
 from starlette.exceptions import HTTPException
-from starlette.routing import Match
+from starlette.routing import compile_path
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 __all__ = ["HEAD", "HeadAsGet", "UniqueKeysRoute", "http_error_handler", "validation_error_handler"]
@@ -131,7 +131,8 @@ async def validation_error_handler(request: Request, error: RequestValidationErr
 
 
 async def http_error_handler(request: Request, error: HTTPException) -> Response:
-    """FastAPI's own answer to an HTTPException, with a 405's Allow listing every method of the path's routes."""
+    """FastAPI's own answer to an HTTPException, with a 405's Allow listing the methods /openapi.json documents for
+    the path (Starlette's own path compiler matches it; an undocumented path, as the page's, keeps Starlette's)."""
     cause = error.__cause__
     if error.status_code == 400 and isinstance(cause, (RecursionError, UnicodeDecodeError)):
         # FastAPI's 400 "There was an error parsing the body", without a loc, for a body JSON's parser refused
@@ -141,8 +142,8 @@ async def http_error_handler(request: Request, error: HTTPException) -> Response
             "type": "json_invalid", "loc": ["body"], "msg": f"the body is not JSON this service can read ({why})",
             "input": None}]})
     if error.status_code == 405:  # Starlette's Allow names the methods of the first route whose path matched
-        methods = {method for route in request.app.routes if route.matches(request.scope)[0] == Match.PARTIAL
-                   for method in getattr(route, "methods", ()) if method != "HEAD"}
+        methods = {method.upper() for path, operations in request.app.openapi()["paths"].items()
+                   if compile_path(path)[0].fullmatch(request.scope["path"]) for method in operations}
         if methods:
             error = HTTPException(405, detail=error.detail, headers={**(error.headers or {}),
                                                                    "Allow": ", ".join(sorted(methods))})
