@@ -61,3 +61,34 @@ def test_unknown_ids_are_not_cached_and_the_oldest_parse_is_dropped_past_the_bou
     parsed.forget("a" * 32)
     parsed("a" * 32)
     assert store.reads == 5
+
+
+def test_a_file_forgotten_while_it_is_parsed_is_not_cached():
+    """A run parsing a file while a DELETE of it forgot it put the parse back in the cache afterwards: the next
+    submission naming the deleted file passed its check and got 409 at its insert, not 422 naming the file (a
+    loaded test run). The parse finishing after forget() is handed to its caller and not kept."""
+
+    class SlowStore(CountingStore):
+        def __init__(self, files):
+            super().__init__(files)
+            self.reading, self.release = threading.Event(), threading.Event()
+
+        def file_content(self, file_id):
+            content = super().file_content(file_id)
+            self.reading.set()  # read; its parse is still to come
+            self.release.wait(30)
+            return content
+
+    store = SlowStore({"a" * 32: _mtx(10)})
+    parsed = ParsedFiles(store, max_entries=10**6)
+    result = []
+    run = threading.Thread(target=lambda: result.append(parsed("a" * 32)))
+    run.start()
+    assert store.reading.wait(30)
+    parsed.forget("a" * 32)  # DELETE /v1/files/<id>, while the run parses it
+    del store.files["a" * 32]
+    store.release.set()
+    run.join()
+    assert result[0].shape == (10, 10)
+    with pytest.raises(ValueError, match="no uploaded file with id"):
+        parsed("a" * 32)

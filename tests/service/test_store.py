@@ -263,7 +263,7 @@ def test_the_queue_bound_counts_afresh_after_a_cancel_and_a_restart(store, tmp_p
     store.claim(first[1].id)  # running: no longer queued
     store.close()
 
-    again = JobStore(tmp_path / "jobs.sqlite3")  # a restart: the count comes from the file, not from memory
+    again = JobStore(store.path)  # a restart: the count comes from the file, not from memory
     again.open()
     try:
         assert again.recover() == [first[1].id, first[2].id, second[0].id]  # the running one queued again

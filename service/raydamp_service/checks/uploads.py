@@ -110,9 +110,10 @@ class ParsedFiles:
                         self._parsed.pop(file_id, None)
                     raise
                 with self._lock:
-                    self._parsed[file_id] = (lock, matrix)
-                    self._size[file_id] = _entries(matrix)
-                    self._evict()
+                    if self._parsed.get(file_id, (None, None))[0] is lock:  # not forgotten meanwhile (deleted)
+                        self._parsed[file_id] = (lock, matrix)
+                        self._size[file_id] = _entries(matrix)
+                        self._evict()
         return matrix
 
     def forget(self, file_id: str) -> None:
