@@ -45,8 +45,8 @@ def proxied(start_server, tmp_path):
                     + "".join(f"{kind}_temp_path {tmp_path}/{kind};\n" for kind in
                               ("client_body", "proxy", "fastcgi", "uwsgi", "scgi"))
                     + block + "}\n")
-    nginx = subprocess.Popen([NGINX, "-p", str(tmp_path), "-c", str(conf), "-g", "daemon off;"],
-                             stderr=subprocess.PIPE)
+    log = (tmp_path / "logs" / "stderr.log").open("wb")
+    nginx = subprocess.Popen([NGINX, "-p", str(tmp_path), "-c", str(conf), "-g", "daemon off;"], stderr=log)
     client = httpx.Client(base_url=f"http://127.0.0.1:{port}", timeout=30.0)
     try:
         deadline = time.monotonic() + 30
@@ -56,7 +56,7 @@ def proxied(start_server, tmp_path):
                     break
             except httpx.TransportError:
                 pass
-            assert nginx.poll() is None, nginx.stderr.read().decode()
+            assert nginx.poll() is None, (tmp_path / "logs" / "stderr.log").read_text()
             assert time.monotonic() < deadline, "nginx did not answer within 30 s"
             time.sleep(0.1)
         yield server, client, port
@@ -64,6 +64,7 @@ def proxied(start_server, tmp_path):
         client.close()
         nginx.terminate()
         nginx.wait(timeout=30)
+        log.close()
 
 
 def test_the_readme_proxy_serves_jobs_and_bounds_slow_and_large_requests(proxied):
