@@ -91,26 +91,36 @@ def test_a_drift_of_many_periods_is_the_drift_modulo_the_period():
 
 
 @pytest.mark.parametrize("e", [0.0, 0.5, 0.99])
-def test_ten_thousand_periods_without_drag_stay_within_rounding(e):
+@pytest.mark.parametrize("steps_per_period", [1, 4, 16])
+def test_ten_thousand_periods_without_drag_stay_within_rounding_accumulation(e, steps_per_period):
+    """sv with eps = 0 is the exact flow at any h: what is left is the rounding of the double state
+    once per step, a random walk of the energy whose phase error grows like eps N^{3/2} (Brouwer's law).
+    The phase error is measured as the time shift along the orbit, |(q - q_ref) . v_ref| / |v_ref|^2,
+    relative to t: at the pericentre of e = 0.99 a time error moves q by |v| P / |q| ~ 10^4 times as
+    much, relative. A drift that rounded the same way at every step (the drift in double: the energy off
+    by 4.4e-12 after 4e4 steps at e = 0.5, 7e-7 in q) drifts the energy like N, not sqrt(N), and fails
+    the energy bound."""
     k = raydamp.Kepler(MU)
     q0, p0 = k.pericentre_state(1.0, e)
-    a = 1.0 / (1.0 - e)
-    period = 2 * math.pi * a**1.5
-    steps_per_period = 16
-    sol = raydamp.integrate(k, q0, p0, method="sv", h=period / steps_per_period,
-                            n_steps=10_000 * steps_per_period, save_every=10_000 * steps_per_period)
+    period = 2 * math.pi * (1.0 / (1.0 - e)) ** 1.5
+    steps = 10_000 * steps_per_period
+    sol = raydamp.integrate(k, q0, p0, method="sv", h=period / steps_per_period, n_steps=steps, save_every=steps)
     assert sol.status == "completed"
     rq, rv = kepler_reference(sol.t[-1], q0, p0)
-    assert relative(sol.q[-1], rq) <= 1e-9
-    assert relative(sol.p[-1], rv) <= 1e-9
-    assert abs(sol.energy[-1] - sol.energy[0]) <= 1e-12 * abs(sol.energy[0])
+    shift = abs(np.dot(sol.q[-1] - rq, rv)) / np.dot(rv, rv)
+    assert shift / sol.t[-1] <= 2 * np.finfo(float).eps * steps**1.5
+    if steps_per_period == 1 and e < 0.9:
+        assert relative(sol.q[-1], rq) <= 1e-9 and relative(sol.p[-1], rv) <= 1e-9
+    # The energy of a double state near pericentre is known to eps (1 + e) / (1 - e) relative.
+    assert abs(sol.energy[-1] - sol.energy[0]) <= 4 * np.finfo(float).eps * steps**0.5 * (1 + e) / (1 - e) * abs(
+        sol.energy[0])
 
 
 def test_isotropic_drag_decays_the_angular_momentum_exactly():
     k = raydamp.Kepler(MU, eps=1e-3)
     sol = raydamp.integrate(k, [1.0, 0.0], [0.0, 1.1], method="3s", h=0.05, t_end=1100.0, save_every=100)
-    law = sol.momenta[0, 0] * np.exp(-1e-3 * sol.t)
-    assert np.max(np.abs(sol.momenta[:, 0] - law) / np.abs(law)) <= 1e-12
+    law = sol.momentum[0, 0] * np.exp(-1e-3 * sol.t)
+    assert np.max(np.abs(sol.momentum[:, 0] - law) / np.abs(law)) <= 1e-12
     assert sol.status == "completed"
 
 
@@ -133,7 +143,7 @@ def test_the_splitting_with_drag_has_its_order(method, composition, order):
     q0, p0 = k.pericentre_state(1.0, 0.5)
     t_end = 10.0
     errors = []
-    hs = [0.2, 0.1, 0.05]
+    hs = [0.1, 0.05, 0.025]
     for h in hs:
         sol = raydamp.integrate(k, q0, p0, method=method, composition=composition, h=h, t_end=t_end,
                                 save_every=round(1.0 / h))
@@ -170,8 +180,8 @@ def test_three_dimensions_keep_the_angular_momentum_vector_direction():
     q0 = np.array([1.0, 0.2, -0.1])
     p0 = np.array([0.1, 0.9, 0.4])
     sol = raydamp.integrate(k, q0, p0, method="2s", h=0.05, t_end=50.0, save_every=100)
-    law = sol.momenta[0] * np.exp(-1e-2 * sol.t)[:, None]
-    assert np.max(np.abs(sol.momenta - law)) <= 1e-12 * np.linalg.norm(sol.momenta[0])
+    law = sol.momentum[0] * np.exp(-1e-2 * sol.t)[:, None]
+    assert np.max(np.abs(sol.momentum - law)) <= 1e-12 * np.linalg.norm(sol.momentum[0])
 
 
 def test_the_json_form_round_trips():
