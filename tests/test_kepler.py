@@ -213,3 +213,16 @@ def test_a_particle_at_the_central_body_is_refused():
 def test_a_negative_eccentricity_is_refused():
     with pytest.raises(ValueError, match="e"):
         raydamp.Kepler(MU).pericentre_state(1.0, -0.1)
+
+
+def test_a_job_runs_a_kepler_system_and_names_a_bad_field():
+    from raydamp.jobs import job_arguments
+
+    job = {"system": {"kind": "kepler", "mu": 1.0, "eps": 1e-3}, "method": "3s", "h": 0.1, "t_end": 10.0,
+           "initial_state": {"q": [1.0, 0.0], "p": [0.0, 1.1]}}
+    model, q0, p0, options = job_arguments(job)
+    direct = raydamp.integrate(raydamp.Kepler(1.0, eps=1e-3), [1.0, 0.0], [0.0, 1.1], method="3s", h=0.1,
+                               t_end=10.0)
+    assert np.array_equal(raydamp.integrate(model, q0, p0, **options).q, direct.q)
+    with pytest.raises(ValueError, match="system.mu"):
+        job_arguments({**job, "system": {"kind": "kepler", "mu": -1.0}})
