@@ -13,12 +13,11 @@
 
 namespace raydamp::kepler {
 
-// The flow is computed in long double (x87's 64-bit significand) and rounded to double once per
-// coordinate at the end. In double, the rounding of r0, beta and the G functions is the same at every
-// step of an orbit and drifts the energy steadily (4e-12 relative over 4e4 steps of e = 0.5, phase
-// 7e-7 after 10^4 periods); in long double the final rounding to nearest is all that is left, and the
-// error grows as rounding does (Brouwer's law). It costs about a fifth more per drift.
-using Real = long double;
+// The orbit's invariants, the G functions and the update are formed in long double (x87's 64-bit
+// significand) and rounded to double once per coordinate at the end. In double, the rounding of r0,
+// beta and the G functions is the same at every step of an orbit and drifts the energy steadily
+// (4e-12 relative over 4e4 steps of e = 0.5, phase 7e-7 after 10^4 periods); in long double the final
+// rounding to nearest is all that is left, and the error grows as rounding does (Brouwer's law).
 
 
 // c0..c3 of x (Stumpff functions): c0 = cos sqrt x, c1 = sin sqrt x / sqrt x, c2 = (1 - c0) / x,
@@ -26,11 +25,13 @@ using Real = long double;
 // |x / 4^k| < 0.1, then quadrupled back with c0(4x) = 2 c0^2 - 1, c1(4x) = c0 c1,
 // c2(4x) = c1^2 / 2, c3(4x) = (c2 + c0 c3) / 4: the closed forms of c2 and c3 cancel near 0, and
 // the at most three quadruplings cost an ulp or two each.
+template <class Real>
 struct Stumpff {
   Real c0, c1, c2, c3;
 };
 
-inline Stumpff stumpff(Real x) {
+template <class Real>
+inline Stumpff<Real> stumpff(Real x) {
   // Far from 0 the closed forms lose nothing (1 - cos s as 2 sin^2(s/2), s - sin s and sinh s - s are
   // far from cancelling once s > 2), where quadrupling from the series would double a relative error
   // per level: 32 ulp on cosh sqrt 30.
@@ -72,6 +73,7 @@ inline Stumpff stumpff(Real x) {
 }
 
 // What a drift needs from the start of the step, computed once per step.
+template <class Real>
 struct Orbit {
   Real r0;      // |q0|
   Real sigma0;  // q0 . v0
@@ -79,6 +81,7 @@ struct Orbit {
   Real mu;
 };
 
+template <class Real>
 struct Anomaly {
   Real s;                // the universal anomaly reached
   Real g0, g1, g2, g3;  // G_k(s)
@@ -86,8 +89,9 @@ struct Anomaly {
 };
 
 // G_k(s) at beta s^2.
-inline void g_functions(const Orbit& o, Real s, Anomaly& a) {
-  const Stumpff c = stumpff(o.beta * s * s);
+template <class Real>
+inline void g_functions(const Orbit<Real>& o, Real s, Anomaly<Real>& a) {
+  const Stumpff<Real> c = stumpff(o.beta * s * s);
   a.s = s;
   a.g0 = c.c0;
   a.g1 = s * c.c1;
@@ -102,8 +106,9 @@ inline void g_functions(const Orbit& o, Real s, Anomaly& a) {
 // short beside the orbit; Halley's iteration (cubic) then takes it to rounding in one or two
 // steps. Where the series start is poor (a long step) Laguerre-Conway's iteration (order 5,
 // convergent from any start on Kepler's equation) is used instead.
-inline Anomaly solve_anomaly(const Orbit& o, Real t, Real v2) {
-  Anomaly a{};
+template <class Real>
+inline Anomaly<Real> solve_anomaly(const Orbit<Real>& o, Real t, Real v2) {
+  Anomaly<Real> a{};
   const Real r0 = o.r0, ir = 1.0 / r0, ir3 = ir * ir * ir;
   Real s = t * ir * (1.0 + t * (-0.5 * o.sigma0 * ir3 * r0 +
                                   t * (3.0 * o.sigma0 * o.sigma0 * ir3 * ir * ir - (v2 - o.mu * ir) * ir3) * r0 / 6.0));
@@ -158,10 +163,11 @@ inline Anomaly solve_anomaly(const Orbit& o, Real t, Real v2) {
 // doubles (operator[] and size()).
 template <class Q, class V>
 inline void drift(double mu_, double t_, Q& q, V& v) {
+  using Real = long double;
   const Real mu = mu_;
   Real t = t_;
   if (t == 0) return;
-  Orbit o;
+  Orbit<Real> o;
   o.mu = mu;
   Real r2 = 0, sigma = 0, v2 = 0;
   for (int i = 0; i < q.size(); ++i) {
@@ -172,15 +178,22 @@ inline void drift(double mu_, double t_, Q& q, V& v) {
   }
   o.r0 = std::sqrt(r2);
   o.sigma0 = sigma;
-  o.beta = 2.0 * mu / o.r0 - v2;
+  o.beta = 2 * mu / o.r0 - v2;
   // A bound orbit's flow has period 2 pi mu / beta^{3/2}: a step is the same step modulo the period,
   // taken within half a period either way.
-  if (o.beta > 0.0) {
-    const Real period = 2.0L * 3.141592653589793238462643383279502884L * mu / (o.beta * std::sqrt(o.beta));
-    if (std::abs(t) > 0.5 * period) t = std::remainder(t, period);
+  if (o.beta > 0) {
+    const Real period = 2 * 3.141592653589793238462643383279502884L * mu / (o.beta * std::sqrt(o.beta));
+    if (std::abs(t) > period / 2) t = std::remainder(t, period);
     if (t == 0) return;
   }
-  const Anomaly a = solve_anomaly(o, t, v2);
+  // The anomaly is found in double: an s off by a rounding is the flow over a time off by a rounding,
+  // which keeps the energy. The G functions at that s and the update are formed in long double.
+  const Orbit<double> od{static_cast<double>(o.r0), static_cast<double>(o.sigma0), static_cast<double>(o.beta),
+                         mu_};
+  const Anomaly<double> guess = solve_anomaly(od, static_cast<double>(t), static_cast<double>(v2));
+  Anomaly<Real> a;
+  g_functions(o, static_cast<Real>(guess.s), a);
+  if (!(std::isfinite(guess.r))) a.r = guess.r;  // not converged: NaN, which the step loop stops on
   const Real f1 = -mu * a.g2 / o.r0;             // f - 1
   const Real g = o.r0 * a.g1 + o.sigma0 * a.g2;  // g
   const Real fdot = -mu * a.g1 / (a.r * o.r0);
