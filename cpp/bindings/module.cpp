@@ -20,4 +20,5 @@ PYBIND11_MODULE(_core, m) {
   raydamp::bindings::bind_system_dense_mass(m);
   raydamp::bindings::bind_chain(m);
   raydamp::bindings::bind_linear_structure(m);
+  raydamp::bindings::bind_kepler(m);
 }

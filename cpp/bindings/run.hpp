@@ -66,7 +66,7 @@ py::dict run(const Model& model, const std::string& method, const std::string& t
              const std::vector<int>& save_dofs, const BoundLoad* load, double temperature, std::uint64_t seed,
              std::uint64_t stream) {
   const MethodEntry& entry = method_entry(method);
-  require_applicable(entry, model.eps);
+  require_applicable(entry, model);
   const ButcherTableau& tab = resolve_tableau(entry, tableau);
   const Composition& comp = resolve_composition(entry, tab, composition);
   RunSpec spec{h, n_steps, h_last, save_every, track_work};

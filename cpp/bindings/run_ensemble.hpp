@@ -107,7 +107,7 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
       model = &built.back();
     }
     try {
-      require_applicable(entry, model->eps);
+      require_applicable(entry, *model);
     } catch (const std::invalid_argument& e) {
       rethrow_prefixed("member " + std::to_string(i) + ": ", e);
     }

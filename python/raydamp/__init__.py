@@ -22,12 +22,13 @@ from .run.ensemble import integrate_ensemble
 from .run.integrate import CancelToken, integrate, steps_for
 from .run.sweep import SweepPlan, check_sweep, parse_grid_item, sweep
 from .systems.chain import Chain, chain_mode_energies
+from .systems.kepler import Kepler
 from .systems.rayleigh import modal_damping_ratio, rayleigh_coefficients
 from .systems.series import ChebyshevDegreeError
 from .systems.structure import LinearStructure
 from .systems.system import SpecError, System
 
-__all__ = ["__version__", "models", "Load", "GroundMotion", "System", "Chain", "chain_mode_energies", "LinearStructure",
+__all__ = ["__version__", "models", "Load", "GroundMotion", "System", "Chain", "chain_mode_energies", "Kepler", "LinearStructure",
            "SpecError", "ChebyshevDegreeError", "integrate", "steps_for", "advise", "Advice", "MethodAdvice",
            "CancelToken", "Solution", "integrate_ensemble", "EnsembleSolution", "sweep",
            "check_sweep", "parse_grid_item", "SweepPlan", "load", "rayleigh_coefficients", "modal_damping_ratio",

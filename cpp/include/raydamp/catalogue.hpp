@@ -27,7 +27,15 @@ struct MethodEntry {
   bool ignores_damping;         // sv: applying it to a damped model would silently drop eps
   bool symmetric_table;         // its table can be composed (with a symmetric tableau, if it takes one)
   bool linear_implicit = false;  // an implicit step of a LinearStructure's whole system, for that kind only
+  bool free_drift_in_rk = false;  // a Runge-Kutta stage steps the kinetic part as q' = M^{-1} p (rksb, rk)
 };
+
+template <class Method>
+constexpr bool steps_free_drift_in_rk() {
+  for (const Stage& s : Method::stages)
+    if (s.flow == Flow::drift_damp_rk || s.flow == Flow::full_rk) return true;
+  return false;
+}
 
 // An entry whose table, tableau use and order come from the Method type itself.
 template <class Method>
@@ -35,7 +43,7 @@ MethodEntry entry(std::string name, std::string description, std::string default
                   bool tableau_fixed = false, bool ignores_damping = false) {
   return {std::move(name),    std::move(description), Method::name,    Method::tableau,
           Method::splitting_order, std::move(default_tableau), tableau_fixed, ignores_damping,
-          is_mergeable<Method>()};
+          is_mergeable<Method>(), false, steps_free_drift_in_rk<Method>()};
 }
 
 // The implicit methods of a linear structure's whole system (methods/linear_implicit.hpp).
@@ -123,6 +131,26 @@ inline void require_applicable(const MethodEntry& method, double eps) {
     throw std::invalid_argument("method: '" + method.name + "' ignores damping and this model has eps = " +
                                 std::to_string(eps) + " > 0; use 3s, 2s or rks, which are '" + method.name +
                                 "' when eps = 0");
+}
+
+// A model whose drift is another exact flow than q += t M^{-1} p (models/kepler.hpp: the Kepler
+// flow) says so with `static constexpr bool free_drift = false`. A method that steps the kinetic
+// part inside a Runge-Kutta stage, or the whole system implicitly, would then integrate another
+// system, and refuses.
+template <class Model, class = void>
+struct has_free_drift : std::true_type {};
+template <class Model>
+struct has_free_drift<Model, std::void_t<decltype(Model::free_drift)>> : std::bool_constant<Model::free_drift> {};
+
+template <class Model>
+void require_applicable(const MethodEntry& method, const Model& model) {
+  require_applicable(method, model.eps);
+  if constexpr (!has_free_drift<Model>::value) {
+    if (method.free_drift_in_rk || method.linear_implicit)
+      throw std::invalid_argument("method: '" + method.name + "' steps the kinetic energy as a free drift (q' = "
+                                  "M^{-1} p) inside a Runge-Kutta or implicit stage, and this model's drift is "
+                                  "the exact flow of " + std::string(Model::name) + "; use sv, 3s, 2s, baoab or rks");
+  }
 }
 
 inline int method_order(const MethodEntry& method, const ButcherTableau& tab) {

@@ -182,6 +182,37 @@ class ChainInput(Input):
             raise path_error(error, type(self)) from None
 
 
+# ---- orbits: raydamp.Kepler.to_dict()'s form ------------------------------------------------------
+
+MAX_KEPLER_PARTICLES = 10**6
+
+
+class KeplerInput(Input):
+    """Test particles around a fixed central body with linear drag, stepped with the exact Kepler drift:
+    raydamp.Kepler.to_dict()'s form (raydamp.systems.kepler documents it)."""
+
+    kind: Literal["kepler"]
+    mu: FiniteFloat = Field(1.0, gt=0, description="G times the central mass")
+    mass: FiniteFloat = Field(1.0, gt=0, description="each particle's mass")
+    dim: Literal[2, 3] = Field(2, description="2 or 3 dimensions")
+    particles: int = Field(1, ge=1, le=MAX_KEPLER_PARTICLES, description="number of test particles")
+    eps: FiniteFloat = Field(0.0, ge=0, description="drag rate: p' = -grad H - eps p")
+
+    def names(self, dim: int, momenta: int, save_dofs: list[int] | None) -> tuple[list[str], list[str]]:
+        axes = "xyz"[: self.dim]
+        coordinates = [f"{a}{i}" for i in range(self.particles) for a in axes]
+        chosen = [coordinates[i] for i in save_dofs] if save_dofs is not None else coordinates
+        return chosen, (["L"] if self.dim == 2 else ["Lx", "Ly", "Lz"])[:momenta]
+
+    def build(self, files: FileResolver | None = None):
+        from ..systems.kepler import Kepler
+
+        try:
+            return Kepler.from_dict(self.model_dump(exclude_none=True))
+        except ValueError as error:
+            raise path_error(error, type(self)) from None
+
+
 # ---- linear structures: raydamp.LinearStructure.to_dict()'s form, with uploaded files -------------
 
 MAX_COO_ENTRIES = 1_000_000  # raydamp.structure.MAX_PLAIN_ENTRIES; a service's max_structure_nnz is at most this
@@ -280,14 +311,15 @@ def _local_files(ref: str) -> Any:
 
 def _system_form(value: object) -> str:
     kind = value.get("kind") if isinstance(value, dict) else getattr(value, "kind", None)
-    return kind if kind in ("chain", "linear_structure") else "expressions"
+    return kind if kind in ("chain", "linear_structure", "kepler") else "expressions"
 
 
 MATRIX_TAGS = frozenset({"coo form", "diagonal form", "file form"})
-SYSTEM_TAGS = frozenset({"expressions", "chain", "linear_structure"})
+SYSTEM_TAGS = frozenset({"expressions", "chain", "linear_structure", "kepler"})
 # Tags name forms, never keys: a path of ours ("damping", "dampers", 0, "on") keeps every part.
 FORM_TAGS = {"damping": frozenset({"scalar form", "diagonal form", "matrix form", "dampers form"}),
              "coordinates": frozenset({"names form", "count form"})}
 VALUE_TAGS = frozenset({"number form", "expression form", "vector form"})  # after a parameter's name
 AnySystemInput = Annotated[Annotated[SystemInput, Tag("expressions")] | Annotated[ChainInput, Tag("chain")]
-                           | Annotated[LinearStructureInput, Tag("linear_structure")], Discriminator(_system_form)]
+                           | Annotated[LinearStructureInput, Tag("linear_structure")]
+                           | Annotated[KeplerInput, Tag("kepler")], Discriminator(_system_form)]

@@ -17,7 +17,7 @@ template <class M, class = void>
 struct has_drift : std::false_type {};
 template <class M>
 struct has_drift<M, std::void_t<decltype(std::declval<const M&>().drift(
-                        std::declval<typename M::Vec&>(), std::declval<const typename M::Vec&>(), 0.0))>>
+                        std::declval<typename M::Vec&>(), std::declval<typename M::Vec&>(), 0.0))>>
     : std::true_type {};
 template <class M, class = void>
 struct has_kick : std::false_type {};

@@ -1,0 +1,91 @@
+// The exact Kepler drift (flows/kepler.hpp) and the Kepler kind (models/kepler.hpp): a circular orbit
+// against its closed form, a drift undone by the drift back, the invariants a drift keeps, the drag's
+// exact law for the angular momentum through the step loop, and the methods the kind refuses.
+#include <cmath>
+
+#include "check.hpp"
+#include "raydamp/models/kepler.hpp"
+#include "raydamp/raydamp.hpp"
+
+using namespace raydamp;
+
+namespace {
+
+double energy(double mu, const Eigen::Vector2d& q, const Eigen::Vector2d& v) { return 0.5 * v.squaredNorm() - mu / q.norm(); }
+double angular(const Eigen::Vector2d& q, const Eigen::Vector2d& v) { return q[0] * v[1] - q[1] * v[0]; }
+
+}  // namespace
+
+int main() {
+  // Stumpff functions against their closed forms, on both sides of 0 and across the series' reach.
+  for (double x : {-300.0, -30.0, -3.9, -2.0, -0.05, 1e-9, 0.05, 0.3, 3.9, 7.0, 38.0}) {
+    const kepler::Stumpff c = kepler::stumpff(x);
+    const double s = std::sqrt(std::abs(x));
+    const double c0 = x > 0 ? std::cos(s) : std::cosh(s);
+    const double c1 = x > 0 ? std::sin(s) / s : std::sinh(s) / s;
+    CHECK_NEAR(c.c0, c0, 1e-14 * std::max(1.0, std::abs(c0)));
+    CHECK_NEAR(c.c1, c1, 1e-14 * std::max(1.0, std::abs(c1)));
+    if (std::abs(x) > 0.01) {
+      CHECK_NEAR(c.c2, (1.0 - c0) / x, 1e-13 * std::abs((1.0 - c0) / x));
+      CHECK_NEAR(c.c3, (1.0 - c1) / x, 1e-13 * std::abs((1.0 - c1) / x));
+    }
+  }
+
+  // A circular orbit of radius 1 (mu = 1): q(t) = (cos t, sin t), for steps short and long.
+  for (double t : {1e-8, 0.01, 1.0, 3.0, -2.5, 100.0}) {
+    Eigen::Vector2d q(1.0, 0.0), v(0.0, 1.0);
+    kepler::drift(1.0, t, q, v);
+    CHECK_NEAR(q[0], std::cos(t), 4e-14 * std::max(1.0, std::abs(t)));
+    CHECK_NEAR(q[1], std::sin(t), 4e-14 * std::max(1.0, std::abs(t)));
+    CHECK_NEAR(v[0], -std::sin(t), 4e-14 * std::max(1.0, std::abs(t)));
+  }
+
+  // Elliptic, near-parabolic, parabolic and hyperbolic orbits: the drift keeps energy and angular
+  // momentum, and the drift back returns to the start.
+  for (double e : {0.0, 0.5, 0.99, 1.0, 1.5, 4.0}) {
+    const Eigen::Vector2d q0(1.0, 0.0), v0(0.0, std::sqrt(1.0 + e));
+    for (double t : {0.01, 0.7, 5.0}) {
+      Eigen::Vector2d q = q0, v = v0;
+      kepler::drift(1.0, t, q, v);
+      CHECK_NEAR(energy(1.0, q, v), energy(1.0, q0, v0), 1e-14 * std::max(1.0, std::abs(energy(1.0, q0, v0))));
+      CHECK_NEAR(angular(q, v), angular(q0, v0), 1e-14);
+      const double reach = 1.0 + q.norm();  // rounding on the way out is relative to how far it went
+      kepler::drift(1.0, -t, q, v);
+      CHECK_NEAR(q[0], q0[0], 2e-14 * reach);
+      CHECK_NEAR(q[1], q0[1], 2e-14 * reach);
+      CHECK_NEAR(v[1], v0[1], 2e-14 * reach);
+    }
+  }
+
+  // Through the step loop: 3s with drag D = M on two particles keeps L = L0 e^{-eps t} to rounding.
+  {
+    const double eps = 1e-3;
+    Kepler model(1.0, 2.0, 2, 2, eps);
+    Eigen::VectorXd q(4), p(4);
+    q << 1.0, 0.0, -2.0, 0.5;
+    p << 0.0, 2.2, 0.3, -1.0;
+    const double l0 = 2.0 * 1.1 + (-2.0 * -1.0 - 0.5 * 0.3);
+    const ButcherTableau& heun = builtin_tableau("heun");
+    RunResult r = integrate<ThreeTermSplitting>(model, heun, State<Eigen::Dynamic>{q, p}, RunSpec{0.05, 20000, 0.05, 2000});
+    CHECK(r.status == Status::completed);
+    const Trajectory& tr = r.trajectory;
+    for (long i = 0; i < static_cast<long>(tr.rows()); ++i)
+      CHECK_NEAR(tr.momentum[i], l0 * std::exp(-eps * tr.t[i]), 1e-12 * l0);
+  }
+
+  // A method that steps the kinetic part as a free drift would integrate another system: refused.
+  {
+    Kepler model(1.0, 1.0, 2, 1, 0.01);
+    CHECK(test::throws([&] { require_applicable(method_entry("rksb"), model); }));
+    CHECK(test::throws([&] { require_applicable(method_entry("rk4"), model); }));
+    CHECK(test::throws([&] { require_applicable(method_entry("midpoint"), model); }));
+    require_applicable(method_entry("3s"), model);
+    require_applicable(method_entry("2s"), model);
+    require_applicable(method_entry("rks"), model);
+    require_applicable(method_entry("baoab"), model);
+    CHECK(test::throws([] { Kepler(0.0, 1.0, 2, 1, 0.0); }));
+    CHECK(test::throws([] { Kepler(1.0, -1.0, 2, 1, 0.0); }));
+    CHECK(test::throws([] { Kepler(1.0, 1.0, 4, 1, 0.0); }));
+  }
+  return test::failures == 0 ? 0 : 1;
+}

@@ -1,0 +1,146 @@
+"""raydamp.Kepler: test particles around a fixed central body, with drag, stepped with the exact
+Kepler flow.
+
+Each particle i (mass m, position q_i, momentum p_i in 2 or 3 dimensions) moves in
+
+    H = sum_i |p_i|^2 / (2 m) - mu m / |q_i|,      p_i' = -grad_i H - eps p_i
+
+(``mu`` is G times the central mass; the drag is D = M, so A = eps D M^{-1} = eps and every
+particle's angular momentum decays exactly as L(t) = L(0) e^{-eps t}). The splitting methods take
+H = H_kepler + V_interaction: their drift is the exact Kepler flow of each particle (universal
+variables with Stumpff functions: elliptic, parabolic and hyperbolic orbits, any step length), their
+kick is the interaction (none between test particles) and their damping flow is exact. A splitting
+of this kind then errs only by the commutators of the Kepler flow with the drag, O(eps h^2) per unit
+time for 3s and 2s (O(eps h^4) and better with a composition), where writing Kepler as kinetic plus
+potential errs by O(h^2) whatever eps is.
+
+Methods: sv (eps = 0), 3s, 2s, baoab and rks, with compositions. A method that steps the kinetic
+energy as a free drift inside a Runge-Kutta or implicit stage (rksb, heun, rk4, rk, midpoint,
+gauss4) would integrate another system, and is refused.
+
+    >>> k = raydamp.Kepler(mu=1.0, eps=1e-3)
+    >>> q0, p0 = k.pericentre_state(1.0, e=0.5)
+    >>> sol = raydamp.integrate(k, q0, p0, method="3s", h=0.05, t_end=1000, save_every=100)
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from .. import _core
+from .._validation import _short, integer, real, real_array, vector
+from .models import SharedModel
+
+__all__ = ["Kepler"]
+
+_AXES = ("x", "y", "z")
+
+
+class Kepler(SharedModel):
+    """Test particles of mass ``mass`` around a fixed central body (see the module docstring).
+
+    mu: G times the central mass (> 0); dim: 2 or 3; particles: how many (>= 1), each with its own
+    block of ``dim`` coordinates (x0, y0, x1, y1, ...); eps: the drag rate (>= 0), p' = ... - eps p.
+    """
+
+    name = "kepler"
+
+    def __init__(self, mu: float = 1.0, mass: float = 1.0, dim: int = 2, particles: int = 1, eps: float = 0.0):
+        self.mu = real("mu", mu, positive=True)
+        self.mass = real("mass", mass, positive=True)
+        self.space_dim = integer("dim", dim, minimum=2, maximum=3)
+        self.particles = integer("particles", particles, minimum=1, maximum=2**31 // 3 - 1)
+        self.eps = real("eps", eps, nonnegative=True)
+        self._core_model = _core.Kepler(self.mu, self.mass, self.space_dim, self.particles, self.eps)
+        self.momentum_names = ("L",) if self.space_dim == 2 else ("Lx", "Ly", "Lz")
+        self._freeze()
+
+    # -- plain data ---------------------------------------------------------------------------
+    @property
+    def parameters(self) -> dict[str, Any]:
+        """The constructor's arguments, by name (``replace`` and the JSON form use them)."""
+        return {"mu": self.mu, "mass": self.mass, "dim": self.space_dim, "particles": self.particles, "eps": self.eps}
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON form: ``{"kind": "kepler", "mu": ..., "mass": ..., "dim": ..., "particles": ..., "eps": ...}``."""
+        return {"kind": "kepler", **self.parameters}
+
+    @classmethod
+    def from_dict(cls, spec: Mapping[str, Any]) -> Kepler:
+        """Build from ``to_dict()``'s form; errors name the key."""
+        if not isinstance(spec, Mapping):
+            raise ValueError("system: a Kepler system must be an object with kind \"kepler\"")
+        known = ("kind", "mu", "mass", "dim", "particles", "eps")
+        for key in spec:
+            if key not in known:
+                raise ValueError(f"{key}: unknown key of a Kepler system (known: {', '.join(known)})")
+        if spec.get("kind") != "kepler":
+            raise ValueError(f"kind: expected \"kepler\", got {_short(spec.get('kind'))}")
+        return cls(**{k: v for k, v in spec.items() if k != "kind"})
+
+    @property
+    def coordinates(self) -> tuple[str, ...]:
+        axes = _AXES[: self.space_dim]
+        return tuple(f"{a}{i}" for i in range(self.particles) for a in axes)
+
+    def mass_product(self, r) -> np.ndarray:
+        """M r: every coordinate has mass ``mass``."""
+        return self.mass * vector("r", r, self.dim)
+
+    def check_configuration(self, name: str, q: np.ndarray) -> np.ndarray:
+        """Refuse a particle at the central body (|q_i| = 0), where the potential is singular."""
+        radii = np.linalg.norm(np.asarray(q, dtype=float).reshape(self.particles, self.space_dim), axis=1)
+        bad = np.flatnonzero(~(radii > 0))
+        if bad.size:
+            raise ValueError(f"{name}: particle {int(bad[0])} is at the central body (|q| = 0), where the "
+                             "Kepler potential -mu m / |q| is singular")
+        return q
+
+    def check_configurations(self, name: str, qs: np.ndarray) -> None:
+        radii = np.linalg.norm(np.asarray(qs, dtype=float).reshape(len(qs), self.particles, self.space_dim), axis=2)
+        bad = np.argwhere(~(radii > 0))
+        if bad.size:
+            member, particle = (int(x) for x in bad[0])
+            raise ValueError(f"{name}[{member}]: particle {particle} is at the central body (|q| = 0), where the "
+                             "Kepler potential -mu m / |q| is singular")
+
+    # -- orbits ---------------------------------------------------------------------------------
+    def pericentre_state(self, rp: float, e: float, *, particle: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """(q0, p0) of an orbit at its pericentre: distance ``rp`` (> 0) along x, moving along +y with the
+        speed of eccentricity ``e`` (>= 0; 0 circular, < 1 elliptic, 1 parabolic, > 1 hyperbolic),
+        v = sqrt(mu (1 + e) / rp). Every particle gets it, or only ``particle`` (the others at rest at
+        distance rp along x: set their states yourself)."""
+        rp = real("rp", rp, positive=True)
+        e = real("e", e, nonnegative=True)
+        q = np.zeros((self.particles, self.space_dim))
+        p = np.zeros((self.particles, self.space_dim))
+        rows = range(self.particles) if particle is None else [integer("particle", particle, minimum=0,
+                                                                         maximum=self.particles - 1)]
+        q[:, 0] = rp
+        for i in rows:
+            p[i, 1] = self.mass * math.sqrt(self.mu * (1.0 + e) / rp)
+        return q.reshape(-1), p.reshape(-1)
+
+    def elements(self, q, p) -> dict[str, np.ndarray]:
+        """Per particle: specific energy, semi-major axis a = -mu / (2 energy) (inf for a parabola,
+        negative for a hyperbola), eccentricity e and the angular momentum's size |L| / m, for rows of
+        (q, p) of shape (rows, n) or (n,)."""
+        q, p = real_array("q", q), real_array("p", p)
+        if q.shape != p.shape or q.shape[-1] != self.dim:
+            raise ValueError(f"q, p: expected arrays with last dimension n = {self.dim}, got {q.shape} and {p.shape}")
+        shape = q.shape[:-1] + (self.particles, self.space_dim)
+        x, v = q.reshape(shape), p.reshape(shape) / self.mass
+        r = np.linalg.norm(x, axis=-1)
+        energy = 0.5 * np.sum(v * v, axis=-1) - self.mu / r
+        if self.space_dim == 2:
+            h = np.abs(x[..., 0] * v[..., 1] - x[..., 1] * v[..., 0])
+        else:
+            h = np.linalg.norm(np.cross(x, v), axis=-1)
+        with np.errstate(divide="ignore"):
+            a = -self.mu / (2.0 * energy)
+        e = np.sqrt(np.maximum(0.0, 1.0 + 2.0 * energy * h * h / self.mu**2))
+        return {"energy": energy, "a": a, "e": e, "h": h}
