@@ -9,8 +9,9 @@ INSTALLED := $(VENV)/.raydamp-installed
 SOURCES := $(shell find cpp python service -type f \( -name '*.hpp' -o -name '*.cpp' -o -name '*.py' -o -name '*.pyi' \
              -o -name '*.html' -o -name '*.js' -o -name '*.css' -o -name '*.json' \) 2>/dev/null)
 APT_PACKAGES := libeigen3-dev g++ make
-# The page test (tests/service/test_page.py) drives Debian's chromium; only the test targets need it.
-test pytest: APT_PACKAGES += chromium
+# The page test (tests/service/test_page.py) drives Debian's chromium and the proxy test (tests/service/test_proxy.py)
+# runs the README's nginx block; only the test targets need them.
+test pytest: APT_PACKAGES += chromium nginx
 SUDO := $(if $(filter 0,$(shell id -u)),,sudo)
 HOST ?= 127.0.0.1
 PORT ?= 8000
