@@ -138,6 +138,10 @@ def test_energy_dissipated_under_a_load_is_the_damping_work(tmp_path):
     assert unrecorded.summary()["mean_dissipation_rate"] is None
     sol.save(tmp_path / "forced.npz")  # read back, the run knows its load from the provenance
     assert raydamp.load(tmp_path / "forced.npz").energy_dissipated == sol.work[-1]
+    # At a temperature the noise puts energy in too (here H(0) - H(t) = -1.48 beside W = 18.1).
+    hot = raydamp.integrate(DampedPendulum(eps=0.5), [0.5], [0.0], method="baoab", h=0.05, t_end=50, temperature=0.5,
+                            seed=1, work=True)
+    assert hot.energy_dissipated == hot.work[-1] > 1.0 and hot.initial_energy - hot.final_energy < 0
     free = raydamp.integrate(model, [1.0], [0.0], method="gauss4", h=0.01, t_end=100, work=True)
     assert free.energy_dissipated == free.initial_energy - free.final_energy
     assert free.energy_dissipated == pytest.approx(free.work[-1], rel=1e-9)  # gauss4 balances energy exactly
