@@ -531,7 +531,10 @@ def reference_states(problem: Problem, out=print):
     if s.name == "chain":
         return (ModalSolution(chain_modes(s.n), s.M, problem.alpha, problem.beta).at(problem.q0, problem.times),
                 1e-12, "exact modal solution (closed-form modes)")
-    from modal_reference import modal_reference
+    try:
+        from modal_reference import modal_reference
+    except ImportError as error:
+        raise SystemExit(f"the beam's reference needs mpmath ({error}): .venv/bin/pip install mpmath") from None
 
     def distance(a, b):
         return float(np.max(np.linalg.norm(a - b, axis=1)) / norm)
