@@ -101,3 +101,16 @@ def test_a_reply_that_is_not_json_exits_1(url, tmp_path):
     done = jobs(url, "list", cwd=tmp_path)
     assert done.returncode == 1, done.stderr
     assert "the reply was not JSON (text/html" in done.stderr and "Traceback" not in done.stderr
+
+
+def test_url_and_token_may_follow_the_action(url, tmp_path):
+    """`raydamp jobs fetch ID --out F --url U` was refused ("unrecognized arguments: --url"): --url had to come
+    before the action. Given after it, it is used; given on both sides, the later one wins."""
+    done = jobs(None, "fetch", "whole", "--out", "tr.nc", "--url", url, "--token", "t", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "tr.nc").read_bytes() == BODY
+    both = jobs("http://127.0.0.1:1", "fetch", "whole", "--out", "again.nc", "--url", url, cwd=tmp_path)
+    assert both.returncode == 0 and (tmp_path / "again.nc").read_bytes() == BODY, both.stderr
+    # Before the action, as it always worked: the action's own (absent) --url does not reset it.
+    before = jobs(url, "fetch", "whole", "--out", "before.nc", cwd=tmp_path)
+    assert before.returncode == 0 and (tmp_path / "before.nc").read_bytes() == BODY, before.stderr

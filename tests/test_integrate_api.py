@@ -121,12 +121,51 @@ def test_energy_and_summary_are_consistent():
     assert 0.5 < s["energy_dissipated"] < s["energy_initial"]
 
 
+def test_energy_dissipated_under_a_load_is_the_damping_work(tmp_path):
+    """Under a load H(0) - H(t) mixes the load's work with the damping's (it was -1.5 on the page beside a damping
+    work of 616,012): a driven run's energy_dissipated is the damping work W(t_final), nan (null in the summary)
+    without work=True; a free run keeps H(0) - H(t_final), which there is W to the method's error."""
+    model = raydamp.LinearStructure(np.array([[2.0]]), np.array([[3.0]]), alpha=0.125)
+    force = raydamp.Load.harmonic([0.7], 1.4)
+    sol = raydamp.integrate(model, [0.0], [0.0], method="gauss4", h=0.01, t_end=100, load=force, work=True)
+    assert sol.energy_dissipated == sol.work[-1] and sol.work[-1] > 1.0  # W grows with each forced period
+    assert sol.initial_energy - sol.final_energy < 0  # the load put energy in: the old figure's sign
+    s = sol.summary()
+    assert s["energy_dissipated"] == s["work_final"] and s["mean_dissipation_rate"] == pytest.approx(
+        s["work_final"] / 100.0, rel=1e-12)
+    unrecorded = raydamp.integrate(model, [0.0], [0.0], method="gauss4", h=0.01, t_end=100, load=force)
+    assert math.isnan(unrecorded.energy_dissipated) and unrecorded.summary()["energy_dissipated"] is None
+    assert unrecorded.summary()["mean_dissipation_rate"] is None
+    sol.save(tmp_path / "forced.npz")  # read back, the run knows its load from the provenance
+    assert raydamp.load(tmp_path / "forced.npz").energy_dissipated == sol.work[-1]
+    # At a temperature the noise puts energy in too (here H(0) - H(t) = -1.48 beside W = 18.1).
+    hot = raydamp.integrate(DampedPendulum(eps=0.5), [0.5], [0.0], method="baoab", h=0.05, t_end=50, temperature=0.5,
+                            seed=1, work=True)
+    assert hot.energy_dissipated == hot.work[-1] > 1.0 and hot.initial_energy - hot.final_energy < 0
+    free = raydamp.integrate(model, [1.0], [0.0], method="gauss4", h=0.01, t_end=100, work=True)
+    assert free.energy_dissipated == free.initial_energy - free.final_energy
+    assert free.energy_dissipated == pytest.approx(free.work[-1], rel=1e-9)  # gauss4 balances energy exactly
+
+
 def test_progress_is_called_a_bounded_number_of_times():
     calls = []
     pendulum_run(n_steps=1_000_000, save_every=10**6, progress=lambda done, total: calls.append((done, total)))
     assert 50 <= len(calls) <= 102
     assert calls[-1] == (1_000_000, 1_000_000)
     assert all(a[0] < b[0] for a, b in zip(calls, calls[1:]))
+
+
+def test_progress_true_draws_a_bar_as_sweep_does(capsys):
+    """integrate(progress=True) was refused ("progress must be callable") while sweep(progress=True) drew a bar:
+    it draws a tqdm bar over the steps (on stderr), ends at the run's step count, and the run is the one without
+    it, bit for bit. progress=False is none."""
+    plain = pendulum_run(n_steps=20_000, save_every=1000)
+    barred = pendulum_run(n_steps=20_000, save_every=1000, progress=True)
+    np.testing.assert_array_equal(barred.q, plain.q)
+    err = capsys.readouterr().err
+    assert "integrate" in err and "20000/20000" in err, err[-300:]
+    pendulum_run(n_steps=100, progress=False)
+    assert capsys.readouterr().err == ""
 
 
 def test_progress_exception_propagates():

@@ -104,6 +104,45 @@ class Session:
         return found[occurrence]
 
 
+# The names a group's blocks use without defining them, which the README leaves to the reader (and the tests
+# define in a preamble): any other is a NameError for a reader who pastes the blocks in order.
+LEFT_TO_READER = {"structures": {"q0", "p0", "omega1", "omega2", "zeta1", "zeta2"}}
+
+
+def _undefined_names(sources: list[str]) -> set[str]:
+    """Names read by the statements of ``sources`` (run in order, as one session) before any statement of them
+    binds them, builtins aside. A statement's own bindings (a comprehension's variable, a function's arguments)
+    count as made before it reads."""
+    import builtins
+
+    bound, missing = set(dir(builtins)), set()
+    for source in sources:
+        for statement in ast.parse(source).body:
+            made = set()
+            for node in ast.walk(statement):
+                if isinstance(node, ast.Name) and isinstance(node.ctx, (ast.Store, ast.Del)):
+                    made.add(node.id)
+                elif isinstance(node, (ast.Import, ast.ImportFrom)):
+                    made.update((a.asname or a.name).split(".")[0] for a in node.names)
+                elif isinstance(node, (ast.FunctionDef, ast.ClassDef)):
+                    made.add(node.name)
+                elif isinstance(node, ast.arg):
+                    made.add(node.arg)
+            bound |= made
+            missing |= {node.id for node in ast.walk(statement)
+                        if isinstance(node, ast.Name) and isinstance(node.ctx, ast.Load) and node.id not in bound}
+    return missing
+
+
+def test_no_block_reads_a_name_it_never_defined():
+    # The ground-motion example ran `integrate(frame, ...)` with no frame defined anywhere in the README; its test
+    # supplied one, so nothing failed.
+    for group, markers in GROUPS.items():
+        missing = _undefined_names([block(marker)[1] for marker in markers])
+        assert missing <= LEFT_TO_READER.get(group, set()), f"README.md, {group}: undefined {sorted(missing)}"
+    assert _undefined_names(["x = y + 1"]) == {"y"} and _undefined_names(["[k for k in range(3)]"]) == set()
+
+
 def test_every_python_block_is_run():
     # A new example in the README needs a group here (and its claims asserted); a renamed one, a new marker.
     markers = [m for group in GROUPS.values() for m in group]
@@ -444,19 +483,26 @@ def test_loads_block(tmp_path, monkeypatch):
     from raydamp.analysis import piecewise_linear_response
 
     monkeypatch.chdir(tmp_path)
-    # The README leaves `frame` and RSN953.AT2 to the reader. Here: a 10-storey shear frame (unit masses, storey
-    # stiffness 1800: T1 = 1.0 s) with 5% Rayleigh damping in modes 1 and 3, and a synthetic 20 s record at
-    # dt = 0.01 in g (two sines under a sin^2 envelope, zero at both ends) in the PEER format raydamp reads.
-    M, K = shear_frame(10, 1.0, 1800.0)
-    omegas = np.sqrt(np.linalg.eigvalsh(K))
-    alpha, beta = raydamp.rayleigh_coefficients(omegas[0], omegas[2], 0.05, 0.05)
-    frame = raydamp.LinearStructure(M, K, alpha=alpha, beta=beta)
+    # The README leaves RSN953.AT2 to the reader (it once left `frame` too, undefined: a NameError pasted; the
+    # block now builds it and runs with no preamble). Here: a synthetic 20 s record at dt = 0.01 in g (two sines
+    # under a sin^2 envelope, zero at both ends) in the PEER format raydamp reads.
     t_record = np.arange(2001) * 0.01
     shape = np.sin(np.pi * t_record / 20) ** 2 * (np.sin(2 * np.pi * 1.3 * t_record)
                                                   + 0.5 * np.sin(2 * np.pi * 3.1 * t_record + 0.4))
     a_g = 9.81 * write_at2(tmp_path / "RSN953.AT2", 0.01, 0.3 * shape)
-    s = Session(frame=frame)
+    s = Session()
     s.run("raydamp.GroundMotion(")
+    # The block's frame is the one its comment describes: unit masses, storey stiffness 1800 (T1 = 1.0 s: measured
+    # 0.991), 5% Rayleigh damping in modes 1 and 3.
+    M, K = shear_frame(10, 1.0, 1800.0)
+    frame = s.names["frame"]
+    np.testing.assert_array_equal(frame.M.toarray(), M)
+    np.testing.assert_array_equal(frame.K.toarray(), K)
+    omegas = np.sqrt(np.linalg.eigvalsh(K))
+    assert 2 * np.pi / omegas[0] == pytest.approx(1.0, abs=0.01)
+    alpha, beta = s.names["alpha"], s.names["beta"]
+    for w in (omegas[0], omegas[2]):
+        assert alpha / (2 * w) + beta * w / 2 == pytest.approx(0.05, rel=1e-12)
 
     # The driven oscillator (m = 2, k = 3, c = 0.125 m = 0.25, F0 = 0.7, w = 1.4): the amplitude of the last six
     # periods (the transient decays as e^{-c t/(2m)}: e^{-25} by t = 400) against F0 / |k - m w^2 + i c w| = 0.7112.

@@ -41,7 +41,7 @@ def test_every_format_carries_the_json_numbers(server, jobs, tmp_path, name):
     job_id = jobs[name]
     reference = _json(server, job_id)
     rows = reference["t"].size
-    for fmt, suffix in (("npz", ".npz"), ("netcdf", ".nc")):
+    for fmt, suffix in (("npz", ".npz"), ("netcdf", ".nc"), ("nc", ".nc")):  # nc: an alias the README names
         response = server.client.get(f"/v1/jobs/{job_id}/trajectory", params={"format": fmt})
         assert response.status_code == 200, response.text
         assert f'filename="{job_id}-trajectory{suffix}"' in response.headers["content-disposition"]

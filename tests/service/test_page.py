@@ -119,6 +119,8 @@ def test_kepler_run_through_the_form(module_server) -> None:
         phase = _traces(page, "phase")
         assert [trace["name"] for trace in phase] == ["(x, p_x)", "(y, p_y)"]
         assert phase[0]["x"][0] == 1.0 and phase[1]["y"][0] == 1.2  # (q0, p0) per coordinate
+        assert page.eval_on_selector_all("#displacement-dof option", "options => options.map(o => o.textContent)") \
+            == ["x", "y"]
 
         projection = _traces(page, "projection")
         assert len(projection) == 1 and projection[0]["x"][0] == 1.0 and projection[0]["y"][0] == 0.0
@@ -338,6 +340,11 @@ def test_a_harmonic_load_and_a_record_as_ground_motion(module_server) -> None:
         assert max(map(abs, data["load_work"])) > 0.05
         assert _drawn(page, "budget") and _drawn(page, "balance")
         assert "load work W_f" in page.inner_text("#summary")
+        # Under a load H0 - H is no dissipation (the page showed "energy dissipated -1.53" beside a damping work
+        # of 616,012): the row is the damping work W, the summary's energy_dissipated, W at the end.
+        rows = dict(line.split("\t") for line in page.inner_text("#summary").splitlines())
+        assert "energy dissipated" not in rows and job["summary"]["energy_dissipated"] == job["summary"]["work_final"]
+        assert float(rows["damping work W"]) == pytest.approx(data["work"][-1], rel=1e-5) and data["work"][-1] > 0
 
         page.select_option("#load-kind", "ground")
         bad = AT2_RECORD.replace("NPTS=   400", "NPTS=   401")
@@ -454,3 +461,42 @@ def test_a_decimated_plot_ends_at_the_last_point_and_names_are_text(module_serve
         assert shown == failed["error"] and shown.count(f"step {failed['failed_step']}") == 1, shown
         # Escaped for Plotly, which then shows the name as written (its legend, its hover), not as markup.
         assert energy["name"].startswith("&lt;b&gt;bold&lt;/b&gt; &lt;a href=\"x\"&gt;link&lt;/a&gt; 3s"), energy["name"]
+
+
+def test_a_displacement_plot_with_a_choice_of_coordinate(module_server) -> None:
+    """The first plot an engineer looks for: q_k(t) of one coordinate, chosen from a list of the saved ones. A
+    4-storey shear frame (unit masses and storey springs) under a harmonic force on its roof, saving storeys 2 and
+    4 (save_dofs [3, 1]): the list names them q3 and q1 in that order, the roof (q3, which moves most) is drawn
+    first, and choosing q1 draws its column, both the service's numbers. Screenshot: build/page-displacement.png."""
+    k = {"coo": {"shape": [4, 4], "rows": [0, 0, 1, 1, 1, 2, 2, 2, 3, 3], "cols": [0, 1, 0, 1, 2, 1, 2, 3, 2, 3],
+                 "values": [2, -1, -1, 2, -1, -1, 2, -1, -1, 1]}}
+    spec = {"system": {"kind": "linear_structure", "M": {"diagonal": [1, 1, 1, 1]}, "K": k, "alpha": 0.05},
+            "load": {"harmonic": {"amplitude": [0, 0, 0, 0.1], "omega": 0.5}}, "method": "gauss4", "h": 0.05,
+            "t_end": 60, "save_every": 4, "save_dofs": [3, 1], "initial_state": {"rest": True}}
+    job_id = module_server.submit(spec)
+    assert module_server.wait_finished(job_id)["status"] == "completed"
+    data = module_server.client.get(f"/v1/jobs/{job_id}/trajectory").json()
+    with open_page(_base(module_server)) as page:
+        _ready(page)
+        page.wait_for_selector(f'#jobs tr[data-job="{job_id}"] button.show', timeout=30_000)
+        page.click(f'#jobs tr[data-job="{job_id}"] button.show')
+        page.wait_for_function("id => { const plots = document.getElementById('plots');"
+                               " return plots.dataset.job === id && plots.dataset.ready === 'true'; }",
+                               arg=job_id, timeout=RUN_TIMEOUT_MS)
+        options = page.eval_on_selector_all("#displacement-dof option", "options => options.map(o => o.textContent)")
+        assert options == ["q3", "q1"]
+        assert page.input_value("#displacement-dof") == "0"  # the roof: its peak is the larger
+        roof = [row[0] for row in data["q"]]
+        assert max(map(abs, roof)) > max(abs(row[1]) for row in data["q"]) > 0.01
+        drawn = _traces(page, "displacement")
+        assert len(drawn) == 1 and drawn[0]["x"] == data["t"] and drawn[0]["y"] == roof
+        assert _drawn(page, "displacement")
+        assert page.eval_on_selector("#plot-displacement", "gd => gd.layout.title.text") == "displacement q3(t)"
+        shot = SCREENSHOT.parents[1] / "build" / "page-displacement.png"
+        shot.parent.mkdir(exist_ok=True)
+        page.screenshot(path=str(shot), full_page=True)
+        page.select_option("#displacement-dof", label="q1")
+        page.wait_for_function("() => document.getElementById('plot-displacement').layout.title.text"
+                               " === 'displacement q1(t)'", timeout=30_000)
+        assert _traces(page, "displacement")[0]["y"] == [row[1] for row in data["q"]]
+        assert [trace["name"] for trace in _traces(page, "phase")] == ["(q3, p_q3)", "(q1, p_q1)"]

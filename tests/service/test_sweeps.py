@@ -76,6 +76,8 @@ def test_grid_of_eps_and_q0_equals_single_runs(sweeps, cluster, tmp_path):
     assert view["outcomes"] == {"completed": 6} and view["result"] == f"/v1/sweeps/{sweep_id}/result"
     ds = result(sweeps, sweep_id, tmp_path)
     assert ds.attrs["kind"] == "sweep" and ds.sizes["member"] == 6
+    alias = sweeps.client.get(f"/v1/sweeps/{sweep_id}/result", params={"format": "nc"})  # the README's alias
+    assert alias.status_code == 200 and alias.content == sweeps.client.get(f"/v1/sweeps/{sweep_id}/result").content
     assert sorted(set(ds["eps"].values.tolist())) == [0.0, 0.1, 0.2]
     for i in range(6):
         ref = raydamp.integrate(DampedPendulum(float(ds["eps"].values[i])), [float(ds["q0[0]"].values[i])], [0.0],

@@ -42,16 +42,23 @@ def add_client_commands(commands) -> None:
         one = kind[:-1]
         parser = commands.add_parser(kind, help=f"list, show, cancel, delete or download the {kind} of a running "
                                                 "service")
-        parser.add_argument("--url", help=f"the service (default: RAYDAMP_URL or {_DEFAULT_URL})")
-        parser.add_argument("--token", help="bearer token (default: RAYDAMP_TOKEN)")
+        url_help = f"the service (default: RAYDAMP_URL or {_DEFAULT_URL})"
+        token_help = "bearer token (default: RAYDAMP_TOKEN)"
+        parser.add_argument("--url", help=url_help)
+        parser.add_argument("--token", help=token_help)
+        # Also after the action (`jobs fetch ID --url U`): argparse gives each subparser its own options, and
+        # SUPPRESS leaves the value given before the action in place when none is given after it.
+        connection = argparse.ArgumentParser(add_help=False)
+        connection.add_argument("--url", default=argparse.SUPPRESS, help=url_help)
+        connection.add_argument("--token", default=argparse.SUPPRESS, help=token_help)
         actions = parser.add_subparsers(dest="action", required=True)
-        listing = actions.add_parser("list", help=f"newest {kind} first")
+        listing = actions.add_parser("list", help=f"newest {kind} first", parents=[connection])
         listing.add_argument("--status", choices=["queued", "running", "completed", "failed", "cancelled"])
         listing.add_argument("--limit", type=_limit, default=20, help="at most this many (default 20)")
         for action, text in (("show", "its status and summary as JSON"), ("cancel", f"stop a queued or running {one}"),
                              ("delete", f"remove a finished {one} with its results (or cancel a running one)")):
-            actions.add_parser(action, help=text).add_argument("id")
-        fetch = actions.add_parser("fetch", help="download its results to a file")
+            actions.add_parser(action, help=text, parents=[connection]).add_argument("id")
+        fetch = actions.add_parser("fetch", help="download its results to a file", parents=[connection])
         fetch.add_argument("id")
         fetch.add_argument("--out", required=True, help="the file: .nc" + (", .npz, .csv or .json" if kind == "jobs"
                                                                             else ""))

@@ -32,8 +32,11 @@ class JobSummary(BaseModel):
     saved_points: int
     energy_initial: float | None
     energy_final: float | None
-    energy_dissipated: float | None
-    mean_dissipation_rate: float | None
+    energy_dissipated: float | None = Field(description=(
+        "the energy the damping took out: H(0) - H(t_final) for a free run; for a run driven by a load, a "
+        "ground motion or a temperature (where H(0) - H(t_final) mixes in the energy put in) the damping "
+        "work W at the end, null when the run did not record it"))
+    mean_dissipation_rate: float | None = Field(description="energy_dissipated / (t_final - t_0)")
     momentum_drift: float | None
     work_final: float | None = Field(None, description="the damping work W at the end (jobs with work)")
     load_work_final: float | None = Field(None, description="the load's work W_f at the end (jobs with work)")

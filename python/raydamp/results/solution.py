@@ -163,13 +163,28 @@ class Solution:
         return float(self.energy[-1])
 
     @property
+    def _driven(self) -> bool:
+        """Whether energy entered the run from outside: a load (or ground motion) or thermal noise."""
+        if isinstance(self.origin, tuple):
+            options = self.origin[3]
+            return options.get("load") is not None or options.get("thermal") is not None
+        origin = self.origin if isinstance(self.origin, dict) else {}
+        return bool(self.load is not None or self.load_work is not None or origin.get("load")
+                    or origin.get("ground_motion") or origin.get("temperature"))
+
+    @property
     def energy_dissipated(self) -> float:
-        """H(0) - H(t_final): positive when energy was lost."""
-        return self.initial_energy - self.final_energy
+        """The energy the damping took out: H(0) - H(t_final) for a free run (positive when energy was lost).
+        A driven run (a load, a ground motion or a temperature) gains energy from outside, so there
+        H(0) - H(t_final) says nothing of the damping: its figure is the damping work W(t_final)
+        (``work[-1]``), and nan when the run did not record W (``work=False``)."""
+        if not self._driven:
+            return self.initial_energy - self.final_energy
+        return float(self.work[-1]) if self.work is not None else math.nan
 
     @property
     def mean_dissipation_rate(self) -> float:
-        """Energy dissipated per unit time over the run (nan if no time elapsed)."""
+        """``energy_dissipated`` per unit time over the run (nan if no time elapsed, or if it is nan)."""
         elapsed = float(self.t[-1] - self.t[0])
         return self.energy_dissipated / elapsed if elapsed > 0 else math.nan
 

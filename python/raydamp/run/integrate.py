@@ -67,7 +67,7 @@ def _tableau(tableau) -> tuple[str, str | dict | None]:
 def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_end: float | None = None,
               n_steps: int | None = None, save_every: int = 1, tableau: str | Mapping | None = None,
               composition: str | None = None, work: bool = False, save_dofs=None,
-              progress: Callable[[int, int], object] | None = None,
+              progress: bool | Callable[[int, int], object] | None = None,
               cancel: CancelToken | None = None, load: Load | None = None, temperature: float | None = None,
               seed: int | None = None, stream: int = 0) -> Solution:
     """Integrate ``model`` from (q0, p0) with fixed steps of size ``h``.
@@ -121,8 +121,9 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
         (default) saves all. Energy, W and the momentum maps are still computed from the whole
         state at each saved point, so a 10^6-site chain run keeps a few numbers per row.
         ``Solution.dofs`` holds the indices.
-    progress : called as ``progress(steps_done, n_steps)`` about 100 times per run
-        (never once per step), from the integrating thread.
+    progress : True for a tqdm bar (as :func:`raydamp.sweep`'s), or a callable, called as
+        ``progress(steps_done, n_steps)`` about 100 times per run (never once per step), from the
+        integrating thread; None or False for none.
     cancel : a :class:`CancelToken`; cancelling it stops the run.
     work : also record the damping work W(t) = eps int qdot^T D(q) qdot dt at the saved
         points (``Solution.work``), integrated in the step loop with a quadrature of
@@ -168,8 +169,11 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
     p0 = vector("p0", p0, model.dim)
     save_every = integer("save_every", save_every, maximum=MAX_STEPS)
     n_steps, h_last = span(h, t_end, n_steps)
-    if progress is not None and not callable(progress):
-        raise ValueError(f"progress must be callable or None, got {progress!r}")
+    bar = None
+    if progress is True or progress is False:
+        bar, progress = _bar(n_steps) if progress else (None, None)
+    elif progress is not None and not callable(progress):
+        raise ValueError(f"progress must be callable, True or None, got {progress!r}")
     work = flag("work", work)
     if cancel is not None and not isinstance(cancel, _core.CancelToken):
         raise ValueError(f"cancel must be a raydamp.CancelToken or None, got {cancel!r}")
@@ -194,6 +198,9 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
         if named == str(error):
             raise  # as it came (a ChebyshevDegreeError stays one, a progress callback's own error its own)
         raise ValueError(named) from None
+    finally:
+        if bar is not None:
+            bar.close()
     wall = time.perf_counter() - start
     message = out["message"]
     explain = getattr(model, "_explain_failure", None)
@@ -214,6 +221,17 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
                         "save_every": save_every, "work": work, "save_dofs": dofs,
                         "load": load if core_load is not None else None,
                         "thermal": (kT, seed, stream) if kT > 0 else None, "method_reason": method_reason}))
+
+
+def _bar(n_steps: int):
+    """A tqdm bar over the run's steps and the progress callback that moves it."""
+    from tqdm.auto import tqdm
+
+    bar = tqdm(total=n_steps, unit="step", desc="integrate")
+
+    def progress(done: int, total: int) -> None:
+        bar.update(done - bar.n)
+    return bar, progress
 
 
 def _save_dofs(save_dofs, dim: int) -> list[int] | None:

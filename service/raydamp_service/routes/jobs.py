@@ -131,14 +131,15 @@ def get_trajectory(job_id: str, request: Request, store: StoreDep, settings: Set
                    start: Annotated[int, Query(ge=0, description="first saved point (0-based)")] = 0,
                    stop: Annotated[int | None, Query(ge=0, description="end before this point (default: all)")] = None,
                    every: Annotated[int, Query(ge=1, description="every this many points")] = 1,
-                   format: Annotated[Literal["json", "csv", "npz", "netcdf"], Query(  # noqa: A002 - the API's name
-                       description="json (streamed), or a file: csv (the numbers), npz or netcdf (with the job "
-                                   "spec as provenance; raydamp.load reads them)")] = "json") -> Response:
+                   format: Annotated[Literal["json", "csv", "npz", "netcdf", "nc"], Query(  # noqa: A002 - the API's name
+                       description="json (streamed), or a file: csv (the numbers), npz or netcdf (nc: the same; with "
+                                   "the job spec as provenance; raydamp.load reads them)")] = "json") -> Response:
     """The saved points start, start + every, ... before stop, one row per point, streamed as JSON or
     written as a file."""
     record = JOBS.existing(store, job_id)
     if format != "json":
-        return _trajectory_file(record, store, request, settings, slice(start, stop, every), format)
+        return _trajectory_file(record, store, request, settings, slice(start, stop, every),
+                                "netcdf" if format == "nc" else format)
     connection, stored = _opened(record, store)
     selection = Selection(*slice(start, stop, every).indices(stored.points))
     try:

@@ -110,8 +110,8 @@ def _pieces(connection, rowid: int, size: int):
             responses={**_NOT_FOUND, 200: {"content": {"application/x-netcdf": {}}, "description": "NetCDF"},
                        409: {"description": "the sweep has no result (yet)"}})
 def get_result(sweep_id: str, request: Request,
-               format: Annotated[Literal["netcdf"], Query(  # noqa: A002 - the API's name
-                   description="netcdf: the sweep's xarray Dataset (raydamp.load or xarray.open_dataset)")] = "netcdf"
+               format: Annotated[Literal["netcdf", "nc"], Query(  # noqa: A002 - the API's name
+                   description="netcdf (or nc): the sweep's xarray Dataset (raydamp.load or xarray.open_dataset)")] = "netcdf"
                ) -> Response:
     """The members' trajectories and outcomes as one NetCDF file (raydamp.sweep's Dataset; a cancelled
     sweep's file holds the chunks finished before the cancel)."""

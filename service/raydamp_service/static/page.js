@@ -408,10 +408,14 @@ function showThermal(job) {
   $("job-seed").textContent = spec.seedDigits;
 }
 
-function showSummary(summary) {
+// A run driven by a load or by thermal noise gains energy from outside: what the damping took out is then its
+// work W (the summary's energy_dissipated says so), not H(0) - H(t), and the row is named for it.
+function showSummary(summary, spec) {
+  const driven = Boolean(spec && (spec.load || spec.ground_motion || spec.temperature));
   const rows = [["steps", summary.steps], ["t final", summary.t_final], ["saved points", summary.saved_points],
     ["H initial", summary.energy_initial], ["H final", summary.energy_final],
-    ["energy dissipated", summary.energy_dissipated], ["momentum drift", summary.momentum_drift],
+    [driven ? "damping work W" : "energy dissipated", summary.energy_dissipated],
+    ["momentum drift", summary.momentum_drift],
     ...(summary.load_work_final === null || summary.load_work_final === undefined ? [] : [
       ["load work W_f", summary.load_work_final], ["max |H − H0 + W − W_f|", summary.energy_balance_max]]),
     // at a temperature: ⟨pᵀ M⁻¹ p⟩ / n over the run's second half, to compare with kT
@@ -435,7 +439,7 @@ async function showFinished(job) {
     const named = step === null || job.error.includes(`step ${step}`);
     $("job-error").textContent = job.error + (named ? "" : ` (step ${step})`);
   }
-  if (job.summary) showSummary(job.summary);
+  if (job.summary) showSummary(job.summary, job.spec);
   if (!job.trajectory) { $("plots").dataset.ready = "true"; return; } // nothing was computed
   for (const link of document.querySelectorAll("#downloads a[data-format]")) {
     link.href = `${job.trajectory}?format=${link.dataset.format}`;
@@ -462,10 +466,13 @@ async function showFinished(job) {
 
 // ---- plots --------------------------------------------------------------------------------------
 
+// The names of the saved coordinates: a system's own, else q0, q1, ...; a job that saved some coordinates
+// only (save_dofs) has their columns, in its order.
 function coordinateNames(spec, dim) {
   const coordinates = spec.system ? spec.system.coordinates : null;
-  if (Array.isArray(coordinates)) return coordinates;
-  return Array.from({ length: dim }, (_, i) => `q${i}`);
+  const name = (i) => (Array.isArray(coordinates) && coordinates[i] !== undefined ? coordinates[i] : `q${i}`);
+  const saved = Array.isArray(spec.save_dofs) && spec.save_dofs.length === dim ? spec.save_dofs : null;
+  return Array.from({ length: dim }, (_, k) => name(saved ? saved[k] : k));
 }
 
 function momentumNames(spec, count) {
@@ -499,11 +506,37 @@ function keepOverlay() {
   if (plot.data) state.overlays = plot.data.map((trace) => ({ ...trace, line: { dash: "dot" } }));
 }
 
+// q_k(t) of the coordinate chosen: at first the one whose largest |q| is largest (a frame's roof, a
+// cantilever's tip), then any other without fetching again.
+function drawDisplacement(job, trajectory, names) {
+  const select = $("displacement-dof");
+  const k = Number(select.value);
+  Plotly.newPlot("plot-displacement", [{ x: trajectory.t, y: column(trajectory.q, k), mode: "lines",
+    name: `${plotlyText(names[k])}(t), ${label(job)}` }],
+  layout(`displacement ${plotlyText(names[k])}(t)`, "t", plotlyText(names[k]), { showlegend: false }), config);
+}
+
+function showDisplacement(job, trajectory, names) {
+  const select = $("displacement-dof");
+  select.replaceChildren();
+  names.forEach((name, k) => option(select, k, name));
+  $("displacement").hidden = names.length === 0;
+  if (!names.length) { Plotly.purge($("plot-displacement")); return; }
+  const peaks = new Array(names.length).fill(0);
+  for (const row of trajectory.q) {
+    row.forEach((v, k) => { if (v !== null && Math.abs(v) > peaks[k]) peaks[k] = Math.abs(v); });
+  }
+  select.value = String(peaks.indexOf(Math.max(...peaks)));
+  select.onchange = () => drawDisplacement(job, trajectory, names);
+  drawDisplacement(job, trajectory, names);
+}
+
 function draw(job, trajectory) {
   const dim = trajectory.q.length ? trajectory.q[0].length : 0;
   const names = coordinateNames(job.spec, dim);
   const overlays = $("overlay").checked ? state.overlays : [];
   if (!$("overlay").checked) state.overlays = [];
+  showDisplacement(job, trajectory, names);
 
   Plotly.newPlot("plot-energy", [...overlays,
     { x: trajectory.t, y: trajectory.energy, mode: "lines", name: label(job) }],
