@@ -33,7 +33,6 @@ import time
 from pathlib import Path
 from typing import Any
 
-from raydamp.jobs import SystemInput
 from raydamp.systems.system import NotCompiled, compiled_elsewhere, load_compiled
 
 from .config import Settings
@@ -64,24 +63,14 @@ def isolated(spec: JobSpec) -> bool:
     """Whether a job's check runs in a check process: every user-defined system (an expression compiles,
     a chain of expression bonds too, a structure parses its files and factorises M), and every job whose load
     has an expression (compiled like a system's)."""
-    return spec.system is not None or _has_expression(spec.load) or _has_expression(spec.ground_motion)
+    return spec.system is not None or spec.compiles()
 
 
 def checked_inline(spec: JobSpec) -> bool:
     """Whether a job's check is light enough for the event loop: a built-in model without a load, its initial
     state given as numbers (not files): its check (sizes, one trial step) is arithmetic on at most max_dim
     coordinates, and reads no file."""
-    state = spec.initial_state
-    return (spec.system is None and spec.load is None and spec.ground_motion is None
-            and isinstance(getattr(state, "q", None), list) and isinstance(getattr(state, "p", None), list))
-
-
-def _has_expression(value) -> bool:
-    if isinstance(value, dict):
-        return "expression" in value or any(_has_expression(v) for v in value.values())
-    if isinstance(value, list):
-        return any(_has_expression(v) for v in value)
-    return False
+    return spec.system is None and spec.load is None and spec.ground_motion is None and not spec.uploads()
 
 
 # ---- in a check process ----
@@ -159,7 +148,7 @@ def _warm_up(settings: Settings) -> None:
 def _compiled(spec: JobSpec) -> tuple[str, bytes] | None:
     """(key, bytes) of the compiled functions of a job's expression system (built once by the check before:
     raydamp.jobs caches it), for the server to load; None for other kinds."""
-    return spec.system.build().compiled_form() if isinstance(spec.system, SystemInput) else None
+    return spec.compiled_form()
 
 
 def _plot(task: tuple) -> tuple[str | None, bytes | None]:

@@ -69,7 +69,7 @@ class Tasks:
               setting: str, settings: Settings, **columns: Any) -> Any:
         """Store the checked spec as queued and hand it to the runner; 429 when limit are waiting."""
         try:
-            record = store.create(spec.model_dump(mode="json"), limit, **columns)
+            record = store.create(spec.model_dump(mode="json"), limit, files=spec.uploads(), **columns)
         except FileGone as error:
             raise HTTPException(409, detail=str(error)) from None
         if record is not None:
@@ -86,7 +86,8 @@ class Tasks:
             runner.submit(stored.id, prepare(stored) if prepare is not None else stored)
 
         try:
-            record = await store.create_committed(spec.model_dump(mode="json"), limit, hand_over, **columns)
+            record = await store.create_committed(spec.model_dump(mode="json"), limit, hand_over,
+                                                   files=spec.uploads(), **columns)
         except FileGone as error:
             raise HTTPException(409, detail=str(error)) from None
         return self._queued(request, response, record, limit, setting, settings)
