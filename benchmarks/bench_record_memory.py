@@ -23,14 +23,18 @@ import sys
 from pathlib import Path
 
 MiB = 2**20
-CASES = {  # name -> (file name, code making the bytes, environment)
-    "64 MiB one column '0'": ("col1.csv", "b'0\\n' * (32 * MiB)", {"RAYDAMP_MAX_RECORD_SAMPLES": "40000000"}),
-    "64 MiB one column, default limit": ("col1.csv", "b'0\\n' * (32 * MiB)", {}),
-    "64 MiB two columns t, a": ("ta.csv", "b''.join(b'%.6f,%.9e\\n' % (k * 0.01, 0.5) for k in range(2_800_000))",
-                                {}),
-    "64 MiB .AT2": ("a.AT2", "b'H\\nE\\nG\\nNPTS= 4000000, DT= .01 SEC\\n' + b'  .1234567E-01' * 4_000_000 + b'\\n'",
-                    {}),
-}
+def cases(mib: int) -> dict[str, tuple[str, str, dict[str, str]]]:
+    """name -> (file name, code making about mib MiB of bytes, environment)."""
+    rows = mib * MiB // 33
+    return {
+        f"{mib} MiB one column '0' (limit raised)": ("col1.csv", f"b'0\\n' * ({mib} * MiB // 2)",
+                                                     {"RAYDAMP_MAX_RECORD_SAMPLES": str(mib * MiB)}),
+        f"{mib} MiB one column '0', default limit": ("col1.csv", f"b'0\\n' * ({mib} * MiB // 2)", {}),
+        f"{mib} MiB two columns t, a": ("ta.csv", f"b''.join(b'%.6f,%.12e\\n' % (k * 0.01, 0.5) for k in range({rows}))",
+                                        {}),
+        f"{mib} MiB .AT2": ("a.AT2", f"b'H\\nE\\nG\\nNPTS= {mib * MiB // 14}, DT= .01 SEC\\n' + b'  .1234567E-01' * "
+                                     f"({mib * MiB // 14}) + b'\\n'", {}),
+    }
 CHILD = """
 import json, resource, sys, time, tracemalloc
 MiB = 2**20
@@ -61,9 +65,10 @@ def run(tree: Path, name: str, make: str, env: dict[str, str]) -> list:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--tree", action="append", type=Path, help="a source tree (default: this checkout)")
+    parser.add_argument("--mib", type=int, default=64, help="the files' size (the issue's is 64 MiB)")
     args = parser.parse_args()
     trees = [tree.resolve() for tree in (args.tree or [Path(__file__).resolve().parents[1]])]
-    for label, (name, make, env) in CASES.items():
+    for label, (name, make, env) in cases(args.mib).items():
         print(label)
         for tree in trees:
             size, grown, elapsed, outcome = run(tree, name, make, env)

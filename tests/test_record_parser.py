@@ -52,12 +52,23 @@ def test_an_at2_record_read_in_pieces(small_pieces):
     np.testing.assert_array_equal(record.values, [0.01, 0.02, -0.03, 0.04, 0.0, -0.01, 0.005])
     with pytest.raises(ValueError, match=r"a\.AT2: line 6: '\.4X' is not a number"):
         parse_record(head + b" .1 .2 .3\n .4X\n .5 .6 .7\n", name="a.AT2")
+    # all on one line: pieces end at blanks, so a long line costs no more than many short ones
+    record, _ = parse_record(head + b"  .1E-01  .2E-01 -.3E-01 .4E-01 0 -.1E-01 .5E-02\n", name="a.AT2")
+    assert record.values.size == 7
+    with pytest.raises(ValueError, match=r"a\.AT2: line 5: '\.4X' is not a number"):
+        parse_record(head + b" .1 .2 .3 .4X .5 .6 .7\n", name="a.AT2")
     with pytest.raises(ValueError, match=r"a\.AT2: the header says NPTS=7 but the record has 6 values"):
         parse_record(head + b" .1 .2 .3\n .4 .5 .6\n", name="a.AT2")
     # NPTS beyond what the file's bytes can hold: refused before an array of NPTS is made
     big = head.replace(b"    7", b"10000000")
     with pytest.raises(ValueError, match=r"NPTS=10000000 but the record has fewer values \(a file of \d+ bytes\)"):
         parse_record(big + b" .1 .2\n", name="a.AT2")
+
+
+def test_a_text_line_of_a_megabyte_is_refused_before_it_is_read(small_pieces, monkeypatch):
+    monkeypatch.setattr(records, "_LONGEST_LINE", 64)
+    with pytest.raises(ValueError, match=r"v\.csv: line 3 is longer than 64 bytes \(a record's line holds one or two"):
+        parse_record(b"0 1\n1 2\n" + b"1 " * 100 + b"\n", name="v.csv")
 
 
 def test_the_samples_limit_is_found_from_the_header_or_the_lines(monkeypatch, tmp_path):

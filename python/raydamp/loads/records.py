@@ -134,13 +134,17 @@ def _at2(content: bytes, source: str, max_samples: int) -> tuple[np.ndarray, np.
 _BLANKS = bytes.maketrans(b",;\t\r\v\f", b"      ")
 _FORTRAN = bytes.maketrans(b",\t\r\v\fDd", b"     Ee")
 _LINE_END = re.compile(rb"\r\n|\n|\r")
+_NEWLINE = re.compile(rb"\n")
+_BLANK = re.compile(rb"[\s,]")
+_LONGEST_LINE = 1 << 20
 
 
-def _pieces(content: bytes, start: int) -> Iterator[tuple[int, int]]:
-    """(start, end) of consecutive pieces of about _PIECE bytes, each ending at a line's end."""
+def _pieces(content: bytes, start: int, breaks: re.Pattern) -> Iterator[tuple[int, int]]:
+    """(start, end) of consecutive pieces of about _PIECE bytes, each ending after a match of breaks (a line's
+    end, or any blank for a record whose lines do not matter)."""
     while start < len(content):
-        end = content.find(b"\n", min(start + _PIECE, len(content)) - 1)
-        end = len(content) if end < 0 else end + 1
+        found = breaks.search(content, min(start + _PIECE, len(content)) - 1)
+        end = len(content) if found is None else found.end()
         yield start, end
         start = end
 
@@ -151,7 +155,11 @@ def _numbers(content: bytes, start: int, first_line: int, source: str, limit: in
     rows of numbers when width is a list, which then gets the count of numbers of every line of numbers).
     A piece NumPy cannot read exactly is read line by line, for the message naming its line."""
     parts, count, line = [], 0, first_line
-    for begin, end in _pieces(content, start):
+    for begin, end in _pieces(content, start, _BLANK if fortran else _NEWLINE):
+        if end - begin > _PIECE + _LONGEST_LINE:  # a line of a megabyte would cost ten as one piece
+            at = line + content.count(b"\n", begin, end - 1)
+            raise ValueError(f"{source}: line {at} is longer than "
+                             f"{_LONGEST_LINE} bytes (a record's line holds one or two numbers)")
         piece = content[begin:end]
         if b"#" in piece and not fortran:  # comments: dropped line by line (the line count kept)
             piece = b"\n".join(text.split(b"#", 1)[0] for text in piece.split(b"\n"))
