@@ -87,11 +87,16 @@ def _exactly_one(first: str, second: str, first_type: str, second_type: str) -> 
                       {"required": [second], "properties": {second: {"type": second_type}, first: {"type": "null"}}}]}
 
 
+def _flat(schema: dict) -> None:
+    """A name or a table, or null, as one anyOf (the forms' oneOf spliced in): a client sees the names' enum."""
+    schema["anyOf"] = [form for option in schema.get("anyOf", []) for form in option.get("oneOf", [option])]
+
+
 def _job_schema(schema: dict) -> None:
     schema["allOf"] = [_exactly_one("model", "system", "string", "object"),
-                       _exactly_one("t_end", "n_steps", "number", "integer"),
-                       {"not": {"required": ["h", STEP_SIZE_ALIAS]}}]
-    # The former name of h, still accepted: a client's tools see it and that it goes
+                       _exactly_one("t_end", "n_steps", "number", "integer")]
+    # The former name of h, still accepted (never beside h): a client's tools see it and that it goes
+    schema["not"] = {"required": ["h", STEP_SIZE_ALIAS]}
     schema["properties"][STEP_SIZE_ALIAS] = {"type": "number", "exclusiveMinimum": 0, "deprecated": True,
                                              "description": "h under its former name; give h"}
 
@@ -142,14 +147,17 @@ class JobSpec(ModelSpec):
     """One integration problem: a model (or a system), a method, a step size h and a span.
     Exactly one of model and system; exactly one of t_end, n_steps."""
 
-    model_config = ConfigDict(json_schema_extra=lambda schema: _job_schema(schema))
+    # One schema for a job in and out: a stored job is echoed as the client wrote it (_as_written)
+    model_config = ConfigDict(json_schema_extra=lambda schema: _job_schema(schema),
+                              json_schema_mode_override="validation")
 
     method: MethodName | None = Field(
         None, description="a name from raydamp.methods() (GET /v1/methods); null or absent: raydamp chooses (3s, "
                           "except for a linear structure on which 3s is a trap: see raydamp.run.choose_method), and "
                           "the result's provenance names the method and why")
     tableau: TableauChoice | None = Field(
-        None, description="Runge-Kutta tableau for rks, rksb and rk: a name, or your own {A, b, c}")
+        None, description="Runge-Kutta tableau for rks, rksb and rk: a name, or your own {A, b, c}",
+        json_schema_extra=lambda schema: _flat(schema))
     composition: CompositionName | None = Field(None, description="raises a symmetric method's order: a name from "
                                                                  "raydamp.compositions() (GET /v1/methods lists the "
                                                                  "symmetric methods)")
