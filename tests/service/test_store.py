@@ -207,27 +207,29 @@ def test_a_submission_whose_file_was_deleted_meanwhile_is_not_stored(store):
     # Submitted while a DELETE of its file ran: the check read the file, the DELETE found no job naming it yet
     # (204), the insert went in (202), and the run failed later with "no uploaded file" (3 of 25 tries in a
     # service audit). The insert now checks, in its transaction, that the files it names are still there.
-    from raydamp_service.tasks.store import FileGone, uploaded_files
+    from raydamp.jobs import JobSpec
+    from raydamp_service.tasks.store import FileGone
 
     kept = store.add_file("M.mtx", b"%%MatrixMarket matrix coordinate real general\n1 1 1\n1 1 1.0\n", (1, 1), 1)
     gone = store.add_file("K.mtx", b"%%MatrixMarket matrix coordinate real general\n1 1 1\n1 1 2.0\n", (1, 1), 1)
     record = store.add_file("a_g.txt", b"0 0\n1 1\n", record=None, shape=(2, 2))
-    spec = {"system": {"kind": "linear_structure", "M": {"file": kept.id}, "K": {"file": gone.id},
-                       "f": {"coo": {"shape": [1], "rows": [0], "cols": [0], "values": [1.0]}}},
-            "ground_motion": {"acceleration": {"file": {"id": record.id, "factor": 9.81}}},
-            "initial_state": {"q": {"file": kept.id}}}
-    assert uploaded_files(spec) == (kept.id, gone.id, record.id)
+    spec = {"system": {"kind": "linear_structure", "M": {"file": kept.id}, "K": {"file": gone.id}, "f": [1.0]},
+            "ground_motion": {"acceleration": {"file": {"id": record.id, "factor": 9.81}}, "direction": [1.0]},
+            "initial_state": {"q": {"file": kept.id}, "p": {"file": kept.id}}, "h": 0.1, "n_steps": 10}
+    files = JobSpec.model_validate(spec).uploads()  # what the service's routes give the store
+    assert files == (kept.id, gone.id, record.id)
     # Only upload ids where uploads go: a momentum map the user named "file" is none (a review: every such job
     # got 409), nor a record's path.
-    assert uploaded_files({"system": {"coordinates": ["x", "y"], "potential": "x^2 + y^2",
-                                      "momenta": {"file": "x*p_y - y*p_x"}}, "parameters": {"file": 1.0},
-                           "load": {"file": {"path": "/data/a_g.AT2"}}}) == ()
+    assert JobSpec.model_validate({
+        "system": {"coordinates": ["x", "y"], "potential": "x^2 + y^2", "momenta": {"file": "x*p_y - y*p_x"}},
+        "parameters": {"file": 1.0}, "load": {"file": {"path": "/data/a_g.AT2"}}, "h": 0.1, "n_steps": 10,
+        "initial_state": {"rest": True}}).uploads() == ()
     assert store.delete_file(gone.id) == "deleted"
     with pytest.raises(FileGone, match=f"the uploaded file {gone.id} was deleted"):
-        store.create(spec)
+        store.create(spec, files=files)
     assert store.recent(10) == []
     spec["system"]["K"] = {"file": kept.id}
-    assert store.create(spec) is not None
+    assert store.create(spec, files=JobSpec.model_validate(spec).uploads()) is not None
 
 
 def committed(store: JobStore) -> dict[str, str]:

@@ -10,6 +10,7 @@ into raydamp.integrate's arguments.
 from ..systems.kinds import describe_model
 from .build import (PROVENANCE_KEYS, JobCall, build_job, error_at, job_arguments, model_from_spec, parse_job,
                     planned_steps, validation_error)
+from ..loads.forms import GroundMotionInput, LoadInput
 from .errors import JobError
 from .forms import InitialState, ModeState, RestState, TableauInput, VectorFile
 from .spec import STEP_SIZE_ALIAS, UNION_TAGS, JobSpec, ModelSpec, client_path
@@ -21,4 +22,4 @@ __all__ = ["JobSpec", "JobSummary", "ModelSpec", "SweepSpec", "GridRange", "JobE
            "planned_steps", "error_at", "job_arguments", "validation_error", "client_path", "describe_model",
            "model_from_spec", "PROVENANCE_KEYS", "STEP_SIZE_ALIAS", "UNION_TAGS", "InitialState", "ModeState", "RestState",
            "TableauInput", "SystemInput", "ChainInput", "KeplerInput", "LinearStructureInput", "CooForm", "DiagonalForm",
-           "FileForm", "VectorFile"]
+           "FileForm", "VectorFile", "LoadInput", "GroundMotionInput"]

@@ -17,6 +17,7 @@ import numpy as np
 from pydantic import ValidationError
 
 from .._validation import span
+from ..loads.forms import plain_json
 from .errors import JobError, head_path
 from .forms import ModeState, RestState, VectorFile
 from .spec import JobSpec, ModelSpec, client_path
@@ -78,22 +79,9 @@ def parse_job(data: Any) -> JobSpec:
     if isinstance(data, Mapping):
         data = {k: v for k, v in data.items() if k not in PROVENANCE_KEYS}
     try:
-        return JobSpec.model_validate(_plain(data))
+        return JobSpec.model_validate(plain_json(data))
     except ValidationError as error:
         raise validation_error(error) from None
-
-
-def _plain(value: Any) -> Any:
-    """JSON's types (lists, floats, ints) for what Python callers pass: tuples, NumPy arrays and scalars."""
-    if isinstance(value, Mapping):
-        return {k: _plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
 
 
 def _initial_state(spec: JobSpec, model, files: FileResolver | None = None) -> tuple[Any, Any]:
@@ -178,9 +166,11 @@ def planned_steps(spec: JobSpec) -> int:
 def job_load(spec: JobSpec, files: FileResolver | None = None):
     """The job's load (its "load" plus its "ground_motion"), or None; a JobError names the path."""
     try:
-        return load_from(spec.load, spec.ground_motion, files)
+        parts = [form.build(files, name) for name, form in (("load", spec.load), ("ground_motion", spec.ground_motion))
+                 if form is not None]
     except ValueError as error:
         raise JobError(head_path(str(error)), str(error)) from None
+    return sum(parts) if parts else None
 
 
 def load_from(load: Any, ground_motion: Any, files: FileResolver | None = None):
@@ -220,7 +210,7 @@ def model_from_spec(spec: Any, files: FileResolver | None = None):
     if isinstance(spec, Mapping):  # None as "not given", as the job form's null
         spec = {key: value for key, value in spec.items() if value is not None}
     try:
-        parsed = ModelSpec.model_validate(_plain(spec))
+        parsed = ModelSpec.model_validate(plain_json(spec))
     except ValidationError as error:
         raise validation_error(error) from None
     return parsed.build_model(files)

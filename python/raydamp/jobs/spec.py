@@ -8,18 +8,19 @@ accepted for one release: an error then names ``step_size``, the key the client 
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from typing import Annotated, Any
 
-from pydantic import AfterValidator, AliasChoices, ConfigDict, Discriminator, Field, PrivateAttr, Tag, WithJsonSchema, \
-    model_validator
+from pydantic import AfterValidator, AliasChoices, BaseModel, ConfigDict, Discriminator, Field, PrivateAttr, Tag, \
+    WithJsonSchema, field_serializer, model_validator
 
+from ..loads.forms import LOAD_TAGS, GroundMotionInput, LoadInput
 from ..methods.catalogue import compositions, methods
 from ..systems.models import MODELS, make_model
 from .errors import JobError
 from .forms import FILE_ID, STATE_VECTOR_TAGS, FiniteFloat, InitialState, Input, MAX_VECTOR, ModeState, RestState, \
-    TableauInput, Vector, indices
-from .system_forms import (FORM_TAGS, MATRIX_TAGS, SYSTEM_TAGS, VALUE_TAGS, AnySystemInput, FileResolver,
-                           LinearStructureInput)
+    TableauInput, Vector, VectorFile, bounded, indices
+from .system_forms import FORM_TAGS, MATRIX_TAGS, SYSTEM_TAGS, VALUE_TAGS, AnySystemInput, FileResolver
 
 __all__ = ["ModelSpec", "JobSpec", "StateInput", "UNION_TAGS", "STEP_SIZE_ALIAS", "client_path"]
 
@@ -58,7 +59,10 @@ def _state_form(value: object) -> str:
 
 StateInput = Annotated[Annotated[InitialState, Tag("q, p form")] | Annotated[ModeState, Tag("mode form")]
                        | Annotated[RestState, Tag("rest form")], Discriminator(_state_form)]
-UNION_TAGS = {"initial_state": frozenset({"q, p form", "mode form", "rest form"}), "system": SYSTEM_TAGS, "M": MATRIX_TAGS,
+# A tableau's name or a table, told apart by type: a table's error is the table's, not also a name's.
+TableauChoice = Annotated[Annotated[TableauName, Tag("name form")] | Annotated[TableauInput, Tag("table form")],
+                          Discriminator(lambda value: "name form" if isinstance(value, str) else "table form")]
+UNION_TAGS = {"tableau": frozenset({"name form", "table form"}), "initial_state": frozenset({"q, p form", "mode form", "rest form"}), "system": SYSTEM_TAGS, "M": MATRIX_TAGS,
               "K": MATRIX_TAGS, "q": STATE_VECTOR_TAGS, "p": STATE_VECTOR_TAGS, **FORM_TAGS}
 GRID_TAGS = frozenset({"range", "values"})  # a sweep's axis forms (sweep_spec.py)
 
@@ -67,7 +71,8 @@ def client_path(loc: tuple | list) -> tuple:
     """A pydantic loc as the JSON path the client wrote: without the tags of a field's form (at any depth:
     a system's kind, then a structure's matrix form; a sweep's axis form after the axis's name)."""
     return tuple(part for i, part in enumerate(loc)
-                 if not (i >= 1 and isinstance(loc[i - 1], str) and part in UNION_TAGS.get(loc[i - 1], ()))
+                 if not (part in LOAD_TAGS and ("load" in loc[:i] or "ground_motion" in loc[:i]))
+                 and not (i >= 1 and isinstance(loc[i - 1], str) and part in UNION_TAGS.get(loc[i - 1], ()))
                  and not (i >= 2 and loc[i - 2] == "grid" and part in GRID_TAGS)
                  and not (i >= 2 and loc[i - 2] == "parameters" and part in VALUE_TAGS)
                  # tableau is a name or a table, tried in turn (an enum of names in the JSON Schema): pydantic
@@ -80,6 +85,20 @@ def _exactly_one(first: str, second: str, first_type: str, second_type: str) -> 
     """JSON Schema for "exactly one of first and second is given (not null)"."""
     return {"oneOf": [{"required": [first], "properties": {first: {"type": first_type}, second: {"type": "null"}}},
                       {"required": [second], "properties": {second: {"type": second_type}, first: {"type": "null"}}}]}
+
+
+def _flat(schema: dict) -> None:
+    """A name or a table, or null, as one anyOf (the forms' oneOf spliced in): a client sees the names' enum."""
+    schema["anyOf"] = [form for option in schema.get("anyOf", []) for form in option.get("oneOf", [option])]
+
+
+def _job_schema(schema: dict) -> None:
+    schema["allOf"] = [_exactly_one("model", "system", "string", "object"),
+                       _exactly_one("t_end", "n_steps", "number", "integer")]
+    # The former name of h, still accepted (never beside h): a client's tools see it and that it goes
+    schema["not"] = {"required": ["h", STEP_SIZE_ALIAS]}
+    schema["properties"][STEP_SIZE_ALIAS] = {"type": "number", "exclusiveMinimum": 0, "deprecated": True,
+                                             "description": "h under its former name; give h"}
 
 
 class ModelSpec(Input):
@@ -128,15 +147,17 @@ class JobSpec(ModelSpec):
     """One integration problem: a model (or a system), a method, a step size h and a span.
     Exactly one of model and system; exactly one of t_end, n_steps."""
 
-    model_config = ConfigDict(json_schema_extra={"allOf": [_exactly_one("model", "system", "string", "object"),
-                                                           _exactly_one("t_end", "n_steps", "number", "integer")]})
+    # One schema for a job in and out: a stored job is echoed as the client wrote it (_as_written)
+    model_config = ConfigDict(json_schema_extra=lambda schema: _job_schema(schema),
+                              json_schema_mode_override="validation")
 
     method: MethodName | None = Field(
         None, description="a name from raydamp.methods() (GET /v1/methods); null or absent: raydamp chooses (3s, "
                           "except for a linear structure on which 3s is a trap: see raydamp.run.choose_method), and "
                           "the result's provenance names the method and why")
-    tableau: TableauName | TableauInput | None = Field(
-        None, description="Runge-Kutta tableau for rks, rksb and rk: a name, or your own {A, b, c}")
+    tableau: TableauChoice | None = Field(
+        None, description="Runge-Kutta tableau for rks, rksb and rk: a name, or your own {A, b, c}",
+        json_schema_extra=lambda schema: _flat(schema))
     composition: CompositionName | None = Field(None, description="raises a symmetric method's order: a name from "
                                                                  "raydamp.compositions() (GET /v1/methods lists the "
                                                                  "symmetric methods)")
@@ -150,16 +171,16 @@ class JobSpec(ModelSpec):
     work: bool = Field(True, description="record the damping work W(t), so that H(t) - H(0) + W(t) (the energy "
                                          "balance) can be plotted; false skips it and lets 3s merge the damping "
                                          "sub-flows of consecutive steps (a little faster, equal to rounding)")
-    save_dofs: Annotated[list[Annotated[int, Field(ge=0)]], indices(MAX_VECTOR)] | None = Field(
-        None, min_length=1, max_length=MAX_VECTOR, description="save q and p of these coordinates only (energy, W and momenta "
+    save_dofs: bounded(Annotated[int, Field(ge=0)], MAX_VECTOR, min_length=1, items=indices(MAX_VECTOR)) | None = Field(
+        None, description="save q and p of these coordinates only (energy, W and momenta "
                                                  "still from the whole state); null saves all")
-    load: dict[str, Any] | None = Field(
+    load: LoadInput | None = Field(
         None, description="a time-dependent force f(t): {\"harmonic\": {\"amplitude\": [...], \"omega\": w, "
                           "\"phase\": 0}}, {\"series\": {\"t\": [...], \"values\": [...], \"direction\": [...], "
                           "\"hold\": false}}, {\"expression\": {\"expression\": \"F0*sin(w*t)\", \"parameters\": "
                           "{...}, \"direction\": [...]}}, {\"file\": {\"id\": <uploaded .AT2/CSV/.npy>, "
                           "\"direction\": [...], \"factor\": 1}}, or {\"terms\": [several], \"amplitude\": a}")
-    ground_motion: dict[str, Any] | None = Field(
+    ground_motion: GroundMotionInput | None = Field(
         None, description="uniform base excitation (as OpenSees' UniformExcitation): {\"acceleration\": a load form "
                           "without direction (series, file, harmonic with a scalar amplitude, expression), "
                           "\"direction\": r, \"factor\": 1}; the load is -M r a_g(t) and the result is the motion "
@@ -181,22 +202,57 @@ class JobSpec(ModelSpec):
             spec._h_key = STEP_SIZE_ALIAS
         return spec
 
-    def local_path(self) -> tuple[str | int, ...] | None:
-        """The JSON path of the first file of the machine the job runs on, which a service refuses: a
-        {"file": {"path": ...}} in the load or the ground motion, or a structure's {"file": "<path>"} (not an
-        upload's id); None if there is none."""
-        def find(value: Any, at: tuple) -> tuple | None:
-            if isinstance(value, dict) and at and at[-1] == "file" and "path" in value:
-                return (*at, "path")
-            if isinstance(value, str) and at[-1:] == ("file",) and at[0] == "system" and not FILE_ID.match(value):
-                return at
-            items = value.items() if isinstance(value, dict) else enumerate(value) if isinstance(value, list) else ()
-            return next((found for key, item in items if (found := find(item, (*at, key))) is not None), None)
+    @field_serializer("load", "ground_motion")
+    def _as_written(self, value: BaseModel | None) -> dict[str, Any] | None:
+        # A stored or echoed job holds its load as the client wrote it, without the defaults
+        return None if value is None else value.model_dump(mode="json", exclude_unset=True)
 
-        system = self.system.model_dump() if isinstance(self.system, LinearStructureInput) else None
-        return next((found for field, value in (("load", self.load), ("ground_motion", self.ground_motion),
-                                                ("system", system))
-                     if (found := find(value, (field,))) is not None), None)
+    def _files(self) -> Iterator[tuple[tuple, str, str]]:
+        """(JSON path, "id" or "path", the id or path) of every file the job reads: the initial state's uploaded
+        vectors, a structure's matrices, the records of its load and its ground motion."""
+        for name in ("q", "p"):
+            vector = getattr(self.initial_state, name, None)
+            if isinstance(vector, VectorFile):
+                yield ("initial_state", name, "file"), "id", vector.file
+        if self.system is not None:
+            yield from self.system.files(("system",))
+        for field in ("load", "ground_motion"):
+            if getattr(self, field) is not None:
+                yield from getattr(self, field).files((field,))
+
+    def sizes(self) -> Iterator[tuple[tuple[str | int, ...], str, int]]:
+        """(JSON path, unit, count) of what the job carries inline, for a service's bounds before anything is
+        built: "components" of the initial state's and the parameters' vectors, "entries" of a structure's
+        COO lists, "coordinates" of a structure given by COO or diagonal."""
+        for name in ("q", "p"):
+            vector = getattr(self.initial_state, name, None)
+            if isinstance(vector, list):  # a {"file": id} is bounded by the model it must fit
+                yield ("initial_state", name), "components", len(vector)
+        for name, value in self.parameters.items():
+            if isinstance(value, list):
+                yield ("parameters", name), "components", len(value)
+        if self.system is not None:
+            yield from self.system.sizes(("system",))
+
+    def uploads(self) -> tuple[str, ...]:
+        """The ids of the uploaded files (POST /v1/files) the job reads, each once, in the order named."""
+        return tuple(dict.fromkeys(ref for _, source, ref in self._files() if source == "id" and FILE_ID.match(ref)))
+
+    def local_paths(self) -> tuple[tuple[str | int, ...], ...]:
+        """The JSON paths of the files of the machine the job runs on, which a service refuses: a load's
+        {"file": {"path": ...}}, a structure's {"file": "<path>"} (not an upload's id)."""
+        return tuple(at for at, source, _ in self._files() if source == "path")
+
+    def compiles(self) -> bool:
+        """Whether checking or running the job compiles machine code (an expression system, a chain of
+        expression bonds, an expression in the load or the ground motion)."""
+        return (self.system is not None and self.system.compiles()) or any(
+            getattr(self, field) is not None and getattr(self, field).compiles() for field in ("load", "ground_motion"))
+
+    def compiled_form(self) -> tuple[str, bytes] | None:
+        """(key, bytes) of the compiled functions of the job's expression system (built once: the build is
+        cached), for another process to load; None for the other kinds."""
+        return None if self.system is None else self.system.compiled_form()
 
     @property
     def h_key(self) -> str:

@@ -25,7 +25,8 @@ class JobSummary(BaseModel):
     tableau: str | None
     composition: str | None = None
     h: float
-    step_size: float = Field(description="h, under its former name (kept for one release)")
+    step_size: float = Field(description="h, under its former name (kept for one release)",
+                             json_schema_extra={"deprecated": True})
     steps: int
     failed_step: int | None
     t_final: float

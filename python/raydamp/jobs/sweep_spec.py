@@ -10,7 +10,7 @@ from pydantic import Discriminator, Field, Tag, model_validator
 
 from .build import error_at
 from .errors import JobError
-from .forms import FiniteFloat, Input
+from .forms import FiniteFloat, Input, bounded
 from .spec import JobSpec
 
 __all__ = ["SweepSpec", "GridRange", "MAX_AXIS", "MAX_AXES"]
@@ -28,8 +28,7 @@ class GridRange(Input):
     scale: Literal["linear", "log"] = "linear"
 
 
-GridValues = Annotated[list[FiniteFloat | Annotated[str, Field(max_length=100)]],
-                       Field(min_length=1, max_length=MAX_AXIS)]
+GridValues = bounded(FiniteFloat | Annotated[str, Field(max_length=100)], MAX_AXIS, min_length=1)
 
 
 def _axis_form(value: object) -> str:
@@ -60,6 +59,10 @@ class SweepSpec(Input):
         if "work" not in self.job.model_fields_set:
             self.job.work = False
         return self
+
+    def uploads(self) -> tuple[str, ...]:
+        """The ids of the uploaded files the sweep reads (its job's: a grid names no file)."""
+        return self.job.uploads()
 
     def grid_arguments(self) -> dict[str, Any]:
         """The grid as raydamp.sweep takes it: ranges as {start, stop, num, scale}, lists as lists."""

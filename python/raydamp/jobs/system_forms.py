@@ -7,15 +7,15 @@ from __future__ import annotations
 
 import functools
 import json
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Annotated, Any, Literal
 
 from pydantic import BeforeValidator, Discriminator, Field, Tag
 
 from ..systems.system.spec import OUTSIDE_CLASS
 from .errors import JobError, path_error
-from .forms import (FILE_ID, MAX_CHAIN_SITES, MAX_VECTOR, Expression, FiniteFloat, Input, MatrixFile, Name, indices,
-                    numbers)
+from .forms import (FILE_ID, MAX_CHAIN_SITES, MAX_VECTOR, Expression, FiniteFloat, Input, MatrixFile, Name, at_most,
+                    bounded, indices, numbers)
 
 __all__ = ["SystemInput", "ChainInput", "LinearStructureInput", "CooForm", "DiagonalForm", "FileForm",
            "AnySystemInput", "FileResolver", "MAX_COO_ENTRIES", "MAX_STRUCTURE_DIM", "SYSTEM_TAGS", "MATRIX_TAGS",
@@ -25,6 +25,8 @@ def _constant_mass(value: Any) -> Any:
     """An expression where a mass is expected gets the library's explanation as one error, rather than
     one "Input should be a valid number" per form of mass."""
     items = value if isinstance(value, list) else [value]
+    if any(isinstance(x, list) and len(x) > _MAX_COORDINATES for x in items):
+        return value  # a row too long: its length's error, before any item is looked at
     if any(isinstance(x, str) or (isinstance(x, list) and any(isinstance(y, str) for y in x)) for x in items):
         raise ValueError(f"must be constant: {OUTSIDE_CLASS}")
     return value
@@ -41,12 +43,12 @@ class ScalarDamping(Input):
 
 
 class DiagonalDamping(Input):
-    diagonal: list[FiniteFloat] = Field(min_length=1, max_length=_MAX_DENSE, description="a constant diagonal D")
+    diagonal: bounded(FiniteFloat, _MAX_DENSE, min_length=1) = Field(description="a constant diagonal D")
 
 
 class MatrixDamping(Input):
-    matrix: list[Annotated[list[FiniteFloat], Field(max_length=_MAX_DENSE)]] = Field(
-        min_length=1, max_length=_MAX_DENSE, description="a constant symmetric positive semi-definite D (rows)")
+    matrix: bounded(bounded(FiniteFloat, _MAX_DENSE), _MAX_DENSE, min_length=1) = Field(
+        description="a constant symmetric positive semi-definite D (rows)")
 
 
 class Damper(Input):
@@ -55,8 +57,7 @@ class Damper(Input):
 
 
 class DamperDamping(Input):
-    dampers: list[Damper] = Field(min_length=1, max_length=32,
-                                  description="D(q) = sum_i c_i grad g_i grad g_i^T")
+    dampers: bounded(Damper, 32, min_length=1) = Field(description="D(q) = sum_i c_i grad g_i grad g_i^T")
 
 
 def _damping_form(value: object) -> str | None:
@@ -72,13 +73,30 @@ DampingInput = Annotated[Annotated[ScalarDamping, Tag("scalar form")] | Annotate
                          Discriminator(_damping_form, custom_error_type="damping_form",
                                        custom_error_message='damping is null, {"scalar": c}, {"diagonal": [...]}, '
                                                             '{"matrix": [[...]]} or {"dampers": [...]}')]
-Coordinates = Annotated[Annotated[list[Name], Field(min_length=1, max_length=_MAX_COORDINATES), Tag("names form")]
+Coordinates = Annotated[Annotated[bounded(Name, _MAX_COORDINATES, min_length=1), Tag("names form")]
                         | Annotated[int, Field(ge=1, le=_MAX_COORDINATES), Tag("count form")],
                         Discriminator(lambda value: "count form" if isinstance(value, int) else "names form")]
 # A value that is a number or something else (an expression, a vector), told apart by its type, so that an
 # error is about the form the client meant.
 NumberOrExpression = Annotated[Annotated[FiniteFloat, Tag("number form")] | Annotated[Expression, Tag("expression form")],
                                Discriminator(lambda value: "expression form" if isinstance(value, str) else "number form")]
+
+
+def _number_or_list(value: object) -> str:
+    return "vector form" if isinstance(value, list) else "number form"
+
+
+def _mass_form(value: object) -> str:
+    if not isinstance(value, list):
+        return "number form"
+    return "matrix form" if value and isinstance(value[0], list) else "vector form"
+
+
+# A number m (M = m I), a diagonal or a matrix, told apart by their shape: an error is about the form meant.
+MassInput = Annotated[Annotated[FiniteFloat, Tag("number form")]
+                      | Annotated[bounded(FiniteFloat, _MAX_COORDINATES), Tag("vector form")]
+                      | Annotated[bounded(bounded(FiniteFloat, _MAX_COORDINATES), _MAX_COORDINATES), Tag("matrix form")],
+                      Discriminator(_mass_form)]
 
 
 class SystemInput(Input):
@@ -91,9 +109,7 @@ class SystemInput(Input):
                                               "sin cos tan asin acos atan atan2 sinh cosh tanh asinh acosh "
                                               "atanh exp log sqrt cbrt")
     parameters: dict[Name, FiniteFloat] = Field(default_factory=dict, max_length=256)
-    mass: Annotated[FiniteFloat | Annotated[list[FiniteFloat], Field(max_length=_MAX_COORDINATES)] | Annotated[
-            list[Annotated[list[FiniteFloat], Field(max_length=_MAX_COORDINATES)]],
-            Field(max_length=_MAX_COORDINATES)], BeforeValidator(_constant_mass)] = Field(
+    mass: Annotated[MassInput, BeforeValidator(_constant_mass), at_most(_MAX_COORDINATES)] = Field(
         1.0, description="a number m (M = m I), a diagonal (n numbers) or an n x n SPD matrix")
     damping: DampingInput | None = Field(
         None, description="null (undamped) or exactly one form")
@@ -102,7 +118,17 @@ class SystemInput(Input):
                                             description="quantities tracked at every step; momenta are p_<coordinate>")
     name: str | None = Field(None, max_length=200)
 
+    def files(self, at: tuple) -> Iterator[tuple[tuple, str, str]]:
+        return iter(())
 
+    def sizes(self, at: tuple) -> Iterator[tuple[tuple, str, int]]:
+        return iter(())  # bounded by the schema (at most 256 coordinates)
+
+    def compiles(self) -> bool:
+        return True
+
+    def compiled_form(self) -> tuple[str, bytes] | None:
+        return self.build().compiled_form()
 
     def names(self, dim: int, momenta: int, save_dofs: list[int] | None) -> tuple[list[str], list[str]]:
         """(names of the saved coordinates, momentum map names), as the built System has them."""
@@ -129,14 +155,15 @@ def _compiled_system(text: str):
 
 
 class ChainDampers(Input):
-    bonds: Annotated[list[Annotated[int, Field(ge=0)]], indices(MAX_VECTOR)] = Field(default_factory=list, max_length=MAX_VECTOR,
-                                                     description="damped bonds (bond b joins sites b-1 and b)")
-    sites: Annotated[list[Annotated[int, Field(ge=0)]], indices(MAX_VECTOR)] = Field(default_factory=list, max_length=MAX_VECTOR,
-                                                     description="sites with on-site friction")
+    bonds: bounded(Annotated[int, Field(ge=0)], MAX_VECTOR, items=indices(MAX_VECTOR)) = Field(
+        default_factory=list, description="damped bonds (bond b joins sites b-1 and b)")
+    sites: bounded(Annotated[int, Field(ge=0)], MAX_VECTOR, items=indices(MAX_VECTOR)) = Field(
+        default_factory=list, description="sites with on-site friction")
     # Optional for a chain without dampers ({} is Chain.to_dict()'s form of an undamped chain); required, by
     # raydamp.Chain, once there are bonds or sites.
-    c: (FiniteFloat | Annotated[list[FiniteFloat], Field(max_length=2 * MAX_VECTOR), numbers(2 * MAX_VECTOR)]
-        | None) = Field(None, description="the dashpot coefficient, or one per damper (bonds, then sites)")
+    c: Annotated[Annotated[FiniteFloat, Tag("number form")]
+                 | Annotated[bounded(FiniteFloat, 2 * MAX_VECTOR, items=numbers(2 * MAX_VECTOR)), Tag("vector form")],
+                 Discriminator(_number_or_list)] | None = Field(None, description="the dashpot coefficient, or one per damper (bonds, then sites)")
 
 
 class ChainOnSiteInput(Input):
@@ -168,7 +195,17 @@ class ChainInput(Input):
     on_site: ChainOnSiteInput | None = Field(None, description="an on-site potential on every site (Klein-Gordon, "
                                                                "Frenkel-Kontorova); none by default")
 
+    def files(self, at: tuple) -> Iterator[tuple[tuple, str, str]]:
+        return iter(())
 
+    def sizes(self, at: tuple) -> Iterator[tuple[tuple, str, int]]:
+        return iter(())  # a chain's state is built from its description, not sent
+
+    def compiles(self) -> bool:
+        return self.bond == "expression"
+
+    def compiled_form(self) -> tuple[str, bytes] | None:
+        return None
 
     def names(self, dim: int, momenta: int, save_dofs: list[int] | None) -> tuple[list[str], list[str]]:
         return _site_names(dim, momenta, save_dofs)
@@ -220,12 +257,13 @@ MAX_STRUCTURE_DIM = 10**7  # a service's max_structure_dim is at most this
 
 
 class CooMatrix(Input):
-    shape: list[Annotated[int, Field(ge=1, le=MAX_STRUCTURE_DIM)]] = Field(min_length=2, max_length=2,
-                                                                           description="[n, n]")
-    rows: Annotated[list[Annotated[int, Field(ge=0)]], indices(MAX_COO_ENTRIES)] = Field(max_length=MAX_COO_ENTRIES, description="row of each entry")
-    cols: Annotated[list[Annotated[int, Field(ge=0)]], indices(MAX_COO_ENTRIES)] = Field(max_length=MAX_COO_ENTRIES, description="column of each entry")
-    values: Annotated[list[FiniteFloat], numbers(MAX_COO_ENTRIES)] = Field(max_length=MAX_COO_ENTRIES, description="the entries (repeated "
-                                                                              "positions add up)")
+    shape: bounded(Annotated[int, Field(ge=1, le=MAX_STRUCTURE_DIM)], 2, min_length=2) = Field(description="[n, n]")
+    rows: bounded(Annotated[int, Field(ge=0)], MAX_COO_ENTRIES, items=indices(MAX_COO_ENTRIES)) = Field(
+        description="row of each entry")
+    cols: bounded(Annotated[int, Field(ge=0)], MAX_COO_ENTRIES, items=indices(MAX_COO_ENTRIES)) = Field(
+        description="column of each entry")
+    values: bounded(FiniteFloat, MAX_COO_ENTRIES, items=numbers(MAX_COO_ENTRIES)) = Field(
+        description="the entries (repeated positions add up)")
 
 
 class CooForm(Input):
@@ -233,8 +271,8 @@ class CooForm(Input):
 
 
 class DiagonalForm(Input):
-    diagonal: Annotated[list[FiniteFloat], numbers(MAX_STRUCTURE_DIM)] = Field(min_length=1, max_length=MAX_STRUCTURE_DIM,
-                                        description="a diagonal matrix (lumped mass)")
+    diagonal: bounded(FiniteFloat, MAX_STRUCTURE_DIM, min_length=1, items=numbers(MAX_STRUCTURE_DIM)) = Field(
+        description="a diagonal matrix (lumped mass)")
 
 
 class FileForm(Input):
@@ -274,12 +312,34 @@ class LinearStructureInput(Input):
     K: MatrixInput = Field(description="the stiffness matrix, in the same forms as M")
     alpha: FiniteFloat = Field(0.0, ge=0, description="Rayleigh damping C = alpha M + beta K")
     beta: FiniteFloat = Field(0.0, ge=0)
-    f: Annotated[list[FiniteFloat], Field(max_length=MAX_STRUCTURE_DIM), numbers(MAX_STRUCTURE_DIM)] | None = Field(
+    f: bounded(FiniteFloat, MAX_STRUCTURE_DIM, items=numbers(MAX_STRUCTURE_DIM)) | None = Field(
         None, description="constant load (length n); null for none")
     allow_indefinite_stiffness: bool = Field(False, description="accept a K that is not positive semi-definite (a "
                                                                 "structure meant to grow); by default it is refused")
 
+    def files(self, at: tuple) -> Iterator[tuple[tuple, str, str]]:
+        """(JSON path, "id" or "path", the reference) of each matrix given as {"file": ...}."""
+        for key in ("M", "K"):
+            form = getattr(self, key)
+            if isinstance(form, FileForm):
+                yield (*at, key, "file"), "id" if FILE_ID.match(form.file) else "path", form.file
 
+    def sizes(self, at: tuple) -> Iterator[tuple[tuple, str, int]]:
+        """(path, "entries", count) of each COO list, (path, "coordinates", n) of each matrix given inline."""
+        for key in ("M", "K"):
+            form = getattr(self, key)
+            if isinstance(form, CooForm):
+                for name in ("rows", "cols", "values"):
+                    yield (*at, key, "coo", name), "entries", len(getattr(form.coo, name))
+                yield (*at, key, "coo", "shape"), "coordinates", form.coo.shape[0]
+            elif isinstance(form, DiagonalForm):
+                yield (*at, key, "diagonal"), "coordinates", len(form.diagonal)
+
+    def compiles(self) -> bool:
+        return False
+
+    def compiled_form(self) -> tuple[str, bytes] | None:
+        return None
 
     def names(self, dim: int, momenta: int, save_dofs: list[int] | None) -> tuple[list[str], list[str]]:
         return _site_names(dim, momenta, save_dofs)
@@ -318,7 +378,9 @@ MATRIX_TAGS = frozenset({"coo form", "diagonal form", "file form"})
 SYSTEM_TAGS = frozenset({"expressions", "chain", "linear_structure", "kepler"})
 # Tags name forms, never keys: a path of ours ("damping", "dampers", 0, "on") keeps every part.
 FORM_TAGS = {"damping": frozenset({"scalar form", "diagonal form", "matrix form", "dampers form"}),
-             "coordinates": frozenset({"names form", "count form"})}
+             "coordinates": frozenset({"names form", "count form"}),
+             "mass": frozenset({"number form", "vector form", "matrix form"}),
+             "c": frozenset({"number form", "vector form"})}
 VALUE_TAGS = frozenset({"number form", "expression form", "vector form"})  # after a parameter's name
 AnySystemInput = Annotated[Annotated[SystemInput, Tag("expressions")] | Annotated[ChainInput, Tag("chain")]
                            | Annotated[LinearStructureInput, Tag("linear_structure")]

@@ -61,19 +61,11 @@ class GroundMotion(Load):
 
 
 def _ground_from_dict(cls, plain, *, name: str = "ground_motion", files=None) -> GroundMotion:
-    if not isinstance(plain, dict):
-        raise ValueError(f"{name} must be an object")
-    extra = set(plain) - {"acceleration", "direction", "factor"}
-    if extra:
-        raise ValueError(f"{name}.{sorted(extra)[0]}: unknown key (known: acceleration, direction, factor)")
-    if "acceleration" not in plain or "direction" not in plain:
-        raise ValueError(f"{name}.{'acceleration' if 'acceleration' not in plain else 'direction'}: missing")
-    acceleration = Load.from_dict(plain["acceleration"], name=f"{name}.acceleration", files=files)
-    try:
-        return cls(acceleration, plain["direction"], factor=plain.get("factor", 1.0))
-    except ValueError as e:
-        text = str(e)
-        raise ValueError(text if text.startswith(name) else f"{name}.{text}") from None
+    """The ground motion of a JSON form (raydamp.loads.forms.GroundMotionInput): ``{"acceleration": a load
+    without direction, "direction": r, "factor": 1}``; a ValueError names the path of the bad field."""
+    from .forms import ground_motion_input
+
+    return ground_motion_input(plain, name).build(files, name)
 
 
 GroundMotion.from_dict = classmethod(_ground_from_dict)

@@ -221,84 +221,15 @@ class Load:
 
     @classmethod
     def from_dict(cls, plain: Mapping[str, Any], *, name: str = "load", files=None) -> Load:
-        """The load of a JSON form: ``{"terms": [term, ...], "amplitude": a}`` or one term, each
-        ``{"harmonic": {"amplitude", "omega", "phase"}}``, ``{"series": {"t", "values", "direction",
-        "hold"}}``, ``{"expression": {"expression", "parameters", "direction"}}`` or ``{"file": {"path",
-        "direction", "factor", "dt", "hold"}}``; a direction ``{"ground": r}`` is a ground motion's -M r.
-        ``files`` maps an uploaded file's id to its path (the service's "file": {"id": ...})."""
-        if not isinstance(plain, Mapping):
-            raise ValueError(f"{name} must be an object")
-        if "terms" in plain:
-            extra = set(plain) - {"terms", "amplitude"}
-            if extra:
-                raise ValueError(f"{name}.{sorted(extra)[0]}: unknown key (known: terms, amplitude)")
-            if not isinstance(plain["terms"], list):
-                raise ValueError(f"{name}.terms must be a list")
-            terms = []
-            for i, term in enumerate(plain["terms"]):
-                terms.extend(cls.from_dict(term, name=f"{name}.terms[{i}]", files=files).terms)
-            return cls(terms, real(f"{name}.amplitude", plain.get("amplitude", 1.0)))
-        if len(plain) != 1:
-            raise ValueError(f"{name}: one of harmonic, series, expression, file, or terms (got "
-                             f"{', '.join(map(str, plain)) or 'nothing'})")
-        kind, body = next(iter(plain.items()))
-        where = f"{name}.{kind}"
-        if not isinstance(body, Mapping):
-            raise ValueError(f"{where} must be an object")
-        known = {"harmonic": {"amplitude", "omega", "phase", "scale"},
-                 "series": {"t", "values", "direction", "hold", "scale"},
-                 "expression": {"expression", "parameters", "direction", "scale"},
-                 "file": {"path", "id", "direction", "factor", "dt", "hold"}}
-        if kind not in known:
-            raise ValueError(f"{name}.{kind}: unknown load form (known: {', '.join(known)}, terms)")
-        extra = set(body) - known[kind]
-        if extra:
-            raise ValueError(f"{where}.{sorted(extra)[0]}: unknown key (known: {', '.join(sorted(known[kind]))})")
-        try:
-            direction = _plain_direction(body.get("direction"), f"{where}.direction")
-            if kind == "harmonic":
-                load = cls([T.Harmonic(_plain_direction(body.get("amplitude"), f"{where}.amplitude"),
-                                       real(f"{where}.omega", body.get("omega")),
-                                       T.phase_value(body.get("phase", 0.0)))])
-            elif kind == "series":
-                load = cls.series(body.get("t"), body.get("values"), None, hold=body.get("hold", False))
-                load = cls([replace(load.terms[0], direction=direction)])
-            elif kind == "expression":
-                load = cls.expression(body.get("expression"), body.get("parameters"), None)
-                load = cls([replace(load.terms[0], direction=direction)])
-            else:
-                if ("path" in body) == ("id" in body):
-                    raise ValueError(f"{where}: give exactly one of path and id")
-                if "path" in body and files is not None:
-                    raise ValueError(f"{where}.path: the service reads no paths; upload the file (POST /v1/files) "
-                                     "and give its id")
-                if "path" in body:
-                    load = cls.from_file(body["path"], None, body.get("factor", 1.0), dt=body.get("dt"),
-                                         hold=body.get("hold", False))
-                else:
-                    if files is None:
-                        raise ValueError(f"{where}.id: uploaded files are the service's (POST /v1/files)")
-                    try:
-                        record = files(body["id"])  # a path, or the parsed (t, values): t None for one column
-                    except ValueError as e:
-                        raise ValueError(f"{where}.id: {e}") from None
-                    if isinstance(record, tuple):
-                        t, values = _record_times(record, body.get("dt"), f"{where}.dt", body["id"])
-                        load = cls.series(t, values, hold=body.get("hold", False)) * real(
-                            f"{where}.factor", body.get("factor", 1.0))
-                        load = cls(load._scaled_terms())
-                    elif isinstance(record, (str, Path)):
-                        load = cls.from_file(record, None, body.get("factor", 1.0), dt=body.get("dt"),
-                                             hold=body.get("hold", False))
-                    else:
-                        raise ValueError(f"{where}.id: file {body['id']} is a matrix (Matrix Market), not a "
-                                         "record; upload a .AT2, CSV or .npy record")
-                load = cls([replace(load.terms[0], direction=direction)])
-        except ValueError as e:
-            text = str(e)
-            raise ValueError(text if text.startswith(name) else f"{where}.{text}") from None
-        scale = body.get("scale", 1.0)
-        return load if scale == 1.0 else cls([T.scaled(load.terms[0], real(f"{where}.scale", scale))])
+        """The load of a JSON form (raydamp.loads.forms.LoadInput): ``{"terms": [term, ...], "amplitude": a}``
+        or one term, each ``{"harmonic": {"amplitude", "omega", "phase"}}``, ``{"series": {"t", "values",
+        "direction", "hold"}}``, ``{"expression": {"expression", "parameters", "direction"}}`` or ``{"file":
+        {"path" | "id", "direction", "factor", "dt", "hold"}}``; a direction ``{"ground": r}`` is a ground
+        motion's -M r. ``files`` maps an uploaded file's id to its path or its parsed (t, values) (a service's
+        uploads). A ValueError names the path of the bad field, starting with ``name``."""
+        from .forms import load_input
+
+        return load_input(plain, name).build(files, name)
 
     @property
     def is_ground_motion(self) -> bool:
@@ -324,31 +255,6 @@ def set_load_parameters(plain: dict[str, Any], values: Mapping[str, Any]) -> dic
             elif "expression" in term and name in term["expression"].get("parameters", {}):
                 term["expression"]["parameters"] = {**term["expression"]["parameters"], name: value}
     return out
-
-
-def _record_times(record, dt, name: str, file_id) -> tuple[np.ndarray, np.ndarray]:
-    """An uploaded record's (t, values): its own times, or one column of values sampled at dt from t = 0."""
-    t, values = record
-    if t is None and dt is None:
-        raise ValueError(f"{name}: file {file_id} holds one column of values (no times); give dt, their sample "
-                         "interval")
-    if t is not None and dt is not None:
-        raise ValueError(f"{name}: file {file_id} has a time column, so dt must not be given")
-    if t is None:
-        t = np.arange(len(values)) * real(name, dt, positive=True)
-    return t, values
-
-
-def _plain_direction(value, name: str):
-    if isinstance(value, Mapping):
-        if set(value) != {"ground"}:
-            raise ValueError(f"{name}: a vector, or {{\"ground\": r}}")
-        r = T.direction(name + ".ground", value["ground"])
-        return T.Ground(r)
-    try:
-        return T.direction(name, value)
-    except ValueError as e:
-        raise ValueError(str(e)) from None
 
 
 def _length(name: str, vector: np.ndarray, n: int) -> np.ndarray:

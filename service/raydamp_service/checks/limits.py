@@ -11,8 +11,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import raydamp
-from raydamp.jobs import (CooForm, DiagonalForm, JobCall, JobError, JobSpec, LinearStructureInput, SweepSpec,
-                          build_job, error_at, planned_steps)
+from raydamp.jobs import JobCall, JobError, JobSpec, SweepSpec, build_job, error_at, planned_steps
 from raydamp.run.integrate import row_bytes
 from raydamp.run.sweep import GridTooLarge
 
@@ -41,40 +40,24 @@ def build_call(spec: JobSpec, files=None) -> RaydampCall:
 def _check_sizes(spec: JobSpec, settings: Settings) -> None:
     """The operator's bounds on what a job carries, before raydamp builds or allocates anything (a COO
     shape of [10^9, 10^9] with three entries would still cost 8 GB of column pointers)."""
-    for name in ("q", "p"):
-        values = getattr(spec.initial_state, name, ())
-        if isinstance(values, list) and len(values) > settings.max_dim:  # a {"file": id} is bounded by the model
-            raise JobError(("initial_state", name), f"initial_state.{name} has {len(values)} components; "
-                           f"this service accepts at most max_dim = {settings.max_dim}")
-    for name, value in spec.parameters.items():
-        if isinstance(value, list) and len(value) > settings.max_dim:
-            raise JobError(("parameters", name), f"parameters.{name} has {len(value)} components; "
-                           f"this service accepts at most max_dim = {settings.max_dim}")
-    if not isinstance(spec.system, LinearStructureInput):
-        return
-    for key in ("M", "K"):
-        form = getattr(spec.system, key)
-        if isinstance(form, CooForm):
-            for name in ("rows", "cols", "values"):
-                count = len(getattr(form.coo, name))
-                if count > settings.max_structure_nnz:
-                    raise JobError(("system", key, "coo", name), f"system.{key}.coo.{name}: {count} entries; this "
-                                   f"service accepts at most max_structure_nnz = {settings.max_structure_nnz} per "
-                                   "matrix (upload larger ones as Matrix Market files: POST /v1/files)")
-            n, where = form.coo.shape[0], ("system", key, "coo", "shape")
-        elif isinstance(form, DiagonalForm):
-            n, where = len(form.diagonal), ("system", key, "diagonal")
-        else:
-            continue
-        if n > settings.max_structure_dim:
-            raise JobError(where, f"{'.'.join(where)}: n = {n}; this service runs structures of at most "
+    for loc, unit, count in spec.sizes():
+        where = ".".join(map(str, loc))
+        if unit == "components" and count > settings.max_dim:
+            raise JobError(loc, f"{where} has {count} components; this service accepts at most max_dim = "
+                           f"{settings.max_dim}")
+        if unit == "entries" and count > settings.max_structure_nnz:
+            raise JobError(loc, f"{where}: {count} entries; this service accepts at most max_structure_nnz = "
+                           f"{settings.max_structure_nnz} per matrix (upload larger ones as Matrix Market files: "
+                           "POST /v1/files)")
+        if unit == "coordinates" and count > settings.max_structure_dim:
+            raise JobError(loc, f"{where}: n = {count}; this service runs structures of at most "
                            f"max_structure_dim = {settings.max_structure_dim} coordinates")
 
 
 def refuse_paths(spec: JobSpec) -> None:
     """A load's {"file": {"path": ...}} reads a file of the machine it runs on: the service takes uploaded
     files by id only (POST /v1/files), whatever the route (a job, a sweep's job, a check process)."""
-    found = spec.local_path()
+    found = next(iter(spec.local_paths()), None)
     if found is not None:
         raise JobError(found, ".".join(map(str, found)) + ": the service reads no paths; upload the file (POST "
                        "/v1/files) and give its id")

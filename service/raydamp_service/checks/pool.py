@@ -36,7 +36,7 @@ from pathlib import Path
 from typing import Any
 
 from pebble import ProcessExpired, ProcessPool
-from raydamp.jobs import JobSpec, SweepSpec, SystemInput
+from raydamp.jobs import JobSpec, SweepSpec
 from raydamp.systems.system import NotCompiled, compiled_elsewhere, load_compiled
 
 from ..config import Settings
@@ -64,23 +64,13 @@ class PlotOverBudget(Exception):
 def isolated(spec: JobSpec) -> bool:
     """Whether a job's check runs in a check process: every user-defined system, and every job whose load has an
     expression (compiled like a system's)."""
-    return spec.system is not None or _has_expression(spec.load) or _has_expression(spec.ground_motion)
+    return spec.system is not None or spec.compiles()
 
 
 def checked_inline(spec: JobSpec) -> bool:
     """Whether a job's check is light enough for the event loop: a built-in model without a load, its initial
     state given as numbers (its check is arithmetic on at most max_dim coordinates and reads no file)."""
-    state = spec.initial_state
-    return (spec.system is None and spec.load is None and spec.ground_motion is None
-            and isinstance(getattr(state, "q", None), list) and isinstance(getattr(state, "p", None), list))
-
-
-def _has_expression(value) -> bool:
-    if isinstance(value, dict):
-        return "expression" in value or any(_has_expression(v) for v in value.values())
-    if isinstance(value, list):
-        return any(_has_expression(v) for v in value)
-    return False
+    return spec.system is None and spec.load is None and spec.ground_motion is None and not spec.uploads()
 
 
 # ---- in a check process ----
@@ -172,7 +162,7 @@ def _task(function, args: tuple, cpu_seconds: float) -> tuple[str, Any]:
 
 def _compiled(spec: JobSpec) -> tuple[str, bytes] | None:
     """(key, bytes) of the compiled functions of a job's expression system, for the server to load."""
-    return spec.system.build().compiled_form() if isinstance(spec.system, SystemInput) else None
+    return spec.compiled_form()
 
 
 def _check_job(spec: JobSpec, settings: Settings) -> tuple[str, bytes] | None:

@@ -70,7 +70,7 @@ class Tasks:
         """Store the checked spec as queued and hand it to the runner (as prepare(record), if given); 429 when
         limit are waiting."""
         try:
-            record = store.create(spec.model_dump(mode="json"), limit, **columns)
+            record = store.create(spec.model_dump(mode="json"), limit, files=spec.uploads(), **columns)
         except FileGone as error:
             raise HTTPException(409, detail=str(error)) from None
         if record is not None:

@@ -14,7 +14,6 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
-import re
 import sqlite3
 import threading
 import uuid
@@ -181,36 +180,6 @@ class FileGone(LookupError):
                          "upload it again")
 
 
-# Objects whose keys are the user's names (a momentum map called "file" is no upload) are not walked.
-_NAMED_BY_THE_USER = frozenset({"momenta", "parameters", "grid"})
-_UPLOAD_ID = re.compile(r"[0-9a-f]{32}")  # FileStore.add_file: uuid4().hex
-
-
-def uploaded_files(spec: Any) -> tuple[str, ...]:
-    """The ids of the uploads a spec names: {"file": "<id>"} (a matrix, an initial state) and {"file": {"id":
-    ...}} (a record). Lists of numbers (a structure's COO entries) are not walked."""
-    found: list[str] = []
-
-    def walk(value: Any) -> None:
-        if isinstance(value, dict):
-            for key, inner in value.items():
-                if key in _NAMED_BY_THE_USER:
-                    continue
-                if key == "file" and isinstance(inner, dict):
-                    inner = inner.get("id")
-                if key == "file" and isinstance(inner, str):
-                    if _UPLOAD_ID.fullmatch(inner):
-                        found.append(inner)
-                else:
-                    walk(inner)
-        elif isinstance(value, list) and value and isinstance(value[0], (dict, list)):
-            for inner in value:
-                walk(inner)
-
-    walk(spec)
-    return tuple(dict.fromkeys(found))
-
-
 def _require_files(db: sqlite3.Connection, files: tuple[str, ...]) -> None:
     """In the insert's transaction: a file the check read and a DELETE removed since is FileGone (the DELETE
     found no task naming it yet: its 204 and the submission's 202 both went out, and the run failed later)."""
@@ -315,11 +284,11 @@ class TaskStore(Generic[Record]):
 
     # ---- state changes ----
 
-    def create(self, spec: dict[str, Any], max_queued: int | None = None, **columns: Any) -> Record | None:
-        """A new queued task with the kind's columns; None (nothing written) when max_queued are already queued, or
-        FileGone when an upload it names was deleted since its check."""
+    def create(self, spec: dict[str, Any], max_queued: int | None = None, *, files: tuple[str, ...] = (),
+               **columns: Any) -> Record | None:
+        """A new queued task with the kind's columns; None (nothing written) when max_queued are already queued.
+        files: the uploads the spec reads (JobSpec.uploads()), FileGone if one was deleted since its check."""
         values = {"id": uuid.uuid4().hex, "status": "queued", "spec": json.dumps(spec), "created_at": now(), **columns}
-        files = uploaded_files(spec)
         with self.db.transaction() as db:  # counted and inserted under the write lock: the bound is exact
             if max_queued is not None and db.execute(
                     f"SELECT COUNT(*) FROM {self.TABLE} WHERE status = 'queued'").fetchone()[0] >= max_queued:
