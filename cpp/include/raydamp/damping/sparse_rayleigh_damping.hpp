@@ -151,7 +151,7 @@ class SparseRayleighDamping {
   template <class Q, class P>
   void decay(const Q&, const Factors& f, P& p) const {
     Eigen::VectorXd& y = thread_scratch(kScratchSum, p.size());
-    if (modes_) small_product(f.series->exp_matrix, p, y);
+    if (modes_) y.noalias() = f.series->exp_matrix.lazyProduct(p);  // inline loops, no gemv call: a few DOF
     else apply(f.series->exp, p, y);
     p = y;
   }
@@ -161,7 +161,8 @@ class SparseRayleighDamping {
   void decay_affine(const Q&, const Factors& f, const G& g, P& p) const {
     Eigen::VectorXd& y = thread_scratch(kScratchSum, p.size());
     if (modes_) {
-      small_product(f.series->exp_matrix, p, &f.series->t_phi1_matrix, &g, y);
+      y.noalias() = f.series->exp_matrix.lazyProduct(p);
+      y.noalias() -= f.series->t_phi1_matrix.lazyProduct(g);
       p = y;
       return;
     }

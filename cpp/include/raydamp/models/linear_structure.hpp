@@ -131,18 +131,14 @@ struct LinearStructure {
 
   double potential(const Vec& q) const {
     Eigen::VectorXd& kq = thread_scratch(kScratchProduct, n);
-    if (dense_stiffness) small_product(*dense_stiffness, q, kq);
+    if (dense_stiffness) kq.noalias() = dense_stiffness->lazyProduct(q);
     else kq.noalias() = *stiffness * q;
     return 0.5 * q.dot(kq) - force.dot(q);
   }
 
   void gradient(const Vec& q, Vec& g) const {
-    if (dense_stiffness) {
-      g.resize(n);  // a no-op on the step loop's sized g
-      small_product(*dense_stiffness, q, g);
-    } else {
-      g.noalias() = *stiffness * q;
-    }
+    if (dense_stiffness) g.noalias() = dense_stiffness->lazyProduct(q);  // inline loops, no gemv call: a few DOF
+    else g.noalias() = *stiffness * q;
     g -= force;
   }
 
