@@ -12,7 +12,7 @@ computations would mean nothing.
 
 It prints figures beside their targets (ratio to the hand-written loop within 1.3x;
 3s within 1.05x of the hand loop that merges the damping between steps; a short
-call under 20 us) and exits 0 whatever they are: it is a benchmark, not a
+call within 15 us, beside turn 3's 17.8 us) and exits 0 whatever they are: it is a benchmark, not a
 test. It exits 1 only if the final states disagree, and 2 if the hand-written
 program cannot be built or run.
 
@@ -51,7 +51,8 @@ PROGRAM = BUILD / "benchmarks" / "handwritten"
 
 RATIO_TARGET = 1.3
 MERGED_RATIO_TARGET = 1.05  # 3s against the hand loop that merges damp h/2 + damp h/2 between steps
-SHORT_CALL_TARGET_US = 20.0
+SHORT_CALL_TARGET_US = 15.0  # issue 47
+TURN_3_SHORT_CALL_US = 17.8  # the damped pendulum's 10-step call in turn 3, before loads, temperature and the default method
 AGREEMENT = 1e-10  # max |raydamp - hand-written| / max(1, |hand-written|) over the final q, p
 # (raydamp method, hand-written loop, target ratio): each method beside the loop doing
 # its sub-flows step by step, and 3s beside the loop a person writes for speed, which
@@ -340,7 +341,7 @@ def print_short_calls(short_calls: dict) -> None:
     print(f"{SHORT_CALL_STEPS}-step raydamp.integrate call (method 3s, save_every 1), in us: median and best of the "
           f"quietest of {len(batches)} rounds of {len(batches[0][0])} calls")
     header = (f"{'model':<18}{'median':>8}{'best':>8}{'compiled call':>15}{'Python side':>13}"
-              f"{'all rounds':>12}{'target':>8}  result")
+              f"{'all rounds':>12}{'turn 3':>8}{'target':>8}  result")
     print(header)
     print("-" * len(header))
     for name, batches in short_calls.items():
@@ -348,12 +349,15 @@ def print_short_calls(short_calls: dict) -> None:
         median = statistics.median(total) * 1e6
         python_side = statistics.median(t - c for t, c in zip(total, compiled)) * 1e6
         every_call = statistics.median(t for batch in batches for t in batch[0]) * 1e6
-        verdict = "PASS" if round(median, 2) < SHORT_CALL_TARGET_US else "MISS"
+        verdict = "PASS" if round(median, 2) <= SHORT_CALL_TARGET_US else "MISS"
+        turn_3 = f"{TURN_3_SHORT_CALL_US:>8.1f}" if name == "damped_pendulum" else f"{'-':>8}"
         print(f"{name:<18}{median:>8.2f}{min(total) * 1e6:>8.2f}{statistics.median(compiled) * 1e6:>15.2f}"
-              f"{python_side:>13.2f}{every_call:>12.2f}{SHORT_CALL_TARGET_US:>8.0f}  {verdict}")
+              f"{python_side:>13.2f}{every_call:>12.2f}{turn_3}{SHORT_CALL_TARGET_US:>8.0f}  {verdict}")
     print("compiled call = the _core call inside raydamp.integrate (Solution.wall_time: argument conversion, the")
     print("step loop, the result's arrays); Python side = the rest (validation, Solution); medians per call;")
-    print("all rounds = the median over every call of every round, quiet or not.")
+    print("all rounds = the median over every call of every round, quiet or not; turn 3 = the same call's median")
+    print("in turn 3 (before loads, temperature and the default method); compare side by side with the old head")
+    print("(farm-bench --vs), since the machine's load moves every figure.")
     print()
 
 

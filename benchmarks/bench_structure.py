@@ -16,11 +16,20 @@
    shared by every member) beside 100 single raydamp.integrate calls (one each), same process,
    interleaved; the members are checked equal to the single runs bit for bit.
 
+4. Small structures (issue 47): ns per step of a 2-DOF LinearStructure beside the same system written
+   as a raydamp.System (3s; target <= 1.5x), and of the 10-storey shear frame of ground_motion_frame.py
+   with 3s (target <= 150 ns), each also on the sparse path the structure took before (dense_limit 0:
+   sparse products, Chebyshev damping flows), same process, interleaved, best of several rounds.
+5. A response spectrum as one ensemble: 100 SDOF oscillators (periods 0.05 to 5 s, 5% damping) under a
+   30 s record at h = dt = 0.01 s, integrate_ensemble with per-member K_scale and alpha (target <= 50 ms),
+   beside the same members as single integrate calls; members checked equal to their single runs.
+
 It prints figures and exits 0 whatever they are (a benchmark, not a test).
 
     .venv/bin/python benchmarks/bench_structure.py            # a few minutes on 2 cores
     .venv/bin/python benchmarks/bench_structure.py --quick    # n = 10^4 only, fewer points
     .venv/bin/python benchmarks/bench_structure.py --sections 3   # the ensemble alone (a minute)
+    .venv/bin/python benchmarks/bench_structure.py --sections 4,5 # small structures (about ten seconds)
 """
 
 from __future__ import annotations
@@ -261,11 +270,149 @@ def implicit_ensemble(nx: int, ny: int, members: int, steps: int, rounds: int) -
           f"{single / best['ensemble, 2 threads']:.2f}x on 2 threads (best of {rounds})")
 
 
+# -- 4. small structures ------------------------------------------------------------------------------
+
+SMALL_RATIO_TARGET = 1.5
+FRAME_NS_TARGET = 150.0
+SPECTRUM_MS_TARGET = 50.0
+
+
+def _sparse_path(build):
+    """build() on the sparse path (dense_limit 0): what every structure ran before issue 47."""
+    from raydamp.systems import structure
+
+    saved = structure._DENSE_LIMIT
+    structure._DENSE_LIMIT = 0
+    try:
+        return build()
+    finally:
+        structure._DENSE_LIMIT = saved
+
+
+def _ns_per_step(model, q0, steps: int) -> tuple[float, float]:
+    """(wall ns, CPU ns) per step: the step loop runs on the calling thread, so its CPU time is what a
+    quiet machine's wall time would be, where a loaded one (other builds) stretches the wall time."""
+    cpu = time.thread_time()
+    sol = raydamp.integrate(model, q0, np.zeros(len(q0)), method="3s", h=1e-3, n_steps=steps, save_every=steps)
+    cpu = time.thread_time() - cpu
+    assert sol.success, sol.message
+    return sol.wall_time / steps * 1e9, cpu / steps * 1e9
+
+
+def small_structures(steps: int, rounds: int) -> None:
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from ground_motion_frame import frame
+
+    # 2 DOF: two storeys, m = (1, 1.5), k = (40, 25), 5% Rayleigh damping in both modes.
+    M2 = np.diag([1.0, 1.5])
+    K2 = np.array([[65.0, -25.0], [-25.0, 25.0]])
+    w = np.sqrt(np.sort(scipy.linalg.eigh(K2, M2, eigvals_only=True)))
+    a2, b2 = raydamp.rayleigh_coefficients(w[0], w[1], 0.05, 0.05)
+    C2 = a2 * M2 + b2 * K2
+    cases = {
+        "2-DOF LinearStructure": lambda: raydamp.LinearStructure(M2, K2, alpha=a2, beta=b2),
+        "2-DOF System": lambda: raydamp.System(
+            coordinates=["x1", "x2"], potential="65/2*x1^2 - 25*x1*x2 + 25/2*x2^2", mass=[1.0, 1.5],
+            damping={"matrix": C2.tolist()}, eps=1.0),
+    }
+    Mf, Kf, af, bf, _ = frame()
+    cases["10-DOF frame"] = lambda: raydamp.LinearStructure(Mf, Kf, alpha=af, beta=bf)
+    models = {name: build() for name, build in cases.items()}
+    models["2-DOF LinearStructure, sparse path"] = _sparse_path(cases["2-DOF LinearStructure"])
+    models["10-DOF frame, sparse path"] = _sparse_path(cases["10-DOF frame"])
+    starts = {name: (np.array([0.01, 0.02]) if name.startswith("2-DOF") else 1e-3 * np.linspace(0.1, 1.0, 10))
+              for name in models}
+    best = {name: np.inf for name in models}
+    best_cpu = dict(best)
+    for _ in range(rounds):
+        for name, model in models.items():
+            wall, cpu = _ns_per_step(model, starts[name], steps)
+            best[name], best_cpu[name] = min(best[name], wall), min(best_cpu[name], cpu)
+    # the same trajectory on either path (and the System: the same equations)
+    ends = {name: raydamp.integrate(model, starts[name], np.zeros(len(starts[name])), method="3s", h=1e-3,
+                                    n_steps=2000, save_every=2000).q[-1] for name, model in models.items()}
+    print(f"\n4. Small structures, 3s at h = 1e-3, {steps} steps per run, best of {rounds} rounds (ns per step)")
+    print(f"   {'model':<36}{'wall':>9}{'CPU':>9}")
+    for name in models:
+        print(f"   {name:<36}{best[name]:>9.1f}{best_cpu[name]:>9.1f}")
+    best = best_cpu  # the figures below: CPU time, a quiet machine's wall time
+    print("   (ratios and targets below are of the CPU time; load average now " + " ".join(
+        f"{x:.1f}" for x in os.getloadavg()) + ")")
+    ratio = best["2-DOF LinearStructure"] / best["2-DOF System"]
+    print(f"   2-DOF LinearStructure / System: {ratio:.2f}x (target <= {SMALL_RATIO_TARGET}x); sparse path "
+          f"{best['2-DOF LinearStructure, sparse path'] / best['2-DOF System']:.2f}x")
+    print(f"   10-DOF frame: {best['10-DOF frame']:.0f} ns (target <= {FRAME_NS_TARGET:.0f} ns); sparse path "
+          f"{best['10-DOF frame, sparse path']:.0f} ns")
+    differences = {
+        "2-DOF dense vs sparse path": ends["2-DOF LinearStructure"] - ends["2-DOF LinearStructure, sparse path"],
+        "2-DOF LinearStructure vs System": ends["2-DOF LinearStructure"] - ends["2-DOF System"],
+        "10-DOF dense vs sparse path": ends["10-DOF frame"] - ends["10-DOF frame, sparse path"],
+    }
+    for label, d in differences.items():
+        print(f"   q after 2000 steps, {label}: max |difference| = {np.max(np.abs(d)):.2g}")
+
+
+# -- 5. a response spectrum as one ensemble -------------------------------------------------------------
+
+def spectrum(rounds: int, threads: int) -> None:
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from ground_motion_frame import record
+
+    t, a_g = record(seconds=30.0, dt=0.01)
+    dt = float(t[1] - t[0])
+    periods = np.geomspace(0.05, 5.0, 100)
+    omega = 2 * np.pi / periods
+    zeta = 0.05
+    sdof = raydamp.LinearStructure(np.eye(1), np.eye(1))   # m = 1, k = 1: member i has K_scale omega_i^2
+    motion = raydamp.GroundMotion((t, a_g), [1.0])
+    parameters = {"K_scale": omega ** 2, "alpha": 2 * zeta * omega}   # C = 2 zeta omega m
+    options = {"method": "3s", "h": dt, "t_end": float(t[-1]), "save_every": 1, "load": motion}
+    zeros = np.zeros((periods.size, 1))
+
+    def ensemble():
+        return raydamp.integrate_ensemble(sdof, zeros, zeros, parameters=parameters, threads=threads, **options)
+
+    def singles():
+        out = []
+        for w in omega:
+            s = raydamp.LinearStructure(np.eye(1), np.eye(1) * w ** 2, alpha=2 * zeta * w)
+            out.append(raydamp.integrate(s, [0.0], [0.0], **options))
+        return out
+
+    ens, ones = ensemble(), singles()
+    worst = max(float(np.max(np.abs(ens.q[i, :, 0] - ones[i].q[:, 0]))) for i in range(periods.size))
+    peak = max(float(np.max(np.abs(o.q))) for o in ones)
+    def peaks_only():  # the final state alone: what the step loop costs without the saved rows
+        return raydamp.integrate_ensemble(sdof, zeros, zeros, parameters=parameters, threads=1,
+                                          **{**options, "save_every": 10 ** 9})
+
+    labels = {f"one ensemble call, {threads} threads (wall)": (ensemble, time.perf_counter),
+              "one ensemble call, 1 thread (CPU)": (lambda: raydamp.integrate_ensemble(
+                  sdof, zeros, zeros, parameters=parameters, threads=1, **options), time.process_time),
+              "the same, saving the final state only (CPU)": (peaks_only, time.process_time),
+              "100 integrate calls, a LinearStructure each (CPU)": (singles, time.process_time)}
+    best = {label: np.inf for label in labels}
+    for _ in range(rounds):
+        for label, (fn, clock) in labels.items():
+            start = clock()
+            fn()
+            best[label] = min(best[label], clock() - start)
+    n_steps = int(round(t[-1] / dt))
+    print(f"\n5. Response spectrum: 100 SDOF (T = 0.05 to 5 s, 5% damping) under a {t[-1]:.0f} s record, h = dt = "
+          f"{dt}, {n_steps} steps each, 3s, every step saved; best of {rounds}; load average "
+          + " ".join(f"{x:.1f}" for x in os.getloadavg()))
+    for label, seconds in best.items():
+        print(f"   {label:<52}{seconds * 1e3:>9.1f} ms")
+    print(f"   target: one call <= {SPECTRUM_MS_TARGET:.0f} ms (CPU time on 1 thread: a quiet machine's wall time); "
+          f"members against single runs: max |q difference| = {worst:.2g} (peak |q| {peak:.3g})")
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="n = 10^4 only and fewer work-precision points")
     parser.add_argument("--png", default=None, help="also plot the work-precision tables to this PNG")
-    parser.add_argument("--sections", default="1,2,3", help="which of the sections 1, 2, 3 to run (default all)")
+    parser.add_argument("--sections", default="1,2,3,4,5", help="which of the sections 1 to 5 to run (default all)")
+    parser.add_argument("--threads", type=int, default=2, help="threads of section 5's ensemble (default 2)")
     args = parser.parse_args(argv)
     sections = set(args.sections.split(","))
     sizes = [(100, 50)] if args.quick else [(100, 50), (316, 158)]
@@ -275,6 +422,10 @@ def main(argv=None) -> int:
         work_precision(28, 14, t_end=10.0, factors=[1, 2, 4] if args.quick else [1, 2, 4, 8, 16], png=args.png)
     if "3" in sections:
         implicit_ensemble(100, 50, members=100, steps=10 if args.quick else 20, rounds=2 if args.quick else 3)
+    if "4" in sections:
+        small_structures(steps=100_000 if args.quick else 1_000_000, rounds=3 if args.quick else 7)
+    if "5" in sections:
+        spectrum(rounds=3 if args.quick else 7, threads=args.threads)
     return 0
 
 

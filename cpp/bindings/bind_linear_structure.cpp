@@ -21,19 +21,23 @@ void bind_structure_kind(py::module_& m, const char* name) {
   using Model = LinearStructure<Mass>;
   py::class_<Model> cls(m, name);
   cls.def(py::init([](const MassArgument& mass, const SparseColMajor& k, const Eigen::VectorXd& f, double alpha,
-                      double beta) {
+                      double beta, int dense_limit) {
             // Factorising M and estimating the spectrum take a while for large n.
             py::gil_scoped_release release;
-            return Model(Mass(mass, "M"), k, f, alpha, beta);
+            return Model(Mass(mass, "M"), k, f, alpha, beta, dense_limit);
           }),
-          py::arg("M"), py::arg("K"), py::arg("f"), py::arg("alpha"), py::arg("beta"));
+          py::arg("M"), py::arg("K"), py::arg("f"), py::arg("alpha"), py::arg("beta"),
+          py::arg("dense_limit") = kMaxDenseDim);
+  // An ensemble member: K scaled, alpha and beta replaced, M, f and the certified bound (scaled) shared.
+  cls.def("with_parameters", &Model::with_parameters, py::arg("alpha"), py::arg("beta"), py::arg("K_scale"));
   cls.def_property_readonly("mass_kind", [](const Model&) { return Mass::kind; })
       .def_property_readonly("alpha", [](const Model& s) { return s.damping.alpha(); })
       .def_property_readonly("beta", [](const Model& s) { return s.damping.beta(); })
       .def_property_readonly("spectral_bound", [](const Model& s) { return s.damping.spectral_bound(); })
       .def_property_readonly("damping_rate_bound", [](const Model& s) { return s.damping.rate_bound(); })
+      .def_property_readonly("dense", [](const Model& s) { return s.damping.dense(); })
       .def("chebyshev_degrees", [](const Model& s, double t) {
-        const auto series = s.damping.series(t);
+        const auto series = s.damping.chebyshev(t);
         return py::make_tuple(series->exp.degree(), series->t_phi1.degree());
       })
       // One noise sub-flow at kT = 1 from p = 0: N xi, N N^T = M - E M E^T, E = exp(-t C M^{-1}) (a testing
@@ -63,6 +67,7 @@ void bind_structure_kind(py::module_& m, const char* name) {
 }  // namespace
 
 void bind_linear_structure(py::module_& m) {
+  m.attr("STRUCTURE_DENSE_LIMIT") = kMaxDenseDim;
   bind_structure_kind<LumpedMass, Eigen::VectorXd>(m, "LinearStructure_lumped");
   bind_structure_kind<ConsistentMass, SparseColMajor>(m, "LinearStructure_consistent");
 }

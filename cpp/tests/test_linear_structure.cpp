@@ -5,7 +5,9 @@
 // - the spectral bound is above lambda_max and within the margin of it;
 // - solve_shifted is the inverse of I + cA;
 // - eps = 0 (alpha = beta = 0): 3s and 2s equal sv;
-// - once warmed up, the flows allocate nothing (a counting operator new).
+// - once warmed up, the flows allocate nothing (a counting operator new);
+// - a small structure (n <= kMaxDenseDim) flows by its modes: the same checks, and its flows equal
+//   the Chebyshev ones (dense_limit 0) to 1e-13.
 // GCC 12 false positives: "may be used uninitialized" inside Eigen's dense generalised
 // eigensolver (the test's reference), "null argument" in Eigen's copy of an empty
 // vector, and free() after the counting operator new of counting_new.hpp (which does call malloc).
@@ -188,6 +190,61 @@ void undamped_splittings_are_stormer_verlet(const Mass& mass, const SparseColMaj
   }
 }
 
+// The dense (modal) flows of a small structure against its Chebyshev flows, which the same
+// structure runs with dense_limit = 0.
+template <class Mass>
+void dense_flows_equal_chebyshev(const Mass& mass, const SparseColMajor& k, const char* label) {
+  const double alpha = 0.05, beta = 2e-3;
+  const LinearStructure<Mass> dense(mass, k, Vec::Ones(k.rows()), alpha, beta);
+  const LinearStructure<Mass> sparse(mass, k, Vec::Ones(k.rows()), alpha, beta, 0);
+  CHECK(dense.damping.dense() && !sparse.damping.dense());
+  const int n = dense.size();
+  Vec p(n), g(n);
+  for (int i = 0; i < n; ++i) {
+    p[i] = std::cos(0.3 * i) + 0.1 * i / n;
+    g[i] = std::sin(0.7 * i + 0.2);
+  }
+  const double rho = sparse.damping.rate_bound();
+  double worst = 0.0;
+  for (double t_rho : {1e-6, 1e-3, 0.1, 1.0, 10.0, 100.0}) {
+    const double t = t_rho / rho;
+    Vec a = p, b = p;
+    dense.damping.decay(Vec(), dense.damping.factors(t), a);
+    sparse.damping.decay(Vec(), sparse.damping.factors(t), b);
+    worst = std::max(worst, (a - b).norm() / p.norm());
+    a = p;
+    b = p;
+    dense.damping.decay_affine(Vec(), dense.damping.factors(t), g, a);
+    sparse.damping.decay_affine(Vec(), sparse.damping.factors(t), g, b);
+    worst = std::max(worst, (a - b).norm() / (p.norm() + t * g.norm()));
+  }
+  Vec a(n), b(n);
+  dense.damping.rate(Vec(), p, a);
+  sparse.damping.rate(Vec(), p, b);
+  worst = std::max(worst, relative(a, b));
+  a = p;
+  b = p;
+  dense.damping.solve_shifted(Vec(), 0.5, a);
+  sparse.damping.solve_shifted(Vec(), 0.5, b);
+  worst = std::max(worst, relative(a, b));
+  Vec ga(n), gb(n);
+  dense.gradient(g, ga);
+  sparse.gradient(g, gb);
+  worst = std::max(worst, relative(ga, gb));
+  CHECK_NEAR(dense.potential(g), sparse.potential(g), 1e-13 * std::abs(sparse.potential(g)));
+  if (!(worst <= 1e-13)) std::printf("%s: dense flows differ from the Chebyshev ones by %.3g\n", label, worst);
+  CHECK(worst <= 1e-13);
+  // An ensemble member (K scaled): its bound is the scaled one, its flows its own structure's.
+  const LinearStructure<Mass> member = dense.with_parameters(0.1, 1e-3, 4.0);
+  const LinearStructure<Mass> direct(mass, SparseColMajor(4.0 * k), Vec::Ones(k.rows()), 0.1, 1e-3);
+  CHECK_NEAR(member.damping.spectral_bound(), 4.0 * dense.damping.spectral_bound(), 1e-15 * member.damping.spectral_bound());
+  Vec x = p, y = p;
+  member.damping.decay_affine(Vec(), member.damping.factors(0.3), g, x);
+  direct.damping.decay_affine(Vec(), direct.damping.factors(0.3), g, y);
+  CHECK(relative(x, y) <= 1e-13);
+  CHECK(throws([&] { dense.with_parameters(0.1, 0.0, 0.0); }));
+}
+
 }  // namespace
 
 int main() {
@@ -200,6 +257,16 @@ int main() {
   flows_do_not_allocate(ConsistentMass(b.m), b.k);
   undamped_splittings_are_stormer_verlet(LumpedMass(b.lumped), b.k);
   undamped_splittings_are_stormer_verlet(ConsistentMass(b.m), b.k);
+  // A small bar: the dense path.
+  const Bar small = bar(8);
+  CHECK(small.k.rows() <= kMaxDenseDim);
+  flows_equal_modal(LumpedMass(small.lumped), Eigen::MatrixXd(small.lumped.asDiagonal()), small.k, "small lumped");
+  flows_equal_modal(ConsistentMass(small.m), Eigen::MatrixXd(small.m), small.k, "small consistent");
+  flows_do_not_allocate(LumpedMass(small.lumped), small.k);
+  flows_do_not_allocate(ConsistentMass(small.m), small.k);
+  undamped_splittings_are_stormer_verlet(LumpedMass(small.lumped), small.k);
+  dense_flows_equal_chebyshev(LumpedMass(small.lumped), small.k, "small lumped");
+  dense_flows_equal_chebyshev(ConsistentMass(small.m), small.k, "small consistent");
   CHECK(throws([&] { LumpedMass(Vec::Constant(3, -1.0)); }));
   CHECK(throws([&] { ConsistentMass(SparseColMajor(-1.0 * b.m)); }));
   SparseColMajor skew = b.k;

@@ -86,10 +86,13 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
     parameters : {name: per-member values} of the parameters :func:`member_parameters` names:
         every parameter of a built-in model (``eps``; for the elastic pendulum also ``m``, ``k``,
         ``l`` and ``g``, a vector given as (members, 3)), ``eps`` of a damped System and its
-        expression parameters. A Chain or a LinearStructure takes none (its members differ by
-        initial state; build one model per eps). Built-in models are rebuilt per member in C++
-        from their parameter tables; a System is rebuilt once per distinct parameter set before
-        the run (a change of eps alone reuses its compiled functions; other parameters recompile it).
+        expression parameters; a LinearStructure's ``alpha``, ``beta`` and ``K_scale`` (member i
+        runs K_scale[i] K, e.g. one SDOF per period of a response spectrum). A Chain takes none (its
+        members differ by initial state; build one model per eps). Built-in models are rebuilt per
+        member in C++ from their parameter tables, a LinearStructure once per distinct parameter set
+        (in C++, from the shared M, f and spectral bound); a System is rebuilt once per distinct
+        parameter set before the run (a change of eps alone reuses its compiled functions; other
+        parameters recompile it). ``method=None`` chooses for ``system`` itself, not for each member.
     method, h, t_end, n_steps, save_every, tableau, composition : as :func:`raydamp.integrate`,
         shared by every member (method None chooses as integrate does, the reason in the provenance). A LinearStructure's implicit "midpoint" and "gauss4" factorise
         M + c C + c^2 K once per sub-step length for the whole ensemble (once, twice with a

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import math
 import re
 import time
 from collections.abc import Callable, Mapping
@@ -52,6 +53,29 @@ def _catalogue() -> tuple[tuple[str, ...], frozenset[str]]:
     rows = _core.methods()
     names = tuple(dict.fromkeys(row["name"] for row in rows))
     return names, frozenset(row["name"] for row in rows if row["tableau"] is not None)
+
+
+@functools.lru_cache(maxsize=256)
+def _resolved(method: str, tableau_name: str, composition: str) -> tuple[str, str]:
+    """(the tableau's name as the core resolves it, the composition's): the core's ValueErrors name the
+    tableau or the composition (unknown, or a base that is not symmetric). A pure function of the names,
+    asked once per triple: a short call pays for no lookup in the catalogue."""
+    resolved_tableau = _core.resolve(method, tableau_name)
+    resolved_composition, _order = _core.resolve_composition(method, tableau_name, composition)
+    return resolved_tableau, resolved_composition
+
+
+def _state(name: str, value, dim: int) -> np.ndarray:
+    """vector(name, value, dim), with the common short call (a list of a few floats, all finite) checked in
+    Python: at a few coordinates that is cheaper than NumPy's conversions and reductions. Anything else, and
+    every refusal, goes through vector(), which words the error."""
+    if type(value) is list and len(value) == dim <= 16:
+        for x in value:
+            if type(x) is not float or not math.isfinite(x):
+                break
+        else:
+            return np.array(value, dtype=float)
+    return vector(name, value, dim)
 
 
 def _tableau(tableau) -> tuple[str, str | dict | None]:
@@ -159,14 +183,14 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
     if not isinstance(method, str) or method not in names:
         raise ValueError(f"method: unknown method {method!r} (known: {', '.join(names)})")
     tableau_name, tableau = _tableau(tableau)
-    resolved_tableau = _core.resolve(method, tableau_name)  # raises ValueError naming the tableau
     if composition is not None and not isinstance(composition, str):
+        _core.resolve(method, tableau_name)  # a bad tableau is named first, as before
         raise ValueError(f"composition must be a composition name or None, got {composition!r}")
-    # raises ValueError naming the composition (unknown, or a base that is not symmetric)
-    resolved_composition, _order = _core.resolve_composition(method, tableau_name, composition or "")
+    resolved_tableau, resolved_composition = _resolved(method, tableau_name, composition or "")
     h = real("h", h, positive=True)
-    q0 = model.check_configuration("q0", vector("q0", q0, model.dim))
-    p0 = vector("p0", p0, model.dim)
+    dim = model.dim
+    q0 = model.check_configuration("q0", _state("q0", q0, dim))
+    p0 = _state("p0", p0, dim)
     save_every = integer("save_every", save_every, maximum=MAX_STEPS)
     n_steps, h_last = span(h, t_end, n_steps)
     bar = None
@@ -180,8 +204,11 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
     if load is not None and not isinstance(load, Load):
         raise ValueError(f"load must be a raydamp.Load or raydamp.GroundMotion or None, got {_short(load)}")
     core_load = load.bind(model) if _loaded(load) else None  # raises naming load.direction etc.
-    kT, seed, stream = thermal(temperature, seed, stream)
-    dofs = _save_dofs(save_dofs, model.dim)
+    if temperature is None and seed is None and type(stream) is int and stream == 0:
+        kT, seed = 0.0, 0  # no noise: what thermal() gives, without its checks
+    else:
+        kT, seed, stream = thermal(temperature, seed, stream)
+    dofs = _save_dofs(save_dofs, dim)
     rows = n_steps // save_every + 2
     size = rows * row_bytes(model, dofs, work=work, load=load)
     if size > MAX_SAVED_BYTES:
@@ -190,9 +217,10 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
 
     start = time.perf_counter()
     try:
+        # positional: pybind11 matches keyword arguments by name, a microsecond of a short call
         out = model._core_model.integrate(method, tableau_name, composition or "", q0, p0, h, n_steps, h_last,
-                                          save_every, work, progress, cancel, save_dofs=[] if dofs is None else dofs,
-                                          load=core_load, temperature=kT, seed=seed, stream=stream)
+                                          save_every, work, progress, cancel, [] if dofs is None else dofs,
+                                          core_load, kT, seed, stream)
     except ValueError as error:  # the core names the method it runs ("rk" for "rk4"): the caller's name here
         named = re.sub(r"^temperature: method '[^']*'", f"temperature: method {method!r}", str(error))
         if named == str(error):

@@ -25,6 +25,12 @@
 // solve_shifted (rks with a diagonally implicit tableau) is
 //   (I + cA)^{-1} x = M ((1 + c alpha) M + c beta K)^{-1} x,
 // one sparse Cholesky factorisation per distinct c (per run: h a_ii, and the last step's).
+// A small structure (n <= the dense limit, kMaxDenseDim unless the caller says otherwise) has its
+// modes instead: with M = L L^T and L^{-1} K L^{-T} = V Lambda V^T, every function of A is
+// f(A) = L V f(alpha + beta Lambda) V^T L^{-1}, so a flow is one n x n product with a matrix made
+// once per sub-step length, exact, where the Chebyshev sum costs its degree in products with K and
+// solves with M (a 10-storey frame: 430 ns a step of 3s, most of it there). The noise keeps its
+// Chebyshev series in either case (the same draws give the same noise).
 #pragma once
 
 #include <algorithm>
@@ -37,9 +43,13 @@
 #include <utility>
 #include <vector>
 
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
 #include "raydamp/damping/chebyshev.hpp"
 #include "raydamp/mass/sparse_mass.hpp"
 #include "raydamp/phi.hpp"
+#include "raydamp/system/small_dense.hpp"
 #include "raydamp/thread_scratch.hpp"
 
 namespace raydamp {
@@ -52,11 +62,32 @@ class SparseRayleighDamping {
   // and max psi / min psi <= sqrt(1 + 2 t rho) on [alpha, rho] (rho = rate_bound()).
   static constexpr double kNoiseTolerance = 1e-10;
 
-  // The series of one sub-step length t, in the variable of B's spectrum.
+  // A small structure's modes: A = from_modes diag(rates) to_modes.
+  struct Modes {
+    Eigen::MatrixXd from_modes;  // L V
+    Eigen::MatrixXd to_modes;    // V^T L^{-1}
+    Eigen::VectorXd lambda;      // the eigenvalues of K M^{-1} (squared circular frequencies)
+    Eigen::VectorXd rates;       // alpha + beta lambda, those of A
+    Eigen::MatrixXd a;           // A itself (rate())
+
+    // f(A) = from_modes diag(f(rates)) to_modes.
+    template <class F>
+    Eigen::MatrixXd function(F f) const {
+      Eigen::VectorXd d(rates.size());
+      for (Eigen::Index i = 0; i < rates.size(); ++i) d[i] = f(rates[i]);
+      return from_modes * d.asDiagonal() * to_modes;
+    }
+  };
+
+  // The flows of one sub-step length t: Chebyshev series in the variable of B's spectrum, or,
+  // for a small structure, the matrices themselves (its Chebyshev series then made only on request).
   struct Series {
     double t = 0.0;
-    ChebyshevSeries exp;     // exp(-t (alpha + beta lambda))
-    ChebyshevSeries t_phi1;  // t phi1(-t (alpha + beta lambda))
+    Eigen::MatrixXd exp_matrix;     // exp(-tA) (a small structure)
+    Eigen::MatrixXd t_phi1_matrix;  // t phi1(-tA) (a small structure)
+    mutable std::once_flag chebyshev_once;
+    mutable ChebyshevSeries exp;     // exp(-t (alpha + beta lambda))
+    mutable ChebyshevSeries t_phi1;  // t phi1(-t (alpha + beta lambda))
     // psi(alpha + beta lambda) of the noise factor, made at the first noisy flow of this length.
     mutable std::once_flag noise_once;
     mutable ChebyshevSeries noise;
@@ -67,14 +98,21 @@ class SparseRayleighDamping {
     double noise_scale = 0.0;  // beta = 0: sqrt(1 - e^{-2 alpha t}), N = noise_scale M^{1/2}
   };
 
-  // bound: an upper bound of the spectrum of B (the caller estimates it once).
+  // bound: an upper bound of the spectrum of B (the caller estimates it once). dense_limit: the largest n
+  // whose flows are dense (the modes); a test sets 0 to compare against the Chebyshev flows.
   SparseRayleighDamping(double alpha, double beta, std::shared_ptr<const SparseRowMajor> stiffness, Mass mass,
-                        double bound)
+                        double bound, int dense_limit = kMaxDenseDim)
       : alpha_(alpha), beta_(beta), bound_(bound > 0.0 ? bound : 1.0), k_(std::move(stiffness)),
         mass_(std::move(mass)), caches_(std::make_shared<Caches>()) {
     if (!(alpha >= 0.0) || !std::isfinite(alpha)) throw std::invalid_argument("alpha: must be finite and >= 0");
     if (!(beta >= 0.0) || !std::isfinite(beta)) throw std::invalid_argument("beta: must be finite and >= 0");
+    if (mass_.size() <= std::min(dense_limit, kMaxDenseDim)) modes_ = make_modes();
   }
+
+  // Whether the flows are dense (a small structure).
+  bool dense() const { return modes_ != nullptr; }
+  // The modes of a dense one (null otherwise).
+  const Modes* modes() const { return modes_.get(); }
 
   double alpha() const { return alpha_; }
   double beta() const { return beta_; }
@@ -87,28 +125,34 @@ class SparseRayleighDamping {
     std::lock_guard<std::mutex> lock(caches_->mutex);
     for (const auto& s : caches_->series)
       if (s->t == t) return s;
-    // lambda = L (1 + y) / 2 maps [-1, 1] onto [0, L].
-    const double half = 0.5 * bound_, a = alpha_, b = beta_;
-    auto rate = [=](double y) { return a + b * half * (1.0 + y); };
-    // The degree needed is about 4.8 sqrt(t beta L) (4789 at t beta L = 1e6), so past 4 sqrt(t beta L) > the
-    // bound the series below would refuse anyway, after O(N^2) work at every doubling (0.4 s each): refuse at
-    // once. advise's bisection of stability limits meets this refusal dozens of times.
-    if (t > 0.0 && 4.0 * std::sqrt(t * b * bound_) > kMaxChebyshevDegree) detail::refuse_degree("damping flow");
     auto fresh = std::make_shared<Series>();
     fresh->t = t;
-    fresh->exp = chebyshev_series([&](double y) { return std::exp(-t * rate(y)); }, "damping flow");
-    fresh->t_phi1 = chebyshev_series([&](double y) { return t * phi1(-t * rate(y)); }, "kick+damp flow");
+    if (modes_) {
+      fresh->exp_matrix = modes_->function([t](double r) { return std::exp(-t * r); });
+      fresh->t_phi1_matrix = modes_->function([t](double r) { return t * phi1(-t * r); });
+    } else {
+      make_chebyshev(*fresh);
+    }
     std::shared_ptr<const Series> made = std::move(fresh);
     if (caches_->series.size() >= kCachedLengths) caches_->series.erase(caches_->series.begin());
     caches_->series.push_back(made);
     return made;
   }
 
+  // The series of length t with its Chebyshev series made (a small structure's are made here, on request:
+  // chebyshev_degrees, the default method's choice).
+  std::shared_ptr<const Series> chebyshev(double t) const {
+    std::shared_ptr<const Series> s = series(t);
+    make_chebyshev(*s);
+    return s;
+  }
+
   // p <- exp(-tA) p.
   template <class Q, class P>
   void decay(const Q&, const Factors& f, P& p) const {
     Eigen::VectorXd& y = thread_scratch(kScratchSum, p.size());
-    apply(f.series->exp, p, y);
+    if (modes_) y.noalias() = f.series->exp_matrix.lazyProduct(p);  // inline loops, no gemv call: a few DOF
+    else apply(f.series->exp, p, y);
     p = y;
   }
 
@@ -116,6 +160,12 @@ class SparseRayleighDamping {
   template <class Q, class G, class P>
   void decay_affine(const Q&, const Factors& f, const G& g, P& p) const {
     Eigen::VectorXd& y = thread_scratch(kScratchSum, p.size());
+    if (modes_) {
+      y.noalias() = f.series->exp_matrix.lazyProduct(p);
+      y.noalias() -= f.series->t_phi1_matrix.lazyProduct(g);
+      p = y;
+      return;
+    }
     Eigen::VectorXd& z = thread_scratch(kScratchSum2, p.size());
     apply(f.series->exp, p, y);
     apply(f.series->t_phi1, g, z);
@@ -163,6 +213,10 @@ class SparseRayleighDamping {
   // out = A p = alpha p + beta K M^{-1} p (out must not alias p).
   template <class Q, class P, class O>
   void rate(const Q&, const P& p, O& out) const {
+    if (modes_) {
+      out.noalias() = modes_->a * p;
+      return;
+    }
     Eigen::VectorXd& v = thread_scratch(kScratchProduct, p.size());
     mass_.velocity(p, v);
     out.noalias() = *k_ * v;
@@ -174,6 +228,13 @@ class SparseRayleighDamping {
   void solve_shifted(const Q&, double c, X& x) const {
     if (beta_ == 0.0) {
       x /= 1.0 + c * alpha_;
+      return;
+    }
+    if (modes_) {
+      Eigen::VectorXd& y = thread_scratch(kScratchProduct, x.size());
+      y.noalias() = modes_->to_modes * x;
+      y.array() /= 1.0 + c * modes_->rates.array();
+      x.noalias() = modes_->from_modes * y;
       return;
     }
     const auto chol = shifted(c);
@@ -191,6 +252,42 @@ class SparseRayleighDamping {
     std::once_flag root_once;
     std::unique_ptr<const SparseCholesky> root;  // C = R R^T (beta > 0 and C positive definite), else null
   };
+
+  // The Chebyshev series of s's length, once (the caller holds no lock: chebyshev_series may take a while).
+  void make_chebyshev(const Series& s) const {
+    std::call_once(s.chebyshev_once, [&] {
+      const double t = s.t;
+      // lambda = L (1 + y) / 2 maps [-1, 1] onto [0, L].
+      const double half = 0.5 * bound_, a = alpha_, b = beta_;
+      auto rate = [=](double y) { return a + b * half * (1.0 + y); };
+      // The degree needed is about 4.8 sqrt(t beta L) (4789 at t beta L = 1e6), so past 4 sqrt(t beta L) > the
+      // bound the series below would refuse anyway, after O(N^2) work at every doubling (0.4 s each): refuse at
+      // once. advise's bisection of stability limits meets this refusal dozens of times.
+      if (t > 0.0 && 4.0 * std::sqrt(t * b * bound_) > kMaxChebyshevDegree) detail::refuse_degree("damping flow");
+      s.exp = chebyshev_series([&](double y) { return std::exp(-t * rate(y)); }, "damping flow");
+      s.t_phi1 = chebyshev_series([&](double y) { return t * phi1(-t * rate(y)); }, "kick+damp flow");
+    });
+  }
+
+  // The modes of M^{-1} K, from dense copies of M and K (n <= kMaxDenseDim).
+  std::shared_ptr<const Modes> make_modes() const {
+    const Eigen::MatrixXd m = Eigen::MatrixXd(mass_.matrix()), k = Eigen::MatrixXd(SparseColMajor(*k_));
+    const Eigen::Index n = m.rows();
+    Eigen::LLT<Eigen::MatrixXd> llt(m);
+    if (llt.info() != Eigen::Success) throw std::invalid_argument("M: must be positive definite");
+    const Eigen::MatrixXd lower = llt.matrixL();
+    const Eigen::MatrixXd lower_inverse = llt.matrixL().solve(Eigen::MatrixXd::Identity(n, n));
+    const Eigen::MatrixXd s = lower_inverse * k * lower_inverse.transpose();
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(0.5 * (s + s.transpose()));
+    if (eig.info() != Eigen::Success) throw std::invalid_argument("K: the eigendecomposition of M^{-1} K failed");
+    auto modes = std::make_shared<Modes>();
+    modes->from_modes = lower * eig.eigenvectors();
+    modes->to_modes = eig.eigenvectors().transpose() * lower_inverse;
+    modes->lambda = eig.eigenvalues();
+    modes->rates = (alpha_ + beta_ * modes->lambda.array()).matrix();
+    modes->a = modes->from_modes * modes->rates.asDiagonal() * modes->to_modes;
+    return modes;
+  }
 
   // R, C = alpha M + beta K = R R^T, factorised on the first call; null when C is not positive definite.
   const SparseCholesky* noise_root() const {
@@ -233,6 +330,7 @@ class SparseRayleighDamping {
   std::shared_ptr<const SparseRowMajor> k_;
   Mass mass_;
   std::shared_ptr<Caches> caches_;
+  std::shared_ptr<const Modes> modes_;  // a small structure's (null: the Chebyshev flows)
 };
 
 }  // namespace raydamp

@@ -2,7 +2,9 @@
 // Rayleigh damping C = alpha M + beta K (eps = 1, D = C: paper section 2 with a
 // constant mass and a constant dissipation tensor). M and K are sparse; Mass is
 // LumpedMass or ConsistentMass (mass/sparse_mass.hpp). One struct per mass kind,
-// bound once: a user's structure is data (its matrices), never new C++.
+// bound once: a user's structure is data (its matrices), never new C++. A small one
+// (n <= kMaxDenseDim) keeps K dense as well and its damping flows by its modes
+// (damping/sparse_rayleigh_damping.hpp): a few DOF then step like a System of the same size.
 #pragma once
 
 #include <Eigen/SparseCore>
@@ -17,6 +19,7 @@
 #include "raydamp/implicit/sparse_ldlt.hpp"
 #include "raydamp/mass/sparse_mass.hpp"
 #include "raydamp/state.hpp"
+#include "raydamp/system/small_dense.hpp"
 #include "raydamp/thread_scratch.hpp"
 
 namespace raydamp {
@@ -99,34 +102,71 @@ struct LinearStructure {
   Eigen::VectorXd force;  // f
   SparseRayleighDamping<Mass> damping;
   int n;
+  std::shared_ptr<const Eigen::MatrixXd> dense_stiffness;  // K, where the damping is dense (else null)
 
-  LinearStructure(Mass mass_, const SparseColMajor& k, const Eigen::VectorXd& f, double alpha, double beta)
+  // dense_limit: the largest n run by dense products (a test sets 0 to compare against the sparse path).
+  LinearStructure(Mass mass_, const SparseColMajor& k, const Eigen::VectorXd& f, double alpha, double beta,
+                  int dense_limit = kMaxDenseDim)
       : eps(alpha > 0.0 || beta > 0.0 ? 1.0 : 0.0),
         mass(std::move(mass_)),
         stiffness(detail::checked_stiffness(k, mass.size())),
         force(f.size() ? Eigen::VectorXd(f) : Eigen::VectorXd(Eigen::VectorXd::Zero(mass.size()))),
-        damping(alpha, beta, stiffness, mass, detail::structure_spectral_bound(*stiffness, mass)),
+        damping(alpha, beta, stiffness, mass, detail::structure_spectral_bound(*stiffness, mass), dense_limit),
         n(static_cast<int>(mass.size())) {
-    if (force.size() != n) throw std::invalid_argument("f: expected " + std::to_string(n) + " entries");
-    if (!force.allFinite()) throw std::invalid_argument("f: must be finite");
+    finish();
+  }
+
+  // The same structure with K scaled by k_scale > 0 and damping alpha M + beta K: an ensemble's member
+  // (one SDOF per period of a spectrum). M^{-1} (k_scale K) has k_scale times the spectrum, so the
+  // certified bound scales with it and nothing is estimated again.
+  LinearStructure with_parameters(double alpha, double beta, double k_scale) const {
+    if (!(k_scale > 0.0) || !std::isfinite(k_scale)) throw std::invalid_argument("K_scale: must be finite and > 0");
+    std::shared_ptr<const SparseRowMajor> k = stiffness;
+    if (k_scale != 1.0) k = std::make_shared<const SparseRowMajor>(k_scale * *stiffness);
+    return LinearStructure(mass, std::move(k), force, alpha, beta, k_scale * damping.spectral_bound(),
+                           damping.dense() ? kMaxDenseDim : 0);
   }
 
   int size() const { return n; }
 
   double potential(const Vec& q) const {
     Eigen::VectorXd& kq = thread_scratch(kScratchProduct, n);
-    kq.noalias() = *stiffness * q;
+    if (dense_stiffness) kq.noalias() = dense_stiffness->lazyProduct(q);
+    else kq.noalias() = *stiffness * q;
     return 0.5 * q.dot(kq) - force.dot(q);
   }
 
   void gradient(const Vec& q, Vec& g) const {
-    g.noalias() = *stiffness * q;
+    if (dense_stiffness) g.noalias() = dense_stiffness->lazyProduct(q);  // inline loops, no gemv call: a few DOF
+    else g.noalias() = *stiffness * q;
     g -= force;
   }
 
-  void hessian_product(const Vec&, const Vec& v, Vec& out) const { out.noalias() = *stiffness * v; }
+  void hessian_product(const Vec&, const Vec& v, Vec& out) const {
+    if (dense_stiffness) out.noalias() = *dense_stiffness * v;
+    else out.noalias() = *stiffness * v;
+  }
 
   void momenta(const Vec&, const Vec&, double*) const {}
+
+ private:
+  // A checked K with its certified bound (with_parameters).
+  LinearStructure(Mass mass_, std::shared_ptr<const SparseRowMajor> k, const Eigen::VectorXd& f, double alpha,
+                  double beta, double bound, int dense_limit)
+      : eps(alpha > 0.0 || beta > 0.0 ? 1.0 : 0.0),
+        mass(std::move(mass_)),
+        stiffness(std::move(k)),
+        force(f),
+        damping(alpha, beta, stiffness, mass, bound, dense_limit),
+        n(static_cast<int>(mass.size())) {
+    finish();
+  }
+
+  void finish() {
+    if (force.size() != n) throw std::invalid_argument("f: expected " + std::to_string(n) + " entries");
+    if (!force.allFinite()) throw std::invalid_argument("f: must be finite");
+    if (damping.dense()) dense_stiffness = std::make_shared<const Eigen::MatrixXd>(SparseColMajor(*stiffness));
+  }
 };
 
 }  // namespace raydamp
