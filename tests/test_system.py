@@ -29,7 +29,8 @@ def _relative(a: np.ndarray, b: np.ndarray) -> float:
 @pytest.mark.parametrize("method,tableau,damped", ROWS, ids=[f"{m}-{t}" for m, t, _ in ROWS])
 def test_elastic_pendulum_as_system_matches_builtin(method, tableau, damped):
     eps = 0.1 if damped else 0.0
-    kw = dict(method=method, tableau=tableau, h=0.1, n_steps=10_000, save_every=100)
+    # divergence off: explicit Euler blows up here (J3 to 1e42), and the two blown-up runs are compared
+    kw = dict(method=method, tableau=tableau, h=0.1, n_steps=10_000, save_every=100, divergence=0)
     ours = raydamp.integrate(elastic_pendulum(eps), ELASTIC_Q0, ELASTIC_P0, **kw)
     builtin = raydamp.integrate(ElasticPendulum(eps=eps), ELASTIC_Q0, ELASTIC_P0, **kw)
     assert ours.status == builtin.status == "completed"

@@ -14,6 +14,7 @@
 
 #include "bindings.hpp"
 #include "load_binding.hpp"
+#include "raydamp/ensemble/driver.hpp"
 #include "raydamp/implicit/linear_implicit_step.hpp"
 #include "raydamp/raydamp.hpp"
 
@@ -34,37 +35,11 @@ inline py::array_t<double> to_numpy(std::vector<double>&& data, std::vector<py::
 }
 
 template <class Model>
-struct is_compiled_system : std::false_type {};
-template <class Mass, class Damping>
-struct is_compiled_system<CompiledSystem<Mass, Damping>> : std::true_type {};
-
-// Method on model from z: integrate() itself, except that a compiled system of
-// n <= 3 coordinates run by a method without a Runge-Kutta stage (sv, 3s, 2s)
-// runs with n fixed at compile time (CompiledSystem::fixed), chosen here once per
-// run. Only those methods: each size is another instantiation of the step loop per
-// kind, and the tableau methods gained nothing measurable from it (rks on the
-// elastic pendulum: 61 -> 59 ns/step, against 83 -> 67 for 3s). Single runs and
-// ensemble members both come through here, so they stay equal bit for bit.
-template <class Method, class Model>
-RunResult integrate_model(const Model& model, const ButcherTableau& tab, const Composition& comp,
-                          State<Model::dim> z, const RunSpec& spec, const Control& control) {
-  if constexpr (is_compiled_system<Model>::value && !uses_tableau<Method>()) {
-    switch (model.size()) {
-      case 1: return integrate<Method>(model.template fixed<1>(), tab, comp, State<1>{z.q, z.p}, spec, control);
-      case 2: return integrate<Method>(model.template fixed<2>(), tab, comp, State<2>{z.q, z.p}, spec, control);
-      case 3: return integrate<Method>(model.template fixed<3>(), tab, comp, State<3>{z.q, z.p}, spec, control);
-      default: break;
-    }
-  }
-  return integrate<Method>(model, tab, comp, std::move(z), spec, control);
-}
-
-template <class Model>
 py::dict run(const Model& model, const std::string& method, const std::string& tableau,
              const std::string& composition, const typename Model::Vec& q0, const typename Model::Vec& p0, double h, long n_steps, double h_last,
              long save_every, bool track_work, py::object progress, CancelToken* cancel,
              const std::vector<int>& save_dofs, const BoundLoad* load, double temperature, std::uint64_t seed,
-             std::uint64_t stream) {
+             std::uint64_t stream, double divergence) {
   const MethodEntry& entry = method_entry(method);
   require_applicable(entry, model);
   const ButcherTableau& tab = resolve_tableau(entry, tableau);
@@ -75,6 +50,7 @@ py::dict run(const Model& model, const std::string& method, const std::string& t
   spec.temperature = temperature;
   spec.seed = seed;
   spec.stream = stream;
+  spec.divergence = divergence;
   Control control;
   if (cancel) control.cancel = &cancel->flag;
   if (!progress.is_none())
@@ -120,7 +96,8 @@ void def_integrate(py::module_&) {
           py::arg("p0"), py::arg("h"), py::arg("n_steps"), py::arg("h_last"), py::arg("save_every"),
           py::arg("track_work"), py::arg("progress"), py::arg("cancel").none(true),
           py::arg("save_dofs") = std::vector<int>{}, py::arg("load").none(true) = py::none(),
-          py::arg("temperature") = 0.0, py::arg("seed") = 0, py::arg("stream") = 0);
+          py::arg("temperature") = 0.0, py::arg("seed") = 0, py::arg("stream") = 0,
+          py::arg("divergence") = kDefaultDivergence);
 }
 
 }  // namespace raydamp::bindings

@@ -1,6 +1,6 @@
 // The run_ensemble() every model kind binds as its class's integrate_ensemble: members x
 // dof initial states, per-member models, one call, the members spread over threads
-// with the GIL released (raydamp/ensemble.hpp). Saved points land in arrays
+// with the GIL released (raydamp/ensemble/driver.hpp). Saved points land in arrays
 // (member, row, ...) on the run's save grid; each worker copies its member's rows
 // there as soon as the member ends.
 #pragma once
@@ -13,9 +13,8 @@
 #include <vector>
 
 #include "run.hpp"
-#include "run_lanes.hpp"
+#include "raydamp/ensemble/driver.hpp"
 #include "raydamp/errors.hpp"
-#include "raydamp/ensemble.hpp"
 
 namespace raydamp::bindings {
 
@@ -85,7 +84,6 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
       member_load[i] = load_of(loads[j]);
     }
   }
-  const bool loaded = std::any_of(member_load.begin(), member_load.end(), [](const Load* l) { return l != nullptr; });
 
   // Every member's model, checked here, before any thread starts.
   const std::vector<int> slots = member_value_slots<Model>(names);
@@ -114,12 +112,7 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
     member_model[i] = model;
   }
 
-  // The save grid: the rows a completed run saves (every save_every steps, and the
-  // last step), at the times integrate.hpp's time_at gives them.
-  std::vector<double> grid;
-  for (long k = 0; k <= n_steps; k += save_every)
-    grid.push_back(k == n_steps && h_last != h ? (n_steps - 1) * h + h_last : k * h);
-  if (n_steps % save_every != 0) grid.push_back(h_last != h ? (n_steps - 1) * h + h_last : n_steps * h);
+  const std::vector<double> grid = save_grid(h, n_steps, h_last, save_every);  // the rows a completed run saves
   const py::ssize_t R = static_cast<py::ssize_t>(grid.size());
   const int m = momentum_count(*member_model.front());
   const double nan = std::numeric_limits<double>::quiet_NaN();
@@ -172,75 +165,13 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
     status[i] = status_name(r.status);
     message[i] = std::move(r.message);
   };
-  auto initial = [&](long i) {
-    using Vec = typename Model::Vec;
-    return State<Model::dim>{Vec(Eigen::Map<const Vec>(q0d + i * n, n)), Vec(Eigen::Map<const Vec>(p0d + i * n, n))};
-  };
   int factorisations = 0;  // of the linear implicit methods, over the whole ensemble
   {
     py::gil_scoped_release release;
+    EnsembleSpec ens{spec, first_stream, threads, vector_sine};
     with_method_for<Model>(method, [&](auto method_tag) {
-      using Method = decltype(method_tag);
-      if (temperature != 0.0) check_temperature<Method>(*member_model.front(), comp, temperature);  // once, here
-      // Refusals before the factorisations below, which can take seconds.
-      constexpr bool lanes = std::is_same_v<Model, DampedPendulum> && !uses_tableau<Method>();
-      if (vector_sine && !lanes)
-        throw std::invalid_argument("vector_sine: only the damped pendulum's 3s, 2s and sv ensembles run their "
-                                    "sines as SIMD lanes");
-      if (vector_sine && loaded) throw std::invalid_argument("vector_sine: the SIMD lanes take no load");
-      // The linear implicit methods' factorisations: made here, once per distinct model and sub-step length,
-      // before any thread starts, and read by every member of that model (each with scratch of its own).
-      std::vector<std::shared_ptr<const LinearImplicitFactors>> factors(members);
-      if constexpr (detail::has_own_stepper<Method>::value) {
-        std::map<const Model*, std::shared_ptr<const LinearImplicitFactors>> by_model;
-        for (long i = 0; i < members; ++i) {
-          auto& made = by_model[member_model[i]];
-          if (!made) made = Method::Stepper::prepare(*member_model[i], comp, spec);
-          factors[i] = made;
-        }
-        for (const auto& entry : by_model) factorisations += entry.second->count();
-      }
-      auto run_member = [&](long i) {
-        try {
-          RunSpec member_spec = spec;
-          member_spec.load = member_load[i];
-          member_spec.implicit_factors = factors[i];
-          // member i's noise: stream first_stream + i of the seed, whatever the threads (a sweep's chunk
-          // starting at member k passes first_stream = k, so streams follow the whole grid's numbering)
-          member_spec.stream = first_stream + static_cast<std::uint64_t>(i);
-          store(i, integrate_model<Method>(*member_model[i], tab, comp, initial(i), member_spec, member_control));
-        } catch (const std::invalid_argument& e) {
-          rethrow_prefixed("member " + std::to_string(i) + ": ", e);
-        }
-      };
-      if (lanes && loaded) {  // the lanes' step has no clock: one by one
-        for_each_member(members, threads, run_member, control);
-      } else if constexpr (lanes) {
-        // Runs of members sharing eps go as the lanes of one run (run_lanes.hpp).
-        const std::vector<LaneBatch> batches =
-            lane_batches(member_model, batch_lanes(members, ensemble_threads(threads, members)));
-        std::atomic<long> finished{0};
-        EnsembleControl batch_control;
-        long reported = 0;  // called under for_each_member's lock: members counts only grow, as there
-        if (control.progress)
-          batch_control.progress = [&](long, long) {
-            const long now = finished.load();
-            if (now > reported) control.progress(reported = now, members);
-          };
-        for_each_member(static_cast<long>(batches.size()), threads, [&](long b) {
-          const LaneBatch& batch = batches[b];
-          // With vector_sine every member runs as a lane, so that its sines are math::sin's.
-          if (batch.end - batch.begin < kMinLanes && !vector_sine) {
-            for (long i = batch.begin; i < batch.end; ++i) run_member(i);
-          } else {
-            run_lanes<Method>(*member_model[batch.begin], batch, tab, comp, q0d, p0d, spec, first_stream,
-                              member_control, vector_sine, store, run_member);
-          }
-          finished.fetch_add(batch.end - batch.begin);
-        }, batch_control);
-      } else {
-        for_each_member(members, threads, run_member, control);
-      }
+      factorisations = run_members<decltype(method_tag)>(member_model, member_load, q0d, p0d, tab, comp, ens,
+                                                         member_control, control, store);
       return 0;
     });
   }

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "../bindings/run_lanes.hpp"
+#include "raydamp/ensemble/driver.hpp"
 #include "check.hpp"
 #include "raydamp/ensemble.hpp"
 #include "raydamp/models/pendulum_lanes.hpp"
@@ -178,23 +178,65 @@ int main() {
   // Lane batches: about kBatchesPerThread per thread, between 32 and 256 lanes, a
   // multiple of four, and a change of eps always starts a new batch (members sharing
   // a run share eps).
-  CHECK(bindings::batch_lanes(1000, 2) == 64);  // 16 batches for 2 threads
-  CHECK(bindings::batch_lanes(1000, 1) == 128);
-  CHECK(bindings::batch_lanes(90, 1) == 32);
-  CHECK(bindings::batch_lanes(1000, 3) == 44);  // 42 rounded up
-  CHECK(bindings::batch_lanes(100, 2) == 32);
-  CHECK(bindings::batch_lanes(1000000, 2) == 256);
+  CHECK(batch_lanes(1000, 2) == 64);  // 16 batches for 2 threads
+  CHECK(batch_lanes(1000, 1) == 128);
+  CHECK(batch_lanes(90, 1) == 32);
+  CHECK(batch_lanes(1000, 3) == 44);  // 42 rounded up
+  CHECK(batch_lanes(100, 2) == 32);
+  CHECK(batch_lanes(1000000, 2) == 256);
   {
     const DampedPendulum a(0.1), b(0.2);
     std::vector<const DampedPendulum*> run(100, &a);
     for (int i = 40; i < 50; ++i) run[i] = &b;
-    const std::vector<bindings::LaneBatch> batches = bindings::lane_batches(run, 32);
+    const std::vector<LaneBatch> batches = lane_batches(run, 32);
     const std::vector<long> begins{0, 32, 40, 50, 82};
     CHECK(batches.size() == begins.size());
     for (std::size_t k = 0; k < batches.size() && k < begins.size(); ++k) {
       CHECK(batches[k].begin == begins[k]);
       CHECK(batches[k].end == (k + 1 < begins.size() ? begins[k + 1] : 100));
     }
+  }
+  // The driver (ensemble/driver.hpp): every member equals its single run bit for bit, on one thread
+  // and three, through the pendulum lanes (3s) and one by one (rks), and a member that fails ends with
+  // its own status and rows while every other member completes.
+  {
+    const long count = 24;
+    const DampedPendulum calm(0.2), wild(400.0);  // rks's Heun damping sub-step multiplies p by 181 a step
+    const double nan = std::nan("");
+    std::vector<double> q0(count), p0(count);
+    for (long i = 0; i < count; ++i) {
+      q0[i] = -2.0 + 0.17 * i;
+      p0[i] = 0.1 * (i % 4);
+    }
+    const RunSpec spec{0.05, 700, 0.05, 9};
+    const Composition& none = builtin_composition("none");
+    auto check_members = [&](auto method, const std::vector<const DampedPendulum*>& models,
+                             const std::vector<double>& q, Status failing, long kept) {
+      using Method = decltype(method);
+      for (int threads : {1, 3}) {
+        std::vector<RunResult> got(count);
+        auto store = [&](long i, RunResult&& r) { got[i] = std::move(r); };
+        EnsembleSpec ens{spec, 0, threads, false};
+        run_members<Method>(models, {}, q.data(), p0.data(), heun, none, ens, Control{}, EnsembleControl{}, store);
+        for (long i = 0; i < count; ++i) {
+          const RunResult one = integrate<Method>(*models[i], heun, none, State<1>{Vector<1>(q[i]), Vector<1>(p0[i])}, spec);
+          CHECK(got[i].status == (i == 5 ? failing : Status::completed));
+          CHECK(got[i].status == one.status && got[i].steps == one.steps && got[i].failed_step == one.failed_step);
+          CHECK(got[i].trajectory.t == one.trajectory.t);
+          CHECK(got[i].trajectory.q == one.trajectory.q);  // every saved double
+          CHECK(got[i].trajectory.p == one.trajectory.p);
+          CHECK(got[i].trajectory.energy == one.trajectory.energy);
+        }
+        CHECK(got[5].trajectory.rows() == kept && got[0].trajectory.rows() == save_rows(700, 9));
+      }
+    };
+    std::vector<const DampedPendulum*> one_wild(count, &calm);
+    one_wild[5] = &wild;
+    // member 5 overflows at step 137 (p x 181 a step): rows 0, 9, ..., 135 and its last finite state, 136
+    check_members(RungeKuttaSplitting{}, one_wild, q0, Status::non_finite, 17);
+    std::vector<double> one_nan = q0;
+    one_nan[5] = nan;  // the lane run fails at once; its members then run one by one
+    check_members(ThreeTermSplitting{}, std::vector<const DampedPendulum*>(count, &calm), one_nan, Status::non_finite, 0);
   }
   CHECK(ensemble_threads(0, 5) >= 1);
   CHECK(ensemble_threads(4, 2) == 2);

@@ -1,6 +1,8 @@
 // The step loop: saving, the final row, blow-up detection at the exact step, cancellation.
 #include <atomic>
 #include <cmath>
+#include <cstdio>
+#include <vector>
 
 #include "check.hpp"
 #include "raydamp/raydamp.hpp"
@@ -71,6 +73,43 @@ int main() {
     CHECK(sparse.trajectory.rows() == 2);  // the initial state and the last finite one
     CHECK(sparse.trajectory.p.back() == every.trajectory.p.back());
     CHECK(sparse.trajectory.t.back() == every.trajectory.t.back());
+  }
+  // Divergence (record/divergence.hpp): Heun's damping on p' = -eps p multiplies p by 1 - x + x^2/2 =
+  // 1.105 a step at x = h eps = 2.1, so p gains 1e11 over the first 256 steps and would overflow only
+  // after about 7000. The run stops "diverged" at the first check, the first block's end at or past
+  // step 256 (blocks end at the progress points, every 50 steps here: step 300), with its rows: the
+  // same bits as a run of that many steps without the test. Without it, 5000 steps "complete" at
+  // |p| ~ 1e216.
+  {
+    const DampedPendulum slow(42.0);
+    const State<1> start{Vector<1>(0.5), Vector<1>(1.0)};
+    const RunResult r = integrate<RungeKutta>(slow, heun, start, RunSpec{0.05, 5000, 0.05, 1000});
+    std::printf("%s\n", r.message.c_str());
+    CHECK(r.status == Status::diverged);
+    CHECK(r.failed_step == 300 && r.steps == 300);
+    CHECK(r.trajectory.rows() == 2 && r.trajectory.t.back() == 300 * 0.05);
+    RunSpec off{0.05, 300, 0.05, 1000};
+    off.divergence = 0.0;
+    const RunResult same = integrate<RungeKutta>(slow, heun, start, off);
+    CHECK(same.status == Status::completed && same.trajectory.p.back() == r.trajectory.p.back());
+    off.n_steps = 5000;
+    const RunResult unchecked = integrate<RungeKutta>(slow, heun, start, off);
+    CHECK(unchecked.status == Status::completed && std::abs(unchecked.trajectory.p.back()) > 1e200);
+    // The same stiff damping run by 3s, whose damping flow is exact: nothing to flag.
+    const RunResult exact = integrate<ThreeTermSplitting>(slow, heun, start, RunSpec{0.05, 5000, 0.05, 1000});
+    CHECK(exact.status == Status::completed);
+    // A bad factor is refused.
+    RunSpec bad{0.05, 10, 0.05, 1};
+    bad.divergence = -1.0;
+    CHECK(test::throws([&] { integrate<RungeKutta>(slow, heun, start, bad); }));
+  }
+  // The save grid: step 0, every save_every-th step and the last, at the times the loop saves them.
+  {
+    CHECK(save_rows(10, 3) == 5 && save_rows(9, 3) == 4 && save_rows(0, 1) == 1);
+    const std::vector<double> grid = save_grid(0.3, 4, 0.1, 3);
+    CHECK(grid.size() == 3 && grid[1] == 3 * 0.3 && grid[2] == 3 * 0.3 + 0.1);
+    const RunResult r = integrate<TwoTermSplitting>(pendulum, heun, z0, RunSpec{0.3, 4, 0.1, 3});
+    CHECK(r.trajectory.t == grid);
   }
   // Cancellation before the first block: only the initial row.
   {

@@ -1,5 +1,6 @@
-// The one step loop: fixed steps of any method on any model, with saving,
-// blow-up detection, momentum-drift tracking, progress and cancellation.
+// The one step loop: fixed steps of any method on any model. The loop advances, checks
+// (finite, not diverged: record/divergence.hpp) and cancels; a recorder observes the steps
+// and keeps the rows (record/recorder.hpp); a checkpoint holds what a replay needs.
 #pragma once
 
 #include <algorithm>
@@ -20,6 +21,10 @@
 #include "raydamp/amplification.hpp"
 #include "raydamp/composed_step.hpp"
 #include "raydamp/step.hpp"
+#include "raydamp/record/divergence.hpp"
+#include "raydamp/record/recorder.hpp"
+#include "raydamp/record/save_grid.hpp"
+#include "raydamp/run_types.hpp"
 
 #ifndef RAYDAMP_FLATTEN
 #if defined(__GNUC__) || defined(__clang__)
@@ -30,8 +35,6 @@
 #endif
 
 namespace raydamp {
-
-class LinearImplicitFactors;  // implicit/linear_implicit_factors.hpp
 
 // Whether the step loop of Model is flattened (run_block_flat). Flattening pays where
 // a step is a few dozen nanoseconds of register work that a call would interrupt: a
@@ -46,74 +49,6 @@ struct flattens_step_loop : std::bool_constant<Model::dim != Eigen::Dynamic> {};
 template <class Model>
 struct flattens_step_loop<Model, std::void_t<decltype(Model::flatten_step_loop)>>
     : std::bool_constant<Model::flatten_step_loop> {};
-
-enum class Status { completed, non_finite, cancelled, out_of_memory };
-
-inline const char* status_name(Status s) {
-  switch (s) {
-    case Status::completed: return "completed";
-    case Status::non_finite: return "non_finite";
-    case Status::out_of_memory: return "out_of_memory";
-    default: return "cancelled";
-  }
-}
-
-struct RunSpec {
-  double h = 0.1;
-  long n_steps = 0;
-  double h_last = 0.1;   // size of the final step (lands exactly on t_end)
-  long save_every = 1;
-  bool track_work = false;  // record W(t) = eps int qdot^T D qdot dt at the saved points
-  // Merge the last sub-flow of a step with the first of the next between steps
-  // that save nothing (see composed_step.hpp); false runs every step whole (tests).
-  bool merge_steps = true;
-  // The coordinates whose q and p each saved point keeps (empty: all). A large
-  // lattice saves a few sites and the scalar diagnostics, not n numbers per row.
-  std::vector<int> save_dofs{};
-  // A time-dependent load f(t) (load.hpp), or none; with track_work its work W_f is recorded too.
-  const Load* load = nullptr;
-  // Thermal noise: temperature kT > 0 turns every damping flow into its exact Ornstein-Uhlenbeck flow,
-  // its normal numbers from the Philox stream (seed, stream) (random/philox.hpp).
-  double temperature = 0.0;
-  std::uint64_t seed = 0, stream = 0;
-  // A run whose coordinates are the lanes of independent members (the pendulum ensemble's lanes):
-  // coordinate i draws its own stream, stream + i, so that lane i's noise is member i's single run's.
-  bool stream_per_coordinate = false;
-  // The linear implicit methods' factorisations, made beforehand and shared read-only (an
-  // ensemble's members: implicit/linear_implicit_factors.hpp); null: the run makes its own.
-  std::shared_ptr<const LinearImplicitFactors> implicit_factors{};
-};
-
-struct Control {
-  const std::atomic<bool>* cancel = nullptr;         // set from another thread to stop
-  std::function<void(long done, long total)> progress;  // called between blocks, a bounded number of times
-  long max_progress_calls = 100;
-};
-
-// Saved points, row-major: t[k], q[k*n + i], p[k*n + i], energy[k], momentum[k*m + j]
-// (n: the saved coordinates, all of them or RunSpec::save_dofs).
-struct Trajectory {
-  int n = 0, n_momenta = 0;
-  std::vector<double> t, q, p, energy, momentum, work;  // work: empty unless tracked
-  std::vector<double> load_work;  // W_f = int f . M^{-1} p dt; empty unless tracked with a load
-  long rows() const { return static_cast<long>(t.size()); }
-};
-
-struct RunResult {
-  Status status = Status::completed;
-  long steps = 0;          // steps taken whose result is finite
-  long failed_step = -1;   // 1-based index of the step whose result was not finite
-  std::string message;
-  // max over every step of max_j |J_j(t) - J_j(0) e^{-a t}|: the distance of the momentum maps from
-  // the law the exact flow follows, a = momentum_decay_rate(model) (0: conserved; see run_steps).
-  double max_momentum_drift = 0.0;
-  Trajectory trajectory;
-};
-
-template <class Model, int Dim>
-double energy(const Model& model, const State<Dim>& z) {
-  return model.mass.kinetic(z.p) + model.potential(z.q);
-}
 
 // The law the momentum maps J = p . xi(q) a model lists follow under its exact flow:
 // J(t) = J(0) e^{-a t}. A damping kind with A = eps D M^{-1} = a I (D = c M) gives a as
@@ -169,28 +104,12 @@ namespace detail {
 // Buffers for J(q, p), sized before the loop so that tracking allocates nothing.
 struct MomentumBuffers {
   std::vector<double> j0, j;
-  explicit MomentumBuffers(int m) : j0(m), j(m) {}
+  template <class Model, int Dim>
+  MomentumBuffers(const Model& model, const State<Dim>& z) : j0(momentum_count(model)), j(j0.size()) {
+    if (!j0.empty()) model.momenta(z.q, z.p, j0.data());
+  }
   int count() const { return static_cast<int>(j0.size()); }
 };
-
-template <class Model, int Dim, class WS>
-void save_point(const Model& model, const State<Dim>& z, double t, const WS& ws,
-                MomentumBuffers& mb, const std::vector<int>& dofs, Trajectory& out) {
-  out.t.push_back(t);
-  if (ws.track_work) out.work.push_back(ws.work);
-  if (ws.track_work && ws.load) out.load_work.push_back(ws.load_work);
-  if (dofs.empty()) {
-    out.q.insert(out.q.end(), z.q.data(), z.q.data() + z.q.size());
-    out.p.insert(out.p.end(), z.p.data(), z.p.data() + z.p.size());
-  } else {
-    for (int i : dofs) out.q.push_back(z.q[i]);
-    for (int i : dofs) out.p.push_back(z.p[i]);
-  }
-  out.energy.push_back(energy(model, z));
-  if (mb.count() == 0) return;
-  model.momenta(z.q, z.p, mb.j.data());
-  out.momentum.insert(out.momentum.end(), mb.j.begin(), mb.j.end());
-}
 
 // max_j |J_j - J_j(0) law|, law = J(t) / J(0) by momentum_decay_rate (1 when conserved).
 template <class Model, int Dim>
@@ -225,7 +144,6 @@ struct FixedMomentumDrift {
 // Steps between finiteness checks. A blown-up block is replayed step by step from
 // its start, so the failing step is found exactly without a check on every step.
 inline constexpr long kBlock = 256;
-inline constexpr long kReserveRows = 1L << 16;  // saved rows reserved before the first step
 
 namespace detail {
 
@@ -351,6 +269,98 @@ inline double run_block(const Model& model, const Tab& tab, const Stepper& stepp
     return run_block_body<Mergeable>(model, tab, stepper, ws, state, k, end, merge, track_momenta, advance, step_drift);
 }
 
+// A save that ran out of memory ends the run at its last saved row (rows are saved every save_every
+// steps from step 0), so steps and the last row agree, as for every other way a run ends.
+inline long out_of_memory(RunResult& result, long N, long save_every, long at) {
+  const long rows = result.trajectory.rows();
+  result.status = Status::out_of_memory;
+  result.message = "out of memory after saving " + std::to_string(rows) + " points (at step " + std::to_string(at) +
+                   " of " + std::to_string(N) + "); the saved points are kept: raise save_every";
+  return (rows - 1) * save_every;
+}
+
+// Whether the loop merges the last sub-flow of a step with the first of the next. First-same-as-last
+// merging needs no intermediate state except the momentum maps', which are read before the merged
+// sub-flow: an exact flow of a part of H, which conserves J, or of the damping, which conserves J or
+// scales it by a known factor (paper section 5; drift_from_law). The damping work needs the step's
+// end points: with work tracked, steps run whole. At a temperature a merged damping flow (3s's join:
+// one OU draw over h) and the two it stands for (two draws over h/2) are equal in law, not sample by
+// sample: steps then run whole, so that a seed gives one path whatever save_every, progress or a
+// replay do.
+template <class Method>
+bool merges_steps(const RunSpec& spec) {
+  if constexpr (is_mergeable<Method>()) {
+    const bool noisy_join = spec.temperature > 0.0 && is_damping_flow(Method::stages[0].flow);
+    return spec.merge_steps && !spec.track_work && !noisy_join;
+  } else {
+    return false;
+  }
+}
+
+// The momentum maps' drift from their law J(0) e^{-a t} (see momentum_decay_rate), as
+// drift(x, i, before_trail) after step i or, merged, before its last sub-flow: when that is a
+// damping flow (3s's damp), the state has then been damped for t_{i+1} minus its duration.
+template <class Method, class Model, class Stepper, class TimeAt>
+auto drift_from_law(const Model& model, MomentumBuffers& mb, const Stepper& stepper, const TimeAt& time_at) {
+  const double decay_rate = momentum_decay_rate(model);
+  auto law = [&stepper, time_at, decay_rate](long i, bool before_trail) {
+    if constexpr (decays_momenta_v<Model>) {
+      if (decay_rate != 0.0) {
+        double t = time_at(i + 1);
+        if constexpr (is_mergeable<Method>() && is_damping_flow(Method::stages[0].flow))
+          if (before_trail) t -= stepper.durations(i).trail;
+        return std::exp(-decay_rate * t);
+      }
+    }
+    static_cast<void>(stepper), static_cast<void>(i), static_cast<void>(before_trail);
+    return 1.0;
+  };
+  return [&model, &mb, law, fixed = FixedMomentumDrift<Model>(mb)](const auto& x, long i, bool before_trail) {
+    if constexpr (Model::n_momenta > 0) return fixed(model, x, law(i, before_trail));
+    else return momentum_drift(model, x, mb, law(i, before_trail));
+  };
+}
+
+// The workspace's load and noise, as spec asks.
+template <class WS>
+void hook_workspace(WS& ws, const RunSpec& spec, int n) {
+  ws.track_work = spec.track_work;
+  if (spec.load && !spec.load->empty()) {
+    if (spec.load->size() != n)
+      throw std::invalid_argument("load: made for " + std::to_string(spec.load->size()) + " coordinates, the model has " +
+                                  std::to_string(n));
+    ws.load = spec.load;
+  }
+  if (spec.temperature > 0.0) {
+    ws.sigma = std::sqrt(spec.temperature);
+    ws.noise = NormalStream(spec.seed, spec.stream);
+    if (spec.stream_per_coordinate) {
+      ws.lane_noise.clear();
+      for (int i = 0; i < n; ++i) ws.lane_noise.emplace_back(spec.seed, spec.stream + static_cast<std::uint64_t>(i));
+    }
+  }
+}
+
+// Steps k .. end-1 again, one checked step at a time, from the block's start (in z): returns the
+// first step whose result is not finite, z then the state before it, or end.
+template <class WS, class Rec, class Held, int Dim, class Advance, class Drift>
+long replay_block(WS& ws, Rec& rec, Held& before, State<Dim>& z, long k, long end, bool track_momenta,
+                  const Advance& advance, const Drift& step_drift, double& max_drift) {
+  for (long i = k; i < end; ++i) {
+    before.take(z, ws, rec, false);
+    advance(ws, z, i);
+    if (!z.all_finite()) {
+      before.restore(z, ws, rec, false);
+      return i;
+    }
+    if (track_momenta) max_drift = std::max(max_drift, step_drift(z, i, false));
+  }
+  return end;
+}
+
+// The loop: advance a block of steps, check it (finite, not diverged), save, report, cancel. The
+// recorder observes the steps and keeps the rows; a checkpoint at each block's start lets a block
+// that blew up be replayed step by step to find the failing step exactly.
 template <class Method, class Model, class Tab, int Dim>
 RunResult run_steps(const Model& model, const Tab& tab, const Composition& composition, State<Dim> z,
                     const RunSpec& spec, const Control& control) {
@@ -362,179 +372,67 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
   if constexpr (std::is_same_v<Method, ThreeTermSplitting>)
     if (model.eps == 0.0) return run_steps<StormerVerlet>(model, tab, composition, std::move(z), spec, control);
   const long N = spec.n_steps;
-  const int n = model.size();
   RunResult result;
-  Trajectory& out = result.trajectory;
-  for (int i : spec.save_dofs)
-    if (i < 0 || i >= n) throw std::invalid_argument("save_dofs: " + std::to_string(i) + " is not a coordinate");
-  out.n = spec.save_dofs.empty() ? n : static_cast<int>(spec.save_dofs.size());
-  MomentumBuffers mb(momentum_count(model));
-  out.n_momenta = mb.count();
-  // Reserved up to kReserveRows rows; past that the buffers grow at save points (never inside a
-  // block of steps), so a run asking for more rows than memory holds saves what fits and stops
-  // with out_of_memory instead of failing before its first step.
-  const long rows = std::min(N / spec.save_every + 2, kReserveRows);
-  out.t.reserve(rows);
-  out.q.reserve(rows * out.n);
-  out.p.reserve(rows * out.n);
-  out.energy.reserve(rows);
-  out.momentum.reserve(rows * mb.count());
-
   // One workspace; the flattened loop runs on it as Unhooked (no load, no noise) when it can.
-  Unhooked<WorkspaceFor<Model>> unhooked(n, tab.stages());
+  Unhooked<WorkspaceFor<Model>> unhooked(model.size(), tab.stages());
   WorkspaceFor<Model>& ws = unhooked;
-  ws.track_work = spec.track_work;
-  if (spec.track_work) out.work.reserve(rows);
-  if (spec.load && !spec.load->empty()) {
-    if (spec.load->size() != n)
-      throw std::invalid_argument("load: made for " + std::to_string(spec.load->size()) + " coordinates, the model has " +
-                                  std::to_string(n));
-    ws.load = spec.load;
-    if (spec.track_work) out.load_work.reserve(rows);
-  }
-  if (spec.temperature > 0.0) {
-    ws.sigma = std::sqrt(spec.temperature);
-    ws.noise = NormalStream(spec.seed, spec.stream);
-    if (spec.stream_per_coordinate) {
-      ws.lane_noise.clear();
-      for (int i = 0; i < n; ++i) ws.lane_noise.emplace_back(spec.seed, spec.stream + static_cast<std::uint64_t>(i));
-    }
-  }
-  // Copies made now, so the loop never allocates. The block loop steps y, a local
-  // that only inlined code sees, so the compiler can keep it in registers.
-  State<Dim> checkpoint = z, before = z;
-  State<Dim> y = Dim == Eigen::Dynamic ? State<Dim>{} : z;  // a Dynamic state is stepped in place
-  if (mb.count() > 0) model.momenta(z.q, z.p, mb.j0.data());
-  const bool track_momenta = mb.count() > 0;
-  auto time_at = [&](long k) { return k == N && spec.h_last != spec.h ? (N - 1) * spec.h + spec.h_last : k * spec.h; };
-  auto step_size = [&](long k) { return k == N - 1 ? spec.h_last : spec.h; };  // size of step k -> k+1
-
+  // Damping work by the trapezoidal rule, unless the method integrates it itself (integrates_work).
+  constexpr bool trapezoid = !integrates_work<Method>::value;
+  hook_workspace(ws, spec, model.size());
+  Recorder<Model, Dim, trapezoid> rec(model, spec, ws, result.trajectory);
+  auto time_at = [&](long k) { return step_time(k, spec.h, N, spec.h_last); };
+  auto stop = [&](Status status, long failed_step, std::string message) {
+    result.status = status;
+    result.failed_step = failed_step;
+    result.message = std::move(message);
+  };
   if (!z.all_finite()) {
-    result.status = Status::non_finite;
-    result.failed_step = 0;
-    result.message = "the initial state is not finite";
+    stop(Status::non_finite, 0, "the initial state is not finite");
     return result;
   }
-  save_point(model, z, 0.0, ws, mb, spec.save_dofs, out);
-  // A save that runs out of memory takes back its partial row, so every array keeps the same rows.
-  auto save = [&](double t) {
-    const std::size_t sizes[] = {out.t.size(), out.q.size(), out.p.size(), out.energy.size(), out.momentum.size(),
-                                 out.work.size(), out.load_work.size()};
-    try {
-      save_point(model, z, t, ws, mb, spec.save_dofs, out);
-      return true;
-    } catch (const std::bad_alloc&) {
-      out.t.resize(sizes[0]);
-      out.q.resize(sizes[1]);
-      out.p.resize(sizes[2]);
-      out.energy.resize(sizes[3]);
-      out.momentum.resize(sizes[4]);
-      out.work.resize(sizes[5]);
-      out.load_work.resize(sizes[6]);
-      return false;
-    }
-  };
-  // The run then ends at its last saved row (rows are saved every save_every steps from step 0),
-  // so steps and the last row agree, as for every other way a run ends.
-  auto out_of_memory = [&](long at) {
-    result.status = Status::out_of_memory;
-    result.message = "out of memory after saving " + std::to_string(out.rows()) + " points (at step " +
-                     std::to_string(at) + " of " + std::to_string(N) + "); the saved points are kept: raise save_every";
-    return (out.rows() - 1) * spec.save_every;
-  };
-  const long progress_every = std::max(1L, N / std::max(1L, control.max_progress_calls));
-  long next_save = spec.save_every, next_progress = progress_every, k = 0;
-  double max_drift = 0.0;
-  // Damping work by the trapezoidal rule on the step's end points, unless the
-  // method integrates it itself (see integrates_work).
-  constexpr bool trapezoid = !integrates_work<Method>::value;
-  double power = spec.track_work && trapezoid ? dissipated_power(model, z, ws) : 0.0;
-  // The load's power f(t) . M^{-1} p, by the same rule.
-  auto load_power = [&](const State<Dim>& x, double t) {
-    model.mass.velocity(x.p, ws.v);
-    return ws.load->dot(t, ws.v.data());
-  };
-  const bool track_load = spec.track_work && trapezoid && ws.load;
-  double power_f = track_load ? load_power(z, 0.0) : 0.0;
+  DivergenceGuard<Model, Dim> diverged(model, spec, z, time_at(N));
+  MomentumBuffers mb(model, z);
+  const bool track_momenta = mb.count() > 0;
+  // Copies made now, so the loop never allocates. The block loop steps y, a local
+  // that only inlined code sees, so the compiler can keep it in registers.
+  Checkpoint<Dim, typename decltype(rec)::Marks> checkpoint(z), before(z);
+  State<Dim> y = Dim == Eigen::Dynamic ? State<Dim>{} : z;  // a Dynamic state is stepped in place
+  rec.start(z);
   const auto stepper = make_stepper<Method>(model, composition, spec);
-  // First-same-as-last merging needs no intermediate state except the momentum
-  // maps', which are read before the merged sub-flow: an exact flow of a part of
-  // H, which conserves J, or of the damping, which conserves J or scales it by a
-  // known factor (paper section 5; `law` below). The damping work needs the step's
-  // end points: with work tracked, steps run whole.
   constexpr bool mergeable = is_mergeable<Method>();
-  // At a temperature a merged damping flow (3s's join: one OU draw over h) and the two it stands for (two
-  // draws over h/2) are equal in law, not sample by sample: steps then run whole, so that a seed gives one
-  // path whatever save_every, progress or a replay do.
-  bool noisy_join = false;
-  if constexpr (mergeable) noisy_join = spec.temperature > 0.0 && is_damping_flow(Method::stages[0].flow);
-  const bool merge = mergeable && spec.merge_steps && !spec.track_work && !noisy_join;
-  // The momentum maps' drift from their law J(0) e^{-a t} (see momentum_decay_rate), after
-  // step i or, merged, before its last sub-flow: when that is a damping flow (3s's damp),
-  // the state has then been damped for t_{i+1} minus its duration.
-  const double decay_rate = momentum_decay_rate(model);
-  auto law = [&](long i, bool before_trail) {
-    if constexpr (decays_momenta_v<Model>) {
-      if (decay_rate != 0.0) {
-        double t = time_at(i + 1);
-        if constexpr (mergeable && is_damping_flow(Method::stages[0].flow))
-          if (before_trail) t -= stepper.durations(i).trail;
-        return std::exp(-decay_rate * t);
-      }
-    }
-    return 1.0;
-  };
-  auto step_drift = [&, fixed = FixedMomentumDrift<Model>(mb)](const State<Dim>& x, long i, bool before_trail) {
-    if constexpr (Model::n_momenta > 0) return fixed(model, x, law(i, before_trail));
-    else return momentum_drift(model, x, mb, law(i, before_trail));
-  };
-  // The trapezoid's points: a composed step's stage boundaries (see ComposedStepper::step_by_stage).
-  auto trapezoid_point = [&](const State<Dim>& x, double dt, double t) {
-    const double next = dissipated_power(model, x, ws);
-    ws.work += 0.5 * dt * (power + next);
-    power = next;
-    if (track_load) {
-      const double next_f = load_power(x, t);
-      ws.load_work += 0.5 * dt * (power_f + next_f);
-      power_f = next_f;
-    }
-  };
+  const bool merge = merges_steps<Method>(spec);
+  const auto step_drift = drift_from_law<Method>(model, mb, stepper, time_at);
   auto advance = [&](auto& w, State<Dim>& x, long i) {  // w: ws, or the same as Unhooked
     if (ws.load) ws.time = time_at(i);
     if constexpr (trapezoid && has_step_by_stage<std::decay_t<decltype(stepper)>>::value) {
-      if (spec.track_work && stepper.stages() > 1) {
+      if (rec.tracks_work() && stepper.stages() > 1) {  // the trapezoid's points: the stage boundaries
         double t = time_at(i);
-        stepper.step_by_stage(model, tab, x, i, w, [&](double dt) { trapezoid_point(x, dt, t += dt); });
+        stepper.step_by_stage(model, tab, x, i, w, [&](double dt) { rec.on_step(x, dt, t += dt); });
         return;
       }
     }
     stepper.step(model, tab, x, i, w);
-    if constexpr (trapezoid) {
-      if (spec.track_work) trapezoid_point(x, step_size(i), time_at(i + 1));
-    }
+    rec.on_step(x, i == N - 1 ? spec.h_last : spec.h, time_at(i + 1));
   };
-
+  const long progress_every = std::max(1L, N / std::max(1L, control.max_progress_calls));
+  long next_save = spec.save_every, next_progress = progress_every, k = 0;
+  double max_drift = 0.0;
   while (k < N) {
     if (control.cancel && control.cancel->load(std::memory_order_relaxed)) {
-      result.status = Status::cancelled;
-      result.message = "cancelled after " + std::to_string(k) + " of " + std::to_string(N) + " steps";
+      stop(Status::cancelled, -1, "cancelled after " + std::to_string(k) + " of " + std::to_string(N) + " steps");
       break;
     }
     const long end = std::min({N, next_save, next_progress, k + kBlock});
-    checkpoint = z;
-    const double checkpoint_work = ws.work, checkpoint_power = power, checkpoint_load_work = ws.load_work,
-                 checkpoint_power_f = power_f;
+    checkpoint.take(z, ws, rec);  // a replay draws the same noise
     ws.time = time_at(k);  // the merged loop's clock; advance() sets it per step
-    ws.save_noise();  // a replay draws the same noise
     double block_drift = 0.0;
     if constexpr (Dim == Eigen::Dynamic) {  // stepped in place (see run_block)
       block_drift = run_block<mergeable>(model, tab, stepper, ws, z, k, end, merge, track_momenta, advance, step_drift);
     } else {
       y = z;
       bool plain = false;  // a flattened loop without load or noise runs Unhooked (workspace.hpp)
-      if constexpr (flattens_step_loop<Model>::value) plain = !ws.load && ws.sigma == 0.0;
       if constexpr (flattens_step_loop<Model>::value) {
-        if (plain)
+        if ((plain = !ws.load && ws.sigma == 0.0))
           block_drift =
               run_block<mergeable>(model, tab, stepper, unhooked, y, k, end, merge, track_momenta, advance, step_drift);
       }
@@ -543,44 +441,27 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
       z = y;
     }
     if (!z.all_finite()) {
-      // Replay the block one checked step at a time from its start.
-      z = checkpoint;
-      ws.work = checkpoint_work;
-      power = checkpoint_power;
-      ws.load_work = checkpoint_load_work;
-      power_f = checkpoint_power_f;
-      ws.restore_noise();
-      long i = k;
-      for (; i < end; ++i) {
-        before = z;
-        const double work_before = ws.work, load_work_before = ws.load_work;
-        advance(ws, z, i);
-        if (!z.all_finite()) {
-          z = before;
-          ws.work = work_before;
-          ws.load_work = load_work_before;
-          break;
-        }
-        if (track_momenta) max_drift = std::max(max_drift, step_drift(z, i, false));
-      }
+      checkpoint.restore(z, ws, rec);
+      const long i = replay_block(ws, rec, before, z, k, end, track_momenta, advance, step_drift, max_drift);
       if (i < end) {
         k = i;
-        result.status = Status::non_finite;
-        result.failed_step = i + 1;
-        result.message = "the state stopped being finite at step " + std::to_string(i + 1) + " (t = " +
-                         std::to_string(time_at(i + 1)) + "); the last finite state is saved";
+        stop(Status::non_finite, i + 1, "the state stopped being finite at step " + std::to_string(i + 1) +
+                                            " (t = " + std::to_string(time_at(i + 1)) + "); the last finite state is saved");
         break;
       }
       // The steps one at a time stayed finite where the merged block did not (their roundings differ, and a run
-      // at the edge of stability can go either way): the run goes on from the replay's end. (It stopped here,
-      // "non_finite" at a step past the block, with a finite state saved.)
+      // at the edge of stability can go either way): the run goes on from the replay's end.
     } else {
       max_drift = std::max(max_drift, block_drift);
     }
     k = end;
+    if (diverged.check(z, k, N, time_at(k))) {
+      stop(Status::diverged, k, diverged.message(k, time_at(k)));
+      break;
+    }
     if (k == next_save) {
-      if (!save(time_at(k))) {
-        k = out_of_memory(k);
+      if (!rec.save(z, time_at(k))) {
+        k = out_of_memory(result, N, spec.save_every, k);
         break;
       }
       next_save += spec.save_every;
@@ -591,7 +472,8 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
     }
   }
   // The final state is always the last row, saved or not by save_every.
-  if (out.t.back() != time_at(k) && result.status != Status::out_of_memory && !save(time_at(k))) k = out_of_memory(k);
+  if (result.trajectory.t.back() != time_at(k) && result.status != Status::out_of_memory && !rec.save(z, time_at(k)))
+    k = out_of_memory(result, N, spec.save_every, k);
   if (control.progress && result.status == Status::completed && next_progress - progress_every != N) control.progress(N, N);
   result.steps = k;
   result.max_momentum_drift = max_drift;

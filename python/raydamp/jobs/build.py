@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 from pydantic import ValidationError
 
+from .. import _core
 from .._validation import span
 from ..loads.forms import plain_json
 from .errors import JobError, head_path
@@ -145,6 +146,8 @@ def build_job(spec: JobSpec, files: FileResolver | None = None) -> JobCall:
             options[key] = getattr(spec, key)
     if spec.save_dofs is not None:
         options["save_dofs"] = list(spec.save_dofs)
+    if spec.divergence != _core.DEFAULT_DIVERGENCE:
+        options["divergence"] = spec.divergence
     if spec.temperature:
         options.update({"temperature": spec.temperature, "seed": spec.seed, "stream": spec.stream})
     load = job_load(spec, files)

@@ -14,6 +14,7 @@ from typing import Annotated, Any
 from pydantic import AfterValidator, AliasChoices, BaseModel, ConfigDict, Discriminator, Field, PrivateAttr, Tag, \
     WithJsonSchema, field_serializer, model_validator
 
+from .. import _core
 from ..loads.forms import LOAD_TAGS, GroundMotionInput, LoadInput
 from ..methods.catalogue import compositions, methods
 from ..systems.models import MODELS, make_model
@@ -192,6 +193,10 @@ class JobSpec(ModelSpec):
                                                                   "result's provenance)")
     stream: int = Field(0, ge=0, le=2**64 - 1, description="which stream of the seed; a sweep's member k draws stream "
                                                               "stream + k")
+    divergence: FiniteFloat = Field(_core.DEFAULT_DIVERGENCE, ge=0, description=(
+        "the divergence test's factor G: a run whose energy gains more than G times what its start, its load and "
+        "its temperature can give it stops with status \"diverged\", keeping its rows (raydamp.integrate's "
+        "divergence documents the rule); 0 turns the test off"))
     _h_key: str = PrivateAttr("h")
 
     @model_validator(mode="wrap")

@@ -9,9 +9,11 @@ Non-finite numbers are None (JSON null).
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from .statuses import STATUSES
 
 __all__ = ["JobSummary", "summary_values"]
 
@@ -19,7 +21,7 @@ __all__ = ["JobSummary", "summary_values"]
 class JobSummary(BaseModel):
     """raydamp's Solution.summary(): the scalar results of a run (non-finite numbers as null)."""
 
-    status: str = Field(description="completed, non_finite (a blow-up), out_of_memory or cancelled")
+    status: Literal[STATUSES] = Field(description="why the run stopped (raydamp.jobs.statuses documents each)")
     message: str
     method: str
     tableau: str | None

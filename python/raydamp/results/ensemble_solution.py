@@ -11,11 +11,10 @@ import numpy as np
 from ..loads.load import set_load_parameters
 
 from .solution import Solution
+from ..jobs.statuses import STATUSES
 
 __all__ = ["EnsembleSolution", "STATUSES"]
 
-# Status codes in files (NetCDF and Zarr keep numbers better than strings).
-STATUSES = ("completed", "non_finite", "cancelled", "out_of_memory")
 
 
 @dataclass(frozen=True, repr=False)
@@ -23,8 +22,8 @@ class EnsembleSolution:
     """Saved points of every member of an ensemble, and why each stopped.
 
     Rows lie on the run's save grid ``t`` (every ``save_every`` steps from 0, and the
-    last step): ``q[i, k]`` is member i at ``t[k]``. A member that stopped early (status
-    "non_finite", "cancelled", "out_of_memory") keeps its first ``rows[i]`` rows, the
+    last step): ``q[i, k]`` is member i at ``t[k]``. A member that stopped early (any status
+    but "completed": see raydamp.jobs.statuses) keeps its first ``rows[i]`` rows, the
     rest NaN; its last finite state, saved or not by the grid, is in ``q_final[i]``
     (at ``t_final[i]``), as for every member.
 

@@ -18,7 +18,7 @@ __all__ = ["PROVENANCE_KEYS", "job_spec"]
 def job_spec(model: Model, q0: np.ndarray, p0: np.ndarray, *, method: str, tableau: str | None,
              composition: str | None, h: float, t_end: float | None, n_steps: int | None, save_every: int,
              work: bool, save_dofs: list[int] | None = None, load=None, thermal=None,
-             method_reason: str | None = None) -> dict[str, Any]:
+             method_reason: str | None = None, divergence: float | None = None) -> dict[str, Any]:
     """The job spec of a run: what Solution.provenance holds; ``method_reason`` says why the method was
     chosen when the run named none (raydamp.run.choose_method)."""
     spec = describe_model(model)
@@ -28,6 +28,8 @@ def job_spec(model: Model, q0: np.ndarray, p0: np.ndarray, *, method: str, table
         spec["method_reason"] = method_reason
     if save_dofs is not None:
         spec["save_dofs"] = list(save_dofs)
+    if divergence is not None:
+        spec["divergence"] = divergence
     if load is not None:
         spec["load"] = load.to_dict()
     if thermal is not None:

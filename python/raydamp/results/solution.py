@@ -24,10 +24,10 @@ class Solution:
     q, p : (N, n) positions and momenta (N, k with ``save_dofs``: the coordinates in ``dofs``).
     energy : (N,) H(q, p).
     momentum : (N, m) the model's momentum maps (m = 0 for a model without symmetry).
-    status : "completed", "out_of_memory" (the saved points outgrew memory: those that fit are
-        kept, the message says where; raise save_every), "non_finite" (the state overflowed; ``failed_step`` is the
-        first step whose result was not finite and every saved row is finite) or
-        "cancelled".
+    status : why the run stopped, one of raydamp.jobs.statuses.STATUSES (documented there):
+        "completed", "non_finite" (``failed_step`` is the first step whose result was not finite and
+        every saved row is finite), "diverged" (the energy blew up while the state stayed finite;
+        ``failed_step`` is the step after which the test found it), "cancelled" or "out_of_memory".
     steps : steps taken (all with finite results).
     max_momentum_drift : the largest distance, over every step, of the momentum maps from the
         law the exact flow gives them: max_j |J_j(t) - J_j(0) e^{-a t}|. a = eps c when the

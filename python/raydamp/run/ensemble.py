@@ -16,6 +16,7 @@ from ..results.ensemble_solution import EnsembleSolution
 from ..systems.models import Model
 from .choose_method import choose_method
 from .integrate import MAX_SAVED_BYTES, MAX_STEPS, CancelToken, _catalogue, span
+from .save_grid import save_rows
 
 __all__ = ["integrate_ensemble", "member_parameters"]
 
@@ -174,7 +175,7 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
     if cancel is not None and not isinstance(cancel, _core.CancelToken):
         raise ValueError(f"cancel must be a raydamp.CancelToken or None, got {cancel!r}")
     vector_sine = flag("vector_sine", vector_sine)
-    rows = n_steps // save_every + 2
+    rows = save_rows(n_steps, save_every)
     row_bytes = 8 * (1 + 2 * n + len(system.momentum_names))
     if members * rows * row_bytes > MAX_SAVED_BYTES:
         raise ValueError(f"save_every: {members} members x {rows} saved points would take "

@@ -24,6 +24,8 @@ __all__ = ["integrate", "steps_for", "row_bytes", "CancelToken", "MAX_SAVED_BYTE
 MAX_SAVED_BYTES = 4 * 2**30
 # The amplification guard's limit for compositions (see integrate's ``composition``), from the core.
 MAX_AMPLIFICATION: float = _core.MAX_AMPLIFICATION
+# The divergence test's default factor (see integrate's ``divergence``), from the core.
+DEFAULT_DIVERGENCE: float = _core.DEFAULT_DIVERGENCE
 
 
 class CancelToken(_core.CancelToken):
@@ -37,7 +39,7 @@ class CancelToken(_core.CancelToken):
 def row_bytes(model: Model, save_dofs=None, *, work: bool = False, load: Load | None = None) -> int:
     """Bytes of one saved point of ``integrate(model, ..., save_dofs=, work=, load=)``, all float64: t and the
     energy, q and p of the saved coordinates, the momentum maps, W with ``work``, and W_f with ``work`` and a
-    load that has terms. A run keeps ``n_steps // save_every + 2`` points at most."""
+    load that has terms. A run keeps ``raydamp.run.save_grid.save_rows(n_steps, save_every)`` points at most."""
     saved = model.dim if save_dofs is None else len(save_dofs)
     recorded = (1 + _loaded(load)) if work else 0
     return 8 * (2 + 2 * saved + len(model.momentum_names) + recorded)
@@ -93,7 +95,7 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
               composition: str | None = None, work: bool = False, save_dofs=None,
               progress: bool | Callable[[int, int], object] | None = None,
               cancel: CancelToken | None = None, load: Load | None = None, temperature: float | None = None,
-              seed: int | None = None, stream: int = 0) -> Solution:
+              seed: int | None = None, stream: int = 0, divergence: float = DEFAULT_DIVERGENCE) -> Solution:
     """Integrate ``model`` from (q0, p0) with fixed steps of size ``h``.
 
     Parameters
@@ -172,6 +174,16 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
         Either way ``Solution.provenance`` keeps it, so the run repeats bit for bit.
     stream : which stream of the seed (Philox-4x32-10, counter-based): ensemble member i uses
         stream i, so ``integrate(..., seed=s, stream=i)`` is that member alone.
+    divergence : the divergence test's factor G (default 1e6; 0 turns the test off). A run whose state is
+        still finite but whose energy H = T + V has gained more than G times everything its start, its
+        load and its temperature can give it stops with status "diverged", keeping its rows. Damping only
+        takes energy away, so the gain is bounded by the load's work and the thermal input; the test
+        compares H(t) - H(0) with G S(t), S(t) = T(0) + |V(0)| + (t F)^2 + n kT, F the largest
+        |f(t)|_{M^-1} of the load, and requires the gain to be at least half of T(t) + |V(t)| (so the
+        rounding of a large T and V that cancel, an orbit escaping to infinity, never trips it). It runs
+        every 256 steps and at the end; a blow-up that overflows before a check ends "non_finite". An
+        expression load's F is sampled (4096 times over the run and at each check): a pulse narrower
+        than that from rest can go unseen, so such a run may want ``divergence=0``.
 
     The step loop runs in C++ with the GIL released.
     """
@@ -192,6 +204,7 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
     q0 = model.check_configuration("q0", _state("q0", q0, dim))
     p0 = _state("p0", p0, dim)
     save_every = integer("save_every", save_every, maximum=MAX_STEPS)
+    divergence = real("divergence", divergence, nonnegative=True)
     n_steps, h_last = span(h, t_end, n_steps)
     bar = None
     if progress is True or progress is False:
@@ -209,7 +222,7 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
     else:
         kT, seed, stream = thermal(temperature, seed, stream)
     dofs = _save_dofs(save_dofs, dim)
-    rows = n_steps // save_every + 2
+    rows = _core.save_rows(n_steps, save_every)  # run/save_grid.py
     size = rows * row_bytes(model, dofs, work=work, load=load)
     if size > MAX_SAVED_BYTES:
         raise ValueError(f"save_every: {rows} saved points would take {size / 2**30:.1f} GiB "
@@ -220,7 +233,7 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
         # positional: pybind11 matches keyword arguments by name, a microsecond of a short call
         out = model._core_model.integrate(method, tableau_name, composition or "", q0, p0, h, n_steps, h_last,
                                           save_every, work, progress, cancel, [] if dofs is None else dofs,
-                                          core_load, kT, seed, stream)
+                                          core_load, kT, seed, stream, divergence)
     except ValueError as error:  # the core names the method it runs ("rk" for "rk4"): the caller's name here
         named = re.sub(r"^temperature: method '[^']*'", f"temperature: method {method!r}", str(error))
         if named == str(error):
@@ -248,7 +261,8 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
                         "t_end": t_end, "n_steps": None if t_end is not None else n_steps,
                         "save_every": save_every, "work": work, "save_dofs": dofs,
                         "load": load if core_load is not None else None,
-                        "thermal": (kT, seed, stream) if kT > 0 else None, "method_reason": method_reason}))
+                        "thermal": (kT, seed, stream) if kT > 0 else None, "method_reason": method_reason,
+                        "divergence": None if divergence == DEFAULT_DIVERGENCE else divergence}))
 
 
 def _bar(n_steps: int):

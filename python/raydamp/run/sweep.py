@@ -34,6 +34,7 @@ from .ensemble import integrate_ensemble
 from .choose_method import choose_method
 from .cluster import local_cluster
 from .integrate import MAX_SAVED_BYTES, CancelToken, _catalogue, span
+from .save_grid import save_grid
 
 __all__ = ["sweep", "check_sweep", "SweepPlan", "GridTooLarge", "parse_grid_item", "SPEC_KEYS", "RUN_ARGUMENTS"]
 
@@ -315,13 +316,10 @@ def _plan(options: dict[str, Any], axes: dict[str, np.ndarray], labels: dict[str
 
 
 def _grid_times(run: dict[str, Any]) -> np.ndarray:
-    """The save grid of a run, as the core computes it (integrate.hpp's time_at)."""
+    """The save grid of a run (the core's, save_grid)."""
     h, save_every = run["h"], integer("save_every", run["save_every"])
     n, h_last = span(h, run.get("t_end"), run.get("n_steps"))
-    ks = list(range(0, n + 1, save_every))
-    if n % save_every:
-        ks.append(n)
-    return np.array([(n - 1) * h + h_last if k == n and h_last != h else k * h for k in ks])
+    return save_grid(h, n, h_last, save_every)
 
 
 # How often a running chunk asks the scheduler whether its sweep was cancelled (one small message).

@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 from raydamp.jobs import JobSpec
+from raydamp.jobs.statuses import FAILED
 
 from ..checks.pool import CheckPool, build_for_run, checked_inline
 from ..config import Settings
@@ -187,7 +188,7 @@ class JobWork:
         quick = checked_inline(spec) and planned_steps(spec) * call.model.dim < _QUICK_WORK
         solution = call.run(progress=None if quick else run.report, cancel=run.token)
         result = {"summary": solution.summary(), "trajectory": TrajectoryArrays.of(solution)}
-        if solution.status in ("non_finite", "out_of_memory"):
+        if solution.status in FAILED:
             # A blow-up (or a trajectory that outgrew memory) is a failed job that keeps everything
             # computed up to it.
             return Outcome("failed", solution.message, run.progress, {**result, "failed_step": solution.failed_step})

@@ -9,10 +9,11 @@
 #include <vector>
 
 #include "raydamp/errors.hpp"
-#include "raydamp/raydamp.hpp"
+#include "raydamp/integrate.hpp"
+#include "raydamp/models/damped_pendulum.hpp"
 #include "raydamp/models/pendulum_lanes.hpp"
 
-namespace raydamp::bindings {
+namespace raydamp {
 
 struct LaneBatch {
   long begin, end;  // members [begin, end)
@@ -116,4 +117,4 @@ void run_lanes(const DampedPendulum& member, const LaneBatch& batch, const Butch
   }
 }
 
-}  // namespace raydamp::bindings
+}  // namespace raydamp

@@ -1,0 +1,82 @@
+// What a run is asked (RunSpec, Control) and what it gives back (RunResult, Trajectory).
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "raydamp/load.hpp"
+#include "raydamp/state.hpp"
+#include "raydamp/status.hpp"
+
+namespace raydamp {
+
+class LinearImplicitFactors;  // implicit/linear_implicit_factors.hpp
+
+// The divergence test's default factor (record/divergence.hpp): a run is diverged once its energy has
+// gained more than this many times everything its start, its load and its temperature can give it.
+inline constexpr double kDefaultDivergence = 1e6;
+
+struct RunSpec {
+  double h = 0.1;
+  long n_steps = 0;
+  double h_last = 0.1;   // size of the final step (lands exactly on t_end)
+  long save_every = 1;
+  bool track_work = false;  // record W(t) = eps int qdot^T D qdot dt at the saved points
+  // Merge the last sub-flow of a step with the first of the next between steps
+  // that save nothing (see composed_step.hpp); false runs every step whole (tests).
+  bool merge_steps = true;
+  // The coordinates whose q and p each saved point keeps (empty: all). A large
+  // lattice saves a few sites and the scalar diagnostics, not n numbers per row.
+  std::vector<int> save_dofs{};
+  // A time-dependent load f(t) (load.hpp), or none; with track_work its work W_f is recorded too.
+  const Load* load = nullptr;
+  // Thermal noise: temperature kT > 0 turns every damping flow into its exact Ornstein-Uhlenbeck flow,
+  // its normal numbers from the Philox stream (seed, stream) (random/philox.hpp).
+  double temperature = 0.0;
+  std::uint64_t seed = 0, stream = 0;
+  // A run whose coordinates are the lanes of independent members (the pendulum ensemble's lanes):
+  // coordinate i draws its own stream, stream + i, so that lane i's noise is member i's single run's.
+  bool stream_per_coordinate = false;
+  // The linear implicit methods' factorisations, made beforehand and shared read-only (an
+  // ensemble's members: implicit/linear_implicit_factors.hpp); null: the run makes its own.
+  std::shared_ptr<const LinearImplicitFactors> implicit_factors{};
+  // The divergence test's factor G (record/divergence.hpp); 0 turns the test off.
+  double divergence = kDefaultDivergence;
+};
+
+struct Control {
+  const std::atomic<bool>* cancel = nullptr;         // set from another thread to stop
+  std::function<void(long done, long total)> progress;  // called between blocks, a bounded number of times
+  long max_progress_calls = 100;
+};
+
+// Saved points, row-major: t[k], q[k*n + i], p[k*n + i], energy[k], momentum[k*m + j]
+// (n: the saved coordinates, all of them or RunSpec::save_dofs).
+struct Trajectory {
+  int n = 0, n_momenta = 0;
+  std::vector<double> t, q, p, energy, momentum, work;  // work: empty unless tracked
+  std::vector<double> load_work;  // W_f = int f . M^{-1} p dt; empty unless tracked with a load
+  long rows() const { return static_cast<long>(t.size()); }
+};
+
+struct RunResult {
+  Status status = Status::completed;
+  long steps = 0;          // steps taken whose result is finite
+  long failed_step = -1;   // 1-based index of the step whose result was not finite, or after which it diverged
+  std::string message;
+  // max over every step of max_j |J_j(t) - J_j(0) e^{-a t}|: the distance of the momentum maps from
+  // the law the exact flow follows, a = momentum_decay_rate(model) (0: conserved; see run_steps).
+  double max_momentum_drift = 0.0;
+  Trajectory trajectory;
+};
+
+template <class Model, int Dim>
+double energy(const Model& model, const State<Dim>& z) {
+  return model.mass.kinetic(z.p) + model.potential(z.q);
+}
+
+}  // namespace raydamp
