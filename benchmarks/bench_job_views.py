@@ -23,7 +23,6 @@ import time
 from pathlib import Path
 
 import httpx
-
 from bench_service_systems import cpu_seconds, start_server  # one way to start and time a server
 
 SMALL = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "h": 0.01, "n_steps": 100,

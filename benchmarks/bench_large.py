@@ -28,8 +28,6 @@ import subprocess
 import sys
 from pathlib import Path
 
-import numpy as np
-
 import raydamp
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))

@@ -25,8 +25,8 @@ import time
 import numpy as np
 
 import raydamp
-from raydamp.systems.expressions import parse
 from raydamp.models import ElasticPendulum
+from raydamp.systems.expressions import parse
 from raydamp.systems.system.compile import compile_system
 from raydamp.systems.system.spec import normalise
 

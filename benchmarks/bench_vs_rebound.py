@@ -77,8 +77,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-import raydamp
 from scipy.integrate import solve_ivp
+
+import raydamp
 
 try:
     import rebound

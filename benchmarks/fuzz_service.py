@@ -29,9 +29,8 @@ from collections import Counter
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_service_load import start_server  # noqa: E402 - the benchmarks' own server starter
-
 import httpx  # noqa: E402
+from bench_service_load import start_server  # noqa: E402 - the benchmarks' own server starter
 
 SMALL = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "h": 0.1, "n_steps": 200,
          "initial_state": {"q": [0.9 * math.pi], "p": [0.0]}}

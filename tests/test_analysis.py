@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.linalg
+from paper import ELASTIC_P0, ELASTIC_Q0, PENDULUM_P0, PENDULUM_Q0
 
 import raydamp
-from paper import ELASTIC_P0, ELASTIC_Q0, PENDULUM_P0, PENDULUM_Q0
 from raydamp.analysis import (
     cartesian_state,
     convergence,

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from paper import paper_problem
 
 import raydamp
-from paper import paper_problem
 
 H_HUGE = 2.5  # Heun's amplification on the elastic pendulum's spring mode at this h is > 1
 # These tests are of the finiteness check and its replay: the divergence test (which would stop these runs

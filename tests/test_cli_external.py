@@ -4,11 +4,11 @@ that way, never by an import in the library, and says in one line when the servi
 from __future__ import annotations
 
 import sys
-import tomllib
 from importlib.metadata import EntryPoint
 from pathlib import Path
 
 import pytest
+import tomllib
 
 import raydamp.cli.external as external
 from raydamp.cli import main

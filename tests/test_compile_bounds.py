@@ -5,6 +5,7 @@ Hessian product and took LLVM half a minute; it is refused before compiling, nam
 from __future__ import annotations
 
 import pytest
+
 import raydamp
 from raydamp.jobs import JobError, job_arguments
 from raydamp.systems.system.compile import MAX_OPERATIONS

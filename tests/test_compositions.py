@@ -9,10 +9,10 @@ import re
 
 import numpy as np
 import pytest
-
-import raydamp
 import systems
 from paper import fitted_slope, paper_problem, reference
+
+import raydamp
 
 COMPOSITIONS = [("yoshida4", 4), ("suzuki4", 4), ("kahan_li6", 6), ("mclachlan8", 8), ("kahan_li8", 8)]
 BASES = [("3s", None), ("2s", None), ("rks", "midpoint")]

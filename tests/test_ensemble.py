@@ -7,9 +7,9 @@ import math
 
 import numpy as np
 import pytest
+import systems
 
 import raydamp
-import systems
 from raydamp.jobs import job_arguments
 from raydamp.models import DampedPendulum, ElasticPendulum
 

@@ -8,11 +8,11 @@ import math
 
 import numpy as np
 import pytest
-
-import raydamp
 import systems
 from fe_plate import plate
 from test_ensemble import same
+
+import raydamp
 
 
 def fput_chain(boundary: str = "fixed") -> raydamp.Chain:

@@ -6,10 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from test_ensemble import same
 
 import raydamp
 from raydamp.models import DampedPendulum, ElasticPendulum
-from test_ensemble import same
 
 ELASTIC_Q0 = [0.0, 1.5, -0.6]
 

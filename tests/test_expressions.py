@@ -10,8 +10,19 @@ import pickle
 import pytest
 import symengine as se
 
-from raydamp.systems.expressions import (FUNCTIONS, MAX_DEPTH, MAX_EXPONENT, MAX_LENGTH, MAX_NODES, Binary, Expression,
-                                 Name, Number, Unary, parse)
+from raydamp.systems.expressions import (
+    FUNCTIONS,
+    MAX_DEPTH,
+    MAX_EXPONENT,
+    MAX_LENGTH,
+    MAX_NODES,
+    Binary,
+    Expression,
+    Name,
+    Number,
+    Unary,
+    parse,
+)
 
 ELASTIC = {"x": "coordinate", "y": "coordinate", "z": "coordinate",
            "k": "parameter", "l": "parameter", "m": "parameter", "g": "parameter"}

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from paper import reference
+
 from raydamp.models import DampedPendulum, ElasticPendulum
 
 STATES = {

@@ -9,14 +9,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import symengine as se
+from paper import ELASTIC_P0, ELASTIC_Q0
+from systems import elastic_pendulum
 
 import raydamp
 from raydamp import _core
 from raydamp.systems.system import compile as compile_module
 from raydamp.systems.system.compile import _projection, _times_inverse, evaluate, fused_body, number
-
-from paper import ELASTIC_P0, ELASTIC_Q0
-from systems import elastic_pendulum
 
 SPRING = "k/2*(sqrt((x1-x2)^2 + (y1-y2)^2) - 1)^2"
 LENGTH = "sqrt((x1-x2)^2 + (y1-y2)^2)"

@@ -6,12 +6,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-import raydamp
 from fe_plate import plate
-from raydamp.models import DampedPendulum
 from test_ensemble import same
 from test_implicit_structure import damped_plate
+
+import raydamp
+from raydamp.models import DampedPendulum
 
 IMPLICIT = ["midpoint", "gauss4"]
 

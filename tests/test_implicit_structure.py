@@ -9,10 +9,10 @@ import pytest
 import scipy.linalg
 import scipy.sparse as sparse
 import scipy.sparse.linalg as sla
-
-import raydamp
 from fe_plate import plate
 from paper import fitted_slope
+
+import raydamp
 from raydamp.methods.catalogue import linear_structure_methods
 from raydamp.models import DampedPendulum
 

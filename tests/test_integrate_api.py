@@ -4,14 +4,14 @@ from __future__ import annotations
 
 import math
 import threading
-import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
+import tomllib
+from paper import ELASTIC_P0, ELASTIC_Q0, PENDULUM_P0, PENDULUM_Q0, paper_problem
 
 import raydamp
-from paper import ELASTIC_P0, ELASTIC_Q0, PENDULUM_P0, PENDULUM_Q0, paper_problem
 from raydamp.models import DampedPendulum, ElasticPendulum
 
 

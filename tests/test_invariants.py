@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from paper import paper_problem
 
 import raydamp
-from paper import paper_problem
 
 SPLITTINGS = [("3s", None), ("2s", None), ("rks", "heun"), ("rks", "rk4"), ("rks", "midpoint"), ("rks", "euler")]
 

@@ -5,6 +5,7 @@ and a sweep's save grid count the same steps and say the same thing when the spa
 from __future__ import annotations
 
 import pytest
+
 import raydamp
 from raydamp.jobs import JobError, parse_job, planned_steps
 from raydamp.models import DampedPendulum

@@ -5,8 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-import raydamp
 from pydantic import ValidationError
+
+import raydamp
 from raydamp.jobs import JobError, JobSpec, SweepSpec, client_path, job_arguments, parse_job
 from raydamp.models import DampedPendulum
 

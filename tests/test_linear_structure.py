@@ -15,9 +15,9 @@ import pytest
 import scipy.io
 import scipy.sparse
 import scipy.sparse.linalg as sla
+from fe_plate import plate
 
 import raydamp
-from fe_plate import plate
 
 
 def _relative(a, b) -> float:

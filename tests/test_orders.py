@@ -6,10 +6,10 @@ import functools
 
 import numpy as np
 import pytest
+from paper import fitted_slope, paper_problem, reference
 
 import raydamp
 from raydamp.methods.catalogue import linear_structure_methods
-from paper import fitted_slope, paper_problem, reference
 
 HS = [0.1, 0.05, 0.025, 0.0125]
 T = 10.0

@@ -159,6 +159,7 @@ def test_python_section_as_one_session(tmp_path, monkeypatch):
 
     matplotlib.use("Agg")  # no display here; the README's plots return axes either way
     import matplotlib.pyplot as plt
+
     from raydamp.models import DampedPendulum, ElasticPendulum
 
     monkeypatch.chdir(tmp_path)

@@ -7,13 +7,12 @@ import json
 import matplotlib
 import numpy as np
 import pytest
+from paper import ELASTIC_P0, ELASTIC_Q0
+from systems import kepler
 
 import raydamp
 from raydamp.jobs import job_arguments
 from raydamp.models import DampedPendulum, ElasticPendulum
-
-from paper import ELASTIC_P0, ELASTIC_Q0
-from systems import kepler
 
 matplotlib.use("Agg")
 

@@ -11,13 +11,12 @@ import zipfile
 import numpy as np
 import pytest
 import xarray as xr
+from paper import ELASTIC_P0, ELASTIC_Q0
 from PIL import Image
 
 import raydamp
 from raydamp.models import DampedPendulum, ElasticPendulum
 from raydamp.results.io import write_solution
-
-from paper import ELASTIC_P0, ELASTIC_Q0
 
 
 @pytest.fixture(scope="module")

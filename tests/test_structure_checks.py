@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 import raydamp
 
 sparse = pytest.importorskip("scipy.sparse")

@@ -8,15 +8,13 @@ import pickle
 
 import numpy as np
 import pytest
+from paper import ELASTIC_P0, ELASTIC_Q0, PENDULUM_P0, PENDULUM_Q0, fitted_slope, reference
 from scipy.linalg import expm
+from systems import CHAIN_MASS, TWO_DOF_K, TWO_DOF_M, chain, damped_pendulum, elastic_pendulum, kepler, two_dof
 
 import raydamp
 from raydamp.methods.catalogue import linear_structure_methods
 from raydamp.models import DampedPendulum, ElasticPendulum
-
-from paper import ELASTIC_P0, ELASTIC_Q0, PENDULUM_P0, PENDULUM_Q0, fitted_slope, reference
-from systems import (CHAIN_MASS, TWO_DOF_K, TWO_DOF_M, chain, damped_pendulum, elastic_pendulum, kepler,
-                     two_dof)
 
 # (midpoint and gauss4 run only a LinearStructure: tests/test_implicit_structure.py)
 ROWS = [(m.name, m.tableau, m.damped) for m in raydamp.methods() if m.name not in linear_structure_methods()]

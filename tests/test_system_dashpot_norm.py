@@ -11,15 +11,14 @@ import math
 import numpy as np
 import pytest
 import symengine as se
+from paper import ELASTIC_P0, ELASTIC_Q0
 from scipy.linalg import expm
+from systems import elastic_pendulum
 
 import raydamp
 from raydamp.models import ElasticPendulum
 from raydamp.systems.system.compile import _projection, evaluate
 from raydamp.systems.system.system import System, _build_core
-
-from paper import ELASTIC_P0, ELASTIC_Q0
-from systems import elastic_pendulum
 
 SPRING = "k/2*(sqrt((x1-x2)^2 + (y1-y2)^2) - 1)^2"
 LENGTH = "sqrt((x1-x2)^2 + (y1-y2)^2)"

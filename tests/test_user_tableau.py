@@ -8,9 +8,9 @@ import math
 
 import numpy as np
 import pytest
+from paper import fitted_slope, paper_problem, reference
 
 import raydamp
-from paper import fitted_slope, paper_problem, reference
 
 RK4 = {"A": [[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0], [0, 0, 1, 0]], "b": [1 / 6, 1 / 3, 1 / 3, 1 / 6],
        "c": [0, 0.5, 0.5, 1]}

@@ -7,7 +7,6 @@ from numbers import Integral, Real
 
 import numpy as np
 
-
 _MAX_REPR = 200  # characters of a bad value quoted in a message
 
 

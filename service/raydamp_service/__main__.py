@@ -13,9 +13,9 @@ import sys
 import uvicorn
 from pydantic import ValidationError
 
-from .edge import deadlines
 from .app import create_app
 from .config import Settings, is_loopback
+from .edge import deadlines
 from .kinds.jobs import JobStore
 from .tasks import lock
 from .tasks.store import StoreUnavailable

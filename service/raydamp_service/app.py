@@ -8,21 +8,22 @@ from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from typing import Any
 
-import raydamp
 from fastapi import FastAPI
 from fastapi.exceptions import RequestValidationError
 from starlette.exceptions import HTTPException
+
+import raydamp
 
 from .checks.pool import CheckPool
 from .config import Settings
 from .edge.guard import RequestGuard, needs_token
 from .edge.http import HeadAsGet, http_error_handler, validation_error_handler
 from .kinds.jobs import JobStore
+from .kinds.sweeps import SweepStore
 from .routes import catalogue, files, health, jobs, page, sweeps
 from .tasks import lock
 from .tasks.runner import Runner
 from .tasks.store import Database
-from .kinds.sweeps import SweepStore
 
 __all__ = ["ROUTERS", "create_app"]
 

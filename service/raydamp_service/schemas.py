@@ -8,6 +8,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 from pydantic_core import core_schema
+
 from raydamp.jobs import JobSpec, SweepSpec
 from raydamp.jobs.summary import JobSummary  # the library's: Solution.summary()
 

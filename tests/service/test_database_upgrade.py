@@ -9,9 +9,10 @@ import sqlite3
 
 import numpy as np
 import pytest
+
 from raydamp_service.kinds.jobs import JobStore, TrajectoryArrays
-from raydamp_service.tasks.store import Database
 from raydamp_service.kinds.sweeps import SweepStore
+from raydamp_service.tasks.store import Database
 
 # The schema of jobs (store.py) and sweeps (sweep_store.py) as of commit 6cd9b70.
 OLD_SCHEMA = """

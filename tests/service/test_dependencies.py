@@ -11,6 +11,7 @@ from __future__ import annotations
 import inspect
 
 from fastapi.routing import APIRoute
+
 from raydamp_service.app import ROUTERS
 
 
@@ -45,6 +46,7 @@ def test_a_builtin_submission_never_hops_to_the_thread_pool(tmp_path, monkeypatc
 
     import anyio.to_thread
     import httpx
+
     from raydamp_service.app import create_app
     from raydamp_service.config import Settings
 

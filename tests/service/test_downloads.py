@@ -185,6 +185,7 @@ def test_a_refused_plot_reads_no_stored_array(tmp_path, monkeypatch):
     import time
 
     import httpx
+
     import raydamp_service.routes.jobs as routes
     from raydamp_service.app import create_app
     from raydamp_service.config import Settings

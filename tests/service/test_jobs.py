@@ -6,6 +6,7 @@ import math
 import time
 
 import numpy as np
+
 import raydamp
 from raydamp.models import make_model
 

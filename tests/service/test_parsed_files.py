@@ -7,6 +7,7 @@ import io
 import threading
 
 import pytest
+
 from raydamp_service.checks.uploads import ParsedFiles
 
 sparse = pytest.importorskip("scipy.sparse")

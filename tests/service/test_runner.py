@@ -6,6 +6,7 @@ import math
 import time
 
 import pytest
+
 from raydamp_service.config import Settings
 from raydamp_service.tasks.runner import Runner
 
@@ -101,9 +102,10 @@ def test_a_submitted_builtin_job_is_built_once_for_its_check_and_its_run(tmp_pat
 
     import httpx
     import numpy as np
+
     import raydamp
-    import raydamp_service.checks.pool
     import raydamp_service.checks.limits
+    import raydamp_service.checks.pool
     from raydamp.models import make_model
     from raydamp_service.app import create_app
 

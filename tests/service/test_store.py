@@ -8,6 +8,7 @@ from datetime import datetime, timezone
 
 import numpy as np
 import pytest
+
 from raydamp_service.kinds.jobs import JobStore, TrajectoryArrays
 
 SPEC = {"model": "damped_pendulum", "method": "3s"}
@@ -280,6 +281,7 @@ def test_a_quick_run_goes_from_queued_to_its_end_in_one_write_unless_cancelled_f
     """Runner._run_quick: a run of milliseconds is recorded without a claim, by one guarded write: queued ->
     completed with attempts 1 and its start time; a cancel that came first wins."""
     import numpy as np
+
     from raydamp_service.kinds.jobs import TrajectoryArrays
     from raydamp_service.tasks.store import now
 

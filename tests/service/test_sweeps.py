@@ -175,8 +175,8 @@ def test_a_huge_grid_is_refused_before_raydamp_builds_it(settings, message):
     import tracemalloc
 
     from raydamp.jobs import JobError, SweepSpec
-    from raydamp_service.config import Settings
     from raydamp_service.checks.limits import check_sweep_spec
+    from raydamp_service.config import Settings
 
     spec = SweepSpec.model_validate({"job": JOB, "grid": {"eps": [0.1] * 10_000, "q0[0]": {"start": 0.0, "stop": 1.0,
                                                                                            "num": 10_000}}})

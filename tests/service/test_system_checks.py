@@ -7,9 +7,9 @@ The budget is scaled down (1 s) so the reproducers run in seconds; the responsiv
 from __future__ import annotations
 
 import threading
-from pathlib import Path
 import time
 from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
 
 import numpy as np
 import pytest

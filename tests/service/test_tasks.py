@@ -4,9 +4,10 @@ states by the same code, each in its own table."""
 from __future__ import annotations
 
 import pytest
+
 from raydamp_service.kinds.jobs import JobStore
-from raydamp_service.tasks.store import Database
 from raydamp_service.kinds.sweeps import SweepStore
+from raydamp_service.tasks.store import Database
 
 KINDS = {"job": (JobStore, {}, "progress"), "sweep": (SweepStore, {"members": 4}, "members_done")}
 

@@ -7,10 +7,10 @@ from __future__ import annotations
 
 import pytest
 
-from raydamp.jobs import JobSpec, JobError
+from raydamp.jobs import JobError, JobSpec
+from raydamp_service.checks.limits import check_spec
 from raydamp_service.config import Settings
 from raydamp_service.kinds.jobs import StoredTrajectory
-from raydamp_service.checks.limits import check_spec
 
 STEPS = 1000
 PENDULUM = {"model": "damped_pendulum", "parameters": {"eps": 0.1}, "method": "3s", "h": 0.1, "n_steps": STEPS,

@@ -11,6 +11,7 @@ import time
 from pathlib import Path
 
 import pytest
+
 from raydamp_service.trajectories.stream import FetchLease
 
 PENDULUM = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "step_size": 0.01,

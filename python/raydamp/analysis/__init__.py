@@ -9,7 +9,6 @@ from .convergence import ConvergenceResult, convergence
 from .energy import energy_error, modified_energy, reference_solution
 from .linear_response import piecewise_linear_response
 from .momentum import momentum_drift
-from .temperature import configurational_temperature, kinetic_temperature
 from .relative_equilibrium import (
     RelativeEquilibrium,
     cartesian_state,
@@ -19,6 +18,7 @@ from .relative_equilibrium import (
     reduced_hessian,
     relative_equilibrium,
 )
+from .temperature import configurational_temperature, kinetic_temperature
 
 __all__ = [
     "ConvergenceResult", "convergence", "energy_error", "modified_energy", "reference_solution",

@@ -26,7 +26,6 @@ from ..results.solution import Solution
 from ..run.integrate import integrate
 from ..systems.models import ElasticPendulum
 
-
 # The |mu| relative_equilibrium solves (to rounding) for m, k, l, G near 1: below, mu^2 and rho^4 underflow;
 # above, rho passes the bracket's 1e12 (rho grows like sqrt(|mu|)), then mu^2 overflows.
 MU_RANGE = (1e-150, 1e20)

@@ -7,10 +7,19 @@ into raydamp.integrate's arguments.
        "save_every": 1, "initial_state": {"q": [...], "p": [...]} (or {"file": id} each), "work": true}
 """
 
-from ..systems.kinds import describe_model
-from .build import (PROVENANCE_KEYS, JobCall, build_job, error_at, job_arguments, model_from_spec, parse_job,
-                    planned_steps, validation_error)
 from ..loads.forms import GroundMotionInput, LoadInput
+from ..systems.kinds import describe_model
+from .build import (
+                    PROVENANCE_KEYS,
+                    JobCall,
+                    build_job,
+                    error_at,
+                    job_arguments,
+                    model_from_spec,
+                    parse_job,
+                    planned_steps,
+                    validation_error,
+)
 from .errors import JobError
 from .forms import InitialState, ModeState, RestState, TableauInput, VectorFile
 from .spec import STEP_SIZE_ALIAS, UNION_TAGS, JobSpec, ModelSpec, client_path

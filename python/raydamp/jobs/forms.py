@@ -7,8 +7,19 @@ from typing import Annotated, Any, Literal
 
 from pydantic import Discriminator, Field, Tag, model_validator
 
-from ..loads.inputs import (FILE_ID, MAX_ITEM_ERRORS, MAX_VECTOR, FileId, FiniteFloat, Input, Vector, at_most, bounded,
-                            indices, numbers)
+from ..loads.inputs import (
+    FILE_ID,
+    MAX_ITEM_ERRORS,
+    MAX_VECTOR,
+    FileId,
+    FiniteFloat,
+    Input,
+    Vector,
+    at_most,
+    bounded,
+    indices,
+    numbers,
+)
 
 __all__ = ["Input", "FiniteFloat", "Vector", "bounded", "at_most", "numbers", "indices", "MAX_ITEM_ERRORS", "InitialState", "ModeState", "RestState", "TableauInput",
            "MAX_VECTOR", "MAX_CHAIN_SITES", "MAX_EXPRESSION", "Expression", "Name", "FileId", "FILE_ID", "MatrixFile", "VectorFile", "STATE_VECTOR_TAGS"]

@@ -11,16 +11,40 @@ from __future__ import annotations
 from collections.abc import Iterator
 from typing import Annotated, Any
 
-from pydantic import AfterValidator, AliasChoices, BaseModel, ConfigDict, Discriminator, Field, PrivateAttr, Tag, \
-    WithJsonSchema, field_serializer, model_validator
+from pydantic import (
+    AfterValidator,
+    AliasChoices,
+    BaseModel,
+    ConfigDict,
+    Discriminator,
+    Field,
+    PrivateAttr,
+    Tag,
+    WithJsonSchema,
+    field_serializer,
+    model_validator,
+)
 
 from .. import _core
 from ..loads.forms import LOAD_TAGS, GroundMotionInput, LoadInput
 from ..methods.catalogue import compositions, methods
 from ..systems.models import MODELS, make_model
 from .errors import JobError
-from .forms import FILE_ID, STATE_VECTOR_TAGS, FiniteFloat, InitialState, Input, MAX_VECTOR, ModeState, RestState, \
-    TableauInput, Vector, VectorFile, bounded, indices
+from .forms import (
+    FILE_ID,
+    MAX_VECTOR,
+    STATE_VECTOR_TAGS,
+    FiniteFloat,
+    InitialState,
+    Input,
+    ModeState,
+    RestState,
+    TableauInput,
+    Vector,
+    VectorFile,
+    bounded,
+    indices,
+)
 from .system_forms import FORM_TAGS, MATRIX_TAGS, SYSTEM_TAGS, VALUE_TAGS, AnySystemInput, FileResolver
 
 __all__ = ["ModelSpec", "JobSpec", "StateInput", "UNION_TAGS", "STEP_SIZE_ALIAS", "client_path"]

@@ -14,8 +14,20 @@ from pydantic import BeforeValidator, Discriminator, Field, Tag
 
 from ..systems.system.spec import OUTSIDE_CLASS
 from .errors import JobError, path_error
-from .forms import (FILE_ID, MAX_CHAIN_SITES, MAX_VECTOR, Expression, FiniteFloat, Input, MatrixFile, Name, at_most,
-                    bounded, indices, numbers)
+from .forms import (
+    FILE_ID,
+    MAX_CHAIN_SITES,
+    MAX_VECTOR,
+    Expression,
+    FiniteFloat,
+    Input,
+    MatrixFile,
+    Name,
+    at_most,
+    bounded,
+    indices,
+    numbers,
+)
 
 __all__ = ["SystemInput", "ChainInput", "LinearStructureInput", "CooForm", "DiagonalForm", "FileForm",
            "AnySystemInput", "FileResolver", "MAX_COO_ENTRIES", "MAX_STRUCTURE_DIM", "SYSTEM_TAGS", "MATRIX_TAGS",

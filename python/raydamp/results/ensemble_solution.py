@@ -8,10 +8,9 @@ from typing import Any
 
 import numpy as np
 
-from ..loads.load import set_load_parameters
-
-from .solution import Solution
 from ..jobs.statuses import STATUSES
+from ..loads.load import set_load_parameters
+from .solution import Solution
 
 __all__ = ["EnsembleSolution", "STATUSES"]
 

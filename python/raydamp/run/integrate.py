@@ -8,9 +8,9 @@ import re
 import time
 from collections.abc import Callable, Mapping
 
-from .. import _core
 import numpy as np
 
+from .. import _core
 from .._validation import MAX_STEPS, _short, flag, integer, real, span, steps_for, thermal, vector
 from ..loads import Load
 from ..methods.user_tableau import resolve_user_tableau

@@ -24,15 +24,15 @@ import numpy as np
 
 from .._core import __version__
 from .._validation import MAX_SEED, _short, integer, real, replaceable_store, thermal, vector
-from ..results.ensemble_solution import STATUSES
 from ..jobs import STEP_SIZE_ALIAS, JobSpec, job_arguments, model_from_spec
 from ..loads import Load
+from ..results.ensemble_solution import STATUSES
 from ..systems.kinds import describe_model
 from ..systems.models import MODELS, Model
 from ..systems.system import System
-from .ensemble import integrate_ensemble
 from .choose_method import choose_method
 from .cluster import local_cluster
+from .ensemble import integrate_ensemble
 from .integrate import MAX_SAVED_BYTES, CancelToken, _catalogue, span
 from .save_grid import save_grid
 

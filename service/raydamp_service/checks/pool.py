@@ -36,6 +36,7 @@ from pathlib import Path
 from typing import Any
 
 from pebble import ProcessExpired, ProcessPool
+
 from raydamp.jobs import JobSpec, SweepSpec
 from raydamp.systems.system import NotCompiled, compiled_elsewhere, load_compiled
 

@@ -24,11 +24,12 @@ from fastapi.exception_handlers import http_exception_handler
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from fastapi.routing import APIRoute
-from raydamp.jobs import client_path
-from raydamp.jobs.build import unique_keys
 from starlette.exceptions import HTTPException
 from starlette.routing import compile_path
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
+
+from raydamp.jobs import client_path
+from raydamp.jobs.build import unique_keys
 
 __all__ = ["HEAD", "HeadAsGet", "UniqueKeysRoute", "http_error_handler", "validation_error_handler"]
 

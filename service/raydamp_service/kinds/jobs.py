@@ -9,16 +9,17 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+
 from raydamp.jobs import JobSpec
 from raydamp.jobs.statuses import FAILED
 
+from ..checks.limits import RaydampCall, planned_steps
 from ..checks.pool import CheckPool, build_for_run, checked_inline
 from ..config import Settings
-from .files import FILE_COLUMNS_ADDED, FILES_TABLE, FileStore, file_resolver
-from ..checks.limits import RaydampCall, planned_steps
 from ..tasks.runner import Outcome, Run
 from ..tasks.store import TaskRecord, TaskStore, normalise_stored
 from ..trajectories.arrays import SAVED, StoredTrajectory, TrajectoryArrays
+from .files import FILE_COLUMNS_ADDED, FILES_TABLE, FileStore, file_resolver
 
 __all__ = ["JobStore", "JobRecord", "JobWork", "TrajectoryArrays", "StoredTrajectory"]
 

@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-import raydamp
 from fastapi import APIRouter
+
+import raydamp
 from raydamp.models import describe_models
 
 from ..schemas import CompositionInfo, MethodInfo, ModelInfo

@@ -16,13 +16,13 @@ from typing import Annotated
 from fastapi import APIRouter, File, HTTPException, Query, Request, Response, UploadFile
 from fastapi.exceptions import RequestValidationError
 
-from .deps import SettingsDep, StoreDep
 from ..checks.limits import JobError
 from ..checks.pool import ChecksBusy
 from ..checks.uploads import RecordFileInfo, check_upload
-from ..kinds.files import FileRecord
 from ..edge.guard import file_too_large
+from ..kinds.files import FileRecord
 from ..schemas import FileInfo, FileList
+from .deps import SettingsDep, StoreDep
 from .tasks import check_limit, checks_busy
 
 router = APIRouter(prefix="/v1/files", tags=["files"])

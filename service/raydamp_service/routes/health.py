@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
-import raydamp
 from fastapi import APIRouter
 
-from .deps import SettingsDep, StoreDep
+import raydamp
+
 from ..schemas import Health
+from .deps import SettingsDep, StoreDep
 
 router = APIRouter(tags=["health"])
 

@@ -17,25 +17,25 @@ from typing import Annotated, Literal
 from fastapi import APIRouter, HTTPException, Query, Request, Response
 from fastapi.exceptions import RequestValidationError
 from pydantic import ValidationError
-from raydamp.jobs import validation_error
 from starlette.background import BackgroundTask
 from starlette.concurrency import run_in_threadpool
 
-from ..checks.pool import CheckPool, ChecksBusy, PlotOverBudget, checked_inline
-from .deps import RunnerDep, SettingsDep, StoreDep
-from ..kinds.files import file_resolver
+from raydamp.jobs import validation_error
+
 from ..checks.limits import JobError, RaydampCall
-from ..tasks.runner import Runner
-from ..schemas import JobCreated, JobList, JobListItem, JobSpec, JobStatus, JobView, Trajectory
+from ..checks.pool import CheckPool, ChecksBusy, PlotOverBudget, checked_inline
 from ..config import Settings
-from ..trajectories.downloads import draw_plot, write_file
-from ..edge.http import HEAD
-from ..kinds.jobs import JobRecord, JobStore
-from ..tasks.store import FINAL_STATUSES
 from ..edge.deadlines import TimedFileResponse, TimedStreamingResponse
-from .tasks import Tasks, check_limit, checks_busy, invalid
+from ..edge.http import HEAD, UniqueKeysRoute
+from ..kinds.files import file_resolver
+from ..kinds.jobs import JobRecord, JobStore
+from ..schemas import JobCreated, JobList, JobListItem, JobSpec, JobStatus, JobView, Trajectory
+from ..tasks.runner import Runner
+from ..tasks.store import FINAL_STATUSES
+from ..trajectories.downloads import draw_plot, write_file
 from ..trajectories.stream import FetchLease, Selection, read_arrays, trajectory_chunks
-from ..edge.http import UniqueKeysRoute
+from .deps import RunnerDep, SettingsDep, StoreDep
+from .tasks import Tasks, check_limit, checks_busy, invalid
 
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"], route_class=UniqueKeysRoute)
 

@@ -7,15 +7,15 @@ from typing import Annotated, Literal
 
 from fastapi import APIRouter, HTTPException, Query, Request, Response
 
-from .jobs import with_seed
-from ..checks.pool import ChecksBusy
-from .deps import ChecksDep, SettingsDep
 from ..checks.limits import JobError
-from ..tasks.runner import Runner
-from ..schemas import JobStatus, SweepCreated, SweepList, SweepListItem, SweepSpec, SweepView
-from ..kinds.sweeps import SweepRecord, SweepStore
+from ..checks.pool import ChecksBusy
 from ..edge.deadlines import TimedStreamingResponse
 from ..edge.http import UniqueKeysRoute
+from ..kinds.sweeps import SweepRecord, SweepStore
+from ..schemas import JobStatus, SweepCreated, SweepList, SweepListItem, SweepSpec, SweepView
+from ..tasks.runner import Runner
+from .deps import ChecksDep, SettingsDep
+from .jobs import with_seed
 from .tasks import Tasks, check_limit, checks_busy, invalid
 
 router = APIRouter(prefix="/v1/sweeps", tags=["sweeps"], route_class=UniqueKeysRoute)

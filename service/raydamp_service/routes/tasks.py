@@ -11,8 +11,8 @@ from typing import Any
 from fastapi import HTTPException, Request, Response
 from fastapi.exceptions import RequestValidationError
 
-from ..config import Settings
 from ..checks.limits import JobError
+from ..config import Settings
 from ..tasks.runner import Runner
 from ..tasks.store import FINAL_STATUSES, FileGone, TaskStore
 

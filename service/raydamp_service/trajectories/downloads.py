@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Literal
 
 import numpy as np
+
 import raydamp
 from raydamp.jobs import JobSpec
 from raydamp.results.io import write_solution

@@ -17,8 +17,7 @@ error is a ValueError "<field>: ... at column N ...".
 
 from .parser import parse
 from .symbolic import Expression
-from .tree import (FUNCTIONS, MAX_DEPTH, MAX_EXPONENT, MAX_LENGTH, MAX_NODES, Binary, Call, Name, Node, Number,
-                   Unary)
+from .tree import FUNCTIONS, MAX_DEPTH, MAX_EXPONENT, MAX_LENGTH, MAX_NODES, Binary, Call, Name, Node, Number, Unary
 
 __all__ = ["parse", "Expression", "FUNCTIONS", "MAX_LENGTH", "MAX_NODES", "MAX_DEPTH", "MAX_EXPONENT",
            "Node", "Number", "Name", "Unary", "Binary", "Call"]

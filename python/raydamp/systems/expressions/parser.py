@@ -25,8 +25,7 @@ from collections.abc import Mapping
 from typing import NamedTuple
 
 from .symbolic import Expression
-from .tree import (FUNCTIONS, MAX_DEPTH, MAX_LENGTH, MAX_NODES, Binary, Call, Name, Node, Number, Unary,
-                   fold)
+from .tree import FUNCTIONS, MAX_DEPTH, MAX_LENGTH, MAX_NODES, Binary, Call, Name, Node, Number, Unary, fold
 
 __all__ = ["parse"]
 

@@ -14,7 +14,8 @@ cannot prove keeps the general path, which is exact for every g.
 from __future__ import annotations
 
 import math
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import symengine as se

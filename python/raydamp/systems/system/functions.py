@@ -20,8 +20,17 @@ from typing import Any
 import numpy as np
 
 from .errors import SpecError
-from .spec import (MAX_COORDINATES, MAX_DAMPERS, MAX_DENSE_DAMPING, MAX_MOMENTA, SystemSpec, _damping, _mass, _real,
-                   damping_strength)
+from .spec import (
+    MAX_COORDINATES,
+    MAX_DAMPERS,
+    MAX_DENSE_DAMPING,
+    MAX_MOMENTA,
+    SystemSpec,
+    _damping,
+    _mass,
+    _real,
+    damping_strength,
+)
 
 __all__ = ["PythonFunctions", "build_from_functions"]
 
