@@ -17,7 +17,7 @@ HOST ?= 127.0.0.1
 PORT ?= 8000
 export RAYDAMP_DB ?= $(CURDIR)/var/raydamp.sqlite3
 
-.PHONY: all setup system-deps serve test ctest ctest-build layers pytest bench fuzz reproduce wheel stubs clean
+.PHONY: all setup system-deps serve test ctest ctest-build layers lint pytest bench fuzz reproduce wheel stubs clean
 
 all: test
 
@@ -74,14 +74,14 @@ serve: setup
 # A line naming $(MAKE) runs even under `make -n`, so the recipe looks for -n itself.
 test: system-deps $(TOOLS)
 	@if [ -n "$(findstring n,$(firstword -$(MAKEFLAGS)))" ]; then \
-	  echo "make ctest-build (in the background), make setup layers pytest, then ctest"; exit 0; fi; \
+	  echo "make ctest-build (in the background), make setup layers lint pytest, then ctest"; exit 0; fi; \
 	  mkdir -p build; \
 	  setsid bash -c 'echo 19 >/proc/self/autogroup 2>/dev/null; exec nice -n 19 $(MAKE) -s ctest-build' \
 	  >build/ctest-build.log 2>&1 & build=$$!; \
 	  trap 'kill -- -$$build 2>/dev/null' EXIT; \
 	  echo "building the C++ tests alongside (log: build/ctest-build.log)"; \
 	  $(MAKE) --no-print-directory setup || exit 1; \
-	  $(MAKE) --no-print-directory layers pytest; status=$$?; \
+	  $(MAKE) --no-print-directory layers lint pytest; status=$$?; \
 	  if ! wait $$build; then cat build/ctest-build.log; echo "the C++ tests did not build"; exit 1; fi; \
 	  trap - EXIT; \
 	  $(VENV)/bin/ctest --test-dir build/cpp --output-on-failure || status=1; \
@@ -98,6 +98,10 @@ ctest-build: system-deps $(TOOLS)
 # The import contracts of pyproject.toml's [tool.importlinter], read from the source tree.
 layers: setup
 	PYTHONPATH=python:service $(VENV)/bin/lint-imports --no-cache
+
+# ruff, configured in pyproject.toml's [tool.ruff]: lint and import order.
+lint: setup
+	$(VENV)/bin/ruff check python service tests benchmarks
 
 pytest: setup
 	$(PY) -m pytest
