@@ -93,7 +93,8 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="200 members x 5000 steps, fewer rounds")
     parser.add_argument("--rounds", type=int,
-                        help="rounds, best taken (default 3, and 10 for the interleaved ensemble timings; --quick 2 and 3)")
+                        help="rounds, best taken (default 3, and 10 for the interleaved ensemble timings; "
+                             "--quick 2 and 3)")
     args = parser.parse_args()
     members, steps = (200, 5000) if args.quick else (1000, 20000)
     rounds = args.rounds or (2 if args.quick else 3)

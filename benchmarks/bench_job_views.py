@@ -30,7 +30,8 @@ SMALL = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s"
 
 
 def structure_job(n: int) -> dict:
-    """A fixed-free bar of n springs: K tridiagonal (3n - 2 triplets), M lumped, f pulling the free end; ten steps from rest."""
+    """A fixed-free bar of n springs: K tridiagonal (3n - 2 triplets), M lumped, f pulling the free end; ten steps
+    from rest."""
     rows, cols, values = [], [], []
     for i in range(n):
         rows.append(i)
@@ -41,7 +42,8 @@ def structure_job(n: int) -> dict:
             cols += [i + 1, i]
             values += [-1.0, -1.0]
     system = {"kind": "linear_structure", "M": {"diagonal": [1.0] * n},
-              "K": {"coo": {"shape": [n, n], "rows": rows, "cols": cols, "values": values}}, "alpha": 0.1, "f": [0.0] * (n - 1) + [1.0]}
+              "K": {"coo": {"shape": [n, n], "rows": rows, "cols": cols, "values": values}}, "alpha": 0.1,
+              "f": [0.0] * (n - 1) + [1.0]}
     return {"system": system, "method": "2s", "h": 0.01, "n_steps": 10, "save_every": 10,
             "initial_state": {"rest": True}}
 
@@ -57,7 +59,8 @@ def measure(client: httpx.Client, pid: int, label: str, path: str, repeats: int,
         answer.raise_for_status()
     cpu = cpu_seconds(pid) - cpu
     print(f"{label:<44} server CPU {1000 * cpu / repeats:7.2f} ms/request   wall p50 "
-          f"{1000 * statistics.median(walls):7.2f} ms   ({len(answer.content) / 1024:.0f} KiB body, {repeats} requests)")
+          f"{1000 * statistics.median(walls):7.2f} ms   "
+          f"({len(answer.content) / 1024:.0f} KiB body, {repeats} requests)")
 
 
 def main() -> None:

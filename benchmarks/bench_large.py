@@ -86,7 +86,8 @@ def main() -> int:
           f"({BYTES_PER_DOF_STEP} B per DOF-step)")
     print()
     print(f"FPUT chain (alpha = {ALPHA}, beta = {BETA}, fixed ends), sv (leapfrog), h = {H}; DOF-steps per second")
-    print(f"{'N':>9} {'steps':>7} {'raydamp sv':>12} {'hand loop':>12} {'ratio':>6}   {'3s, every 10th bond damped':>27}")
+    print(f"{'N':>9} {'steps':>7} {'raydamp sv':>12} {'hand loop':>12} {'ratio':>6}   "
+          f"{'3s, every 10th bond damped':>27}")
     agree = True
     for n in (10**3, 10**4, 10**5, 10**6):
         steps = max(10, work // n)

@@ -88,7 +88,7 @@ def measure(tree: Path, repeats: int) -> dict[str, tuple[float, float, float, in
             for name, (route, body) in bodies().items():
                 answers, health, stop = [], [], threading.Event()
 
-                def poll() -> None:
+                def poll(stop=stop, health=health) -> None:
                     with httpx.Client(base_url=f"http://127.0.0.1:{port}", timeout=120) as probe:
                         while not stop.is_set():
                             start = time.perf_counter()

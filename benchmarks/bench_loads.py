@@ -39,8 +39,8 @@ def case(name, model, q0, p0, method, h, steps, loads, repeats):
     times = {label: [] for label in loads}
     for _ in range(repeats):
         for label, load in loads.items():
-            times[label].append(timed(lambda: raydamp.integrate(model, q0, p0, method=method, h=h, n_steps=steps,
-                                                                save_every=steps, load=load)))
+            times[label].append(timed(lambda load=load: raydamp.integrate(
+                model, q0, p0, method=method, h=h, n_steps=steps, save_every=steps, load=load)))
     base = statistics.median(times["none"])
     row = [f"{name:<34}", f"{method:<9}", f"{1e9 * base / steps:9.1f}"]
     for label in list(loads)[1:]:

@@ -30,7 +30,8 @@ def cases(mib: int) -> dict[str, tuple[str, str, dict[str, str]]]:
         f"{mib} MiB one column '0' (limit raised)": ("col1.csv", f"b'0\\n' * ({mib} * MiB // 2)",
                                                      {"RAYDAMP_MAX_RECORD_SAMPLES": str(mib * MiB)}),
         f"{mib} MiB one column '0', default limit": ("col1.csv", f"b'0\\n' * ({mib} * MiB // 2)", {}),
-        f"{mib} MiB two columns t, a": ("ta.csv", f"b''.join(b'%.6f,%.12e\\n' % (k * 0.01, 0.5) for k in range({rows}))",
+        f"{mib} MiB two columns t, a": ("ta.csv",
+                                        f"b''.join(b'%.6f,%.12e\\n' % (k * 0.01, 0.5) for k in range({rows}))",
                                         {}),
         f"{mib} MiB .AT2": ("a.AT2", f"b'H\\nE\\nG\\nNPTS= {mib * MiB // 14}, DT= .01 SEC\\n' + b'  .1234567E-01' * "
                                      f"({mib * MiB // 14}) + b'\\n'", {}),

@@ -52,7 +52,8 @@ PROGRAM = BUILD / "benchmarks" / "handwritten"
 RATIO_TARGET = 1.3
 MERGED_RATIO_TARGET = 1.05  # 3s against the hand loop that merges damp h/2 + damp h/2 between steps
 SHORT_CALL_TARGET_US = 15.0  # issue 47
-TURN_3_SHORT_CALL_US = 17.8  # the damped pendulum's 10-step call in turn 3, before loads, temperature and the default method
+# the damped pendulum's 10-step call in turn 3, before loads, temperature and the default method
+TURN_3_SHORT_CALL_US = 17.8
 AGREEMENT = 1e-10  # max |raydamp - hand-written| / max(1, |hand-written|) over the final q, p
 # (raydamp method, hand-written loop, target ratio): each method beside the loop doing
 # its sub-flows step by step, and 3s beside the loop a person writes for speed, which
@@ -242,7 +243,7 @@ def measure(n_steps: int, save_every: int, rounds: int, calls: int) -> tuple[lis
                   "hand_ns": math.inf, "n_steps": n_steps}
                  for name in CASES for method, hand, target in COMPARISONS]
     short_calls = {name: [] for name in CASES}
-    for name, (model, q0, p0) in CASES.items():  # warm up: first calls, page faults
+    for _name, (model, q0, p0) in CASES.items():  # warm up: first calls, page faults
         short_call_times(model, q0, p0, 50)
     for _ in range(rounds):
         for run in long_runs:
@@ -362,7 +363,8 @@ def print_short_calls(short_calls: dict) -> None:
 
 
 def print_agreement(results: list[dict]) -> bool:
-    print(f"final state, raydamp vs hand-written: max |difference| / max(1, |x|) over q and p (must be <= {AGREEMENT:g})")
+    print("final state, raydamp vs hand-written: max |difference| / max(1, |x|) over q and p "
+          f"(must be <= {AGREEMENT:g})")
     agree = True
     for r in results:
         solution = r["solution"]
@@ -376,7 +378,8 @@ def print_agreement(results: list[dict]) -> bool:
         if not finished:
             note = f"raydamp stopped: {solution.status} after {solution.steps} steps ({solution.message})"
         print(f"  {r['model']:<18}{r['method']:<4} vs {r['hand']:<10}{difference:10.3g}  {note}")
-    print("all final states agree" if agree else "FINAL STATES DISAGREE: the timings above compare different computations")
+    print("all final states agree" if agree
+          else "FINAL STATES DISAGREE: the timings above compare different computations")
     return agree
 
 

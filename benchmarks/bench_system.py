@@ -91,7 +91,8 @@ def main() -> int:
         print(f"  {stage:<20}{ms:>8.2f} ms")
     t0 = time.perf_counter()
     for _ in range(100):
-        parse(SPEC["potential"], field="potential", names={n: "coordinate" for n in "xyz"} | dict.fromkeys("klmg", "parameter"))
+        parse(SPEC["potential"], field="potential",
+              names={n: "coordinate" for n in "xyz"} | dict.fromkeys("klmg", "parameter"))
     print(f"  (parsing the potential alone: {(time.perf_counter() - t0) * 10:.3f} ms)")
     return 1 if worst > 1e-10 else 0
 

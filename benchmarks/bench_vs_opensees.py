@@ -626,7 +626,8 @@ def main() -> None:
                       f"{SAVES * 256} steps (h = {problem.T / (SAVES * 256):.3g}) **")
                 floor = []
                 for m in (32, 64, 128, 256):
-                    floor.append(f"{SAVES * m}: {np.max(np.linalg.norm(run_gauss(m)[1] - reference, axis=1)) / norm:.1e}")
+                    floor.append(f"{SAVES * m}: "
+                                 f"{np.max(np.linalg.norm(run_gauss(m)[1] - reference, axis=1)) / norm:.1e}")
                 print(f"    raydamp gauss4 against the exact solution, steps: error  {', '.join(floor)}")
                 for label, run, *_ in tools:
                     seconds, q = run(256)

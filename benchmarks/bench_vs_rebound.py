@@ -363,7 +363,8 @@ def single_orbit(label: str, q0, p0, repeats: int) -> None:
             if best is not None and best.tool not in shown:
                 shown.add(best.tool)
                 print(f"  speed-up of raydamp's fastest ({ours.tool}, {ours.seconds:.3e} s) against {against} "
-                      f"({best.tool.removeprefix('REBOUND ')}, {best.seconds:.3e} s): {best.seconds / ours.seconds:.1f}x")
+                      f"({best.tool.removeprefix('REBOUND ')}, {best.seconds:.3e} s): "
+                      f"{best.seconds / ours.seconds:.1f}x")
     print("  cost per step: " + "; ".join(f"{r.tool.removeprefix('REBOUND ')} {r.ns_per_step:.0f} ns"
                                           for r in rows + theirs))
 

@@ -53,8 +53,10 @@ def main() -> int:
     for label, composition, steps in METHODS:
         points = []
         for h in steps:
-            wall, sol = timed(lambda: raydamp.integrate(model, Q0, P0, method="sv", composition=composition, h=h,
-                                                        t_end=args.t_end), args.rounds)
+            wall, sol = timed(lambda composition=composition, h=h: raydamp.integrate(model, Q0, P0, method="sv",
+                                                                                  composition=composition, h=h,
+                                                                                  t_end=args.t_end),
+                              args.rounds)
             points.append((wall, float(np.max(np.abs(sol.energy - h0)))))
         curves[label] = points
 
@@ -66,8 +68,8 @@ def main() -> int:
 
     points = []
     for tol in TOLERANCES:
-        wall, sol = timed(lambda: solve_ivp(field, (0.0, args.t_end), np.concatenate([Q0, P0]), method="DOP853",
-                                            rtol=tol, atol=tol), args.rounds)
+        wall, sol = timed(lambda tol=tol: solve_ivp(field, (0.0, args.t_end), np.concatenate([Q0, P0]),
+                                                    method="DOP853", rtol=tol, atol=tol), args.rounds)
         energies = [model.energy(y[:3], y[3:]) for y in sol.y.T]
         points.append((wall, float(np.max(np.abs(np.array(energies) - h0)))))
     curves["SciPy DOP853"] = points

@@ -53,7 +53,7 @@ def test_energy_balance_closes_for_the_exact_solution_limit():
     assert np.log2(balances[0] / balances[1]) == pytest.approx(4, abs=0.3)
     assert sols[0].work[-1] == pytest.approx(sols[0].energy[0] - sols[0].energy[-1], rel=1e-4)
     with pytest.raises(ValueError, match="work: this run did not record"):
-        raydamp.integrate(model, PENDULUM_Q0, PENDULUM_P0, h=0.1, n_steps=5).energy_balance
+        _ = raydamp.integrate(model, PENDULUM_Q0, PENDULUM_P0, h=0.1, n_steps=5).energy_balance
 
 
 def test_modified_energy_is_h_and_model_aware():

@@ -26,7 +26,7 @@ def test_status_and_step_of_the_blow_up():
     k = sol.failed_step
     assert k is not None and 1 < k < 100_000
     assert sol.steps == k - 1
-    assert "step %d" % k in sol.message
+    assert f"step {k}" in sol.message
     # The step is right: k - 1 steps stay finite, the k-th does not.
     before = raydamp.integrate(model, q0, p0, method="heun", h=H_HUGE, n_steps=k - 1, **OFF)
     assert before.status == "completed"

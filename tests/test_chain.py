@@ -226,7 +226,8 @@ def test_an_undamped_chain_runs_again_from_its_provenance_and_sweeps():
 
 
 @pytest.mark.parametrize("kwargs, message", [
-    ({"n": 10, "dampers": {"bonds": [11], "c": 0.1}}, r"dampers.bonds\[0\]: bond 11 is not in this fixed chain \(0..10\)"),
+    ({"n": 10, "dampers": {"bonds": [11], "c": 0.1}},
+     r"dampers.bonds\[0\]: bond 11 is not in this fixed chain \(0..10\)"),
     ({"n": 10, "boundary": "free", "dampers": {"bonds": [0], "c": 0.1}}, r"dampers.bonds\[0\]: bond 0"),
     ({"n": 10, "dampers": {"sites": [1]}}, "dampers.c: missing"),
     ({"n": 10, "dampers": {"bonds": [1, 2], "c": [0.1]}}, "dampers.c: 1 coefficients for 2 dampers"),
@@ -385,7 +386,7 @@ def test_friction_on_every_site_under_a_load_equals_numpy(method):
     q0, p0 = _state(n, seed=9, scale=0.2)
     q, p = q0.copy(), p0.copy()
     for k in range(steps):
-        force = lambda: _fput_gradient(q, 0.25, 1.0) - amplitude * np.sin(omega * (k + 0.5) * h)  # noqa: E731
+        force = lambda q=q, k=k: _fput_gradient(q, 0.25, 1.0) - amplitude * np.sin(omega * (k + 0.5) * h)  # noqa: E731
         if method == "3s":
             p *= np.exp(-0.5 * h * a)
             q += 0.5 * h * p / mass

@@ -93,7 +93,8 @@ def test_catalogue():
     # The triple jump's middle coefficient is derived: -2^{1/3} / (2 - 2^{1/3}).
     assert listed["yoshida4"].gammas[1] == pytest.approx(-2 ** (1 / 3) / (2 - 2 ** (1 / 3)), rel=1e-15)
     symmetric = {(m.name, m.tableau) for m in raydamp.methods() if m.symmetric}
-    assert symmetric == {("sv", None), ("3s", None), ("baoab", None), ("2s", None), ("rks", "midpoint"), ("midpoint", None)}
+    assert symmetric == {("sv", None), ("3s", None), ("baoab", None), ("2s", None), ("rks", "midpoint"),
+                         ("midpoint", None)}
 
 
 def test_solution_records_the_composition():

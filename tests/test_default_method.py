@@ -122,7 +122,8 @@ def test_at_a_temperature_past_the_explicit_limit_the_default_is_an_error_naming
     # Only the explicit splittings take a temperature (exact noise flows): past their stability limit the default
     # ran 3s, which blew up (status non_finite at step 165 in an audit) with no reason recorded.
     q0, p0 = start(chain2000)
-    with pytest.raises(ValueError, match=r"^h: h omega_max may reach h sqrt\(spectral_bound\) = 2\.4 >= 2 .*take h < 1, or name the method"):
+    with pytest.raises(ValueError, match=r"^h: h omega_max may reach h sqrt\(spectral_bound\) = 2\.4 >= 2 "
+                                         r".*take h < 1, or name the method"):
         raydamp.integrate(chain2000, q0, p0, h=1.2, n_steps=200, temperature=0.1, seed=1)
     sol = raydamp.integrate(chain2000, q0, p0, h=0.5, n_steps=200, temperature=0.1, seed=1)
     assert sol.success and sol.method == "3s"

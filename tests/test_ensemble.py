@@ -146,7 +146,8 @@ def test_progress_counts_only_grow_and_end_at_members(eps_groups):
         counts: list[tuple[int, int]] = []
         raydamp.integrate_ensemble(DampedPendulum(), np.linspace(-1, 1, members)[:, None], [0.0],
                                    parameters={"eps": eps}, h=0.1, n_steps=3, threads=2,
-                                   progress=lambda done, total: counts.append((done, total)))
+                                   progress=lambda done, total: (
+                                       counts.append((done, total))))  # noqa: B023 - called before this call returns
         done = [c[0] for c in counts]
         assert done == sorted(set(done)) and done[-1] == members and {c[1] for c in counts} == {members}
 

@@ -60,8 +60,8 @@ def test_bool_vector_and_load_parameters_are_refused():
                                    load=raydamp.Load.harmonic([1.0], 1.0), parameters={"load.amplitude": [True, 2]})
 
 
-@pytest.mark.parametrize("values, shown", [(["0.1", "0.5"], "'0.1'"), (np.array(["0.1"]), "'0.1'"), ([b"0.1"], "b'0.1'"),
-                                           ([0.1, None], "None"), ([1 + 2j], r"\(1\+2j\)")],
+@pytest.mark.parametrize("values, shown", [(["0.1", "0.5"], "'0.1'"), (np.array(["0.1"]), "'0.1'"),
+                                           ([b"0.1"], "b'0.1'"), ([0.1, None], "None"), ([1 + 2j], r"\(1\+2j\)")],
                          ids=["strings", "string-array", "bytes", "none", "complex"])
 def test_parameters_that_are_not_real_numbers_are_refused(values, shown):
     # Strings were parsed as numbers ("0.1" ran as eps = 0.1) where integrate(eps="0.1") refuses them (API audit).

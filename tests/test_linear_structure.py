@@ -192,7 +192,8 @@ def big_plate():
 
 
 def _modal_solution(structure, omega, phi, a, b, t):
-    """(q(t), p(t)) of q(0) = phi a, qdot(0) = phi b: each mode an underdamped oscillator with rate alpha + beta omega^2."""
+    """(q(t), p(t)) of q(0) = phi a, qdot(0) = phi b: each mode an underdamped oscillator with rate
+    alpha + beta omega^2."""
     c = structure.alpha + structure.beta * omega ** 2
     wd = np.sqrt(omega ** 2 - c ** 2 / 4)
     e = np.exp(-c * t / 2)

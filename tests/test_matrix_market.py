@@ -25,8 +25,8 @@ def _mtx(matrix, **options) -> bytes:
 
 def test_the_header_of_a_coordinate_file():
     K = scipy.sparse.diags([-1.0, 2.0, -1.0], [-1, 0, 1], shape=(6, 6), format="csc")
-    assert read_header(_mtx(K, symmetry="general")) == MatrixMarketHeader(shape=(6, 6), entries=16, layout="coordinate", field="real",
-                                                      symmetry="general")
+    assert read_header(_mtx(K, symmetry="general")) == MatrixMarketHeader(shape=(6, 6), entries=16, layout="coordinate",
+                                                                          field="real", symmetry="general")
     assert read_header(_mtx(K, symmetry="symmetric")).entries == 11  # the lower triangle: 6 + 5
 
 

@@ -56,7 +56,8 @@ def test_a_file_written_in_slices_is_the_file_written_whole(request, tmp_path, n
     slice_bytes = 7 * _row_bytes(sol) + 3  # 7 rows a slice, the last one shorter
     assert sol.t.size % 7 != 0 and sol.t.size > 50
     for fmt, suffix in (("csv", ".csv"), ("npz", ".npz"), ("netcdf", ".nc")):
-        write_solution(tmp_path / f"sliced{suffix}", fmt, sol, lambda column, start, stop: getattr(sol, column)[start:stop],
+        write_solution(tmp_path / f"sliced{suffix}", fmt, sol,
+                       lambda column, start, stop: getattr(sol, column)[start:stop],
                        sol.t.size, slice_bytes=slice_bytes)
         sol.save(tmp_path / f"whole{suffix}")
     csv = (tmp_path / "sliced.csv").read_bytes()

@@ -143,8 +143,8 @@ def test_an_axis_over_a_systems_expression_parameter_is_checked_at_64_values_end
     1000-value axis took 5.5 s, past a service's check budget for a couple of thousand. 64 values after the
     first, spread with both ends, are stepped (a System's expression parameters enter its potential and
     momentum maps only, where any finite value builds a model)."""
-    system = {"coordinates": ["x"], "potential": "k*x^2/2 + x^4/4", "parameters": {"k": 1.0}, "damping": {"scalar": 1.0},
-              "eps": 0.1}
+    system = {"coordinates": ["x"], "potential": "k*x^2/2 + x^4/4", "parameters": {"k": 1.0},
+              "damping": {"scalar": 1.0}, "eps": 0.1}
     spec = {**{k: v for k, v in SPEC.items() if k not in ("model", "parameters")}, "system": system}
     stepped = []
     original = sweep_module._run_ensemble

@@ -280,7 +280,8 @@ def test_double_well_bias_is_second_order_and_smallest_for_baoab():
     the smallest at every h where the difference is resolved (4 standard errors). 4,000 members x 350
     time units each (time averages after a burn-in of 50; members are independent, so the standard
     error is that of the members' averages). baoab's own slope needs ~100 times the samples
-    (its bias at h = 0.1 is 2.5e-4 against a standard error of 3e-4 here; h = 0.3 blows up rare members): benchmarks/bench_thermal.py."""
+    (its bias at h = 0.1 is 2.5e-4 against a standard error of 3e-4 here; h = 0.3 blows up rare members):
+    benchmarks/bench_thermal.py."""
     import scipy.integrate as si
 
     kT = 0.5
@@ -311,7 +312,8 @@ def test_double_well_bias_is_second_order_and_smallest_for_baoab():
             (b0, s0), (b1, s1) = bias["baoab", name, h], bias["3s", name, h]
             if abs(abs(b1) - abs(b0)) > 4 * np.hypot(s0, s1):
                 assert abs(b0) < abs(b1), (name, h, b0, b1)
-        assert abs(bias["baoab", name, 0.24][0]) < min(abs(bias["3s", name, 0.24][0]), abs(bias["2s", name, 0.24][0])), \
+        assert abs(bias["baoab", name, 0.24][0]) < min(abs(bias["3s", name, 0.24][0]),
+                                                       abs(bias["2s", name, 0.24][0])), \
             {k: v for k, v in bias.items() if k[1] == name}
 
 

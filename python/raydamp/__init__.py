@@ -28,9 +28,9 @@ from .systems.series import ChebyshevDegreeError
 from .systems.structure import LinearStructure
 from .systems.system import SpecError, System
 
-__all__ = ["__version__", "models", "Load", "GroundMotion", "System", "Chain", "chain_mode_energies", "Kepler", "LinearStructure",
-           "SpecError", "ChebyshevDegreeError", "integrate", "steps_for", "advise", "Advice", "MethodAdvice",
-           "CancelToken", "Solution", "integrate_ensemble", "EnsembleSolution", "sweep",
+__all__ = ["__version__", "models", "Load", "GroundMotion", "System", "Chain", "chain_mode_energies", "Kepler",
+           "LinearStructure", "SpecError", "ChebyshevDegreeError", "integrate", "steps_for", "advise", "Advice",
+           "MethodAdvice", "CancelToken", "Solution", "integrate_ensemble", "EnsembleSolution", "sweep",
            "check_sweep", "parse_grid_item", "SweepPlan", "load", "rayleigh_coefficients", "modal_damping_ratio",
            "methods", "tableaux", "compositions", "MethodInfo", "TableauInfo", "CompositionInfo"]
 

@@ -84,4 +84,4 @@ def test_bad_chains_are_422_naming_the_path(server, system, loc):
     response = server.client.post("/v1/jobs", json=job)
     assert response.status_code == 422, response.text
     locs = [d["loc"] for d in response.json()["detail"]]
-    assert any(list(l)[:len(loc)] == loc for l in locs), locs
+    assert any(list(found)[:len(loc)] == loc for found in locs), locs

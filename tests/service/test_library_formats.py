@@ -23,7 +23,8 @@ CHAIN = {"system": {"kind": "chain", "n": SITES, "bond": "fput"}, "method": "3s"
          "initial_state": {"mode": 1, "amplitude": 0.5}}
 KEPLER = {"system": {"coordinates": ["x", "y"], "potential": "-1/sqrt(x^2+y^2)", "eps": 0.01,
                      "damping": {"dampers": [{"on": "sqrt(x^2+y^2)", "c": 1}]}, "momenta": {"L": "x*p_y - y*p_x"}},
-          "method": "2s", "h": 0.01, "n_steps": 2000, "save_every": 10, "initial_state": {"q": [1.0, 0.0], "p": [0.0, 1.2]}}
+          "method": "2s", "h": 0.01, "n_steps": 2000, "save_every": 10,
+          "initial_state": {"q": [1.0, 0.0], "p": [0.0, 1.2]}}
 ARRAYS = ("t", "q", "p", "energy", "momentum", "work")
 
 

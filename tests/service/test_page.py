@@ -75,7 +75,8 @@ def _run(page, previous: str | None = None) -> str:
 def _traces(page, plot: str) -> list[dict]:
     """Plotly's own record of what it drew (gd.data): name and the x, y arrays of each trace."""
     return page.eval_on_selector(f"#plot-{plot}",
-                                 "gd => (gd.data || []).map(t => ({name: t.name, x: Array.from(t.x), y: Array.from(t.y)}))")
+                                 "gd => (gd.data || []).map(t => "
+                                 "({name: t.name, x: Array.from(t.x), y: Array.from(t.y)}))")
 
 
 def _drawn(page, plot: str) -> bool:
@@ -131,7 +132,8 @@ def test_kepler_run_through_the_form(module_server) -> None:
         assert max(abs(value) for value in drift[0]["y"]) < 1e-10
         assert all(_drawn(page, plot) for plot in ("energy", "balance", "phase", "projection", "momentum"))
 
-        links = page.eval_on_selector_all("#downloads a[data-format]", "links => links.map(a => a.getAttribute('href'))")
+        links = page.eval_on_selector_all("#downloads a[data-format]",
+                                          "links => links.map(a => a.getAttribute('href'))")
         assert links == [f"/v1/jobs/{job_id}/trajectory?format={fmt}" for fmt in ("json", "csv", "npz", "netcdf")]
         csv = module_server.client.get(links[1])
         assert csv.status_code == 200 and csv.text.count("\n") >= points
@@ -460,7 +462,8 @@ def test_a_decimated_plot_ends_at_the_last_point_and_names_are_text(module_serve
         shown = page.text_content("#job-error")
         assert shown == failed["error"] and shown.count(f"step {failed['failed_step']}") == 1, shown
         # Escaped for Plotly, which then shows the name as written (its legend, its hover), not as markup.
-        assert energy["name"].startswith("&lt;b&gt;bold&lt;/b&gt; &lt;a href=\"x\"&gt;link&lt;/a&gt; 3s"), energy["name"]
+        assert energy["name"].startswith(
+            "&lt;b&gt;bold&lt;/b&gt; &lt;a href=\"x\"&gt;link&lt;/a&gt; 3s"), energy["name"]
 
 
 def test_a_displacement_plot_with_a_choice_of_coordinate(module_server) -> None:

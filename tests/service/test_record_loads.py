@@ -73,7 +73,8 @@ def job(**changes) -> dict:
 def trajectory(server, job_id: str) -> dict:
     response = server.client.get(f"/v1/jobs/{job_id}/trajectory")
     assert response.status_code == 200, response.text
-    return {key: (np.array(value, dtype=float) if value is not None else None) for key, value in response.json().items()}
+    return {key: (np.array(value, dtype=float) if value is not None else None)
+            for key, value in response.json().items()}
 
 
 def locs(response) -> list[list]:

@@ -184,7 +184,8 @@ def test_a_matrix_file_with_a_blank_before_its_banner_serves_a_job(module_server
 
 def test_a_file_in_use_cannot_be_deleted(module_server):
     M, K = bar()
-    ids = [upload(module_server, f"{name}.mtx", mtx_bytes(matrix)).json()["id"] for name, matrix in (("M", M), ("K", K))]
+    ids = [upload(module_server, f"{name}.mtx", mtx_bytes(matrix)).json()["id"]
+           for name, matrix in (("M", M), ("K", K))]
     system = structure_system({"file": ids[0]}, {"file": ids[1]})
     long_job = module_server.submit(job(system, n_steps=10**9, save_every=10**6))
     module_server.wait_for(long_job, lambda j: j["status"] in ("queued", "running"), timeout=10)
@@ -247,7 +248,7 @@ def _bad_structures():
                          ids=[case[0] for case in _bad_structures()])
 def test_bad_structures_are_422_naming_the_path(module_server, spec, loc):
     found = locs(module_server.client.post("/v1/jobs", json=spec))
-    assert any(l[:len(loc)] == loc for l in found), found
+    assert any(where[:len(loc)] == loc for where in found), found
 
 
 def test_bad_uploads_are_422(module_server):
@@ -385,7 +386,7 @@ def test_a_large_structure_started_at_rest_under_its_load(start_server):
     # A start at rest with a q of its own, or with anything else, is refused.
     for state in ({"rest": False}, {"rest": True, "q": [0.0]}):
         response = server.client.post("/v1/jobs", json={**spec, "initial_state": state})
-        assert any(l[:2] == ["body", "initial_state"] for l in locs(response)), state
+        assert any(where[:2] == ["body", "initial_state"] for where in locs(response)), state
 
 
 def test_a_matrix_path_is_refused_saying_the_service_reads_no_paths(module_server):

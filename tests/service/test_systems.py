@@ -53,7 +53,8 @@ def test_listing_shows_the_system_name(server):
 def test_openapi_documents_the_system_schema(server):
     schemas = server.client.get("/openapi.json").json()["components"]["schemas"]
     assert "SystemInput" in schemas
-    assert {"coordinates", "potential", "mass", "damping", "eps", "momenta"} <= set(schemas["SystemInput"]["properties"])
+    assert {"coordinates", "potential", "mass", "damping", "eps", "momenta"} <= set(
+        schemas["SystemInput"]["properties"])
 
 
 HOSTILE = [

@@ -23,6 +23,7 @@ from .temperature import configurational_temperature, kinetic_temperature
 __all__ = [
     "ConvergenceResult", "convergence", "energy_error", "modified_energy", "reference_solution",
     "piecewise_linear_response",
-    "momentum_drift", "kinetic_temperature", "configurational_temperature", "RelativeEquilibrium", "cartesian_state", "distance_from", "modified_relative_equilibrium",
+    "momentum_drift", "kinetic_temperature", "configurational_temperature", "RelativeEquilibrium", "cartesian_state",
+    "distance_from", "modified_relative_equilibrium",
     "reduced_coordinates", "reduced_hessian", "relative_equilibrium",
 ]

@@ -118,14 +118,14 @@ def relative_equilibrium(model: ElasticPendulum, mu: float) -> RelativeEquilibri
                          f"<= {MU_RANGE[1]:g}")
     if model.k == 0.0:
         raise ValueError("model: k = 0 has no relative equilibrium (nothing holds the mass up)")
-    m, k, l = model.m, model.k, model.l
+    m, k, length = model.m, model.k, model.l
 
     def depth(rho):
         return m * m * G * rho**4 / mu**2
 
     def vertical_balance(rho):
         Z = depth(rho)
-        return k * Z * (1.0 - l / math.hypot(rho, Z)) - m * G
+        return k * Z * (1.0 - length / math.hypot(rho, Z)) - m * G
 
     try:
         lo, hi = 1e-6, 1.0
@@ -158,15 +158,16 @@ def reduced_hessian(model: ElasticPendulum, equilibrium: RelativeEquilibrium) ->
     Second derivatives written out by hand, so no finite-difference step enters."""
     _require_vertical_gravity(model)
     _equilibrium(equilibrium)
-    m, k, l, mu = model.m, model.k, model.l, equilibrium.mu
+    m, k, length, mu = model.m, model.k, model.l, equilibrium.mu
     rho, z = equilibrium.rho, equilibrium.z
     r = math.hypot(rho, z)
-    stretch = r - l
+    stretch = r - length
     # Hessian of k/2 (r - l)^2 is k (x x^T / r^2 + (r - l)(I / r - x x^T / r^3)), x = (rho, z).
     h_rr = 3.0 * mu**2 / (m * rho**4) + k * (rho**2 / r**2 + stretch * z**2 / r**3)
     h_zz = k * (z**2 / r**2 + stretch * rho**2 / r**3)
     h_rz = k * rho * z * (1.0 / r**2 - stretch / r**3)
-    return np.array([[h_rr, h_rz, 0.0, 0.0], [h_rz, h_zz, 0.0, 0.0], [0.0, 0.0, 1.0 / m, 0.0], [0.0, 0.0, 0.0, 1.0 / m]])
+    return np.array([[h_rr, h_rz, 0.0, 0.0], [h_rz, h_zz, 0.0, 0.0], [0.0, 0.0, 1.0 / m, 0.0],
+                     [0.0, 0.0, 0.0, 1.0 / m]])
 
 
 def distance_from(equilibrium: RelativeEquilibrium, solution_or_q, p=None) -> np.ndarray:

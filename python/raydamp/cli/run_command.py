@@ -62,7 +62,7 @@ def _integrate_until_interrupted(model, q0, p0, progress, options: dict):
     def run() -> None:
         try:
             outcome["solution"] = integrate(model, q0, p0, progress=progress, cancel=cancel, **options)
-        except BaseException as error:  # handed to the main thread, which reports it
+        except BaseException as error:  # noqa: BLE001 - handed to the main thread, which reports it
             outcome["error"] = error
 
     worker = threading.Thread(target=run, name="raydamp-run", daemon=True)

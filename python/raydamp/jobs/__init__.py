@@ -27,8 +27,9 @@ from .summary import JobSummary
 from .sweep_spec import GridRange, SweepSpec
 from .system_forms import ChainInput, CooForm, DiagonalForm, FileForm, KeplerInput, LinearStructureInput, SystemInput
 
-__all__ = ["JobSpec", "JobSummary", "ModelSpec", "SweepSpec", "GridRange", "JobError", "JobCall", "parse_job", "build_job",
-           "planned_steps", "error_at", "job_arguments", "validation_error", "client_path", "describe_model",
-           "model_from_spec", "PROVENANCE_KEYS", "STEP_SIZE_ALIAS", "UNION_TAGS", "InitialState", "ModeState", "RestState",
-           "TableauInput", "SystemInput", "ChainInput", "KeplerInput", "LinearStructureInput", "CooForm", "DiagonalForm",
-           "FileForm", "VectorFile", "LoadInput", "GroundMotionInput"]
+__all__ = ["JobSpec", "JobSummary", "ModelSpec", "SweepSpec", "GridRange", "JobError", "JobCall", "parse_job",
+           "build_job", "planned_steps", "error_at", "job_arguments", "validation_error", "client_path",
+           "describe_model", "model_from_spec", "PROVENANCE_KEYS", "STEP_SIZE_ALIAS", "UNION_TAGS", "InitialState",
+           "ModeState", "RestState", "TableauInput", "SystemInput", "ChainInput", "KeplerInput",
+           "LinearStructureInput", "CooForm", "DiagonalForm", "FileForm", "VectorFile", "LoadInput",
+           "GroundMotionInput"]

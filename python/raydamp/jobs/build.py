@@ -24,8 +24,8 @@ from .forms import ModeState, RestState, VectorFile
 from .spec import JobSpec, ModelSpec, client_path
 from .system_forms import FileResolver
 
-__all__ = ["JobCall", "unique_keys", "parse_job", "build_job", "planned_steps", "job_arguments", "model_from_spec", "error_at",
-           "validation_error", "PROVENANCE_KEYS"]
+__all__ = ["JobCall", "unique_keys", "parse_job", "build_job", "planned_steps", "job_arguments", "model_from_spec",
+           "error_at", "validation_error", "PROVENANCE_KEYS"]
 
 # What a Solution's provenance adds to the job (a saved result's provenance runs as a job).
 PROVENANCE_KEYS = ("raydamp_version", "job_id", "coordinates", "momentum_names", "method_reason")

@@ -21,8 +21,9 @@ from ..loads.inputs import (
     numbers,
 )
 
-__all__ = ["Input", "FiniteFloat", "Vector", "bounded", "at_most", "numbers", "indices", "MAX_ITEM_ERRORS", "InitialState", "ModeState", "RestState", "TableauInput",
-           "MAX_VECTOR", "MAX_CHAIN_SITES", "MAX_EXPRESSION", "Expression", "Name", "FileId", "FILE_ID", "MatrixFile", "VectorFile", "STATE_VECTOR_TAGS"]
+__all__ = ["Input", "FiniteFloat", "Vector", "bounded", "at_most", "numbers", "indices", "MAX_ITEM_ERRORS",
+           "InitialState", "ModeState", "RestState", "TableauInput", "MAX_VECTOR", "MAX_CHAIN_SITES", "MAX_EXPRESSION",
+           "Expression", "Name", "FileId", "FILE_ID", "MatrixFile", "VectorFile", "STATE_VECTOR_TAGS"]
 
 MAX_CHAIN_SITES = 10**7  # a chain's state is built from its description, not sent
 MAX_EXPRESSION = 10_000

@@ -87,8 +87,9 @@ StateInput = Annotated[Annotated[InitialState, Tag("q, p form")] | Annotated[Mod
 # A tableau's name or a table, told apart by type: a table's error is the table's, not also a name's.
 TableauChoice = Annotated[Annotated[TableauName, Tag("name form")] | Annotated[TableauInput, Tag("table form")],
                           Discriminator(lambda value: "name form" if isinstance(value, str) else "table form")]
-UNION_TAGS = {"tableau": frozenset({"name form", "table form"}), "initial_state": frozenset({"q, p form", "mode form", "rest form"}), "system": SYSTEM_TAGS, "M": MATRIX_TAGS,
-              "K": MATRIX_TAGS, "q": STATE_VECTOR_TAGS, "p": STATE_VECTOR_TAGS, **FORM_TAGS}
+UNION_TAGS = {"tableau": frozenset({"name form", "table form"}),
+              "initial_state": frozenset({"q, p form", "mode form", "rest form"}), "system": SYSTEM_TAGS,
+              "M": MATRIX_TAGS, "K": MATRIX_TAGS, "q": STATE_VECTOR_TAGS, "p": STATE_VECTOR_TAGS, **FORM_TAGS}
 GRID_TAGS = frozenset({"range", "values"})  # a sweep's axis forms (sweep_spec.py)
 
 
@@ -149,8 +150,9 @@ class ModelSpec(Input):
         """The model; raises JobError naming the field (a parameter, or the path inside "system")."""
         if (self.model is None) == (self.system is None):
             # loc: the field to remove (a system beside a model) or to add (a model's name)
-            raise JobError(("model",) if self.model is None else ("system",), "model: give exactly one of model (a built-in model's name, with parameters) "
-                                       "and system (a user-defined system)")
+            raise JobError(("model",) if self.model is None else ("system",),
+                           "model: give exactly one of model (a built-in model's name, with parameters) "
+                           "and system (a user-defined system)")
         if self.system is not None:
             if self.parameters:
                 raise JobError(("parameters",), "parameters: a system carries its parameters inside "

@@ -90,8 +90,10 @@ Coordinates = Annotated[Annotated[bounded(Name, _MAX_COORDINATES, min_length=1),
                         Discriminator(lambda value: "count form" if isinstance(value, int) else "names form")]
 # A value that is a number or something else (an expression, a vector), told apart by its type, so that an
 # error is about the form the client meant.
-NumberOrExpression = Annotated[Annotated[FiniteFloat, Tag("number form")] | Annotated[Expression, Tag("expression form")],
-                               Discriminator(lambda value: "expression form" if isinstance(value, str) else "number form")]
+NumberOrExpression = Annotated[Annotated[FiniteFloat, Tag("number form")]
+                               | Annotated[Expression, Tag("expression form")],
+                               Discriminator(lambda value: "expression form" if isinstance(value, str)
+                                             else "number form")]
 
 
 def _number_or_list(value: object) -> str:
@@ -107,7 +109,8 @@ def _mass_form(value: object) -> str:
 # A number m (M = m I), a diagonal or a matrix, told apart by their shape: an error is about the form meant.
 MassInput = Annotated[Annotated[FiniteFloat, Tag("number form")]
                       | Annotated[bounded(FiniteFloat, _MAX_COORDINATES), Tag("vector form")]
-                      | Annotated[bounded(bounded(FiniteFloat, _MAX_COORDINATES), _MAX_COORDINATES), Tag("matrix form")],
+                      | Annotated[bounded(bounded(FiniteFloat, _MAX_COORDINATES), _MAX_COORDINATES),
+                                  Tag("matrix form")],
                       Discriminator(_mass_form)]
 
 
@@ -175,7 +178,8 @@ class ChainDampers(Input):
     # raydamp.Chain, once there are bonds or sites.
     c: Annotated[Annotated[FiniteFloat, Tag("number form")]
                  | Annotated[bounded(FiniteFloat, 2 * MAX_VECTOR, items=numbers(2 * MAX_VECTOR)), Tag("vector form")],
-                 Discriminator(_number_or_list)] | None = Field(None, description="the dashpot coefficient, or one per damper (bonds, then sites)")
+                 Discriminator(_number_or_list)] | None = Field(
+        None, description="the dashpot coefficient, or one per damper (bonds, then sites)")
 
 
 class ChainOnSiteInput(Input):

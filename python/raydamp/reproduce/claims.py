@@ -92,7 +92,8 @@ def evaluate(r: dict) -> list[Claim]:
     out.append(Claim("Fig. 3 (lower)", "2S and RKS agree more closely with each other than either with 3S "
                      "(3S is the outlier)",
                      f"max abs difference: 2s-rks {_fmt(energy['differences']['2s-rks'].max())}, 3s-2s "
-                     f"{_fmt(energy['differences']['3s-2s'].max())}, 3s-rks {_fmt(energy['differences']['3s-rks'].max())}",
+                     f"{_fmt(energy['differences']['3s-2s'].max())}, "
+                     f"3s-rks {_fmt(energy['differences']['3s-rks'].max())}",
                      "2s-rks at least 10x smaller than both pairs with 3s",
                      energy["differences"]["2s-rks"].max() * 10
                      < min(energy["differences"]["3s-2s"].max(), energy["differences"]["3s-rks"].max())))
@@ -137,9 +138,11 @@ def evaluate(r: dict) -> list[Claim]:
     drift, bound = mom["drift"], 1e-12 * max(1.0, abs(mom["j0"]))
     out.append(Claim("Prop. 5.2, Sec. 6.2", "3S, 2S, RKS conserve the momentum map J3 exactly; RKS-B (end of Sec. 5) "
                      "and Heun do not",
-                     f"max abs(J3 - J3(0)) over {mom['steps']} steps: " + ", ".join(f"{m} {_fmt(v)}" for m, v in drift.items()),
+                     f"max abs(J3 - J3(0)) over {mom['steps']} steps: "
+                     + ", ".join(f"{m} {_fmt(v)}" for m, v in drift.items()),
                      f"splittings < {_fmt(bound)}, rksb and heun > 1e-6",
-                     all(drift[m] < bound for m in ("3s", "2s", "rks")) and drift["rksb"] > 1e-6 and drift["heun"] > 1e-6))
+                     all(drift[m] < bound for m in ("3s", "2s", "rks"))
+                     and drift["rksb"] > 1e-6 and drift["heun"] > 1e-6))
 
     res1, res10 = eq["residual_k1"], eq["residual_k10"]
     out.append(Claim("Sec. 6.2 (data)", "q0 = (0, 1.0392, -0.6), p0 = (1.3416, 0, 0) is an exact relative "
@@ -180,7 +183,8 @@ def evaluate(r: dict) -> list[Claim]:
 
     out.append(Claim("Lemma 4.4, Sec. 4.2", "The modified Hamiltonian of Stormer-Verlet is conserved to higher order "
                      "(here truncated after h^2: O(h^4)) while H oscillates at O(h^2)",
-                     "fitted order of the range of H_mod: " + ", ".join(f"{k} {_fmt(v)}" for k, v in mod["Hmod_order"].items())
+                     "fitted order of the range of H_mod: "
+                     + ", ".join(f"{k} {_fmt(v)}" for k, v in mod["Hmod_order"].items())
                      + "; of H: " + ", ".join(f"{k} {_fmt(v)}" for k, v in mod["H_order"].items()),
                      "H_mod within 0.3 of 4, H within 0.3 of 2",
                      all(abs(v - 4) < 0.3 for v in mod["Hmod_order"].values())

@@ -153,8 +153,10 @@ def elastic_energy(r: dict, out: Path) -> list[str]:
 
 def orbits(r: dict, out: Path) -> list[str]:
     fig, axes = plt.subplots(2, 2, figsize=(10, 10))
-    panels = ((SPLITTINGS, 0.1, 0.1, "3S, 2S, RKS (h = 0.1, eps = 0.1)"), (("heun",), 0.1, 0.1, "Heun (h = 0.1, eps = 0.1)"),
-              (SPLITTINGS, 0.01, 0.1, "3S, 2S, RKS (h = 0.1, eps = 0.01)"), (SPLITTINGS, 0.01, 0.4, "3S, 2S, RKS (h = 0.4, eps = 0.01)"))
+    panels = ((SPLITTINGS, 0.1, 0.1, "3S, 2S, RKS (h = 0.1, eps = 0.1)"),
+              (("heun",), 0.1, 0.1, "Heun (h = 0.1, eps = 0.1)"),
+              (SPLITTINGS, 0.01, 0.1, "3S, 2S, RKS (h = 0.1, eps = 0.01)"),
+              (SPLITTINGS, 0.01, 0.4, "3S, 2S, RKS (h = 0.4, eps = 0.01)"))
     for ax, (methods, eps, h, title) in zip(axes.flat, panels):
         for m in methods:
             sol = r["runs"][m, eps, h]
@@ -221,8 +223,8 @@ def equilibrium(r: dict, out: Path) -> list[str]:
     left.legend()
     for m, offsets in r["offsets"].items():
         style = _layer(m)
-        right.loglog(r["hs"], offsets, marker=MARKERS[m], ms=4 + 3 * (m == "3s"), label=f"{m} (order {r['offset_order'][m]:.2f})",
-                     **style)
+        right.loglog(r["hs"], offsets, marker=MARKERS[m], ms=4 + 3 * (m == "3s"),
+                     label=f"{m} (order {r['offset_order'][m]:.2f})", **style)
     right.loglog(r["hs"], r["offsets"]["3s"][-1] * (r["hs"] / r["hs"][-1]) ** 2, "k:", lw=0.8, label="h^2")
     right.set_xlabel("h")
     right.set_ylabel("|modified RE - exact RE|")

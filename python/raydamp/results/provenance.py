@@ -22,7 +22,8 @@ def job_spec(model: Model, q0: np.ndarray, p0: np.ndarray, *, method: str, table
     """The job spec of a run: what Solution.provenance holds; ``method_reason`` says why the method was
     chosen when the run named none (raydamp.run.choose_method)."""
     spec = describe_model(model)
-    spec.update({"method": method, "tableau": tableau, "composition": composition, "h": h, "save_every": save_every, "work": work,
+    spec.update({"method": method, "tableau": tableau, "composition": composition, "h": h, "save_every": save_every,
+                 "work": work,
                  "initial_state": {"q": np.asarray(q0, float).tolist(), "p": np.asarray(p0, float).tolist()}})
     if method_reason is not None:
         spec["method_reason"] = method_reason

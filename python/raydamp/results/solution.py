@@ -37,7 +37,8 @@ class Solution:
         flow conserves (the elastic pendulum's J3, L under a radial dashpot, a chain's total
         momentum). 3s, 2s and rks keep it at rounding (rks with an explicit tableau plus its
         stability function's error against e^{-a h} per step); a method that does not keep
-        momentum maps (heun, rk4) shows its error. 0 for a model without momentum maps. A System's ``momenta`` under non-scalar
+        momentum maps (heun, rk4) shows its error. 0 for a model without momentum maps.
+        A System's ``momenta`` under non-scalar
         damping that breaks their symmetry follow no such law: there the figure includes the
         damping's real change of J.
     work : (N,) damping work W(t) if the run was asked for it (``work=True``), else None.

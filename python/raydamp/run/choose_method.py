@@ -88,8 +88,9 @@ def choose_method(model, method: str | None, tableau, composition, h: float, the
     limit = DEGREE_LIMIT[model.mass_kind]
     if degree >= limit:
         return Choice("rks", "midpoint", f"rks with tableau midpoint: 3s's beta K damping flow over h would be a "
-                                         f"Chebyshev series of degree {degree if degree < math.inf else 'above 8192'} (h rho = "
-                                         f"{h * model.damping_rate_bound:.4g}; from {limit} on, with a {model.mass_kind} "
+                                         f"Chebyshev series of degree {degree if degree < math.inf else 'above 8192'} "
+                                         f"(h rho = {h * model.damping_rate_bound:.4g}; from {limit} on, "
+                                         f"with a {model.mass_kind} "
                                          "M, it costs more per step than rks-midpoint's one sparse solve, at the "
                                          "same stability limit and error)")
     return Choice(DEFAULT_METHOD, None, f"3s: h omega_max = {h * omega_max:.4g} < 2 and its damping flow's "

@@ -95,7 +95,8 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
         parameter set before the run (a change of eps alone reuses its compiled functions; other
         parameters recompile it). ``method=None`` chooses for ``system`` itself, not for each member.
     method, h, t_end, n_steps, save_every, tableau, composition : as :func:`raydamp.integrate`,
-        shared by every member (method None chooses as integrate does, the reason in the provenance). A LinearStructure's implicit "midpoint" and "gauss4" factorise
+        shared by every member (method None chooses as integrate does, the reason in the provenance).
+        A LinearStructure's implicit "midpoint" and "gauss4" factorise
         M + c C + c^2 K once per sub-step length for the whole ensemble (once, twice with a
         shortened last step), before the members run; the members share the factors read-only,
         each solving in buffers of its own.
@@ -128,7 +129,8 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
         raise ValueError(f"system must be a raydamp model or System, got {system!r}")
     names, with_tableau = _catalogue()
     method, tableau, method_reason = choose_method(system, method, tableau, composition, h,
-                                                   thermal=temperature is not None and real("temperature", temperature, nonnegative=True) > 0)
+                                                   thermal=temperature is not None
+                                                   and real("temperature", temperature, nonnegative=True) > 0)
     if not isinstance(method, str) or method not in names:
         raise ValueError(f"method: unknown method {method!r} (known: {', '.join(names)})")
     if tableau is not None and not isinstance(tableau, str):

@@ -191,7 +191,8 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
         raise ValueError(f"model must be a raydamp model (e.g. raydamp.models.DampedPendulum()), got {model!r}")
     names, with_tableau = _catalogue()
     method, tableau, method_reason = choose_method(model, method, tableau, composition, h,
-                                                   thermal=temperature is not None and real("temperature", temperature, nonnegative=True) > 0)
+                                                   thermal=temperature is not None
+                                                   and real("temperature", temperature, nonnegative=True) > 0)
     if not isinstance(method, str) or method not in names:
         raise ValueError(f"method: unknown method {method!r} (known: {', '.join(names)})")
     tableau_name, tableau = _tableau(tableau)

@@ -344,7 +344,7 @@ def _watch_stop(name: str | None) -> tuple[CancelToken | None, threading.Event |
                 if stop.wait(timeout=_STOP_POLL_SECONDS):
                     token.cancel()
                     return
-            except BaseException:  # the client or scheduler closing (CancelledError included): nothing can stop it now
+            except BaseException:  # noqa: BLE001 - the client or scheduler closing (CancelledError included): nothing can stop it now
                 return
 
     threading.Thread(target=watch, name="raydamp-sweep-stop", daemon=True).start()
@@ -767,7 +767,7 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
         coords["t"] = (("time",), times[0])
     else:
         t = np.full((members, R), np.nan)
-        for (run, start, stop), grid_t in zip(groups, times):
+        for (_run, start, stop), grid_t in zip(groups, times):
             t[start:stop, :grid_t.size] = grid_t
         coords["t"] = (("member", "time"), t)
     for name, values in columns.items():
@@ -797,7 +797,8 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
         # written every member reads "cancelled": a sweep ended any way (a cancel, Ctrl-C, an error, a crash)
         # leaves its unfinished members so, not at the store's fill value, 0, which reads "completed".
         unfinished = np.full(members, STATUSES.index("cancelled"), dtype=np.int8)
-        xr.Dataset({**statics, "status": (("member",), unfinished)}).to_zarr(store, region={"member": slice(0, members)})
+        xr.Dataset({**statics, "status": (("member",), unfinished)}).to_zarr(store,
+                                                                            region={"member": slice(0, members)})
     messages: dict[str, str] = {}
     finished = np.zeros(members, dtype=bool)
     done = 0
@@ -854,7 +855,7 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
         if not close and any(not f.done() for f in futures):  # an error here or in a chunk: the rest stop too
             try:
                 _stop_chunks(client, futures, stop_event)
-            except Exception:  # the client itself failing: the error being raised is the one to see
+            except Exception:  # noqa: BLE001 - the client itself failing: the error being raised is the one to see
                 pass
         for thing in close:
             thing.close()

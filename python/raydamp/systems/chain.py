@@ -320,7 +320,7 @@ def _on_site(on_site: Mapping[str, Any] | None) -> dict[str, Any] | None:
     if not isinstance(kind, str) or kind not in ON_SITE:
         raise ValueError(f"on_site.kind: unknown on-site potential {_short(kind)} (known: {', '.join(ON_SITE)})")
     out: dict[str, Any] = {"kind": kind}
-    for key, value in on_site.items():
+    for key, _value in on_site.items():
         if key != "kind" and key not in ON_SITE[kind]:
             raise ValueError(f"on_site.{key}: the {kind} on-site potential has no parameter {key!r} "
                              f"(known: {', '.join(ON_SITE[kind])})")

@@ -19,7 +19,8 @@ from .. import _core
 from .._validation import _short, real, vector
 from .kinds import MemberModels, plain
 
-__all__ = ["Model", "SharedModel", "BuiltinModel", "DampedPendulum", "ElasticPendulum", "MODELS", "describe_models", "make_model"]
+__all__ = ["Model", "SharedModel", "BuiltinModel", "DampedPendulum", "ElasticPendulum", "MODELS", "describe_models",
+           "make_model"]
 
 # The core's catalogue of built-in models, by name (cpp/include/raydamp/models/*.hpp, each
 # struct's `parameters` table).

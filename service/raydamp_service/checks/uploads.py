@@ -77,7 +77,8 @@ def check_matrix_market(content: bytes, *, max_dim: int, name: str = "the matrix
 
 
 class ParsedFiles:
-    """Uploaded files as raydamp reads them, parsed once per id (an upload never changes). A matrix is a scipy.sparse matrix; a record its (t, values), t None for one column of values.
+    """Uploaded files as raydamp reads them, parsed once per id (an upload never changes).
+    A matrix is a scipy.sparse matrix; a record its (t, values), t None for one column of values.
     A parse in progress is waited for, not repeated; at most max_entries stored entries (a matrix's
     nonzeros, a record's numbers) are kept, the least recently used dropped first."""
 

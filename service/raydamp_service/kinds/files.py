@@ -77,7 +77,8 @@ class FileStore:
         """Store an upload: a matrix (its shape and nnz) or a record; None (nothing written) when it would take
         the files past max_total_bytes (0: no bound)."""
         if record is not None:
-            file = FileRecord(id=uuid.uuid4().hex, name=name, bytes=len(content), shape=(record.samples, record.columns),
+            file = FileRecord(id=uuid.uuid4().hex, name=name, bytes=len(content),
+                              shape=(record.samples, record.columns),
                               nnz=0, created_at=now(), kind="record", format=record.format, t_start=record.t_start,
                               t_end=record.t_end, dt=record.dt)
         else:

@@ -42,7 +42,8 @@ def _view(record: SweepRecord, runner: Runner) -> SweepView:
     return SweepView(id=record.id, status=record.status, members=record.members, members_done=done,
                      progress=1.0 if record.status == "completed" else done / record.members,
                      cancel_requested=record.cancel_requested, attempts=record.attempts, error=record.error,
-                     outcomes=record.outcomes, result=SWEEPS.url(record.id) + "/result" if record.result_bytes else None,
+                     outcomes=record.outcomes,
+                     result=SWEEPS.url(record.id) + "/result" if record.result_bytes else None,
                      result_bytes=record.result_bytes, spec=record.spec,
                      created_at=record.created_at, started_at=record.started_at, finished_at=record.finished_at)
 
@@ -100,7 +101,7 @@ def get_sweep(sweep_id: str, request: Request) -> SweepView:
 def _pieces(connection, rowid: int, size: int):
     try:
         with connection.blobopen("sweeps", "result", rowid, readonly=True) as blob:
-            for offset in range(0, size, _PIECE):
+            for _offset in range(0, size, _PIECE):
                 yield blob.read(_PIECE)
     finally:
         connection.close()
@@ -111,7 +112,8 @@ def _pieces(connection, rowid: int, size: int):
                        409: {"description": "the sweep has no result (yet)"}})
 def get_result(sweep_id: str, request: Request,
                format: Annotated[Literal["netcdf", "nc"], Query(  # noqa: A002 - the API's name
-                   description="netcdf (or nc): the sweep's xarray Dataset (raydamp.load or xarray.open_dataset)")] = "netcdf"
+                   description="netcdf (or nc): the sweep's xarray Dataset "
+                               "(raydamp.load or xarray.open_dataset)")] = "netcdf"
                ) -> Response:
     """The members' trajectories and outcomes as one NetCDF file (raydamp.sweep's Dataset; a cancelled
     sweep's file holds the chunks finished before the cancel)."""

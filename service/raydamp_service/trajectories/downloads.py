@@ -62,7 +62,8 @@ def write_file(record, spec: JobSpec, connection: sqlite3.Connection, stored: St
     return path, MEDIA_TYPES[fmt]
 
 
-def draw_plot(record, arrays: TrajectoryArrays, spec: JobSpec, kind: str, options: dict) -> tuple[str | None, bytes | None]:
+def draw_plot(record, arrays: TrajectoryArrays, spec: JobSpec, kind: str,
+              options: dict) -> tuple[str | None, bytes | None]:
     """(None, the PNG) of a stored trajectory's plot, or (raydamp's refusal, None): a plot this run cannot have (a
     projection of one coordinate, an unknown coordinate). Run in a check process (CheckPool.plot)."""
     try:

@@ -20,7 +20,8 @@ from .arrays import SAVED, StoredTrajectory, TrajectoryArrays
 
 __all__ = ["FetchLease", "Selection", "read_arrays", "read_column", "trajectory_chunks"]
 
-CHUNK_BYTES = 1 << 16  # floats read per piece. Small: json.dumps holds the GIL (and so the event loop) for a whole piece
+# floats read per piece. Small: json.dumps holds the GIL (and so the event loop) for a whole piece
+CHUNK_BYTES = 1 << 16
 _ROW_READ_LIMIT = 1 << 16  # bytes of one read of a blob
 
 

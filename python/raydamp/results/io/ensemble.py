@@ -82,7 +82,8 @@ def ensemble_from_xarray(ds) -> EnsembleSolution:
 
     return EnsembleSolution(
         t=values("t"), q=values("q"), p=values("p"), energy=values("energy"),
-        momentum=values("momentum").reshape(members, ds.sizes["time"], -1), rows=np.asarray(ds["rows"].values, np.int64),
+        momentum=values("momentum").reshape(members, ds.sizes["time"], -1),
+        rows=np.asarray(ds["rows"].values, np.int64),
         t_final=values("t_final"), q_final=values("q_final"), p_final=values("p_final"),
         energy_final=values("energy_final"), momentum_final=values("momentum_final").reshape(members, -1),
         status=status, steps=steps, failed_step=np.asarray(ds["failed_step"].values, np.int64), message=message,

@@ -21,7 +21,7 @@ import os
 import zipfile
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import IO, Union
+from typing import IO
 
 import numpy as np
 
@@ -35,7 +35,7 @@ WRITE_FORMATS = ("csv", "npz", "netcdf")
 # read(column, start, stop): rows [start, stop) of one column of the trajectory; column is one of
 # t, energy, work, load_work ((rows,) arrays) or q, p, momentum ((rows, width) arrays).
 ReadRows = Callable[[str, int, int], np.ndarray]
-Target = Union[str, os.PathLike, IO[bytes]]
+Target = str | os.PathLike | IO[bytes]
 
 _WIDE = ("q", "p", "momentum")
 

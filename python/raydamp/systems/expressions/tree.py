@@ -17,7 +17,7 @@ import math
 import operator
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import NamedTuple, TypeVar, Union
+from typing import NamedTuple, TypeVar
 
 __all__ = ["Number", "Name", "Unary", "Binary", "Call", "Node", "FUNCTIONS", "OPERATORS", "MAX_LENGTH",
            "MAX_NODES",
@@ -65,7 +65,7 @@ class Call:
     column: int            # of the function's name
 
 
-Node = Union[Number, Name, Unary, Binary, Call]
+Node = Number | Name | Unary | Binary | Call
 
 # name -> (number of arguments, description). The float version of each is below
 # (FLOAT_FUNCTIONS, for constant folding), the SymEngine one in symbolic.py; both
