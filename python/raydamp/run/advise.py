@@ -89,7 +89,8 @@ _FLOOR_SECONDS_PER_STEP = 5e-8       # the step loop's own overhead, at least
 MIN_TOLERANCE = 1e-13
 # An explicit method steps at most at this fraction of its stability limit.
 STABILITY_MARGIN = 0.95
-_AIM = 0.85                 # the modal model aims at this fraction of the tolerance
+_AIM = 0.85                 # the modal model aims at this fraction of the tolerance first
+_MARGIN = 0.99              # and accepts a step up to this fraction (rounding; a maximum between samples)
 _DENSE_BELOW = 500          # DOF: all modes from a dense eigensolver below this
 _LANCZOS_MODES = 40         # beyond: this many of the lowest modes weight the error model
 _MODAL_GRID = 48            # frequencies of the modal copy that stability limits are computed on
@@ -387,7 +388,7 @@ def _plan(method, tableau, order, constant, h_max, t_end, tolerance, motion, rec
     def within(k: int) -> bool:
         if k not in tried:
             tried[k] = error(method, tableau, unit / k, steps_of(k))
-        return tried[k] <= tolerance
+        return tried[k] <= _MARGIN * tolerance
 
     # a step count within the tolerance: from the guess, aimed at _AIM of it
     best = None
@@ -403,12 +404,12 @@ def _plan(method, tableau, order, constant, h_max, t_end, tolerance, motion, rec
     if best is None:
         return _Plan(method, tableau, order, h_max, unit / k, steps_of(k), "steps", math.nan)
     # the fewest: predicted from the error's order, bisection where the prediction falls short
-    failed = max([j for j, e in tried.items() if e > tolerance and j < best], default=k_min - 1)
+    failed = max([j for j, e in tried.items() if e > _MARGIN * tolerance and j < best], default=k_min - 1)
     for _ in range(12):
         if best - failed <= 1 or best - failed <= best // 200:  # within 0.5% of the fewest
             break
         e = tried[best]
-        guess = math.ceil(best * (e / tolerance) ** (1 / order) * (1 - 1e-12)) if e > 0 else failed + 1
+        guess = math.ceil(best * (e / (_MARGIN * tolerance)) ** (1 / order) * (1 - 1e-12)) if e > 0 else failed + 1
         if guess >= best:       # predicted at the fewest already: is one fewer still within?
             guess = best - 1
         elif guess <= failed:

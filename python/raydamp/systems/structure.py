@@ -470,6 +470,6 @@ def _lowest_modes(stiffness, mass, k: int, bound: float) -> tuple[np.ndarray, np
         order = np.argsort(w2)
         w2, phi = w2[order], phi[:, order]
         phi = phi / np.sqrt(np.einsum("ij,ij->j", phi, mass @ phi))
-    w2 = np.where(w2 > _DEFINITENESS_SHIFT * bound, w2, 0.0)  # rigid modes: zero to rounding
+    w2 = np.where(w2 > 1e-13 * bound, w2, 0.0)  # rigid modes: zero to rounding (1e-13 of the largest)
     return np.sqrt(w2), phi
 
