@@ -18,8 +18,9 @@ Before a long run, from the structure and (when given) the start and the load:
   the Euclidean norm over the DOF, scale = ||q0|| (or, from rest, the peak of the response). So each mode
   counts by its share of the motion, with its own frequency and its damping decay over t_end, and a
   method's error past h omega = 1 (an overdamped top mode that midpoint and gauss4 keep at amplitude about
-  1, by design) is in it. The step is the fewest whole steps whose predicted error is within the tolerance
-  (aimed at 0.85 of it). An explicit method steps at most at 0.95 h_max.
+  1, by design) is in it. The step is the fewest whole steps whose predicted error is within 0.99 of the
+  tolerance (rounding, and a maximum between the sampled steps). An explicit method steps at most at
+  0.95 h_max, and its error is then below the tolerance.
 - what the motion is: ``q0`` and ``p0`` give the modal coordinates x_i = phi_i^T M q0, v_i = phi_i^T p0. A
   ``load`` adds to each mode the peak of its exact forced response (modal forces linear between the load's
   samples), as an amplitude at the start: a model of the free-vibration part of the error the forced
