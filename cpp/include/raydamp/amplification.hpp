@@ -23,6 +23,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <iomanip>
 #include <limits>
 #include <sstream>
@@ -182,6 +183,27 @@ inline std::string coefficient_formula(const BackwardStep& w) {
   return c.str();
 }
 
+// The decimal text of a step at most h that passes: h rounded down (never to nearest, which
+// suggested 1.13 for a limit of 1.127186, itself refused) at 6 significant figures, then more
+// digits only if that text, read back, does not pass.
+template <class Passes>
+std::string passing_step(double h, Passes passes) {
+  if (!(h > 0.0) || !std::isfinite(h)) return "0";
+  for (int digits = 6; digits <= 17; ++digits) {
+    const double scale = std::pow(10.0, std::floor(std::log10(h)) - (digits - 1));
+    for (double units = std::floor(h / scale); units > 0.0; units -= 1.0) {
+      std::ostringstream text;
+      text << std::setprecision(digits) << units * scale;
+      const double back = std::strtod(text.str().c_str(), nullptr);
+      if (back <= h && back > 0.0 && passes(back)) return text.str();
+      if (units < std::floor(h / scale) - 2.0) break;  // rounding is not the issue: try more digits
+    }
+  }
+  std::ostringstream text;
+  text << std::setprecision(17) << h;  // h passes: the bisection kept only passing steps
+  return text.str();
+}
+
 }  // namespace detail
 
 // Refuses (std::invalid_argument naming composition and h) a composed run whose
@@ -224,7 +246,10 @@ void check_amplification(const Model& model, const typename Model::Vec& q0, cons
       why << "e^{|c| h rho} = e^{" << std::setprecision(6) << worst.exponent << "}";
     why << std::setprecision(3) << " = " << worst.factor << " with rho = " << std::setprecision(6) << rho << " ("
         << rate.what << ")" << std::setprecision(3) << ", past the limit " << kMaxAmplification
-        << "; use the order-2 method (composition=None) or h <= " << lo;
+        << "; use the order-2 method (composition=None) or h <= "
+        << detail::passing_step(lo, [&](double x) {
+             return amplification_bound<Method>(composition, tab, x, rho) <= kMaxAmplification;
+           });
     throw std::invalid_argument(why.str());
   }
 }

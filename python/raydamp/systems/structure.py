@@ -353,6 +353,24 @@ class LinearStructure(SharedModel):
         return (f"LinearStructure(n={self.dim}, mass={self.mass_kind}, nnz(K)={self._stiffness.nnz}, "
                 f"alpha={self.alpha!r}, beta={self.beta!r})")
 
+    # -- natural frequencies and modes -------------------------------------------
+    def frequencies(self, k: int | None = None) -> np.ndarray:
+        """The k lowest natural circular frequencies sqrt(eig(K, M)), ascending (rigid modes are 0); all of
+        them when k is None. What ``raydamp.rayleigh_coefficients`` takes. See :meth:`modes`."""
+        return self.modes(k)[0]
+
+    def modes(self, k: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """(omega, phi): the k lowest natural circular frequencies, ascending, and their mode shapes as the
+        columns of phi (n, k), normalised to phi^T M phi = I (so q = phi x splits the free motion into
+        uncoupled modes x_i'' + (alpha + beta omega_i^2) x_i' + omega_i^2 x_i = 0). All of them when k is
+        None. A dense eigensolver below 500 DOF or when k >= n - 1; shift-invert Lanczos (scipy's ARPACK)
+        at 0 otherwise, shifted just below 0 for a singular (free-free) K."""
+        if k is None:
+            k = self.dim
+        if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 1 <= k <= self.dim:
+            raise ValueError(f"k must be an integer from 1 to {self.dim} (the DOF), got {_short(k)}")
+        return _lowest_modes(self._stiffness, self._mass, int(k), self._core_model.spectral_bound)
+
 
 class _Member:
     """An ensemble member's core model (what integrate_ensemble runs of a member)."""
@@ -482,3 +500,28 @@ def _matrix_from_plain(key: str, value, n: int | None, files=None):
         if bad.size:
             raise ValueError(f"{key}.coo.{name}[{bad[0]}]: index {index[bad[0]]} outside 0..{shape[0] - 1}")
     return sparse.csc_matrix((values, (rows, cols)), shape=tuple(shape))
+
+
+_DENSE_MODES_BELOW = 500  # DOF: all modes from a dense eigensolver below this
+
+
+def _lowest_modes(stiffness, mass, k: int, bound: float) -> tuple[np.ndarray, np.ndarray]:
+    """The k lowest eigenpairs of (K, M): frequencies (negative rounding clipped to 0) and M-normalised shapes."""
+    n = stiffness.shape[0]
+    if n < _DENSE_MODES_BELOW or k >= n - 1:
+        import scipy.linalg
+
+        w2, phi = scipy.linalg.eigh(stiffness.toarray(), mass.toarray(), subset_by_index=[0, k - 1])
+    else:
+        import scipy.sparse.linalg as sla
+
+        try:  # shift-invert at 0: K definite (a supported structure)
+            w2, phi = sla.eigsh(stiffness, k=k, M=mass, sigma=0.0, which="LM", tol=1e-12)
+        except RuntimeError:  # singular K (free-free): shift just below its rigid modes
+            w2, phi = sla.eigsh(stiffness, k=k, M=mass, sigma=-1e-12 * bound, which="LM", tol=1e-12)
+        order = np.argsort(w2)
+        w2, phi = w2[order], phi[:, order]
+        phi = phi / np.sqrt(np.einsum("ij,ij->j", phi, mass @ phi))
+    w2 = np.where(w2 > 1e-13 * bound, w2, 0.0)  # rigid modes: zero to rounding (1e-13 of the largest)
+    return np.sqrt(w2), phi
+
