@@ -27,7 +27,10 @@ def test_the_suggested_step_is_accepted(n, c, composition):
     suggested = float(text)
     # accepted as printed, and within 2e-5 of the limit (6 significant figures): a step 1.00002 times longer is
     # refused
-    assert raydamp.integrate(chain, q0, p0, method="2s", composition=composition, h=suggested, n_steps=2).success
+    # (Accepted is run, not refused: at such an h the composition is past the explicit stability limit of the
+    # harmonic chain, which the guard does not judge, and the run may end "diverged" after its two steps.)
+    ran = raydamp.integrate(chain, q0, p0, method="2s", composition=composition, h=suggested, n_steps=2)
+    assert ran.steps == 2 and ran.status in ("completed", "diverged"), ran
     with pytest.raises(ValueError, match="h <= "):
         raydamp.integrate(chain, q0, p0, method="2s", composition=composition, h=suggested * (1 + 2e-5), n_steps=2)
     assert len(text.replace(".", "").lstrip("0")) <= 7 and np.isfinite(suggested)

@@ -200,3 +200,14 @@ def test_unknown_job_is_404(server):
     for response in (server.client.get("/v1/jobs/nope"), server.client.get("/v1/jobs/nope/trajectory"),
                      server.client.post("/v1/jobs/nope/cancel"), server.client.delete("/v1/jobs/nope")):
         assert response.status_code == 404 and "nope" in response.json()["detail"]
+
+
+def test_a_job_started_at_rest_is_run_and_not_a_500(server):
+    # The fuzz run's body: the quick-run test read initial_state.q of a {"rest": true} start (500). A rest or
+    # mode start takes its sizes from the model, so it is not among the quick runs checked inline.
+    body = {"h": 7.506959706133062e+21, "model": "damped_pendulum", "initial_state": {"rest": True},
+            "t_end": 5e-324, "method": None}
+    response = server.client.post("/v1/jobs", json=body)
+    assert response.status_code == 202, response.text
+    job = server.wait_finished(response.json()["id"])
+    assert job["status"] == "completed" and job["summary"]["steps"] == 1

@@ -71,7 +71,9 @@ def isolated(spec: JobSpec) -> bool:
 def checked_inline(spec: JobSpec) -> bool:
     """Whether a job's check is light enough for the event loop: a built-in model without a load, its initial
     state given as numbers (its check is arithmetic on at most max_dim coordinates and reads no file)."""
-    return spec.system is None and spec.load is None and spec.ground_motion is None and not spec.uploads()
+    state = spec.initial_state  # numbers, not files nor a rest or mode form (their sizes come from the model)
+    return (spec.system is None and spec.load is None and spec.ground_motion is None
+            and isinstance(getattr(state, "q", None), list) and isinstance(getattr(state, "p", None), list))
 
 
 # ---- in a check process ----
