@@ -72,6 +72,15 @@ def _run(page, previous: str | None = None) -> str:
     return page.eval_on_selector("#plots", "plots => plots.dataset.job")
 
 
+def _show(page, job_id: str) -> None:
+    """Open a listed job's plots and wait until they are drawn."""
+    page.wait_for_selector(f'#jobs tr[data-job="{job_id}"] button.show', timeout=30_000)
+    page.click(f'#jobs tr[data-job="{job_id}"] button.show')
+    page.wait_for_function("id => { const plots = document.getElementById('plots');"
+                           " return plots.dataset.job === id && plots.dataset.ready === 'true'; }",
+                           arg=job_id, timeout=RUN_TIMEOUT_MS)
+
+
 def _traces(page, plot: str) -> list[dict]:
     """Plotly's own record of what it drew (gd.data): name and the x, y arrays of each trace."""
     return page.eval_on_selector(f"#plot-{plot}",
@@ -439,11 +448,7 @@ def test_a_decimated_plot_ends_at_the_last_point_and_names_are_text(module_serve
     assert job["status"] == "completed" and job["summary"]["saved_points"] == 10_004  # drawn every 3rd
     with open_page(_base(module_server)) as page:
         _ready(page)
-        page.wait_for_selector(f'#jobs tr[data-job="{job_id}"] button.show', timeout=30_000)
-        page.click(f'#jobs tr[data-job="{job_id}"] button.show')
-        page.wait_for_function("id => { const plots = document.getElementById('plots');"
-                               " return plots.dataset.job === id && plots.dataset.ready === 'true'; }",
-                               arg=job_id, timeout=RUN_TIMEOUT_MS)
+        _show(page, job_id)
         energy = _traces(page, "energy")[0]
         assert energy["x"][-1] == job["summary"]["t_final"] and len(energy["x"]) == 3336  # 3,335 every 3rd + last
         assert page.is_hidden("#jobs-more")  # fewer than 100 jobs: nothing more to say
@@ -454,11 +459,7 @@ def test_a_decimated_plot_ends_at_the_last_point_and_names_are_text(module_serve
         failed = module_server.wait_finished(blown)
         assert failed["status"] == "failed" and failed["failed_step"] is not None
         page.click("#refresh")
-        page.wait_for_selector(f'#jobs tr[data-job="{blown}"] button.show', timeout=30_000)
-        page.click(f'#jobs tr[data-job="{blown}"] button.show')
-        page.wait_for_function("id => document.getElementById('plots').dataset.job === id"
-                               " && document.getElementById('plots').dataset.ready === 'true'", arg=blown,
-                               timeout=RUN_TIMEOUT_MS)
+        _show(page, blown)
         shown = page.text_content("#job-error")
         assert shown == failed["error"] and shown.count(f"step {failed['failed_step']}") == 1, shown
         # Escaped for Plotly, which then shows the name as written (its legend, its hover), not as markup.
@@ -481,11 +482,7 @@ def test_a_displacement_plot_with_a_choice_of_coordinate(module_server) -> None:
     data = module_server.client.get(f"/v1/jobs/{job_id}/trajectory").json()
     with open_page(_base(module_server)) as page:
         _ready(page)
-        page.wait_for_selector(f'#jobs tr[data-job="{job_id}"] button.show', timeout=30_000)
-        page.click(f'#jobs tr[data-job="{job_id}"] button.show')
-        page.wait_for_function("id => { const plots = document.getElementById('plots');"
-                               " return plots.dataset.job === id && plots.dataset.ready === 'true'; }",
-                               arg=job_id, timeout=RUN_TIMEOUT_MS)
+        _show(page, job_id)
         options = page.eval_on_selector_all("#displacement-dof option", "options => options.map(o => o.textContent)")
         assert options == ["q3", "q1"]
         assert page.input_value("#displacement-dof") == "0"  # the roof: its peak is the larger
