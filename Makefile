@@ -103,8 +103,11 @@ layers: setup
 lint: setup
 	$(VENV)/bin/ruff check python service tests benchmarks
 
+# Two workers, each taking whole files (a file's servers and fixtures start once): the service,
+# page and sweep tests wait on other processes much of the time, and the C++ tests build alongside.
+PYTEST_WORKERS ?= 2
 pytest: setup
-	$(PY) -m pytest
+	$(PY) -m pytest -n $(PYTEST_WORKERS) --dist loadfile
 
 bench: setup
 	$(PY) benchmarks/bench_steps.py
