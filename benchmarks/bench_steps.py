@@ -80,11 +80,18 @@ def main() -> int:
     parser.add_argument("--rounds", type=int, help="rounds of measurements, best taken (default 7; --quick 3)")
     parser.add_argument("--calls", type=int, help="10-step calls per model and round (default 1000; --quick 200)")
     parser.add_argument("--rebuild", action="store_true", help="configure build/bench again before building")
+    parser.add_argument("--short-only", action="store_true",
+                        help="only the 10-step calls (no hand-written program): a whole process to time side by side "
+                             "with another raydamp on PYTHONPATH")
     args = parser.parse_args()
     n_steps = args.steps or (200_000 if args.quick else 2_000_000)
     rounds = args.rounds or (3 if args.quick else 7)
     calls = args.calls or (200 if args.quick else 1000)
     save_every = max(1, n_steps // 10)
+    if args.short_only:
+        print(f"raydamp {raydamp.__version__} from {Path(raydamp.__file__).parent}; load average {format_load()}")
+        print_short_calls(measure_short_calls(rounds, calls))
+        return 0
 
     try:
         build(args.rebuild)
@@ -229,6 +236,17 @@ def short_call_times(model, q0, p0, calls: int) -> tuple[list[float], list[float
         total.append(time.perf_counter() - start)
         compiled.append(solution.wall_time)
     return total, compiled
+
+
+def measure_short_calls(rounds: int, calls: int) -> dict:
+    """The short calls alone, as measure() takes them: a warm-up, then one batch per model and round."""
+    short_calls = {name: [] for name in CASES}
+    for _name, (model, q0, p0) in CASES.items():
+        short_call_times(model, q0, p0, 50)
+    for _ in range(rounds):
+        for name, (model, q0, p0) in CASES.items():
+            short_calls[name].append(short_call_times(model, q0, p0, calls))
+    return short_calls
 
 
 def measure(n_steps: int, save_every: int, rounds: int, calls: int) -> tuple[list[dict], dict]:

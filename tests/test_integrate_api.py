@@ -301,3 +301,46 @@ def test_row_bytes_counts_the_arrays_a_run_saves(work, load, save_dofs):
     per_point = sum(a.size for a in arrays if a is not None) // sol.t.size
     assert row_bytes(model, save_dofs, work=work, load=forcing) == 8 * per_point
     assert (sol.load_work is not None) == (work and load == "harmonic")
+
+
+def test_a_models_facts_are_not_read_for_another_model_at_its_address():
+    """integrate caches a model's dimension by id(model) with a weak reference: a model made where a collected
+    one lived (ids are reused at once in CPython) must not run with the old one's dimension."""
+    for _ in range(20):
+        pendulum = DampedPendulum(eps=0.1)
+        assert raydamp.integrate(pendulum, [1.0], [0.0], method="3s", h=0.1, n_steps=2).q.shape == (3, 1)
+        del pendulum
+        elastic = ElasticPendulum()
+        assert raydamp.integrate(elastic, ELASTIC_Q0, ELASTIC_P0, method="3s", h=0.1, n_steps=2).q.shape == (3, 3)
+        del elastic
+
+
+@pytest.mark.parametrize("given", ["list", "array", "int array", "0-d array"])
+def test_the_provenance_keeps_the_start_as_it_was_at_the_call(given):
+    """The Solution keeps the run's own copy of q0 and p0: changing the caller's array afterwards changes neither
+    the provenance nor a rerun."""
+    make = {"list": lambda: [1.0], "array": lambda: np.array([1.0]), "int array": lambda: np.array([1]),
+            "0-d array": lambda: np.array(1.0)}[given]
+    q0, p0 = make(), make()
+    sol = raydamp.integrate(DampedPendulum(eps=0.1), q0, p0, method="3s", h=0.1, n_steps=2)
+    for start in (q0, p0):
+        if given == "list":
+            start[0] = 5.0
+        else:
+            start[...] = 5
+    assert sol.provenance["initial_state"] == {"q": [1.0], "p": [1.0]}
+
+
+def test_a_solution_from_integrate_has_every_field():
+    """integrate fills a Solution's fields without its __init__ (a short call's cost): every field is there, with
+    the value the dataclass would hold."""
+    import dataclasses
+
+    sol = raydamp.integrate(DampedPendulum(eps=0.1), [1.0], [0.0], method="3s", h=0.1, n_steps=2)
+    rebuilt = raydamp.Solution(**{f.name: getattr(sol, f.name) for f in dataclasses.fields(raydamp.Solution)})
+    for f in dataclasses.fields(raydamp.Solution):
+        ours, theirs = getattr(sol, f.name), getattr(rebuilt, f.name)
+        assert type(ours) is type(theirs), f.name
+        if isinstance(ours, np.ndarray):
+            np.testing.assert_array_equal(ours, theirs)
+    assert sol.status == "completed" and sol.work is None and sol.dofs is None and sol.wall_time > 0

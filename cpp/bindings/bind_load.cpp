@@ -9,6 +9,7 @@
 
 #include "bindings.hpp"
 #include "load_binding.hpp"
+#include "raydamp/response_spectrum.hpp"
 
 namespace py = pybind11;
 
@@ -87,6 +88,25 @@ void bind_load(py::module_& m) {
              for (std::size_t k = 0; k < times.size(); ++k) b.load.add(times[k], 1.0, d + k * n);
              return out;
            }, py::arg("times"));
+  // Peak |u| over the sample times of each oscillator under a piecewise-linear record (raydamp.response_spectrum
+  // checks the arguments and names them).
+  m.def("elastic_peaks", [](const py::array_t<double, py::array::c_style | py::array::forcecast>& omega, double zeta,
+                            const py::array_t<double, py::array::c_style | py::array::forcecast>& times,
+                            const py::array_t<double, py::array::c_style | py::array::forcecast>& accel) {
+    if (omega.ndim() != 1 || times.ndim() != 1 || accel.ndim() != 1 || times.size() != accel.size())
+      throw std::invalid_argument("elastic_peaks: omega, times and accel must be vectors, times and accel alike");
+    py::array_t<double> peaks(omega.size());
+    const double* w = omega.data();
+    const double* t = times.data();
+    const double* a = accel.data();
+    double* out = peaks.mutable_data();
+    {
+      py::gil_scoped_release release;
+      elastic_peaks(w, static_cast<std::size_t>(omega.size()), zeta, t, a, static_cast<std::size_t>(times.size()),
+                    out);
+    }
+    return peaks;
+  }, py::arg("omega"), py::arg("zeta"), py::arg("times"), py::arg("accel"));
 }
 
 }  // namespace raydamp::bindings

@@ -93,6 +93,7 @@ class EnsembleSolution:
         system, options = self.origin
         options = dict(options)
         vector_sine = options.pop("vector_sine", False)
+        listed = options.pop("loads", None)  # a load per member
         spec = job_spec(system, self.q0[0], self.p0[0], **options)
         del spec["initial_state"]  # per member: the q0, p0 arrays
         spec["coordinates"] = list(system.coordinates)
@@ -104,6 +105,16 @@ class EnsembleSolution:
                             "parameters": {name: values.tolist() for name, values in self.parameters.items()}}
         if vector_sine:
             spec["ensemble"]["vector_sine"] = True
+        if listed is not None:  # each distinct load once, and which one each member ran
+            distinct: dict[int, int] = {}
+            plain, of_member = [], []
+            for load in listed:
+                if id(load) not in distinct:
+                    distinct[id(load)] = len(plain)
+                    plain.append(load.to_dict())
+                of_member.append(distinct[id(load)])
+            spec["ensemble"]["loads"] = plain
+            spec["ensemble"]["load_of_member"] = of_member
         return spec
 
     @property
@@ -154,7 +165,9 @@ class EnsembleSolution:
         spec = self.provenance
         if spec is None:
             return None
-        spec.pop("ensemble", None)
+        ensemble = spec.pop("ensemble", None) or {}
+        if "loads" in ensemble:  # member i's own load, before its load.amplitude is set on it
+            spec["load"] = ensemble["loads"][ensemble["load_of_member"][i]]
         _set_parameters(spec, {name: array[i].tolist() for name, array in self.parameters.items()})
         spec["initial_state"] = {"q": self.q0[i].tolist(), "p": self.p0[i].tolist()}
         if "seed" in spec:  # member i drew stream first_stream + i

@@ -109,6 +109,12 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
         (``Load.parameters``: ``amplitude``, ``omega``, ``phase``, an expression's) vary per member
         as ``parameters={"load.amplitude": [...], "load.omega": [...]}``. Members share the load's
         data (a record is held once); each distinct set of expression parameters is compiled once.
+        Or a list of loads, one per member (an incremental dynamic analysis: records of different
+        lengths, each scaled, ``[motion * s for motion in records for s in scales]``, or the records
+        repeated with ``parameters={"load.amplitude": scales}``); a load object listed for several
+        members is bound once and its data shared. A record is zero past its end (``hold=False``), so a
+        member whose record is shorter than the run goes on in free vibration. Only ``load.amplitude``
+        varies per member then (each listed load has its own other parameters).
     temperature, seed : thermal noise as in :func:`raydamp.integrate`; member i draws stream
         ``first_stream + i`` of the seed, so it equals ``integrate(..., seed=seed, stream=first_stream + i)``
         bit for bit, whatever ``threads`` is.
@@ -151,17 +157,25 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
         if len(shape) == 2:
             members = shape[0]
             break
-    if load is not None and not isinstance(load, Load):
+    listed = isinstance(load, (list, tuple))
+    if load is not None and not listed and not isinstance(load, Load):
         raise ValueError(f"load must be a raydamp.Load or None, got {type(load).__name__}")
+    if listed and not load:
+        raise ValueError("load: an empty list; give one load per member, or one raydamp.Load for all, or None")
     parameters, load_parameters = _split_load_parameters(parameters, load)
     if members is None:
         members = _parameter_members(system, parameters, load_parameters)
+    if members is None and listed:
+        members = len(load)
     q0 = _states("q0", q0, members, n)
     members = q0.shape[0]
     p0 = _states("p0", p0, members, n)
     system.check_configurations("q0", q0)
     params = _parameter_arrays(system, parameters, members)
-    loads, load_index, load_arrays = _member_loads(system, load, load_parameters, members)
+    if listed:
+        loads, load_index, load_arrays = _listed_loads(system, load, load_parameters, members)
+    else:
+        loads, load_index, load_arrays = _member_loads(system, load, load_parameters, members)
     kT, seed, first_stream = thermal(temperature, seed, first_stream, "first_stream")
     if kT > 0 and first_stream + members - 1 > MAX_SEED:  # the core's stream counter would wrap to stream 0
         raise ValueError(f"first_stream: members draw streams first_stream + i for i < {members}, which passes "
@@ -200,7 +214,9 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
         options["method_reason"] = method_reason
     if vector_sine:
         options["vector_sine"] = True
-    if loads:
+    if listed:
+        options["loads"] = tuple(load)
+    elif loads:
         options["load"] = load
     if kT > 0:
         options["thermal"] = (kT, seed, first_stream)
@@ -248,6 +264,35 @@ def _member_loads(system: Model, load: Load | None, varied: dict[str, Any], memb
         scaled = [bound[index[i]].scaled(float(arrays["amplitude"][i]), 1.0) for i in range(members)]
         bound, index = scaled, np.arange(members, dtype=np.int64)
     return bound, index, {f"load.{k}": v for k, v in arrays.items()}
+
+
+def _listed_loads(system: Model, loads, varied: dict[str, Any], members: int):
+    """_member_loads for a list of loads, one per member: each distinct load object bound once, scaled per
+    member by "load.amplitude" (the one parameter every load has)."""
+    if len(loads) != members:
+        raise ValueError(f"load: {len(loads)} loads for {members} members; give one load per member")
+    for i, load in enumerate(loads):
+        if not isinstance(load, Load):
+            raise ValueError(f"load[{i}] must be a raydamp.Load or raydamp.GroundMotion, got {_short(load)}")
+    for name in varied:
+        if name != "amplitude":
+            raise ValueError(f"parameters.load.{name}: with a load per member only load.amplitude varies per "
+                             f"member; give each member's load its own {name}")
+    arrays = _load_parameter_arrays(loads[0], varied, members)
+    arrays = {f"load.{k}": v for k, v in arrays.items()}
+    if not any(load.terms for load in loads):
+        return [], np.zeros(0, dtype=np.int64), arrays
+    bound, index, seen = [], np.empty(members, dtype=np.int64), {}
+    for i, load in enumerate(loads):
+        if id(load) not in seen:
+            seen[id(load)] = len(bound)
+            bound.append(load.bind(system))  # a load without terms binds to none: the member runs unforced
+        index[i] = seen[id(load)]
+    if "load.amplitude" in arrays:
+        amplitude = arrays["load.amplitude"]
+        bound = [bound[index[i]].scaled(float(amplitude[i]), 1.0) for i in range(members)]
+        index = np.arange(members, dtype=np.int64)
+    return bound, index, arrays
 
 
 def _load_parameter_arrays(load: Load, varied: dict[str, Any], members: int) -> dict[str, np.ndarray]:

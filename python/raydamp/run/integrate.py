@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 import re
 import time
+import weakref
 from collections.abc import Callable, Mapping
 
 import numpy as np
@@ -68,16 +70,59 @@ def _resolved(method: str, tableau_name: str, composition: str) -> tuple[str, st
 
 
 def _state(name: str, value, dim: int) -> np.ndarray:
-    """vector(name, value, dim), with the common short call (a list of a few floats, all finite) checked in
-    Python: at a few coordinates that is cheaper than NumPy's conversions and reductions. Anything else, and
-    every refusal, goes through vector(), which words the error."""
-    if type(value) is list and len(value) == dim <= 16:
-        for x in value:
-            if type(x) is not float or not math.isfinite(x):
-                break
+    """vector(name, value, dim) as an array of the run's own (the Solution's provenance keeps it: a caller's array
+    changed after the call must not change it). A short call's state (a list or a float64 vector of a few
+    finite floats) is checked in Python: at a few coordinates that is cheaper than NumPy's conversions and
+    reductions. Anything else, and every refusal, goes through vector(), which words the error."""
+    if dim <= 16:
+        if type(value) is list:
+            values = value
+        elif type(value) is np.ndarray and value.dtype == np.float64 and value.shape == (dim,):
+            values = value.tolist()
         else:
-            return np.array(value, dtype=float)
-    return vector(name, value, dim)
+            values = None
+        if values is not None and len(values) == dim:
+            for x in values:
+                if type(x) is not float or x - x != 0.0:  # x - x is nan for inf and nan
+                    break
+            else:
+                return np.array(values) if values is value else value.copy()
+    return vector(name, value, dim).copy()  # vector() may hand back the caller's array, or a view of it
+
+
+# What a short call reads of a model, asked once per model (models are immutable): id(model) -> (a weak reference
+# to the model, (its dimension, the most bytes a saved point can take: every coordinate, the momentum maps, W
+# and W_f)). An entry leaves with its model.
+_FACTS: dict[int, tuple[weakref.ref, tuple[int, int]]] = {}
+
+
+def _facts(model: Model) -> tuple[int, int]:
+    key = id(model)
+    entry = _FACTS.get(key)
+    if entry is not None and entry[0]() is model:
+        return entry[1]
+    facts = (model.dim, 8 * (2 + 2 * model.dim + len(model.momentum_names) + 2))
+    try:
+        _FACTS[key] = (weakref.ref(model, lambda _, key=key: _FACTS.pop(key, None)), facts)
+    except TypeError:  # a model without weak references is asked each time
+        pass
+    return facts
+
+
+# integrate makes its Solution by filling the instance's __dict__ in one update: the frozen dataclass's __init__
+# sets each of 20 fields by object.__setattr__, a quarter of a 10-step call's Python. A field left out reads its
+# default from the class, as a dataclass keeps it there; where Solution needs its __init__ (a field with a
+# default factory, a __post_init__), it is called.
+_SOLUTION_BY_INIT = hasattr(Solution, "__post_init__") or any(
+    f.default_factory is not dataclasses.MISSING for f in dataclasses.fields(Solution))
+
+
+def _solution(fields: dict) -> Solution:
+    if _SOLUTION_BY_INIT:
+        return Solution(**fields)
+    solution = object.__new__(Solution)
+    solution.__dict__.update(fields)
+    return solution
 
 
 def _tableau(tableau) -> tuple[str, str | dict | None]:
@@ -190,29 +235,39 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
     if not isinstance(model, Model):
         raise ValueError(f"model must be a raydamp model (e.g. raydamp.models.DampedPendulum()), got {model!r}")
     names, with_tableau = _catalogue()
-    method, tableau, method_reason = choose_method(model, method, tableau, composition, h,
-                                                   thermal=temperature is not None
-                                                   and real("temperature", temperature, nonnegative=True) > 0)
+    # Each check below has a fast path for the common value and falls back on the checker that words the error.
+    thermal_run = temperature is not None and real("temperature", temperature, nonnegative=True) > 0
+    if method is None:
+        method, tableau, method_reason = choose_method(model, method, tableau, composition, h, thermal=thermal_run)
+    else:
+        method_reason = None  # what choose_method gives for a named method
     if not isinstance(method, str) or method not in names:
         raise ValueError(f"method: unknown method {method!r} (known: {', '.join(names)})")
-    tableau_name, tableau = _tableau(tableau)
+    tableau_name, tableau = ("", None) if tableau is None else _tableau(tableau)
     if composition is not None and not isinstance(composition, str):
         _core.resolve(method, tableau_name)  # a bad tableau is named first, as before
         raise ValueError(f"composition must be a composition name or None, got {composition!r}")
     resolved_tableau, resolved_composition = _resolved(method, tableau_name, composition or "")
-    h = real("h", h, positive=True)
-    dim = model.dim
+    if not (type(h) is float and 0.0 < h < math.inf):
+        h = real("h", h, positive=True)
+    dim, most_row_bytes = _facts(model)
     q0 = model.check_configuration("q0", _state("q0", q0, dim))
     p0 = _state("p0", p0, dim)
-    save_every = integer("save_every", save_every, maximum=MAX_STEPS)
-    divergence = real("divergence", divergence, nonnegative=True)
-    n_steps, h_last = span(h, t_end, n_steps)
+    if not (type(save_every) is int and 1 <= save_every <= MAX_STEPS):
+        save_every = integer("save_every", save_every, maximum=MAX_STEPS)
+    if divergence is not DEFAULT_DIVERGENCE:
+        divergence = real("divergence", divergence, nonnegative=True)
+    if t_end is None and type(n_steps) is int and 1 <= n_steps <= MAX_STEPS and n_steps * h < math.inf:
+        h_last = h  # what span() gives for n_steps
+    else:
+        n_steps, h_last = span(h, t_end, n_steps)
     bar = None
     if progress is True or progress is False:
         bar, progress = _bar(n_steps) if progress else (None, None)
     elif progress is not None and not callable(progress):
         raise ValueError(f"progress must be callable, True or None, got {progress!r}")
-    work = flag("work", work)
+    if work is not False and work is not True:
+        work = flag("work", work)
     if cancel is not None and not isinstance(cancel, _core.CancelToken):
         raise ValueError(f"cancel must be a raydamp.CancelToken or None, got {cancel!r}")
     if load is not None and not isinstance(load, Load):
@@ -222,12 +277,15 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
         kT, seed = 0.0, 0  # no noise: what thermal() gives, without its checks
     else:
         kT, seed, stream = thermal(temperature, seed, stream)
-    dofs = _save_dofs(save_dofs, dim)
-    rows = _core.save_rows(n_steps, save_every)  # run/save_grid.py
-    size = rows * row_bytes(model, dofs, work=work, load=load)
-    if size > MAX_SAVED_BYTES:
-        raise ValueError(f"save_every: {rows} saved points would take {size / 2**30:.1f} GiB "
-                         f"(limit {MAX_SAVED_BYTES / 2**30:.0f} GiB); raise save_every")
+    dofs = None if save_dofs is None else _save_dofs(save_dofs, dim)
+    # The saved points' size is counted only where it could pass the limit: save_rows <= n_steps // save_every + 2
+    # and a point takes at most most_row_bytes.
+    if (n_steps // save_every + 2) * most_row_bytes > MAX_SAVED_BYTES:
+        rows = _core.save_rows(n_steps, save_every)  # run/save_grid.py
+        size = rows * row_bytes(model, dofs, work=work, load=load)
+        if size > MAX_SAVED_BYTES:
+            raise ValueError(f"save_every: {rows} saved points would take {size / 2**30:.1f} GiB "
+                             f"(limit {MAX_SAVED_BYTES / 2**30:.0f} GiB); raise save_every")
 
     start = time.perf_counter()
     try:
@@ -248,22 +306,22 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
     explain = getattr(model, "_explain_failure", None)
     if explain is not None and (why := explain()) is not None:
         message = f"{message}: {why}"
-    return Solution(t=out["t"], q=out["q"], p=out["p"], energy=out["energy"], momentum=out["momentum"],
-                    status=out["status"], steps=out["steps"], failed_step=out["failed_step"],
-                    message=message, method=method, tableau=resolved_tableau if method in with_tableau else None,
-                    composition=None if resolved_composition == "none" else resolved_composition, h=h,
-                    max_momentum_drift=out["max_momentum_drift"], work=out["work"], wall_time=wall,
-                    load_work=out["load_work"],
-                    load=load if core_load is not None else None,
-                    dofs=None if dofs is None else np.asarray(dofs, dtype=np.int64),
-                    origin=(model, q0.copy(), p0.copy(), {
-                        "method": method, "tableau": tableau,
-                        "composition": None if resolved_composition == "none" else resolved_composition, "h": h,
-                        "t_end": t_end, "n_steps": None if t_end is not None else n_steps,
-                        "save_every": save_every, "work": work, "save_dofs": dofs,
-                        "load": load if core_load is not None else None,
-                        "thermal": (kT, seed, stream) if kT > 0 else None, "method_reason": method_reason,
-                        "divergence": None if divergence == DEFAULT_DIVERGENCE else divergence}))
+    composition = None if resolved_composition == "none" else resolved_composition
+    loaded = load if core_load is not None else None
+    return _solution({
+        "t": out["t"], "q": out["q"], "p": out["p"], "energy": out["energy"], "momentum": out["momentum"],
+        "status": out["status"], "steps": out["steps"], "failed_step": out["failed_step"], "message": message,
+        "method": method, "tableau": resolved_tableau if method in with_tableau else None,
+        "composition": composition, "h": h, "max_momentum_drift": out["max_momentum_drift"], "work": out["work"],
+        "wall_time": wall, "load_work": out["load_work"], "load": loaded,
+        "dofs": None if dofs is None else np.asarray(dofs, dtype=np.int64),
+        # q0 and p0 are the run's own arrays (_state), so the provenance keeps them uncopied
+        "origin": (model, q0, p0, {
+            "method": method, "tableau": tableau, "composition": composition, "h": h,
+            "t_end": t_end, "n_steps": None if t_end is not None else n_steps,
+            "save_every": save_every, "work": work, "save_dofs": dofs, "load": loaded,
+            "thermal": (kT, seed, stream) if kT > 0 else None, "method_reason": method_reason,
+            "divergence": None if divergence == DEFAULT_DIVERGENCE else divergence})})
 
 
 def _bar(n_steps: int):
