@@ -145,3 +145,24 @@ def test_cli(building, tmp_path, capsys):
     assert "to t_end = 50 within 1e-05" in out and "recommended:" in out
     assert main(["advise", str(path), "--tolerance", "1e-5", "--t-end", "-1", "--no-measure"]) == 2
     assert "t_end" in capsys.readouterr().err
+
+
+def test_cli_weights_the_jobs_start_and_load(building, tmp_path, capsys):
+    """A whole job's initial state and load weight the CLI's advice as raydamp.advise's q0, p0 and load do."""
+    s, _, _ = building
+    q0 = np.linspace(0.0, 1.0, N).tolist()
+    path = tmp_path / "spec.json"
+    path.write_text(json.dumps({"system": s.to_dict(), "h": 0.1, "t_end": 50.0,
+                                "initial_state": {"q": q0, "p": [0.0] * N}}))
+    assert main(["advise", str(path), "--tolerance", "1e-5", "--no-measure"]) == 0
+    out = capsys.readouterr().out
+    expected = raydamp.advise(s, 50.0, 1e-5, q0=np.array(q0), p0=np.zeros(N), measure=False)
+    assert expected.weighting != "mode"
+    assert str(expected) == out.rstrip("\n")
+    load = {"harmonic": {"amplitude": [1.0] + [0.0] * (N - 1), "omega": 2.0}}
+    path.write_text(json.dumps({"system": s.to_dict(), "h": 0.1, "t_end": 50.0, "load": load,
+                                "initial_state": {"q": [0.0] * N, "p": [0.0] * N}}))
+    assert main(["advise", str(path), "--tolerance", "1e-5", "--no-measure"]) == 0
+    out = capsys.readouterr().out
+    expected = raydamp.advise(s, 50.0, 1e-5, load=raydamp.Load.from_dict(load), measure=False)
+    assert expected.weighting != "mode" and str(expected) == out.rstrip("\n")
