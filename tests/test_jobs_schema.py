@@ -149,3 +149,13 @@ def test_an_initial_state_from_uploaded_vectors():
     with pytest.raises(JobError, match=r"^initial_state\.p\.file: String should match pattern") as error:
         parse_job({**base, "initial_state": {"q": [0.0], "p": {"file": "x"}}})
     assert error.value.loc == ("initial_state", "p", "file")
+
+
+@pytest.mark.parametrize("system", [{"kind": "kepler"}, {"kind": "kepler", "dim": 3, "particles": 2}])
+def test_every_system_kind_answers_its_files(system):
+    """A Kepler job whose start is uploaded was a 500 in the service (KeplerInput had no files(); found by the
+    fuzz test): each kind answers which files it reads, and the start's files are the job's."""
+    spec = parse_job({"system": system, "h": 0.1, "t_end": 1.0,
+                      "initial_state": {"q": {"file": "a" * 32}, "p": {"file": "b" * 32}}})
+    assert spec.uploads() == ("a" * 32, "b" * 32)
+    assert list(spec.system.files(("system",))) == []

@@ -257,6 +257,10 @@ class KeplerInput(Input):
         chosen = [coordinates[i] for i in save_dofs] if save_dofs is not None else coordinates
         return chosen, (["L"] if self.dim == 2 else ["Lx", "Ly", "Lz"])[:momenta]
 
+    def files(self, at: tuple) -> Iterator[tuple[tuple, str, str]]:
+        """A Kepler system reads no file (its start may: JobSpec walks that)."""
+        return iter(())
+
     def build(self, files: FileResolver | None = None):
         from ..systems.kepler import Kepler
 
