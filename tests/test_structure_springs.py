@@ -175,3 +175,43 @@ def test_a_yielding_frame_runs_every_splitting_and_converges_to_one_answer():
 def test_the_implicit_methods_refuse_springs():
     with pytest.raises(ValueError, match="midpoint"):
         raydamp.integrate(shear_frame(True), [0, 0, 0], [0, 0, 0], method="midpoint", h=0.01, n_steps=10)
+
+
+def newmark_epp(h: float, t_end: float) -> tuple[np.ndarray, np.ndarray]:
+    """Newmark's average acceleration on Chopra's SDOF as OpenSees runs it: the spring's force at the step's end
+    (the trapezoidal rule on it), Newton on the consistent tangent to |du| < 1e-13, one commit per step."""
+    n = int(round(t_end / h))
+    t = np.arange(n + 1) * h
+    p = np.where(t <= T_D, P0 * np.sin(math.pi * t / T_D), 0.0)
+    u = np.zeros(n + 1)
+    v, a, plastic = 0.0, 0.0, 0.0
+    for i in range(n):
+        x = u[i]
+        for _ in range(50):
+            trial = K * (x - plastic)
+            force, tangent = (trial, K) if abs(trial) <= FY else (math.copysign(FY, trial), 0.0)
+            a_new = 4 / h**2 * (x - u[i] - h * v) - a
+            v_new = 2 / h * (x - u[i]) - v
+            residual = M * a_new + C * v_new + force - p[i + 1]
+            step = residual / (4 * M / h**2 + 2 * C / h + tangent)
+            x -= step
+            if abs(step) < 1e-13:
+                break
+        trial = K * (x - plastic)
+        if abs(trial) > FY:
+            plastic = x - math.copysign(FY, trial) / K
+        a_new = 4 / h**2 * (x - u[i] - h * v) - a
+        v = 2 / h * (x - u[i]) - v
+        a, u[i + 1] = a_new, x
+    return t, u
+
+
+def test_the_default_method_is_no_worse_than_newmark_at_the_same_h(chopra):
+    # Newmark's peak is 6.2% low at the textbook h = 0.1 and 9e-6 low at 1e-3 (issue 42's figures); 3s's error
+    # is about half Newmark's at each h
+    for h in (0.1, 0.01 / 10):
+        t, u = newmark_epp(h, 3.0)
+        newmark = np.max(np.abs(u - chopra.displacement(t)))
+        sol = raydamp.integrate(sdof(ElasticPlastic(K, FY)), [0.0], [0.0], h=h, t_end=3.0, load=PULSE)
+        default = np.max(np.abs(sol.q[:, 0] - chopra.displacement(sol.t)))
+        assert default <= newmark, (h, default, newmark, sol.method)

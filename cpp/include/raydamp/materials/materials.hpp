@@ -16,6 +16,7 @@
 // events of the deformation; Bouc-Wen, smooth at every d, has only its reversals.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -130,19 +131,27 @@ struct BoucWen {
 
   double stiffness() const { return k; }
 
+  // w' = 1 - c w over a distance D from w: w e^{-cD} + D phi1(-cD), with e^{-cD} = 1 + x phi1(x), x = -cD,
+  // so one phi1 (a short series, no library call, for the small |x| of one step) gives both terms.
+  static double relax(double w, double c, double distance) {
+    const double x = -c * distance;
+    const double p = phi1(x);
+    return w + w * x * p + distance * p;
+  }
+
   // w after a drift of D >= 0 (in units of d_y) from w0, in the direction that w counts positive.
   double evolve(double w, double distance) const {
     if (w < 0.0) {
       const double c = beta - gamma;
-      // The distance at which w reaches 0: log(1 - c w0) / c, i.e. -w0 log1p(x) / x with x = -c w0.
+      const double end = relax(w, c, distance);
+      if (end <= 0.0) return end;  // w rises monotonically (1 - c w > 0 while bounded): it did not reach 0
+      // It reached 0 after log(1 - c w0) / c, i.e. -w0 log1p(x) / x with x = -c w0.
       const double x = -c * w;
       const double to_zero = x == 0.0 ? -w : -w * std::log1p(x) / x;
-      if (distance <= to_zero) return w * std::exp(-c * distance) + distance * phi1(-c * distance);
-      distance -= to_zero;
+      distance = std::max(0.0, distance - to_zero);
       w = 0.0;
     }
-    const double c = beta + gamma;
-    return w * std::exp(-c * distance) + distance * phi1(-c * distance);
+    return relax(w, beta + gamma, distance);
   }
 
   double force(const State& c, double d, State& t) const {
