@@ -39,7 +39,7 @@ def chopra():
     return HystereticSDOF(M, C, K, FY, 0.0, P0, math.pi / T_D, T_D, 40.0)
 
 
-def test_the_reference_is_choprás_exact_solution(chopra):
+def test_the_reference_is_the_exact_solution_chopra_quotes(chopra):
     assert abs(chopra.peak() - U_MAX) <= 1e-11
     assert abs(chopra.permanent_set() - PERMANENT_SET) <= 1e-11
 

@@ -26,11 +26,12 @@ from .systems.kepler import Kepler
 from .systems.rayleigh import modal_damping_ratio, rayleigh_coefficients
 from .systems.series import ChebyshevDegreeError
 from .systems.structure import LinearStructure
-from .systems.yielding import Spring, Structure
 from .systems.system import SpecError, System
+from .systems.yielding import Spring, Structure
 
 __all__ = ["__version__", "models", "Load", "GroundMotion", "System", "Chain", "chain_mode_energies", "Kepler",
-           "LinearStructure", "Structure", "Spring", "materials", "SpecError", "ChebyshevDegreeError", "integrate", "steps_for", "advise", "Advice",
+           "LinearStructure", "Structure", "Spring", "materials", "SpecError", "ChebyshevDegreeError", "integrate",
+           "steps_for", "advise", "Advice",
            "MethodAdvice", "CancelToken", "Solution", "integrate_ensemble", "EnsembleSolution", "sweep",
            "check_sweep", "parse_grid_item", "SweepPlan", "load", "rayleigh_coefficients", "modal_damping_ratio",
            "methods", "tableaux", "compositions", "MethodInfo", "TableauInfo", "CompositionInfo"]
