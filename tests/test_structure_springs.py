@@ -215,3 +215,19 @@ def test_the_default_method_is_no_worse_than_newmark_at_the_same_h(chopra):
         sol = raydamp.integrate(sdof(ElasticPlastic(K, FY)), [0.0], [0.0], h=h, t_end=3.0, load=PULSE)
         default = np.max(np.abs(sol.q[:, 0] - chopra.displacement(sol.t)))
         assert default <= newmark, (h, default, newmark, sol.method)
+
+
+def test_runs_and_ensemble_members_each_start_from_virgin_materials():
+    # The materials' states are each run's own: a second run, and every member of an ensemble on two threads,
+    # equal a first single run bit for bit (a shared state would carry the first run's plastic set over).
+    frame = shear_frame(True)
+    q0, p0 = np.zeros(3), np.array([3.0, -2.0, 4.0])
+    first = raydamp.integrate(frame, q0, p0, method="3s", h=0.005, n_steps=400)
+    again = raydamp.integrate(frame, q0, p0, method="3s", h=0.005, n_steps=400)
+    assert np.array_equal(first.q, again.q)
+    members = raydamp.integrate_ensemble(frame, np.zeros((4, 3)), np.tile(p0, (4, 1)), method="3s", h=0.005,
+                                         n_steps=400, threads=2)
+    for i in range(4):
+        assert np.array_equal(members.q[i], first.q), i
+    storey = np.diff(np.column_stack([np.zeros(first.q.shape[0]), first.q]), axis=1)
+    assert np.max(np.abs(storey[:, 0])) > 1.0 / 40.0  # the first storey yields (d_y = fy / k)
