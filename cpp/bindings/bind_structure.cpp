@@ -36,7 +36,7 @@ materials::Springs make_springs(const std::vector<std::string>& kinds, const std
       springs.bilinear.add(from[s], to[s], materials::Bilinear(v[0], v[1], v[2]));
     } else if (kinds[s] == materials::BoucWen::name) {
       need(5);
-      springs.bouc_wen.add(from[s], to[s], materials::BoucWen{v[0], v[1], v[2], v[3], v[4]});
+      springs.bouc_wen.add(from[s], to[s], materials::BoucWen(v[0], v[1], v[2], v[3], v[4]));
     } else {
       throw std::invalid_argument("springs[" + std::to_string(s) + "].material: unknown kind '" + kinds[s] + "'");
     }

@@ -98,7 +98,7 @@ double bouc_wen_rk4(const BoucWen& m, double z, double d0, double d1) {
 
 void bouc_wen() {
   for (const auto& [beta, gamma] : {std::pair{0.5, 0.5}, std::pair{0.7, -0.3}, std::pair{0.25, 0.75}}) {
-    const BoucWen m{10.0, 7.5, 0.1, beta, gamma};
+    const BoucWen m(10.0, 7.5, 0.1, beta, gamma);
     const std::vector<double> path = {0.4, 2.5, 1.0, -1.8, -0.3, 0.9, 0.85};
     BoucWen::State c, t;
     double z_ref = 0.0, d_prev = 0.0;
@@ -135,7 +135,7 @@ Structure<LumpedMass> frame(bool with_springs, SparseColMajor& k_out) {
   if (with_springs) {
     springs.bilinear.add(-1, 0, Bilinear(40.0, 1.0, 0.05));
     springs.elastic_plastic.add(0, 1, ElasticPlastic{30.0, 0.8});
-    springs.bouc_wen.add(1, 2, BoucWen{20.0, 0.6, 0.1, 0.5, 0.5});
+    springs.bouc_wen.add(1, 2, BoucWen(20.0, 0.6, 0.1, 0.5, 0.5));
   } else {
     std::vector<Eigen::Triplet<double>> t = {{0, 0, 70.0}, {0, 1, -30.0}, {1, 0, -30.0}, {1, 1, 50.0},
                                              {1, 2, -20.0}, {2, 1, -20.0}, {2, 2, 20.0}};
@@ -180,6 +180,12 @@ void structure_runs() {
     else
       for (std::size_t i = 0; i < first.size(); ++i) CHECK_NEAR(r.trajectory.q[i], first[i], 1e-12);
   }
+  // The elastic ranges from the committed states: virgin, each spring's is [-fy/k, fy/k] (Bouc-Wen: unbounded).
+  std::vector<double> lower(3), upper(3);
+  yielding.elastic_ranges(lower.data(), upper.data());
+  CHECK_NEAR(upper[0], 0.8 / 30.0, 1e-15);  // kind order: the elastic-plastic spring first
+  CHECK_NEAR(lower[1], -1.0 / 40.0, 1e-15);
+  CHECK(std::isinf(upper[2]));
   // The springs' gradient allocates nothing.
   Vec g = Vec::Zero(3), q = q0;
   yielding.gradient(q, g);

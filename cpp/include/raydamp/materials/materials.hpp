@@ -124,6 +124,11 @@ struct Bilinear {
 struct BoucWen {
   static constexpr const char* name = "bouc_wen";
   double k, fy, alpha, beta, gamma;
+  double per_yield, elastic, hysteretic;  // 1 / d_y, alpha k, (1 - alpha) fy: no division in a kick
+
+  BoucWen(double k_, double fy_, double alpha_, double beta_, double gamma_)
+      : k(k_), fy(fy_), alpha(alpha_), beta(beta_), gamma(gamma_), per_yield(k_ / fy_), elastic(alpha_ * k_),
+        hysteretic((1.0 - alpha_) * fy_) {}
 
   struct State {
     double d = 0.0, z = 0.0;  // the deformation the state belongs to, and z there
@@ -161,9 +166,9 @@ struct BoucWen {
       t.z = c.z;
     } else {
       const double s = step > 0.0 ? 1.0 : -1.0;
-      t.z = s * evolve(s * c.z, std::abs(step) * k / fy);
+      t.z = s * evolve(s * c.z, std::abs(step) * per_yield);
     }
-    return alpha * k * d + (1.0 - alpha) * fy * t.z;
+    return elastic * d + hysteretic * t.z;
   }
 
   // The elastic part 1/2 alpha k d^2 and the hysteretic part's recoverable 1/2 (1 - alpha) fy d_y z^2.

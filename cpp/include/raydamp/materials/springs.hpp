@@ -78,6 +78,16 @@ struct SpringSet {
     }
   }
 
+  // Each spring's elastic range from its committed state: the deformations at which it next yields
+  // (materials.hpp), for a caller that locates kinks as events of the deformation.
+  void elastic_ranges(double* lower, double* upper) const {
+    for (std::size_t s = 0; s < j.size(); ++s) {
+      const Range r = material[s].elastic_range(committed[s]);
+      lower[s] = r.lower;
+      upper[s] = r.upper;
+    }
+  }
+
   // The forces sigma(d) from the committed states (the trial states untouched).
   template <class Vec>
   void forces(const Vec& q, double* out) const {

@@ -78,6 +78,16 @@ struct Structure : LinearStructure<Mass> {
     springs.for_each([&](const auto& set) { set.add_tangent_correction(q, v, out); });
   }
 
+  // Each spring's elastic range [lower, upper] of its deformation from the committed state, in Springs'
+  // order (infinite for Bouc-Wen): where a kink locator looks for the next yield.
+  void elastic_ranges(double* lower, double* upper) const {
+    springs.for_each([&](const auto& set) {
+      set.elastic_ranges(lower, upper);
+      lower += set.size();
+      upper += set.size();
+    });
+  }
+
   // The springs' forces sigma_s(d_s) at q from the committed states, in Springs' order.
   std::vector<double> spring_forces(const Vec& q) const {
     std::vector<double> out(springs.size());
