@@ -37,6 +37,7 @@ LoadTerm term_from(const py::dict& d) {
     term.shape = LoadTerm::Shape::harmonic;
     term.omega = d["omega"].cast<double>();
     term.phase = d["phase"].cast<double>();
+    if (d.contains("t_end")) term.t_end = d["t_end"].cast<double>();
   } else if (shape == "series") {
     term.shape = LoadTerm::Shape::series;
     auto series = std::make_shared<LoadSeries>();

@@ -20,5 +20,6 @@ PYBIND11_MODULE(_core, m) {
   raydamp::bindings::bind_system_dense_mass(m);
   raydamp::bindings::bind_chain(m);
   raydamp::bindings::bind_linear_structure(m);
+  raydamp::bindings::bind_structure(m);
   raydamp::bindings::bind_kepler(m);
 }

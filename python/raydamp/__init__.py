@@ -10,7 +10,7 @@ equilibria.
 ...                         method="3s", h=0.2, t_end=200)
 """
 
-from . import models
+from . import materials, models
 from ._core import __version__
 from .loads import GroundMotion, Load
 from .methods.catalogue import CompositionInfo, MethodInfo, TableauInfo, compositions, methods, tableaux
@@ -28,9 +28,11 @@ from .systems.rayleigh import modal_damping_ratio, rayleigh_coefficients
 from .systems.series import ChebyshevDegreeError
 from .systems.structure import LinearStructure
 from .systems.system import SpecError, System
+from .systems.yielding import Spring, Structure
 
 __all__ = ["__version__", "models", "Load", "GroundMotion", "System", "Chain", "chain_mode_energies", "Kepler",
-           "LinearStructure", "SpecError", "ChebyshevDegreeError", "integrate", "steps_for", "advise", "Advice",
+           "LinearStructure", "Structure", "Spring", "materials", "SpecError", "ChebyshevDegreeError", "integrate",
+           "steps_for", "advise", "Advice",
            "MethodAdvice", "CancelToken", "Solution", "integrate_ensemble", "EnsembleSolution", "sweep",
            "check_sweep", "parse_grid_item", "SweepPlan", "load", "rayleigh_coefficients", "modal_damping_ratio",
            "methods", "tableaux", "compositions", "MethodInfo", "TableauInfo", "CompositionInfo",

@@ -86,6 +86,7 @@ inline void inner_stages(const Model& model, const Tab& tab, State<Dim>& z, cons
 template <class Method>
 class ComposedStepper {
  public:
+  using Table = Method;
   static constexpr int S = StepDurations<Method>::S;
   static_assert(is_mergeable<Method>(), "ComposedStepper needs a symmetric table with an exact end sub-flow");
 

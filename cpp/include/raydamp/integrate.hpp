@@ -21,6 +21,7 @@
 #include "raydamp/amplification.hpp"
 #include "raydamp/composed_step.hpp"
 #include "raydamp/step.hpp"
+#include "raydamp/materials/commit.hpp"
 #include "raydamp/record/divergence.hpp"
 #include "raydamp/record/recorder.hpp"
 #include "raydamp/record/save_grid.hpp"
@@ -206,7 +207,7 @@ inline double run_block_body(const Model& model, const Tab& shared_tab, const St
   using LocalTab = std::conditional_t<std::is_trivially_copyable_v<Tab>, const Tab, const Tab&>;
   LocalTab tab = shared_tab;
   double block_drift = 0.0;
-  if constexpr (Mergeable && (fuses_3s<Model>::value || Dim != Eigen::Dynamic)) {
+  if constexpr (Mergeable && !has_materials_v<Model> && (fuses_3s<Model>::value || Dim != Eigen::Dynamic)) {
     // The same sub-flows in the same order as below, grouped as join(i) + body(i + 1)
     // so that a model can run the pair as one call. A fixed-size state takes this
     // grouping too (the damped pendulum's 3s: 0.5 ns of 11 per step less), lanes on
@@ -225,14 +226,20 @@ inline double run_block_body(const Model& model, const Tab& shared_tab, const St
     }
   } else if constexpr (Mergeable) {
     if (merge) {
+      // Materials commit after each step's last kick: the body's, or the joint's where kicks end a step.
+      constexpr bool commit_after_body = !kicks_at_ends<typename Stepper::Table>();
       local.lead(model, tab, y, k, ws);
       for (long i = k; i + 1 < end; ++i) {
         local.body(model, tab, y, i, ws);
+        if constexpr (commit_after_body) commit_materials(model);
         if (track_momenta) block_drift = std::max(block_drift, step_drift(y, i, true));
         local.join(model, tab, y, i, ws);
+        if constexpr (!commit_after_body) commit_materials(model);
       }
       local.body(model, tab, y, end - 1, ws);
+      if constexpr (commit_after_body) commit_materials(model);
       local.trail(model, tab, y, end - 1, ws);
+      if constexpr (!commit_after_body) commit_materials(model);
       if (track_momenta) block_drift = std::max(block_drift, step_drift(y, end - 1, false));
       if constexpr (!in_place) state = y;
       return block_drift;
@@ -408,10 +415,12 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
       if (rec.tracks_work() && stepper.stages() > 1) {  // the trapezoid's points: the stage boundaries
         double t = time_at(i);
         stepper.step_by_stage(model, tab, x, i, w, [&](double dt) { rec.on_step(x, dt, t += dt); });
+        commit_materials(model);
         return;
       }
     }
     stepper.step(model, tab, x, i, w);
+    commit_materials(model);
     rec.on_step(x, i == N - 1 ? spec.h_last : spec.h, time_at(i + 1));
   };
   const long progress_every = std::max(1L, N / std::max(1L, control.max_progress_calls));
@@ -424,6 +433,7 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
     }
     const long end = std::min({N, next_save, next_progress, k + kBlock});
     checkpoint.take(z, ws, rec);  // a replay draws the same noise
+    save_materials(model);        // and starts from the same material states
     ws.time = time_at(k);  // the merged loop's clock; advance() sets it per step
     double block_drift = 0.0;
     if constexpr (Dim == Eigen::Dynamic) {  // stepped in place (see run_block)
@@ -442,6 +452,7 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
     }
     if (!z.all_finite()) {
       checkpoint.restore(z, ws, rec);
+      restore_materials(model);
       const long i = replay_block(ws, rec, before, z, k, end, track_momenta, advance, step_drift, max_drift);
       if (i < end) {
         k = i;

@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -80,7 +81,8 @@ struct LoadTerm {
   enum class Shape { harmonic, series, expression };
   Shape shape = Shape::harmonic;
   double scale = 1.0;                // a factor on the term (an ensemble member's amplitude)
-  double omega = 0.0, phase = 0.0;   // harmonic: s(t) = sin(omega t + phase)
+  double omega = 0.0, phase = 0.0;   // harmonic: s(t) = sin(omega t + phase) for t <= t_end, 0 after
+  double t_end = std::numeric_limits<double>::infinity();
   double time_scale = 1.0;           // series and expression: s(t) = history(time_scale * t)
   std::shared_ptr<const LoadSeries> series;
   CompiledFunction expression;       // (t) -> s(t), the user's expression with its parameters bound
@@ -139,7 +141,7 @@ class Load {
  private:
   static double scalar(const LoadTerm& term, double t) {
     switch (term.shape) {
-      case LoadTerm::Shape::harmonic: return std::sin(term.omega * t + term.phase);
+      case LoadTerm::Shape::harmonic: return t <= term.t_end ? std::sin(term.omega * t + term.phase) : 0.0;
       case LoadTerm::Shape::expression: {
         const double in = term.time_scale * t;
         double out = 0.0;
@@ -167,6 +169,7 @@ class Load {
     if (!std::isfinite(term.scale)) fail("scale is not finite");
     if (term.shape == LoadTerm::Shape::harmonic && !(std::isfinite(term.omega) && std::isfinite(term.phase)))
       fail("omega and phase must be finite");
+    if (term.shape == LoadTerm::Shape::harmonic && std::isnan(term.t_end)) fail("t_end is not a number");
     if (term.shape == LoadTerm::Shape::expression && !term.expression) fail("the expression is not compiled");
     if (term.shape == LoadTerm::Shape::series) {
       if (!term.series || term.series->times.empty()) fail("a series needs at least one time");

@@ -29,7 +29,7 @@ from .forms import (
     numbers,
 )
 
-__all__ = ["SystemInput", "ChainInput", "LinearStructureInput", "CooForm", "DiagonalForm", "FileForm",
+__all__ = ["SystemInput", "ChainInput", "LinearStructureInput", "StructureInput", "CooForm", "DiagonalForm", "FileForm",
            "AnySystemInput", "FileResolver", "MAX_COO_ENTRIES", "MAX_STRUCTURE_DIM", "SYSTEM_TAGS", "MATRIX_TAGS",
            "FORM_TAGS", "VALUE_TAGS"]
 
@@ -375,6 +375,65 @@ class LinearStructureInput(Input):
             raise path_error(error, type(self)) from None
 
 
+# ---- structures with hysteretic springs: raydamp.Structure.to_dict()'s form ----------------------------
+
+class ElasticPlasticForm(Input):
+    kind: Literal["elastic_plastic"]
+    k: FiniteFloat = Field(gt=0, description="the initial stiffness")
+    fy: FiniteFloat = Field(gt=0, description="the yield force")
+
+
+class BilinearForm(Input):
+    kind: Literal["bilinear"]
+    k: FiniteFloat = Field(gt=0, description="the initial stiffness")
+    fy: FiniteFloat = Field(gt=0, description="the yield force")
+    b: FiniteFloat = Field(0.0, gt=-1, lt=1, description="the post-yield stiffness ratio: [0, 1) hardens, "
+                                                          "(-1, 0) softens")
+
+
+class BoucWenForm(Input):
+    kind: Literal["bouc_wen"]
+    k: FiniteFloat = Field(gt=0, description="the initial stiffness")
+    fy: FiniteFloat = Field(gt=0, description="the yield force")
+    alpha: FiniteFloat = Field(0.0, ge=0, lt=1, description="the post-yield stiffness ratio")
+    n: Literal[1] = Field(1, description="the exponent (only 1: its evolution has a closed form)")
+    beta: FiniteFloat = Field(0.5, gt=0, description="beta > 0 and beta + gamma > 0 bound the hysteresis")
+    gamma: FiniteFloat = 0.5
+
+
+MaterialInput = Annotated[ElasticPlasticForm | BilinearForm | BoucWenForm, Field(discriminator="kind")]
+
+
+class SpringInput(Input):
+    dofs: bounded(Annotated[int, Field(ge=0)], 2, min_length=1) = Field(
+        description="[j]: d = q_j (to the ground); [i, j]: d = q_j - q_i")
+    material: MaterialInput
+
+
+class StructureInput(LinearStructureInput):
+    """A structure with hysteretic springs: raydamp.Structure.to_dict()'s form. K (optional) is the linear
+    stiffness besides the springs; C = alpha M + beta K0 with K0 = K + the springs' initial stiffness."""
+
+    kind: Literal["structure"]
+    K: MatrixInput | None = Field(None, description="the linear stiffness besides the springs; null for none")
+    springs: bounded(SpringInput, MAX_STRUCTURE_DIM) = Field(
+        default_factory=list, description='[{"dofs": [i, j], "material": {"kind": "bilinear", "k", "fy", "b"}}]')
+
+    def files(self, at: tuple) -> Iterator[tuple[tuple, str, str]]:
+        for key in ("M", "K"):
+            form = getattr(self, key)
+            if isinstance(form, FileForm):
+                yield (*at, key, "file"), "id" if FILE_ID.match(form.file) else "path", form.file
+
+    def build(self, files: FileResolver | None = None):
+        from ..systems.yielding import Structure
+
+        try:
+            return Structure.from_dict(self.model_dump(exclude_none=True), files=files or _local_files)
+        except ValueError as error:
+            raise path_error(error, type(self)) from None
+
+
 def _site_names(dim: int, momenta: int, save_dofs: list[int] | None) -> tuple[list[str], list[str]]:
     # Sites or degrees of freedom are numbered; the total momentum P is the one momentum map a chain
     # may have, and a structure has none.
@@ -391,17 +450,19 @@ def _local_files(ref: str) -> Any:
 
 def _system_form(value: object) -> str:
     kind = value.get("kind") if isinstance(value, dict) else getattr(value, "kind", None)
-    return kind if kind in ("chain", "linear_structure", "kepler") else "expressions"
+    return kind if kind in ("chain", "linear_structure", "structure", "kepler") else "expressions"
 
 
 MATRIX_TAGS = frozenset({"coo form", "diagonal form", "file form"})
-SYSTEM_TAGS = frozenset({"expressions", "chain", "linear_structure", "kepler"})
+SYSTEM_TAGS = frozenset({"expressions", "chain", "linear_structure", "structure", "kepler"})
 # Tags name forms, never keys: a path of ours ("damping", "dampers", 0, "on") keeps every part.
 FORM_TAGS = {"damping": frozenset({"scalar form", "diagonal form", "matrix form", "dampers form"}),
              "coordinates": frozenset({"names form", "count form"}),
              "mass": frozenset({"number form", "vector form", "matrix form"}),
-             "c": frozenset({"number form", "vector form"})}
+             "c": frozenset({"number form", "vector form"}),
+             "material": frozenset({"elastic_plastic", "bilinear", "bouc_wen"})}
 VALUE_TAGS = frozenset({"number form", "expression form", "vector form"})  # after a parameter's name
 AnySystemInput = Annotated[Annotated[SystemInput, Tag("expressions")] | Annotated[ChainInput, Tag("chain")]
                            | Annotated[LinearStructureInput, Tag("linear_structure")]
+                           | Annotated[StructureInput, Tag("structure")]
                            | Annotated[KeplerInput, Tag("kepler")], Discriminator(_system_form)]

@@ -81,12 +81,14 @@ class HarmonicBody(Input):
     omega: FiniteFloat = Field(description="the angular frequency")
     phase: FiniteFloat = 0.0
     scale: FiniteFloat = Field(1.0, description="a factor on the term (Load.to_dict writes it)")
+    t_end: FiniteFloat | None = Field(None, description="the term acts for t <= t_end and is 0 after (a pulse); "
+                                                        "null: it never ends")
 
     def load(self, where: str, files: FileResolver | None):
         from .load import Load
 
         return Load([T.Harmonic(_direction(self.amplitude, f"{where}.amplitude"), real(f"{where}.omega", self.omega),
-                                T.phase_value(self.phase))])
+                                T.phase_value(self.phase), t_end=T.end_time(f"{where}.t_end", self.t_end))])
 
 
 class SeriesBody(Input):

@@ -49,7 +49,8 @@ class GroundMotion(Load):
                 amplitude = np.asarray(term.direction, dtype=float)
                 if amplitude.size != 1:
                     raise ValueError("acceleration: a harmonic ground acceleration has a scalar amplitude")
-                terms.append(T.scaled(T.Harmonic(T.Ground(r), term.omega, term.phase, term.scale), float(amplitude[0])))
+                terms.append(T.scaled(T.Harmonic(T.Ground(r), term.omega, term.phase, term.scale, term.t_end),
+                                      float(amplitude[0])))
             elif term.direction is not None or (isinstance(term, T.Series) and term.values.ndim == 2):
                 raise ValueError("acceleration: a scalar history a_g(t), made without a direction")
             else:

@@ -60,9 +60,14 @@ class Load:
     # -- the shapes ---------------------------------------------------------------------
 
     @classmethod
-    def harmonic(cls, amplitude, omega: float, phase: float = 0.0) -> Load:
-        """f(t) = amplitude * sin(omega t + phase); ``amplitude`` a vector over the coordinates."""
-        return cls([T.Harmonic(T.direction("amplitude", amplitude), real("omega", omega), T.phase_value(phase))])
+    def harmonic(cls, amplitude, omega: float, phase: float = 0.0, *, t_end: float | None = None) -> Load:
+        """f(t) = amplitude * sin(omega t + phase); ``amplitude`` a vector over the coordinates. With ``t_end``
+        the term acts for t <= t_end only and is 0 after (a pulse such as p0 sin(pi t / t_d) for t <= t_d). Where
+        sin(omega t_end + phase) != 0 the load jumps at t_end, and a jump limits every fixed-step method to order
+        1 (baoab, whose kicks sit at the step ends, even where t_end is a step end); end it at a zero of the sine
+        for a kink only (order 2)."""
+        return cls([T.Harmonic(T.direction("amplitude", amplitude), real("omega", omega), T.phase_value(phase),
+                               t_end=T.end_time("t_end", t_end))])
 
     @classmethod
     def series(cls, t, values, direction=None, *, hold: bool = False) -> Load:
@@ -159,7 +164,7 @@ class Load:
                 if "phase" in values:
                     changes["phase"] = T.phase_value(values["phase"])
                 term = T.Harmonic(term.direction, changes.get("omega", term.omega), changes.get("phase", term.phase),
-                                  term.scale)
+                                  term.scale, term.t_end)
             elif isinstance(term, T.ExpressionTerm):
                 mine = {k: real(f"load.{k}", v) for k, v in values.items() if k in term.parameters}
                 if mine:

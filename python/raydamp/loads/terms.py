@@ -74,20 +74,25 @@ def _floats(name: str, value, ndim) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class Harmonic:
-    """s(t) = sin(omega t + phase) times ``direction`` (the amplitude vector)."""
+    """s(t) = sin(omega t + phase) times ``direction`` (the amplitude vector), for t <= t_end and 0 after
+    (a pulse: ``t_end`` = inf, the default, for a load that never ends)."""
 
     direction: Any
     omega: float
     phase: float = 0.0
     scale: float = 1.0
+    t_end: float = math.inf
 
     def core(self, vector: np.ndarray) -> dict:
-        return _with_direction({"shape": "harmonic", "omega": self.omega, "phase": self.phase, "scale": self.scale},
-                               vector)
+        out = {"shape": "harmonic", "omega": self.omega, "phase": self.phase, "scale": self.scale}
+        if self.t_end != math.inf:
+            out["t_end"] = self.t_end
+        return _with_direction(out, vector)
 
     def plain(self) -> dict:
         return {"harmonic": {"amplitude": _plain_direction(self.direction), "omega": self.omega, "phase": self.phase,
-                             **({"scale": self.scale} if self.scale != 1.0 else {})}}
+                             **({"scale": self.scale} if self.scale != 1.0 else {}),
+                             **({"t_end": self.t_end} if self.t_end != math.inf else {})}}
 
 
 @dataclass(frozen=True, eq=False)
@@ -160,6 +165,11 @@ def _plain_direction(d) -> Any:
     if isinstance(d, Ground):
         return {"ground": d.r.tolist()}
     return None if d is None else d.tolist()
+
+
+def end_time(name: str, value) -> float:
+    """A term's end time: a finite number, or None for a term that never ends (inf)."""
+    return math.inf if value is None else real(name, value)
 
 
 def phase_value(value) -> float:

@@ -56,7 +56,7 @@ def choose_method(model, method: str | None, tableau, composition, h: float, the
         return Choice(DEFAULT_METHOD, tableau, "3s: the default, as the base of the tableau or composition given")
     from ..systems.structure import LinearStructure
 
-    if not isinstance(model, LinearStructure):
+    if not isinstance(model, LinearStructure) or getattr(model, "springs", ()):  # midpoint runs linear ones only
         return Choice(DEFAULT_METHOD, None, f"3s: the default for a {type(model).__name__}"
                                             f"{' at a temperature' if thermal else ''}")
     try:

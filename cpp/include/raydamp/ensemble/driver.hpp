@@ -39,6 +39,10 @@ struct is_compiled_system<CompiledSystem<Mass, Damping>> : std::true_type {};
 template <class Method, class Model>
 RunResult integrate_model(const Model& model, const ButcherTableau& tab, const Composition& comp,
                           State<Model::dim> z, const RunSpec& spec, const Control& control) {
+  if constexpr (has_materials_v<Model>) {  // a run's materials are its own, from their virgin state
+    const Model own = model.fresh_run();
+    return integrate<Method>(own, tab, comp, std::move(z), spec, control);
+  }
   if constexpr (is_compiled_system<Model>::value && !uses_tableau<Method>()) {
     switch (model.size()) {
       case 1: return integrate<Method>(model.template fixed<1>(), tab, comp, State<1>{z.q, z.p}, spec, control);

@@ -1,0 +1,163 @@
+// A structure's hysteretic springs: struct-of-arrays, one set per material kind, each bound once, so the
+// step loop runs one plain loop per kind with no allocation and no virtual call.
+//
+// Spring s acts on the deformation d = q[j] - q[i] (i < 0: d = q[j], relative to the ground) and adds the
+// force -r sigma(d) with r = e_j - e_i. The material states are the run's own (a run copies its model
+// with fresh states, models/structure.hpp), so they are `mutable`: the step loop's model is const, and
+// the kick that reads sigma is where the trial state is written.
+#pragma once
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "raydamp/materials/materials.hpp"
+
+namespace raydamp::materials {
+
+template <class Material>
+struct SpringSet {
+  using State = typename Material::State;
+  std::vector<int> i, j;  // d = q[j] - q[i], or q[j] where i < 0
+  std::vector<Material> material;
+  mutable std::vector<State> committed, trial, saved;
+
+  std::size_t size() const { return j.size(); }
+
+  void add(int from, int to, const Material& m) {
+    i.push_back(from);
+    j.push_back(to);
+    material.push_back(m);
+    committed.emplace_back();
+    trial.emplace_back();
+    saved.emplace_back();
+  }
+
+  template <class Vec>
+  double deformation(const Vec& q, std::size_t s) const {
+    return i[s] < 0 ? q[j[s]] : q[j[s]] - q[i[s]];
+  }
+
+  // g += r (sigma(d) - k d) for each spring: what the springs add to a gradient taken with K0, which
+  // holds their initial stiffness k r r^T. Writes the trial states.
+  template <class Vec>
+  void add_correction(const Vec& q, Vec& g) const {
+    for (std::size_t s = 0; s < j.size(); ++s) {
+      const double d = deformation(q, s);
+      const double f = material[s].force(committed[s], d, trial[s]) - material[s].stiffness() * d;
+      g[j[s]] += f;
+      if (i[s] >= 0) g[i[s]] -= f;
+    }
+  }
+
+  // sum of stored(d) - 1/2 k d^2 at the trial states from the committed ones (the trial states untouched).
+  template <class Vec>
+  double energy_correction(const Vec& q) const {
+    double sum = 0.0;
+    for (std::size_t s = 0; s < j.size(); ++s) {
+      const double d = deformation(q, s);
+      State t;
+      material[s].force(committed[s], d, t);
+      sum += material[s].stored(t, d) - 0.5 * material[s].stiffness() * d * d;
+    }
+    return sum;
+  }
+
+  // out += r (k_t - k) r^T v, k_t the committed state's tangent at q.
+  template <class Vec>
+  void add_tangent_correction(const Vec& q, const Vec& v, Vec& out) const {
+    for (std::size_t s = 0; s < j.size(); ++s) {
+      const double d = deformation(q, s);
+      State t;
+      material[s].force(committed[s], d, t);
+      const double dv = i[s] < 0 ? v[j[s]] : v[j[s]] - v[i[s]];
+      const double f = (material[s].tangent(t, d) - material[s].stiffness()) * dv;
+      out[j[s]] += f;
+      if (i[s] >= 0) out[i[s]] -= f;
+    }
+  }
+
+  // Each spring's elastic range from its committed state: the deformations at which it next yields
+  // (materials.hpp), for a caller that locates kinks as events of the deformation.
+  void elastic_ranges(double* lower, double* upper) const {
+    for (std::size_t s = 0; s < j.size(); ++s) {
+      const Range r = material[s].elastic_range(committed[s]);
+      lower[s] = r.lower;
+      upper[s] = r.upper;
+    }
+  }
+
+  // The forces sigma(d) from the committed states (the trial states untouched).
+  template <class Vec>
+  void forces(const Vec& q, double* out) const {
+    for (std::size_t s = 0; s < j.size(); ++s) {
+      State t;
+      out[s] = material[s].force(committed[s], deformation(q, s), t);
+    }
+  }
+
+  void commit() const { std::copy(trial.begin(), trial.end(), committed.begin()); }
+  void save() const { std::copy(committed.begin(), committed.end(), saved.begin()); }
+  void restore() const {
+    std::copy(saved.begin(), saved.end(), committed.begin());
+    std::copy(saved.begin(), saved.end(), trial.begin());
+  }
+  void reset() const {
+    std::fill(committed.begin(), committed.end(), State{});
+    std::fill(trial.begin(), trial.end(), State{});
+  }
+};
+
+// Every spring of a structure, by material kind. for_each(f) visits the sets in a fixed order, which is
+// also the order of the springs' forces and states (springs of one kind in the order they were added).
+struct Springs {
+  SpringSet<ElasticPlastic> elastic_plastic;
+  SpringSet<Bilinear> bilinear;
+  SpringSet<BoucWen> bouc_wen;
+
+  template <class F>
+  void for_each(F&& f) const {
+    f(elastic_plastic);
+    f(bilinear);
+    f(bouc_wen);
+  }
+  template <class F>
+  void for_each(F&& f) {
+    f(elastic_plastic);
+    f(bilinear);
+    f(bouc_wen);
+  }
+
+  std::size_t size() const { return elastic_plastic.size() + bilinear.size() + bouc_wen.size(); }
+  bool empty() const { return size() == 0; }
+
+  // Refuses (naming springs[s].dofs) a coordinate outside 0..n-1, or a spring from a coordinate to itself.
+  void check(int n) const {
+    std::size_t base = 0;
+    for_each([&](const auto& set) {
+      for (std::size_t s = 0; s < set.size(); ++s) {
+        const std::string where = "springs[" + std::to_string(base + s) + "].dofs";
+        if (set.j[s] < 0 || set.j[s] >= n || set.i[s] >= n)
+          throw std::invalid_argument(where + ": a coordinate outside 0.." + std::to_string(n - 1));
+        if (set.i[s] == set.j[s]) throw std::invalid_argument(where + ": the two coordinates are the same");
+      }
+      base += set.size();
+    });
+  }
+
+  void commit() const {
+    for_each([](const auto& set) { set.commit(); });
+  }
+  void save() const {
+    for_each([](const auto& set) { set.save(); });
+  }
+  void restore() const {
+    for_each([](const auto& set) { set.restore(); });
+  }
+  void reset() const {
+    for_each([](const auto& set) { set.reset(); });
+  }
+};
+
+}  // namespace raydamp::materials

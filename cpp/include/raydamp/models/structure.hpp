@@ -1,0 +1,110 @@
+// A structure with hysteretic springs: the linear structure of K0 = K + sum_s k_s r_s r_s^T (each
+// spring's initial stiffness added to K) with Rayleigh damping C = alpha M + beta K0, plus for each spring
+// the difference between its force and its initial stiffness's, r_s (sigma_s(d_s) - k_s d_s):
+//   grad V(q) = K0 q - f + sum_s r_s (sigma_s(d_s) - k_s d_s).
+// The damping of the initial stiffness keeps every damping sub-flow exact (and LinearStructure's dense
+// modal or sparse Chebyshev flows serve unchanged); its cost is a spurious damping force beta k_s r_s d_s'
+// in a spring that has yielded, which a tangent-stiffness damping would drop.
+//
+// The springs are read in the kick at the kick's q, each return map exact for the increment from the
+// committed state; the step loop commits once per full step (materials/commit.hpp). A run steps its own
+// copy with fresh material states (fresh_run), so one model serves concurrent runs.
+#pragma once
+
+#include <vector>
+
+#include "raydamp/materials/springs.hpp"
+#include "raydamp/models/linear_structure.hpp"
+
+namespace raydamp {
+
+namespace detail {
+
+// K0 = K + sum_s k_s r_s r_s^T, the springs checked first (their dofs name the spring).
+inline SparseColMajor initial_stiffness(const SparseColMajor& k, const materials::Springs& springs, int n) {
+  springs.check(n);
+  std::vector<Eigen::Triplet<double>> entries;
+  springs.for_each([&](const auto& set) {
+    for (std::size_t s = 0; s < set.size(); ++s) {
+      const double ks = set.material[s].stiffness();
+      const int i = set.i[s], j = set.j[s];
+      entries.emplace_back(j, j, ks);
+      if (i >= 0) {
+        entries.emplace_back(i, i, ks);
+        entries.emplace_back(i, j, -ks);
+        entries.emplace_back(j, i, -ks);
+      }
+    }
+  });
+  SparseColMajor added(k.rows(), k.cols());
+  added.setFromTriplets(entries.begin(), entries.end());
+  SparseColMajor out = k + added;
+  out.makeCompressed();
+  return out;
+}
+
+}  // namespace detail
+
+template <class Mass>
+struct Structure : LinearStructure<Mass> {
+  using Base = LinearStructure<Mass>;
+  using Vec = typename Base::Vec;
+  static constexpr const char* name = "structure";
+
+  materials::Springs springs;
+
+  Structure(Mass mass_, const SparseColMajor& k, materials::Springs springs_, const Eigen::VectorXd& f, double alpha,
+            double beta, int dense_limit = kMaxDenseDim)
+      : Base(std::move(mass_), detail::initial_stiffness(k, springs_, static_cast<int>(k.rows())), f, alpha, beta,
+             dense_limit),
+        springs(std::move(springs_)) {}
+
+  // A copy of this structure with every material in its virgin state: what a run steps.
+  Structure fresh_run() const {
+    Structure out = *this;
+    out.springs.reset();
+    return out;
+  }
+
+  double potential(const Vec& q) const { return Base::potential(q) + springs_energy(q); }
+
+  void gradient(const Vec& q, Vec& g) const {
+    Base::gradient(q, g);
+    springs.for_each([&](const auto& set) { set.add_correction(q, g); });
+  }
+
+  void hessian_product(const Vec& q, const Vec& v, Vec& out) const {
+    Base::hessian_product(q, v, out);
+    springs.for_each([&](const auto& set) { set.add_tangent_correction(q, v, out); });
+  }
+
+  // Each spring's elastic range [lower, upper] of its deformation from the committed state, in Springs'
+  // order (infinite for Bouc-Wen): where a kink locator looks for the next yield.
+  void elastic_ranges(double* lower, double* upper) const {
+    springs.for_each([&](const auto& set) {
+      set.elastic_ranges(lower, upper);
+      lower += set.size();
+      upper += set.size();
+    });
+  }
+
+  // The springs' forces sigma_s(d_s) at q from the committed states, in Springs' order.
+  std::vector<double> spring_forces(const Vec& q) const {
+    std::vector<double> out(springs.size());
+    double* at = out.data();
+    springs.for_each([&](const auto& set) {
+      set.forces(q, at);
+      at += set.size();
+    });
+    return out;
+  }
+
+ private:
+  double springs_energy(const Vec& q) const {
+    double sum = 0.0;
+    springs.for_each([&](const auto& set) { sum += set.energy_correction(q); });
+    return sum;
+  }
+};
+
+}  // namespace raydamp

@@ -1,0 +1,308 @@
+"""raydamp.Structure: a structure whose storeys or members yield, as hysteretic springs on a linear structure.
+
+    M q'' + C q' + K q + sum_s r_s sigma_s(d_s) = f,   d_s = r_s^T q,
+
+each spring s acting on a deformation d = q_j - q_i (``dofs=(i, j)``) or d = q_j relative to the ground
+(``dofs=(j,)``) with a material of :mod:`raydamp.materials` (ElasticPlastic, Bilinear, BoucWen).
+
+How it relates to :class:`raydamp.LinearStructure`: a Structure without springs *is* a LinearStructure
+(the same compiled kind, so it steps bit for bit as one, with every method, ensembles included); ``K`` may
+then be given as for a LinearStructure. With springs, it is the linear structure of the initial stiffness
+K0 = K + sum_s k_s r_s r_s^T plus, in each kick, each spring's departure from its initial stiffness.
+``LinearStructure`` stays the name (and the JSON kind ``"linear_structure"``) of the springless case;
+``Structure`` writes the JSON kind ``"structure"`` with its ``"springs"``.
+
+Damping. Rayleigh's C = alpha M + beta K0 uses the initial stiffness (``damping_stiffness="initial"``, the
+only choice so far): the damping sub-flows stay the exact flows of a constant matrix, so the splittings keep
+them exact. What it costs in energy: once a spring yields, its damping force beta k_s d_s' keeps the
+initial stiffness's size while the spring's own stiffness has dropped to b k_s (or 0), so the viscous work
+is larger than a tangent-stiffness damping's (the spurious damping of Charney 2008 and Hall 2006). A
+tangent-stiffness choice is not offered yet.
+
+Methods. The splittings (3s, 2s, rks, baoab, and sv undamped; their compositions) apply the springs in the
+kick, at the kick's q; each material answers from the state committed at the step's start and commits once
+per full step, so a composition's backward sub-steps never create plastic flow. The implicit methods
+(midpoint, gauss4) step a linear system and refuse a Structure with springs. A kink of sigma (yield,
+unloading) inside a step limits every fixed-step method to order 2 (kinks are not located yet; each
+material gives the deformations at which it next yields, materials.hpp's elastic_range, for that). On
+Chopra's elastic-perfectly-plastic SDOF (tests/test_structure_springs.py), measured: the fitted order over
+h = 0.01/2 .. 0.01/16 is 1.93 for 3s, 2s and rks and 2.02 for baoab; the worst error over every step at h =
+0.01/9, 0.01/10, 0.01/11 is 6.0e-6 u_max (baoab) to 9.5e-6 u_max (3s); Newmark's average acceleration
+(with Newton) errs about twice as much as 3s at the same h (its peak 6.2% low at h = 0.1).
+
+Cost. A spring adds a return map per kick to the linear structure's step: on the 10-storey frame
+(benchmarks/bench_springs.py) 1.1-1.4x the springless step for ElasticPlastic and Bilinear, about 1.8x
+for BoucWen (one phi1 per spring and kick).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .. import _core
+from .._validation import _short, flag, real
+from .kinds import MemberModels
+from .materials import Material, material_from_dict
+from .structure import (
+    _DENSE_LIMIT,
+    LinearStructure,
+    _is_diagonal,
+    _matrix_from_plain,
+    _read_matrix,
+    _require_semidefinite,
+    _require_symmetric,
+    _scipy_sparse,
+)
+
+__all__ = ["Spring", "Structure"]
+
+PLAIN_KEYS = ("kind", "M", "K", "springs", "alpha", "beta", "f", "damping_stiffness", "allow_indefinite_stiffness")
+_CORE_ORDER = ("elastic_plastic", "bilinear", "bouc_wen")  # the core keeps springs by kind, in this order
+
+
+@dataclass(frozen=True)
+class Spring:
+    """A hysteretic spring on ``dofs``: ``(i, j)`` acts on d = q_j - q_i, ``(j,)`` on d = q_j (to the
+    ground), with a ``material`` of :mod:`raydamp.materials`."""
+
+    dofs: tuple
+    material: Material
+
+    def __post_init__(self):
+        object.__setattr__(self, "dofs", _dofs("dofs", self.dofs))
+        if not isinstance(self.material, Material):
+            raise ValueError(f"material: expected raydamp.materials.ElasticPlastic, Bilinear or BoucWen, got "
+                             f"{_short(self.material)}")
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"dofs": list(self.dofs), "material": self.material.to_dict()}
+
+
+def _dofs(where: str, value) -> tuple[int, ...]:
+    if isinstance(value, (int, np.integer)) and not isinstance(value, bool):
+        value = (value,)
+    if (not isinstance(value, (tuple, list)) or len(value) not in (1, 2)
+            or not all(isinstance(x, (int, np.integer)) and not isinstance(x, bool) for x in value)):
+        raise ValueError(f"{where}: must be (j,) (to the ground) or (i, j), coordinates as integers, got "
+                         f"{_short(value)}")
+    dofs = tuple(int(x) for x in value)
+    if len(dofs) == 2 and dofs[0] == dofs[1]:
+        raise ValueError(f"{where}: the two coordinates are the same ({dofs[0]})")
+    return dofs
+
+
+def _springs(value, n: int, mass_diagonal: np.ndarray) -> tuple[Spring, ...]:
+    if isinstance(value, (str, bytes, dict)) or not isinstance(value, Sequence):
+        raise ValueError(f"springs: must be a list of raydamp.Spring, got {_short(value)}")
+    out = []
+    for s, spring in enumerate(value):
+        if not isinstance(spring, Spring):
+            raise ValueError(f"springs[{s}]: expected a raydamp.Spring(dofs, material), got {_short(spring)}")
+        for c in spring.dofs:
+            if not 0 <= c < n:
+                raise ValueError(f"springs[{s}].dofs: coordinate {c} outside 0..{n - 1}")
+            if not mass_diagonal[c] > 0:
+                raise ValueError(f"springs[{s}].dofs: coordinate {c} has no mass (M[{c}, {c}] = "
+                                 f"{float(mass_diagonal[c])!r}); a spring must act on coordinates with mass")
+        out.append(spring)
+    return tuple(out)
+
+
+class Structure(LinearStructure):
+    """A structure with hysteretic springs, M q'' + (alpha M + beta K0) q' + K q + sum_s r_s sigma_s = f.
+
+    Parameters
+    ----------
+    M : mass matrix, as for :class:`raydamp.LinearStructure` (n x n, symmetric positive definite).
+    K : the linear stiffness besides the springs (a frame's elastic members, a P-Delta geometric stiffness);
+        None for none (a shear frame whose storeys are all springs).
+    springs : a list of :class:`raydamp.Spring` (dofs, material).
+    alpha, beta : Rayleigh coefficients of C = alpha M + beta K0, K0 = K + sum_s k_s r_s r_s^T.
+    f : constant load vector, or None.
+    damping_stiffness : "initial" (K0, the default and so far the only choice; see the module docstring).
+    allow_indefinite_stiffness : as for LinearStructure, checked on K0.
+
+    ``help(raydamp.systems.yielding)`` says how the springs are stepped and what the damping costs.
+    """
+
+    name = "structure"
+
+    def __init__(self, M, K=None, *, springs=(), alpha: float = 0.0, beta: float = 0.0, f=None,
+                 damping_stiffness: str = "initial", allow_indefinite_stiffness: bool = False):
+        alpha = real("alpha", alpha, nonnegative=True)
+        beta = real("beta", beta, nonnegative=True)
+        if damping_stiffness != "initial":
+            raise ValueError(f"damping_stiffness: only 'initial' (C = alpha M + beta K0) is offered, got "
+                             f"{_short(damping_stiffness)}")
+        mass = _read_matrix("M", M)
+        n = mass.shape[0]
+        sparse = _scipy_sparse()
+        stiffness = sparse.csc_matrix((n, n)) if K is None else _read_matrix("K", K)
+        if stiffness.shape != mass.shape:
+            raise ValueError(f"K must have the shape of M, {mass.shape}, got {stiffness.shape}")
+        _require_symmetric("M", mass)
+        springs = _springs(springs, n, np.asarray(mass.diagonal(), dtype=float))
+        load = self._load_vector(f, n)
+        lumped = _is_diagonal(mass)
+        object.__setattr__(self, "alpha", alpha)
+        object.__setattr__(self, "beta", beta)
+        object.__setattr__(self, "_mass", mass)
+        object.__setattr__(self, "_linear_stiffness", stiffness)
+        object.__setattr__(self, "springs", springs)
+        object.__setattr__(self, "damping_stiffness", damping_stiffness)
+        initial = stiffness + _spring_stiffness(springs, n)
+        initial.sum_duplicates()
+        object.__setattr__(self, "_stiffness", initial.tocsc())  # K0: frequencies, modes, spectral bound
+        object.__setattr__(self, "_load", load)
+        diagonal = np.asarray(mass.diagonal(), dtype=float)
+        try:
+            if not springs:  # a LinearStructure: the same compiled kind
+                core = (_core.LinearStructure_lumped(diagonal, stiffness, load, alpha, beta, dense_limit=_DENSE_LIMIT)
+                        if lumped else
+                        _core.LinearStructure_consistent(mass, stiffness, load, alpha, beta, dense_limit=_DENSE_LIMIT))
+            else:
+                columns = _core_columns(springs)
+                kind = _core.Structure_lumped if lumped else _core.Structure_consistent
+                core = kind(diagonal if lumped else mass, stiffness, *columns, load, alpha, beta,
+                            dense_limit=_DENSE_LIMIT)
+        except ValueError as error:
+            raise ValueError(str(error)) from None
+        object.__setattr__(self, "_core_model", core)
+        allow_indefinite_stiffness = flag("allow_indefinite_stiffness", allow_indefinite_stiffness)
+        object.__setattr__(self, "allow_indefinite_stiffness", allow_indefinite_stiffness)
+        if not allow_indefinite_stiffness:
+            _require_semidefinite(self._stiffness, mass, core.spectral_bound)
+        self._freeze()
+
+    @staticmethod
+    def _load_vector(f, n: int) -> np.ndarray:
+        if f is None:
+            return np.zeros(n)
+        try:
+            load = np.asarray(f)
+        except (TypeError, ValueError):
+            load = None
+        if load is None or load.dtype.kind not in "iuf":
+            raise ValueError(f"f must be None or a vector of {n} real numbers, got {_short(f)}")
+        load = load.astype(float).reshape(-1)
+        if load.shape != (n,):
+            raise ValueError(f"f must be None or a vector of length {n}")
+        if not np.isfinite(load).all():
+            raise ValueError("f must be finite")
+        return load
+
+    # -- what it is ---------------------------------------------------------
+    @property
+    def K(self):
+        """The linear stiffness besides the springs (scipy.sparse CSC); ``initial_stiffness`` is K0."""
+        return self._linear_stiffness.copy()
+
+    @property
+    def initial_stiffness(self):
+        """K0 = K + sum_s k_s r_s r_s^T (scipy.sparse CSC): what the damping and the frequencies use."""
+        return self._stiffness.copy()
+
+    def member_models(self, parameters, members: int) -> MemberModels:
+        """Members differ by initial state only when there are springs; without, as a LinearStructure."""
+        if self.springs and parameters:
+            raise ValueError(f"parameters: a Structure with springs takes no per-member parameters (got "
+                             f"{', '.join(sorted(parameters))}); build one Structure per member")
+        return super().member_models(parameters, members)
+
+    # -- the plain form -------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON form: ``{"kind": "structure", "M", "K", "springs": [{"dofs", "material"}], "alpha",
+        "beta", "f"}``; ``Structure.from_dict`` inverts it."""
+        from .structure import _coo_plain
+
+        mass = ({"diagonal": self._mass.diagonal().tolist()} if self.mass_kind == "lumped"
+                else {"coo": _coo_plain(self._mass)})
+        return {"kind": "structure", "M": mass,
+                "K": {"coo": _coo_plain(self._linear_stiffness)} if self._linear_stiffness.nnz else None,
+                "springs": [s.to_dict() for s in self.springs], "alpha": self.alpha, "beta": self.beta,
+                "f": self._load.tolist() if self._load.any() else None,
+                **({"allow_indefinite_stiffness": True} if self.allow_indefinite_stiffness else {})}
+
+    @classmethod
+    def from_dict(cls, data, *, files=None) -> Structure:
+        """Build from ``to_dict()``'s form; a bad field raises ValueError starting with its path
+        (``springs[2].material.fy``)."""
+        if not isinstance(data, dict):
+            raise ValueError("a structure must be an object with the keys " + ", ".join(PLAIN_KEYS))
+        unknown = [k for k in data if k not in PLAIN_KEYS]
+        if unknown:
+            raise ValueError(f"{unknown[0]}: unknown key (known: {', '.join(PLAIN_KEYS)})")
+        if data.get("kind") != "structure":
+            raise ValueError(f"kind: expected 'structure', got {data.get('kind')!r}")
+        if "M" not in data:
+            raise ValueError("M: missing")
+        mass = _matrix_from_plain("M", data["M"], None, files)
+        n = mass.shape[0]
+        stiffness = None if data.get("K") is None else _matrix_from_plain("K", data["K"], n, files)
+        springs_plain = data.get("springs", [])
+        if not isinstance(springs_plain, list):
+            raise ValueError("springs: must be a list of {\"dofs\": [...], \"material\": {...}}")
+        springs = []
+        for s, item in enumerate(springs_plain):
+            if not isinstance(item, dict) or set(item) != {"dofs", "material"}:
+                raise ValueError(f"springs[{s}]: must be an object with exactly the keys dofs, material")
+            dofs = _dofs(f"springs[{s}].dofs", item["dofs"])
+            springs.append(Spring(dofs, material_from_dict(item["material"], f"springs[{s}].material")))
+        f = data.get("f")
+        if f is not None and (not isinstance(f, list) or len(f) != n
+                              or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in f)):
+            raise ValueError(f"f: must be null or a list of {n} numbers")
+        return cls(mass, stiffness, springs=springs, alpha=data.get("alpha", 0.0), beta=data.get("beta", 0.0), f=f,
+                   damping_stiffness=data.get("damping_stiffness", "initial"),
+                   allow_indefinite_stiffness=data.get("allow_indefinite_stiffness", False) is True)
+
+    def replace(self, **changes) -> Structure:
+        known = {"M", "K", "springs", "alpha", "beta", "f", "damping_stiffness", "allow_indefinite_stiffness"}
+        unknown = set(changes) - known
+        if unknown:
+            raise ValueError(f"{sorted(unknown)[0]}: Structure has no such argument ({', '.join(sorted(known))})")
+        args = {"M": self._mass, "K": self._linear_stiffness, "springs": self.springs, "alpha": self.alpha,
+                "beta": self.beta, "f": self._load, "damping_stiffness": self.damping_stiffness,
+                "allow_indefinite_stiffness": self.allow_indefinite_stiffness, **changes}
+        return Structure(args.pop("M"), args.pop("K"), **args)
+
+    def __repr__(self) -> str:
+        return (f"Structure(n={self.dim}, mass={self.mass_kind}, springs={len(self.springs)}, "
+                f"alpha={self.alpha!r}, beta={self.beta!r})")
+
+
+def _spring_stiffness(springs: Sequence[Spring], n: int):
+    """sum_s k_s r_s r_s^T as a scipy.sparse matrix."""
+    sparse = _scipy_sparse()
+    rows, cols, values = [], [], []
+    for spring in springs:
+        k = spring.material.k
+        if len(spring.dofs) == 1:
+            rows.append(spring.dofs[0]), cols.append(spring.dofs[0]), values.append(k)
+        else:
+            i, j = spring.dofs
+            rows += [i, j, i, j]
+            cols += [i, j, j, i]
+            values += [k, k, -k, -k]
+    return sparse.csc_matrix((values, (rows, cols)), shape=(n, n))
+
+
+def _core_columns(springs: Sequence[Spring]) -> tuple[list, list, list, list]:
+    """(kinds, i, j, parameters) as the core takes them (i = -1: to the ground)."""
+    kinds, first, second, parameters = [], [], [], []
+    for spring in springs:
+        kinds.append(spring.material.kind)
+        first.append(spring.dofs[0] if len(spring.dofs) == 2 else -1)
+        second.append(spring.dofs[-1])
+        parameters.append(spring.material.core_parameters())
+    return kinds, first, second, parameters
+
+
+def core_order(springs: Sequence[Spring]) -> np.ndarray:
+    """The index of each spring in the core's order (springs grouped by kind, stable within a kind)."""
+    order = sorted(range(len(springs)), key=lambda s: _CORE_ORDER.index(springs[s].material.kind))
+    return np.asarray(order, dtype=np.int64)
