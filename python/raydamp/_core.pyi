@@ -8,7 +8,7 @@ import numpy.typing
 from raydamp import ChebyshevDegreeError
 import scipy.sparse
 import typing
-__all__: list[str] = ['CancelToken', 'Chain', 'ChebyshevDegreeError', 'DEFAULT_DIVERGENCE', 'DampedPendulum', 'ElasticPendulum', 'Kepler', 'LinearStructure_consistent', 'LinearStructure_lumped', 'Load', 'MAX_AMPLIFICATION', 'STATUSES', 'STRUCTURE_DENSE_LIMIT', 'Structure_consistent', 'Structure_lumped', 'System_dense_constant', 'System_dense_dampers', 'System_dense_isotropic', 'System_scalar_constant', 'System_scalar_dampers', 'System_scalar_isotropic', 'compositions', 'define_tableau', 'methods', 'models', 'resolve', 'resolve_composition', 'save_grid', 'save_rows', 'splitting', 'tableaux']
+__all__: list[str] = ['CancelToken', 'Chain', 'ChebyshevDegreeError', 'DEFAULT_DIVERGENCE', 'DampedPendulum', 'ElasticPendulum', 'Kepler', 'LinearStructure_consistent', 'LinearStructure_lumped', 'Load', 'MAX_AMPLIFICATION', 'STATUSES', 'STRUCTURE_DENSE_LIMIT', 'Structure_consistent', 'Structure_lumped', 'System_dense_constant', 'System_dense_dampers', 'System_dense_isotropic', 'System_scalar_constant', 'System_scalar_dampers', 'System_scalar_isotropic', 'compositions', 'define_tableau', 'elastic_peaks', 'methods', 'models', 'resolve', 'resolve_composition', 'save_grid', 'save_rows', 'splitting', 'tableaux']
 class Load:
     def __init__(self, n: typing.SupportsInt | typing.SupportsIndex, terms: list, owners: typing.Any = None) -> None:
         ...
@@ -703,6 +703,8 @@ class Kepler:
 def compositions() -> list:
     ...
 def define_tableau(arg0: collections.abc.Sequence[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex]], arg1: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], arg2: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex]) -> dict:
+    ...
+def elastic_peaks(omega: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], zeta: typing.SupportsFloat | typing.SupportsIndex, times: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], accel: typing.Annotated[numpy.typing.ArrayLike, numpy.float64]) -> numpy.typing.NDArray[numpy.float64]:
     ...
 def methods() -> list:
     ...
