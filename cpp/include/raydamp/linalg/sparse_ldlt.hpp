@@ -1,7 +1,7 @@
 // A = P^T L D L^T P of a sparse symmetric matrix (transpose, not conjugate
 // transpose): real symmetric positive definite, or complex symmetric with a
 // positive definite real part (the stage matrix of the 2-stage Gauss method,
-// implicit/linear_gauss.hpp), where elimination without pivoting is stable.
+// implicit/linear_implicit_step.hpp), where elimination without pivoting is stable.
 // Eigen's SimplicialLDLT and CHOLMOD factor Hermitian matrices (L D L^H), which a
 // complex symmetric matrix is not; this is the up-looking algorithm of Davis'
 // LDL (T. A. Davis, "Algorithm 849: a concise sparse Cholesky factorization
