@@ -1,10 +1,6 @@
-"""Request dependencies: the objects the lifespan put on app.state, overridable in tests.
-
-They are coroutines on purpose: FastAPI runs a plain-function dependency in its thread pool,
-and a hop there and back for each of them (three per submission) cost more than the
-submission's own work under load. That is right only for dependencies that do no blocking
-work, as these (they read app.state): one that queried SQLite would have to stay a plain
-function, and tests/service/test_dependencies.py would have to name it as the exception."""
+"""Request dependencies: the objects the lifespan put on app.state, overridable in tests. Coroutines, as they do
+no blocking work: FastAPI would run a plain function in its thread pool, a hop costing more than the work
+(tests/service/test_dependencies.py names the exceptions)."""
 
 from __future__ import annotations
 
@@ -15,28 +11,25 @@ from fastapi import Depends, Request
 from ..checks.pool import CheckPool
 from ..config import Settings
 from ..kinds.jobs import JobStore
+from ..kinds.sweeps import SweepStore
 from ..tasks.runner import Runner
 
-__all__ = ["SettingsDep", "StoreDep", "RunnerDep", "ChecksDep", "get_settings", "get_store", "get_runner", "get_checks"]
+__all__ = ["SettingsDep", "StoreDep", "RunnerDep", "ChecksDep", "SweepsDep", "SweepRunnerDep"]
 
 
-async def get_settings(request: Request) -> Settings:
-    return request.app.state.settings
+def _state(name: str):
+    """The dependency answering app.state.<name>."""
+
+    async def dependency(request: Request):
+        return getattr(request.app.state, name)
+
+    dependency.__name__ = dependency.__qualname__ = f"get_{name}"
+    return dependency
 
 
-async def get_store(request: Request) -> JobStore:
-    return request.app.state.store
-
-
-async def get_runner(request: Request) -> Runner:
-    return request.app.state.runner
-
-
-async def get_checks(request: Request) -> CheckPool:
-    return request.app.state.checks
-
-
-SettingsDep = Annotated[Settings, Depends(get_settings)]
-StoreDep = Annotated[JobStore, Depends(get_store)]
-RunnerDep = Annotated[Runner, Depends(get_runner)]
-ChecksDep = Annotated[CheckPool, Depends(get_checks)]
+SettingsDep = Annotated[Settings, Depends(_state("settings"))]
+StoreDep = Annotated[JobStore, Depends(_state("store"))]
+RunnerDep = Annotated[Runner, Depends(_state("runner"))]
+ChecksDep = Annotated[CheckPool, Depends(_state("checks"))]
+SweepsDep = Annotated[SweepStore, Depends(_state("sweeps"))]
+SweepRunnerDep = Annotated[Runner, Depends(_state("sweep_runner"))]
