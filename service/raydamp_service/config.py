@@ -55,7 +55,8 @@ class Settings(BaseSettings):
     max_queued: int = Field(1000, ge=1, description="queued jobs beyond this get 429 with Retry-After")
     retry_after_seconds: int = Field(5, ge=1, description="the Retry-After of a 429")
     max_steps: int = Field(10**8, ge=1)
-    max_saved_points: int = Field(10**6, ge=2, description="n_steps // save_every + 2 at most")
+    max_saved_points: int = Field(10**6, ge=2, description=(
+        "saved points of a job at most: step 0, every save_every-th step and the last"))
     max_dim: int = Field(1000, ge=1, le=10_000,  # schemas.MAX_VECTOR
                          description="longest initial_state.q / p or vector parameter accepted")
     # All of a job's stored arrays; SQLite refuses blobs above 1e9 bytes.

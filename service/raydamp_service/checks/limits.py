@@ -10,6 +10,7 @@ from typing import Any
 import raydamp
 from raydamp.jobs import JobCall, JobError, JobSpec, SweepSpec, build_job, error_at, planned_steps
 from raydamp.run.integrate import row_bytes
+from raydamp.run.save_grid import save_rows
 from raydamp.run.sweep import GridTooLarge
 
 from ..config import Settings
@@ -67,10 +68,13 @@ def check_spec(spec: JobSpec, settings: Settings, files=None) -> RaydampCall:
         field = "n_steps" if spec.n_steps is not None else "t_end"
         raise JobError((field,), f"{field}: the run would take {steps} steps; this service runs at most "
                        f"max_steps = {settings.max_steps} (raise {spec.h_key} or shorten the run)")
-    saved_points = steps // spec.save_every + 2
+    try:
+        saved_points = save_rows(steps, spec.save_every)
+    except ValueError as error:  # past integrate's range: the error names save_every
+        raise error_at(spec, error) from None
     if saved_points > settings.max_saved_points:
-        raise JobError(("save_every",), f"save_every: {saved_points} saved points (n_steps // save_every + 2) "
-                       f"exceed max_saved_points = {settings.max_saved_points}; raise save_every")
+        raise JobError(("save_every",), f"save_every: {saved_points} saved points exceed max_saved_points = "
+                       f"{settings.max_saved_points}; raise save_every")
     call = build_call(spec, files)
     stored = saved_points * row_bytes(call.model, spec.save_dofs, work=spec.work, load=call.call.options.get("load"))
     if stored > settings.max_trajectory_bytes:
