@@ -17,8 +17,7 @@ from ..checks.uploads import RecordFileInfo, check_upload
 from ..edge.guard import file_too_large
 from ..kinds.files import FileRecord
 from ..schemas import FileInfo, FileList
-from .deps import SettingsDep, StoreDep
-from .tasks import check_limit, checks_busy
+from .tasks import SettingsDep, StoreDep, check_limit, checks_busy
 
 router = APIRouter(prefix="/v1/files", tags=["files"])
 

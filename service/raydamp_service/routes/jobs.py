@@ -32,8 +32,7 @@ from ..tasks.runner import Runner
 from ..tasks.store import FINAL_STATUSES
 from ..trajectories.downloads import draw_plot, write_file
 from ..trajectories.stream import FetchLease, Selection, read_arrays, trajectory_chunks
-from .deps import RunnerDep, SettingsDep, StoreDep
-from .tasks import Tasks, check_limit, checks_busy, invalid
+from .tasks import RunnerDep, SettingsDep, StoreDep, Tasks, check_limit, checks_busy, invalid
 
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"], route_class=UniqueKeysRoute)
 

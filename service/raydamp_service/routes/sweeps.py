@@ -14,9 +14,8 @@ from ..edge.http import UniqueKeysRoute
 from ..kinds.sweeps import SweepRecord
 from ..schemas import JobStatus, SweepCreated, SweepList, SweepListItem, SweepSpec, SweepView
 from ..tasks.runner import Runner
-from .deps import ChecksDep, SettingsDep, SweepRunnerDep, SweepsDep
 from .jobs import with_seed
-from .tasks import Tasks, check_limit, checks_busy, invalid
+from .tasks import ChecksDep, SettingsDep, SweepRunnerDep, SweepsDep, Tasks, check_limit, checks_busy, invalid
 
 router = APIRouter(prefix="/v1/sweeps", tags=["sweeps"], route_class=UniqueKeysRoute)
 

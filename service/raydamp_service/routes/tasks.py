@@ -1,20 +1,45 @@
-"""What every kind of task's routes share (jobs, sweeps): submit (a 422 naming the field, a 429 when the queue is
-full, the Location), list's limit, 404, cancel (409 once finished) and delete (204 once finished, else a cancel)."""
+"""What the routes share. Their dependencies: the objects the lifespan put on app.state, overridable in tests, as
+coroutines (FastAPI runs a plain function in its thread pool, a hop costing more than the work:
+tests/service/test_dependencies.py). And every kind of task's lifecycle (jobs, sweeps): submit (a 422 naming the
+field, a 429 when the queue is full, the Location), list's limit, 404, cancel (409 once finished) and delete (204
+once finished, else a cancel)."""
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import Annotated, Any
 
-from fastapi import HTTPException, Request, Response
+from fastapi import Depends, HTTPException, Request, Response
 from fastapi.exceptions import RequestValidationError
 
 from ..checks.limits import JobError
+from ..checks.pool import CheckPool
 from ..config import Settings
+from ..kinds.jobs import JobStore
+from ..kinds.sweeps import SweepStore
 from ..tasks.runner import Runner
 from ..tasks.store import FINAL_STATUSES, FileGone, TaskStore
 
-__all__ = ["Tasks", "invalid", "check_limit", "checks_busy"]
+__all__ = ["Tasks", "invalid", "check_limit", "checks_busy", "SettingsDep", "StoreDep", "RunnerDep", "ChecksDep",
+           "SweepsDep", "SweepRunnerDep"]
+
+
+def _state(name: str):
+    """The dependency answering app.state.<name>."""
+
+    async def dependency(request: Request):
+        return getattr(request.app.state, name)
+
+    dependency.__name__ = dependency.__qualname__ = f"get_{name}"
+    return dependency
+
+
+SettingsDep = Annotated[Settings, Depends(_state("settings"))]
+StoreDep = Annotated[JobStore, Depends(_state("store"))]
+RunnerDep = Annotated[Runner, Depends(_state("runner"))]
+ChecksDep = Annotated[CheckPool, Depends(_state("checks"))]
+SweepsDep = Annotated[SweepStore, Depends(_state("sweeps"))]
+SweepRunnerDep = Annotated[Runner, Depends(_state("sweep_runner"))]
 
 
 def invalid(error: JobError, body: Any = None) -> RequestValidationError:
