@@ -212,17 +212,16 @@ struct is_linear_system<Model, std::void_t<decltype(Model::linear_system)>>
 template <class Model, class F>
 decltype(auto) with_method_for(const std::string& name, F&& f) {
   const MethodEntry& entry = method_entry(name);
-  if (entry.linear_implicit) {
-    if constexpr (is_linear_system<Model>::value) {
-      return detail::with_table<F, ImplicitMidpoint, Gauss4>(entry.table, f);
-    } else {
-      throw std::invalid_argument("method: '" + name + "' is an implicit step of a linear structure's whole system "
-                                  "M q'' + C q' + K q = f, and runs only a raydamp.LinearStructure; for this model "
-                                  "use 3s, 2s or rks");
-    }
+  if (!entry.linear_implicit)
+    return detail::with_table<F, StormerVerlet, ThreeTermSplitting, Baoab, TwoTermSplitting, RungeKuttaSplitting,
+                              RungeKuttaSplittingB, RungeKutta>(entry.table, f);
+  if constexpr (is_linear_system<Model>::value) {
+    return detail::with_table<F, Gauss4, ImplicitMidpoint>(entry.table, f);
+  } else {
+    throw std::invalid_argument("method: '" + name + "' is an implicit step of a linear structure's whole system "
+                                "M q'' + C q' + K q = f, and runs only a raydamp.LinearStructure; for this model "
+                                "use 3s, 2s or rks");
   }
-  return detail::with_table<F, StormerVerlet, ThreeTermSplitting, Baoab, TwoTermSplitting, RungeKuttaSplitting,
-                            RungeKuttaSplittingB, RungeKutta>(entry.table, f);
 }
 
 // with_method_for on no model: the explicit tables, for a caller that reads a table or runs a
