@@ -21,7 +21,7 @@
 #include <unsupported/Eigen/SparseExtra>
 #include <vector>
 
-#include "raydamp/implicit/sparse_ldlt.hpp"
+#include "raydamp/linalg/sparse_ldlt.hpp"
 
 using Sparse = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
 using Clock = std::chrono::steady_clock;

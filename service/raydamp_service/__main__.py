@@ -1,8 +1,5 @@
-"""`python -m raydamp_service [--host H] [--port P]`: serve the job API with uvicorn.
-
-`raydamp serve [--host H] [--port P]` is the same, reached from the library's command line through the
-entry point ``serve_command`` (group "raydamp.commands" in pyproject.toml): the library never imports
-the service."""
+"""`python -m raydamp_service [--host H] [--port P]`: serve the job API with uvicorn. `raydamp serve` reaches it
+through the entry point ``serve_command`` (group "raydamp.commands"): the library never imports the service."""
 
 from __future__ import annotations
 
@@ -27,26 +24,18 @@ def _refuse(message: str) -> None:
     sys.exit(2)
 
 
-def _arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
-    parser.add_argument("--host", help="address to bind (default: RAYDAMP_HOST or 127.0.0.1)")
-    parser.add_argument("--port", type=int, help="port to bind (default: RAYDAMP_PORT or 8000)")
-    parser.add_argument("--workers", type=int, help="runs executed at once (default: RAYDAMP_WORKERS or 2)")
-    return parser
-
-
 def serve_command(argv: list[str]) -> int:
-    """`raydamp serve [--host H] [--port P] [--workers N]` (the library's command line hands over what follows
-    `serve`); the same options as python -m raydamp_service (--workers was missing)."""
-    parser = argparse.ArgumentParser(prog="raydamp serve",
-                                     description="run the job service (same as python -m raydamp_service)")
-    main([arg for name, value in vars(_arguments(parser).parse_args(argv)).items() if value is not None
-          for arg in (f"--{name}", str(value))])
+    """`raydamp serve [--host H] [--port P] [--workers N]`: what follows `serve` on the library's command line."""
+    main(argv, prog="raydamp serve")
     return 0
 
 
-def main(argv: list[str] | None = None) -> None:
-    args = _arguments(argparse.ArgumentParser(prog="raydamp-service", description="Serve the raydamp job API.")
-                      ).parse_args(argv)
+def main(argv: list[str] | None = None, prog: str = "raydamp-service") -> None:
+    parser = argparse.ArgumentParser(prog=prog, description="Serve the raydamp job API.")
+    parser.add_argument("--host", help="address to bind (default: RAYDAMP_HOST or 127.0.0.1)")
+    parser.add_argument("--port", type=int, help="port to bind (default: RAYDAMP_PORT or 8000)")
+    parser.add_argument("--workers", type=int, help="runs executed at once (default: RAYDAMP_WORKERS or 2)")
+    args = parser.parse_args(argv)
     # Command-line values win over the environment; absent ones fall back to it.
     overrides = {name: value for name, value in vars(args).items() if value is not None}
     try:
@@ -58,8 +47,7 @@ def main(argv: list[str] | None = None) -> None:
         _refuse(f"binding to {settings.host} lets other machines submit, read and cancel jobs: set RAYDAMP_TOKEN "
                 "to a secret that clients send as 'Authorization: Bearer <token>', or bind 127.0.0.1")
     try:
-        # First, and kept (the lifespan counts a second hold): a second service opening the store through a
-        # hard link would write through a WAL of its own.
+        # First, and kept (the lifespan counts a second hold), to refuse with one line.
         lock.hold(settings.db)
     except lock.DatabaseInUse as error:
         _refuse(str(error))
@@ -71,8 +59,7 @@ def main(argv: list[str] | None = None) -> None:
     except StoreUnavailable as error:
         _refuse(str(error))
     store.close()
-    # Threads serialising trajectories hand the GIL back every millisecond rather than every five, so
-    # the event loop (which answers /healthz and accepts submissions) is not kept waiting behind them.
+    # Threads serialising trajectories hand the GIL back every millisecond, not every five: the event loop waits less.
     sys.setswitchinterval(0.001)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     # One process only: the job queue and the cancel tokens live in it.

@@ -27,7 +27,6 @@ from .tasks.store import Database
 
 __all__ = ["ROUTERS", "create_app"]
 
-# Every router the application serves, in the order they are included.
 ROUTERS = (jobs.router, sweeps.router, files.router, catalogue.router, health.router, page.router)
 
 
@@ -43,9 +42,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         finally:
             lock.release(settings.db)
 
-    # /docs is ours (routes/page.py), with Swagger UI served locally; ReDoc would load from a CDN.
-    # redirect_slashes off: "/v1/jobs/" was a 307 to a Location built from the Host header (an open redirect with
-    # trusted_hosts "*", and plain http behind a TLS proxy); the routes have no trailing slash, so it is a 404.
+    # /docs is ours (routes/page.py: no CDN). No redirect_slashes: its Location is built from the Host header.
     app = FastAPI(title="raydamp", version=raydamp.__version__, lifespan=lifespan, docs_url=None, redoc_url=None,
                   redirect_slashes=False,
                   summary="Damped Hamiltonian integrations as jobs: submit, poll, fetch the trajectory.")
@@ -64,11 +61,10 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
 @asynccontextmanager
 async def _serving(app: FastAPI, settings: Settings) -> AsyncIterator[None]:
-    database = Database(settings.db)  # one file, one table per kind of task, one runner per kind
+    database = Database(settings.db)
     store, sweeps = JobStore(database), SweepStore(database)
     store.open()
     sweeps.open()
-    # The check processes compile users' systems, for the submissions and for the runs of jobs and sweeps.
     app.state.checks = checks = CheckPool(settings)
     runner = Runner(store, settings, store.work(settings, checks))
     sweep_runner = Runner(sweeps, settings, sweeps.work(settings, checks))
@@ -77,9 +73,8 @@ async def _serving(app: FastAPI, settings: Settings) -> AsyncIterator[None]:
     checks.start()
     runner.start()
     sweep_runner.start()
-    # Everything built so far (modules, FastAPI's routes and schemas, raydamp's catalogue) lives as
-    # long as the process: out of the collector's sight, a full collection walks only what requests
-    # allocate (it walked ~10^5 objects, a pause in the POST latency's tail).
+    # What is built so far lives as long as the process: out of the collector's sight, a full collection
+    # walks only what requests allocate.
     gc.freeze()
     try:
         yield

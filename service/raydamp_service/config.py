@@ -35,67 +35,63 @@ class Settings(BaseSettings):
     port: int = Field(8000, ge=0, le=65535)
     workers: int = Field(2, ge=1, le=64, description="runs executed at once")
 
-    token: SecretStr | None = Field(None, description="when set, every /v1 request needs Authorization: Bearer "
-                                                      "<token>; required to bind a non-loopback address")
+    token: SecretStr | None = Field(None, description=(
+        "when set, every /v1 request needs Authorization: Bearer <token>; required to bind a non-loopback address"))
     trusted_hosts: Annotated[list[str], NoDecode] = Field(
-        list(LOOPBACK_NAMES), min_length=1, description="Host header names accepted (comma-separated; '*' accepts "
-                                                        "any)")
+        list(LOOPBACK_NAMES), min_length=1, description="Host header names accepted (comma-separated; '*': any)")
 
-    # Bounds on what one job may ask for, so that no request can exhaust memory or disk.
+    # Bounds on what one request or job may ask for, so that none can exhaust memory or disk.
     max_body_bytes: int = Field(2 * 2**20, ge=1024, description="a larger request body gets 413 before parsing")
     large_body_bytes: int = Field(256 * 2**10, ge=1, description="a request body above this is large")
     max_large_bodies: int = Field(2, ge=1, description="large request bodies handled at once; more get 429")
-    header_seconds: float = Field(10.0, gt=0, description="a connection whose request headers have not all arrived "
-                                                          "this long after it opened (or after its previous "
-                                                          "response) is closed")
-    body_seconds: float = Field(120.0, gt=0, description="a request body must arrive within this many seconds of "
-                                                         "the request's headers (plus its bytes at "
-                                                         "min_body_bytes_per_second), or the request gets 408")
-    min_body_bytes_per_second: int = Field(64 * 2**10, ge=0, description="each byte of a body received extends its "
-                                           "deadline by 1 / this many seconds (0: body_seconds alone)")
+    header_seconds: float = Field(10.0, gt=0, description=(
+        "a connection whose request headers have not all arrived this long after it opened (or after its previous "
+        "response) is closed"))
+    body_seconds: float = Field(120.0, gt=0, description=(
+        "a request body must arrive within this many seconds of the request's headers (plus its bytes at "
+        "min_body_bytes_per_second), or the request gets 408"))
+    min_body_bytes_per_second: int = Field(64 * 2**10, ge=0, description=(
+        "each byte of a body received extends its deadline by 1 / this many seconds (0: body_seconds alone)"))
     max_queued: int = Field(1000, ge=1, description="queued jobs beyond this get 429 with Retry-After")
     retry_after_seconds: int = Field(5, ge=1, description="the Retry-After of a 429")
     max_steps: int = Field(10**8, ge=1)
-    max_saved_points: int = Field(10**6, ge=2, description="n_steps // save_every + 2 at most")
+    max_saved_points: int = Field(10**6, ge=2, description=(
+        "saved points of a job at most: step 0, every save_every-th step and the last"))
     max_dim: int = Field(1000, ge=1, le=10_000,  # schemas.MAX_VECTOR
                          description="longest initial_state.q / p or vector parameter accepted")
-    # All of a job's stored arrays (t, q, p, energy, momentum, work); SQLite refuses blobs above 1e9 bytes.
-    max_trajectory_bytes: int = Field(512 * 2**20, ge=1, le=900_000_000,
-                                      description="a job whose stored trajectory would be larger gets 422 on "
-                                                  "save_every (raise it, or save fewer coordinates: save_dofs)")
+    # All of a job's stored arrays; SQLite refuses blobs above 1e9 bytes.
+    max_trajectory_bytes: int = Field(512 * 2**20, ge=1, le=900_000_000, description=(
+        "a job whose stored trajectory would be larger gets 422 on save_every (raise it, or save fewer "
+        "coordinates: save_dofs)"))
     max_list_limit: int = Field(1000, ge=1)
 
     # Linear structures: matrices inline as COO triplets up to max_structure_nnz entries each (the schema
-    # caps them at 10^6, raydamp's own limit); larger ones are uploaded Matrix Market files (POST /v1/files).
+    # caps them at raydamp's own limit); larger ones are uploaded Matrix Market files (POST /v1/files).
     max_structure_nnz: int = Field(100_000, ge=1, le=1_000_000,  # schemas.MAX_COO_ENTRIES
                                    description="stored entries of one COO matrix in a job at most")
-    max_structure_dim: int = Field(100_000, ge=1, le=10**7,  # schemas.MAX_STRUCTURE_DIM
-                                   description="coordinates of a linear structure at most (one started at rest "
-                                               "may exceed max_dim; its M factorisation is the worker's memory)")
-    max_file_bytes: int = Field(64 * 2**20, ge=1024, description="an upload larger than this gets 413, counted as it "
-                                                                 "arrives")
-    max_stored_file_bytes: int = Field(2**30, ge=0, description="uploaded files kept at most, in all; past it an "
-                                                                "upload gets 507 (delete files first); 0: no bound")
+    max_structure_dim: int = Field(100_000, ge=1, le=10**7, description=(  # schemas.MAX_STRUCTURE_DIM
+        "coordinates of a linear structure at most (one started at rest may exceed max_dim)"))
+    max_file_bytes: int = Field(64 * 2**20, ge=1024, description="a larger upload gets 413, counted as it arrives")
+    max_stored_file_bytes: int = Field(2**30, ge=0, description=(
+        "uploaded files kept at most, in all; past it an upload gets 507 (delete files first); 0: no bound"))
 
-    # Trajectory fetches, files and plots read the stored arrays in slices; those that select more than
-    # large_fetch_bytes of them (float64, all arrays) are held to a few at once.
-    large_fetch_bytes: int = Field(16 * 2**20, ge=1, description="stored bytes selected above which a fetch, file "
-                                                                 "or plot is large")
+    # Trajectory fetches, files and plots read the stored arrays in slices; few large ones at once.
+    large_fetch_bytes: int = Field(16 * 2**20, ge=1, description=(
+        "stored bytes selected above which a fetch, file or plot is large"))
     max_large_fetches: int = Field(2, ge=1, description="large trajectory fetches served at once; more get 429")
-    send_timeout_seconds: float = Field(60.0, gt=0, description="a trajectory or file response whose client reads "
-                                                                "nothing for this long is dropped, with its slot")
-    min_send_bytes_per_second: int = Field(128 * 2**10, ge=0, description="a trajectory, file or sweep result "
-                                           "whose client reads slower than this on average (after the first "
-                                           "send_timeout_seconds) is dropped, with its slot; 0: no floor")
-    max_plot_bytes: int = Field(16 * 2**20, ge=2**16, description="stored bytes a plot reads at most (its points "
-                                                                  "decimated evenly to fit)")
+    send_timeout_seconds: float = Field(60.0, gt=0, description=(
+        "a trajectory or file response whose client reads nothing for this long is dropped, with its slot"))
+    min_send_bytes_per_second: int = Field(128 * 2**10, ge=0, description=(
+        "a trajectory, file or sweep result whose client reads slower than this on average (after the first "
+        "send_timeout_seconds) is dropped, with its slot; 0: no floor"))
+    max_plot_bytes: int = Field(16 * 2**20, ge=2**16, description=(
+        "stored bytes a plot reads at most (its points decimated evenly to fit)"))
 
-    # The heavy checks (a system's compile and trial step, an upload's parse, a plot) run in worker processes
-    # (checks/pool.py), each task within a CPU and a memory budget and a wall-clock ceiling of 4 CPU budgets.
+    # The heavy checks run in worker processes (checks/pool.py), each within a CPU and a memory budget.
     check_workers: int = Field(2, ge=1, le=16, description="processes that check submitted systems")
     check_seconds: float = Field(10.0, gt=0, description="CPU time budget of one check")
-    check_memory_bytes: int = Field(2**30, ge=2**26, description="memory budget of one check: address space a "
-                                                                 "check process may add to what it holds at start")
+    check_memory_bytes: int = Field(2**30, ge=2**26, description=(
+        "memory budget of one check: address space a check process may add to what it holds at start"))
     max_pending_checks: int = Field(8, ge=1, description="checks running or waiting for a process; more get 429")
 
     # Retention: finished jobs (oldest first) are removed past any of these; 0 means no bound.
@@ -104,10 +100,9 @@ class Settings(BaseSettings):
     retain_bytes: int = Field(4 * 2**30, ge=0, description="trajectory bytes kept at most")
     retention_interval_seconds: float = Field(60.0, gt=0, description="how often the retention pass runs")
 
-    # Sweeps (POST /v1/sweeps) run through raydamp.sweep on a Dask client: a scheduler's address, or
-    # by default a LocalCluster inside this process (threads; the compiled runs release the GIL).
-    dask_scheduler: str | None = Field(None, description="a Dask scheduler's address (tcp://host:8786) for "
-                                                         "sweeps; unset: an in-process LocalCluster")
+    # Sweeps run through raydamp.sweep on a Dask client (the compiled runs release the GIL).
+    dask_scheduler: str | None = Field(None, description=(
+        "a Dask scheduler's address (tcp://host:8786) for sweeps; unset: an in-process LocalCluster"))
     sweep_threads: int = Field(2, ge=1, le=64, description="threads of the in-process LocalCluster")
     max_sweep_members: int = Field(100_000, ge=1, description="grid points of one sweep at most")
     max_sweep_steps: int = Field(10**10, ge=1, description="members x steps of one sweep at most")
@@ -115,11 +110,8 @@ class Settings(BaseSettings):
     max_queued_sweeps: int = Field(20, ge=1, description="queued sweeps beyond this get 429 with Retry-After")
 
     access_log: bool = Field(True, description="log every request (method, path, status) on stdout")
-
-    # How often a run's progress is also written to the database (GET reads memory first).
-    progress_save_seconds: float = Field(1.0, gt=0)
-    # How long shutdown waits for interrupted runs to hand their jobs back to the queue.
-    shutdown_seconds: float = Field(10.0, gt=0)
+    progress_save_seconds: float = Field(1.0, gt=0, description="how often a run's progress is saved to the database")
+    shutdown_seconds: float = Field(10.0, gt=0, description="how long shutdown waits for runs to hand their jobs back")
 
     @field_validator("trusted_hosts", mode="before")
     @classmethod

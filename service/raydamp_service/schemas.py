@@ -23,9 +23,8 @@ JobStatus = Literal["queued", "running", "completed", "failed", "cancelled"]
 
 
 class _Stored:
-    """A spec as the store holds it: validated once, at submission, and kept as the model's normalised JSON
-    (model_dump), so a view sends it as it is rather than validating it again; described in /openapi.json
-    as the model itself."""
+    """A spec as the store holds it: validated at submission and kept as the model's normalised JSON, so a view
+    sends it as it is; described in /openapi.json as the model itself."""
 
     def __init__(self, model: type[BaseModel]):
         self.model = model
@@ -42,40 +41,48 @@ def _spec_as_model(schema: dict[str, Any]) -> None:
     schema["properties"]["spec"].pop("title", None)
 
 
-# ---- output -----------------------------------------------------------------------------------
-
 class JobCreated(BaseModel):
     id: str
     status: JobStatus
 
 
-class JobView(BaseModel):
+class _TaskView(BaseModel):
+    """The lifecycle's fields, the same in a job's and a sweep's view."""
+
     model_config = ConfigDict(json_schema_extra=_spec_as_model)
 
     id: str
     status: JobStatus
-    progress: float = Field(description="fraction of the steps done, 0 to 1")
-    attempts: int = Field(description="runs started; above 1 when a restart re-ran the job")
+    progress: float
+    attempts: int = Field(description="runs started; above 1 when a restart re-ran it")
     cancel_requested: bool
-    error: str | None = Field(description="why a failed job failed (for a blow-up, the solver's message)")
-    failed_step: int | None = Field(description="the first step whose result was not finite")
-    summary: JobSummary | None
-    trajectory: str | None = Field(description="URL of the saved points, once there are any")
-    spec: Annotated[dict[str, Any], _Stored(JobSpec)]
+    error: str | None
     created_at: datetime
     started_at: datetime | None
     finished_at: datetime | None
 
 
-class JobListItem(BaseModel):
+class JobView(_TaskView):
+    progress: float = Field(description="fraction of the steps done, 0 to 1")
+    error: str | None = Field(description="why a failed job failed (for a blow-up, the solver's message)")
+    failed_step: int | None = Field(description="the first step whose result was not finite")
+    summary: JobSummary | None
+    trajectory: str | None = Field(description="URL of the saved points, once there are any")
+    spec: Annotated[dict[str, Any], _Stored(JobSpec)]
+
+
+class _ListItem(BaseModel):
     id: str
     status: JobStatus
     progress: float
-    model: str
-    method: str
     created_at: datetime
     finished_at: datetime | None
     url: str
+
+
+class JobListItem(_ListItem):
+    model: str
+    method: str
 
 
 class JobList(BaseModel):
@@ -100,9 +107,8 @@ class Trajectory(BaseModel):
 
 
 class FileInfo(BaseModel):
-    """An uploaded file: a matrix (Matrix Market, for {"file": id} in place of a structure's M or K) or a
-    record (PEER .AT2, text columns t, value, or .npy: for a load's or ground motion's {"file": {"id": id}};
-    one column of values also serves as an initial state's {"file": id})."""
+    """An uploaded file: a matrix (Matrix Market: a structure's M or K, {"file": id}) or a record (PEER .AT2, text
+    columns t, value, .npy: a load's or ground motion's {"file": {"id": id}}, or an initial state's q or p)."""
 
     id: str
     name: str = Field(description="the file name the client sent")
@@ -163,41 +169,22 @@ class Health(BaseModel):
     workers: int
 
 
-class SweepCreated(BaseModel):
-    id: str
-    status: JobStatus
+class SweepCreated(JobCreated):
     members: int
 
 
-class SweepView(BaseModel):
-    model_config = ConfigDict(json_schema_extra=_spec_as_model)
-
-    id: str
-    status: JobStatus
+class SweepView(_TaskView):
     members: int
     members_done: int = Field(description="members whose chunk has finished")
-    progress: float
-    cancel_requested: bool
-    attempts: int
-    error: str | None
     outcomes: dict[str, int] | None = Field(description="members per status (completed, non_finite, cancelled, "
                                                         "...), once finished")
     result: str | None = Field(description="URL of the NetCDF result, once stored")
     result_bytes: int | None
     spec: Annotated[dict[str, Any], _Stored(SweepSpec)]
-    created_at: datetime
-    started_at: datetime | None
-    finished_at: datetime | None
 
 
-class SweepListItem(BaseModel):
-    id: str
-    status: JobStatus
+class SweepListItem(_ListItem):
     members: int
-    progress: float
-    created_at: datetime
-    finished_at: datetime | None
-    url: str
 
 
 class SweepList(BaseModel):

@@ -16,9 +16,10 @@ STEPS = 1000
 PENDULUM = {"model": "damped_pendulum", "parameters": {"eps": 0.1}, "method": "3s", "h": 0.1, "n_steps": STEPS,
             "initial_state": {"q": [0.5], "p": [0.0]}}
 FORCED = {**PENDULUM, "load": {"harmonic": {"amplitude": [0.2], "omega": 1.1}}}
-# n_steps // save_every + 2 saved points at most, of 1 coordinate and no momentum map:
-# t, energy, W, W_f, q, p with the load; W_f left out without it, W too with "work": false.
-POINTS = STEPS + 2
+# The points a run saves (raydamp.run.save_rows: step 0 and every step), of 1 coordinate and no momentum map:
+# t, energy, W, W_f, q, p with the load; W_f left out without it, W too with "work": false. The estimate once
+# counted n_steps // save_every + 2, a point more than a run saves when save_every divides n_steps.
+POINTS = STEPS + 1
 
 
 def admitted(spec: dict, limit: int) -> bool:
@@ -40,8 +41,8 @@ def test_the_limit_admits_exactly_the_bytes_a_job_stores(spec, columns):
 @pytest.mark.parametrize(("spec", "columns"), [(FORCED, 6), (PENDULUM, 5), ({**FORCED, "work": False}, 4)])
 def test_the_columns_counted_are_those_the_run_stores(spec, columns):
     """The run's arrays as the store keeps them (jobs.StoredTrajectory: W and W_f when not None), and its
-    n_steps + 1 points within the estimate's n_steps // save_every + 2."""
+    points: exactly the estimate's."""
     solution = check_spec(JobSpec.model_validate(spec), Settings()).run()
     stored = StoredTrajectory.of(solution)
     assert stored.row_bytes == columns * 8
-    assert stored.points == POINTS - 1
+    assert stored.points == POINTS

@@ -6,6 +6,7 @@
 #include <utility>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "raydamp/methods/butcher_tableau.hpp"
@@ -196,17 +197,38 @@ decltype(auto) with_table(const std::string& table, F& f) {
 
 }  // namespace detail
 
-// Calls f(MethodType{}) for the method named `name`: the one place a name becomes a type.
-// The implicit methods of a linear structure are not among these: see with_method_for
-// (implicit/linear_implicit_step.hpp), which runs them on a LinearStructure only.
+// A model that is one linear system M q'' + C q' + K q = f as a whole says so with
+// `static constexpr bool linear_system = true` (models/linear_structure.hpp); only such a
+// model runs the implicit methods, which step that whole system at once.
+template <class Model, class = void>
+struct is_linear_system : std::false_type {};
+template <class Model>
+struct is_linear_system<Model, std::void_t<decltype(Model::linear_system)>>
+    : std::bool_constant<Model::linear_system> {};
+
+// Calls f(MethodType{}) for the method named `name` on a model of type Model: the one place a
+// name becomes a type. An implicit method on a model that is not a linear system is refused,
+// naming the method.
+template <class Model, class F>
+decltype(auto) with_method_for(const std::string& name, F&& f) {
+  const MethodEntry& entry = method_entry(name);
+  if (!entry.linear_implicit)
+    return detail::with_table<F, StormerVerlet, ThreeTermSplitting, Baoab, TwoTermSplitting, RungeKuttaSplitting,
+                              RungeKuttaSplittingB, RungeKutta>(entry.table, f);
+  if constexpr (is_linear_system<Model>::value) {
+    return detail::with_table<F, Gauss4, ImplicitMidpoint>(entry.table, f);
+  } else {
+    throw std::invalid_argument("method: '" + name + "' is an implicit step of a linear structure's whole system "
+                                "M q'' + C q' + K q = f, and runs only a raydamp.LinearStructure; for this model "
+                                "use 3s, 2s or rks");
+  }
+}
+
+// with_method_for on no model: the explicit tables, for a caller that reads a table or runs a
+// model of its own (the implicit methods are refused).
 template <class F>
 decltype(auto) with_method(const std::string& name, F&& f) {
-  const MethodEntry& entry = method_entry(name);
-  if (entry.linear_implicit)
-    throw std::invalid_argument("method: '" + name + "' steps a LinearStructure's whole linear system implicitly, "
-                                "and runs only a LinearStructure (with_method_for, implicit/linear_implicit_step.hpp)");
-  return detail::with_table<F, StormerVerlet, ThreeTermSplitting, Baoab, TwoTermSplitting, RungeKuttaSplitting,
-                            RungeKuttaSplittingB, RungeKutta>(method_entry(name).table, f);
+  return with_method_for<void>(name, std::forward<F>(f));
 }
 
 }  // namespace raydamp

@@ -18,6 +18,7 @@ from pydantic import ValidationError
 
 from .. import _core
 from .._validation import span
+from ..loads import GroundMotion, Load
 from ..loads.forms import plain_json
 from .errors import JobError, head_path
 from .forms import ModeState, RestState, VectorFile
@@ -169,8 +170,8 @@ def planned_steps(spec: JobSpec) -> int:
 def job_load(spec: JobSpec, files: FileResolver | None = None):
     """The job's load (its "load" plus its "ground_motion"), or None; a JobError names the path."""
     try:
-        parts = [form.build(files, name) for name, form in (("load", spec.load), ("ground_motion", spec.ground_motion))
-                 if form is not None]
+        parts = [kind.from_form(form, files, name) for kind, name, form in (
+            (Load, "load", spec.load), (GroundMotion, "ground_motion", spec.ground_motion)) if form is not None]
     except ValueError as error:
         raise JobError(head_path(str(error)), str(error)) from None
     return sum(parts) if parts else None
@@ -179,8 +180,6 @@ def job_load(spec: JobSpec, files: FileResolver | None = None):
 def load_from(load: Any, ground_motion: Any, files: FileResolver | None = None):
     """The load of a job's "load" and "ground_motion" JSON (either may be None), or None; a ValueError names
     the path."""
-    from ..loads import GroundMotion, Load
-
     parts = []
     if load is not None:
         parts.append(Load.from_dict(load, name="load", files=files))

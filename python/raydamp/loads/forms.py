@@ -1,7 +1,8 @@
 """A load and a ground motion as JSON: the typed forms that Load.to_dict() writes, a job's "load" and
 "ground_motion" hold and /openapi.json describes. Pydantic checks their shape (keys, types, sizes);
-each form then builds its Load through the Load's own constructors, which check what depends on the
-values (times increasing, lengths agreeing, an expression's names).
+each form then builds its Load through the constructors of the class it is given (Load.from_form,
+GroundMotion.from_form), which check what depends on the values (times increasing, lengths agreeing,
+an expression's names).
 
     {"harmonic": {"amplitude": [...], "omega": w, "phase": 0}}
     {"series": {"t": [...], "values": [...], "direction": [...], "hold": false}}
@@ -84,9 +85,7 @@ class HarmonicBody(Input):
     t_end: FiniteFloat | None = Field(None, description="the term acts for t <= t_end and is 0 after (a pulse); "
                                                         "null: it never ends")
 
-    def load(self, where: str, files: FileResolver | None):
-        from .load import Load
-
+    def load(self, where: str, files: FileResolver | None, Load: type):
         return Load([T.Harmonic(_direction(self.amplitude, f"{where}.amplitude"), real(f"{where}.omega", self.omega),
                                 T.phase_value(self.phase), t_end=T.end_time(f"{where}.t_end", self.t_end))])
 
@@ -99,9 +98,7 @@ class SeriesBody(Input):
     hold: bool = Field(False, description="outside [t[0], t[-1]]: the end values (true) or zero (false)")
     scale: FiniteFloat = 1.0
 
-    def load(self, where: str, files: FileResolver | None):
-        from .load import Load
-
+    def load(self, where: str, files: FileResolver | None, Load: type):
         load = Load.series(self.t, self.values, None, hold=self.hold)
         return Load([replace(load.terms[0], direction=_direction(self.direction, f"{where}.direction"))])
 
@@ -113,9 +110,7 @@ class ExpressionBody(Input):
     direction: Direction | None = Field(None, description=_DIRECTION)
     scale: FiniteFloat = 1.0
 
-    def load(self, where: str, files: FileResolver | None):
-        from .load import Load
-
+    def load(self, where: str, files: FileResolver | None, Load: type):
         load = Load.expression(self.expression, self.parameters, None)
         return Load([replace(load.terms[0], direction=_direction(self.direction, f"{where}.direction"))])
 
@@ -137,9 +132,7 @@ class FileBody(Input):
             raise ValueError("give exactly one of path and id")
         return self
 
-    def load(self, where: str, files: FileResolver | None):
-        from .load import Load
-
+    def load(self, where: str, files: FileResolver | None, Load: type):
         if self.path is not None:
             if files is not None:
                 raise ValueError(f"{where}.path: the service reads no paths; upload the file (POST /v1/files) and "
@@ -184,13 +177,11 @@ class _Term(Input):
         name = next(iter(type(self).model_fields))
         return name, getattr(self, name)
 
-    def build(self, files: FileResolver | None = None, name: str = "load"):
-        from .load import Load
-
+    def build(self, Load: type, files: FileResolver | None = None, name: str = "load"):
         kind, body = self.body()
         where = f"{name}.{kind}"
         try:
-            load = body.load(where, files)
+            load = body.load(where, files, Load)
         except ValueError as error:
             text = str(error)
             raise ValueError(text if text.startswith(name) else f"{where}.{text}") from None
@@ -247,10 +238,9 @@ class TermsLoad(Input):
     terms: bounded(Term, MAX_TERMS) = Field(description="the terms, each a load of one form")
     amplitude: FiniteFloat = Field(1.0, description="a factor on the whole load (a sweep's load.amplitude)")
 
-    def build(self, files: FileResolver | None = None, name: str = "load"):
-        from .load import Load
-
-        terms = [part for i, term in enumerate(self.terms) for part in term.build(files, f"{name}.terms[{i}]").terms]
+    def build(self, Load: type, files: FileResolver | None = None, name: str = "load"):
+        terms = [part for i, term in enumerate(self.terms)
+                 for part in term.build(Load, files, f"{name}.terms[{i}]").terms]
         return Load(terms, self.amplitude)
 
     def files(self, at: tuple) -> Iterator[tuple[tuple, str, str]]:
@@ -283,10 +273,8 @@ class GroundMotionInput(Input):
                          Discriminator(_direction_form)] = Field(description="r, the influence vector")
     factor: FiniteFloat = Field(1.0, description="a factor on a_g (9.81 turns g into m/s^2)")
 
-    def build(self, files: FileResolver | None = None, name: str = "ground_motion"):
-        from .ground import GroundMotion
-
-        acceleration = self.acceleration.build(files, f"{name}.acceleration")
+    def build(self, GroundMotion: type, Load: type, files: FileResolver | None = None, name: str = "ground_motion"):
+        acceleration = self.acceleration.build(Load, files, f"{name}.acceleration")
         try:
             return GroundMotion(acceleration, self.direction, factor=self.factor)
         except ValueError as error:

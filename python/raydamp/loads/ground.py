@@ -14,6 +14,7 @@ import numpy as np
 
 from .._validation import real
 from . import terms as T
+from .forms import ground_motion_input
 from .load import Load
 
 __all__ = ["GroundMotion"]
@@ -60,16 +61,16 @@ class GroundMotion(Load):
         object.__setattr__(self, "acceleration", Load([_with_direction(t, None) if not isinstance(t, T.Harmonic)
                                                        else t for t in acceleration._scaled_terms()]))
 
+    @classmethod
+    def from_dict(cls, plain, *, name: str = "ground_motion", files=None) -> GroundMotion:
+        """The ground motion of a JSON form (raydamp.loads.forms.GroundMotionInput): ``{"acceleration": a load
+        without direction, "direction": r, "factor": 1}``; a ValueError names the path of the bad field."""
+        return cls.from_form(ground_motion_input(plain, name), files, name)
 
-def _ground_from_dict(cls, plain, *, name: str = "ground_motion", files=None) -> GroundMotion:
-    """The ground motion of a JSON form (raydamp.loads.forms.GroundMotionInput): ``{"acceleration": a load
-    without direction, "direction": r, "factor": 1}``; a ValueError names the path of the bad field."""
-    from .forms import ground_motion_input
-
-    return ground_motion_input(plain, name).build(files, name)
-
-
-GroundMotion.from_dict = classmethod(_ground_from_dict)
+    @classmethod
+    def from_form(cls, form, files=None, name: str = "ground_motion") -> GroundMotion:
+        """The ground motion of a validated form (a GroundMotionInput), built through this class's constructors."""
+        return form.build(cls, Load, files, name)
 
 
 def _with_direction(term, direction):

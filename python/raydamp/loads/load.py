@@ -22,6 +22,7 @@ from .. import _core
 from .._validation import _short, flag, real
 from ..systems.expressions import parse
 from . import terms as T
+from .forms import load_input
 from .records import read_record
 
 __all__ = ["Load", "set_load_parameters"]
@@ -232,9 +233,12 @@ class Load:
         {"path" | "id", "direction", "factor", "dt", "hold"}}``; a direction ``{"ground": r}`` is a ground
         motion's -M r. ``files`` maps an uploaded file's id to its path or its parsed (t, values) (a service's
         uploads). A ValueError names the path of the bad field, starting with ``name``."""
-        from .forms import load_input
+        return cls.from_form(load_input(plain, name), files, name)
 
-        return load_input(plain, name).build(files, name)
+    @classmethod
+    def from_form(cls, form, files=None, name: str = "load") -> Load:
+        """The load of a validated form (a LoadInput), built through this class's constructors."""
+        return form.build(cls, files, name)
 
     @property
     def is_ground_motion(self) -> bool:

@@ -10,12 +10,9 @@ threads share no figure.
 from __future__ import annotations
 
 import io
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
-
-if TYPE_CHECKING:
-    from .solution import Solution
 
 __all__ = ["SolutionPlots", "PLOT_KINDS"]
 
@@ -31,7 +28,7 @@ def _axes(ax):
     return ax
 
 
-def _label(sol: Solution, label: str | None) -> str:
+def _label(sol: Any, label: str | None) -> str:
     if label is not None:
         return label
     return sol.method + (f" ({sol.tableau})" if sol.tableau else "") + f", h = {sol.h:g}"
@@ -40,7 +37,7 @@ def _label(sol: Solution, label: str | None) -> str:
 class SolutionPlots:
     """The plots of one solution."""
 
-    def __init__(self, solution: Solution):
+    def __init__(self, solution: Any):
         self._sol = solution
 
     def _coordinate(self, coordinate, argument: str = "coordinate") -> int:

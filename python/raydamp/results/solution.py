@@ -140,14 +140,14 @@ class Solution:
 
     def to_xarray(self):
         """An xarray.Dataset with dims (time, dof[, momentum]) and the provenance in attrs."""
-        from .io.solution import to_xarray
+        from .io.dataset import to_xarray
 
         return to_xarray(self)
 
     def save(self, path) -> None:
         """Write to ``path``: .nc (NetCDF, via xarray), .npz or .csv, by its suffix
         (``raydamp.results.io.write_solution``, which also writes rows read a slice at a time)."""
-        from .io.solution import save
+        from .io.writer import save
 
         save(self, path)
 

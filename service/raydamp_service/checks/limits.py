@@ -1,8 +1,5 @@
-"""The service's checks of a job and a sweep before they are queued: its own limits (sizes, steps,
-bytes), then raydamp's (raydamp.jobs builds the call; one step runs it as the real run will).
-
-raydamp owns the job's schema and rules and names every error by its JSON path; the service adds
-only its limits, and says which one a job exceeds.
+"""The service's checks of a job and a sweep before they are queued: its own limits (sizes, steps, bytes),
+then raydamp's (raydamp.jobs builds the call, names every error by its JSON path; one step runs it).
 """
 
 from __future__ import annotations
@@ -13,6 +10,7 @@ from typing import Any
 import raydamp
 from raydamp.jobs import JobCall, JobError, JobSpec, SweepSpec, build_job, error_at, planned_steps
 from raydamp.run.integrate import row_bytes
+from raydamp.run.save_grid import save_rows
 from raydamp.run.sweep import GridTooLarge
 
 from ..config import Settings
@@ -38,8 +36,7 @@ def build_call(spec: JobSpec, files=None) -> RaydampCall:
 
 
 def _check_sizes(spec: JobSpec, settings: Settings) -> None:
-    """The operator's bounds on what a job carries, before raydamp builds or allocates anything (a COO
-    shape of [10^9, 10^9] with three entries would still cost 8 GB of column pointers)."""
+    """The operator's bounds on what a job carries, before raydamp builds or allocates anything."""
     for loc, unit, count in spec.sizes():
         where = ".".join(map(str, loc))
         if unit == "components" and count > settings.max_dim:
@@ -55,8 +52,7 @@ def _check_sizes(spec: JobSpec, settings: Settings) -> None:
 
 
 def refuse_paths(spec: JobSpec) -> None:
-    """A load's {"file": {"path": ...}} reads a file of the machine it runs on: the service takes uploaded
-    files by id only (POST /v1/files), whatever the route (a job, a sweep's job, a check process)."""
+    """The service takes uploaded files by id only: a {"file": {"path": ...}} would read the server's files."""
     found = next(iter(spec.local_paths()), None)
     if found is not None:
         raise JobError(found, ".".join(map(str, found)) + ": the service reads no paths; upload the file (POST "
@@ -72,12 +68,14 @@ def check_spec(spec: JobSpec, settings: Settings, files=None) -> RaydampCall:
         field = "n_steps" if spec.n_steps is not None else "t_end"
         raise JobError((field,), f"{field}: the run would take {steps} steps; this service runs at most "
                        f"max_steps = {settings.max_steps} (raise {spec.h_key} or shorten the run)")
-    saved_points = steps // spec.save_every + 2
+    try:
+        saved_points = save_rows(steps, spec.save_every)
+    except ValueError as error:  # past integrate's range: the error names save_every
+        raise error_at(spec, error) from None
     if saved_points > settings.max_saved_points:
-        raise JobError(("save_every",), f"save_every: {saved_points} saved points (n_steps // save_every + 2) "
-                       f"exceed max_saved_points = {settings.max_saved_points}; raise save_every")
+        raise JobError(("save_every",), f"save_every: {saved_points} saved points exceed max_saved_points = "
+                       f"{settings.max_saved_points}; raise save_every")
     call = build_call(spec, files)
-    # What the store will hold: the points the run saves (raydamp's count of a saved point's arrays).
     stored = saved_points * row_bytes(call.model, spec.save_dofs, work=spec.work, load=call.call.options.get("load"))
     if stored > settings.max_trajectory_bytes:
         saved = call.model.dim if spec.save_dofs is None else len(spec.save_dofs)
@@ -85,8 +83,7 @@ def check_spec(spec: JobSpec, settings: Settings, files=None) -> RaydampCall:
                        f"({saved_points} saved points x {saved} saved coordinates); the limit is max_trajectory_bytes "
                        f"= {settings.max_trajectory_bytes / 2**20:.0f} MiB: raise save_every, or save fewer "
                        "coordinates with save_dofs")
-    # One step validates method, tableau, their fit with the model, h and the initial state the way
-    # the real run will, in microseconds.
+    # One step validates method, tableau, model, h and initial state as the real run will, in microseconds.
     try:
         call.run(n_steps=1, t_end=None)
     except ValueError as error:
@@ -95,9 +92,8 @@ def check_spec(spec: JobSpec, settings: Settings, files=None) -> RaydampCall:
 
 
 def check_sweep_spec(spec: SweepSpec, settings: Settings) -> raydamp.SweepPlan:
-    """Every check a sweep must pass before it is queued: the job's, the service's bounds on the grid's size
-    (members and members x steps, counted from the axes' lengths before raydamp builds a member), raydamp's
-    (raydamp.check_sweep: grid names and values, one step per value), then the result's size."""
+    """Every check a sweep must pass before it is queued: the job's, the grid's size (members, members x steps;
+    before raydamp builds a member), raydamp's (grid names and values), then the result's size."""
     try:
         check_spec(spec.job, settings)
         job, grid = spec.job_form(), spec.grid_arguments()
@@ -114,8 +110,7 @@ def check_sweep_spec(spec: SweepSpec, settings: Settings) -> raydamp.SweepPlan:
                             f"this service runs at most max_sweep_steps = {settings.max_sweep_steps} per sweep")
         return None
 
-    # Both bounds as one on the members, which raydamp applies before it builds any (a grid of 10^8 members
-    # would otherwise be built, gigabytes, before being refused).
+    # Both bounds as one on the members, which raydamp applies before it builds any.
     bound = min(settings.max_sweep_members, max(1, settings.max_sweep_steps // max(steps, 1)))
     try:
         plan = raydamp.check_sweep(job, grid, chunk_size=spec.chunk_size, max_members=bound)

@@ -1,23 +1,11 @@
-"""The heavy checks, in worker processes under budgets: never in the server's interpreter.
+"""The heavy checks (a system's compile and trial step, an upload's parse, a plot) in a pebble ProcessPool of
+check_workers processes, forked warm from a forkserver with raydamp imported: never in the server's interpreter.
+A task's budgets: CPU (check_seconds, by a profiling timer that ends even a compile holding the interpreter lock:
+422), memory (check_memory_bytes above the warm worker, RLIMIT_AS: 422) and wall time (_WALL_FACTOR budgets: only
+a loaded machine meets it, 429). At most max_pending_checks run or wait, each at most _START_SECONDS: past it, 429.
 
-A system's check compiles its functions (SymEngine's LLVM JIT holds the interpreter lock all the while),
-parses the files it names and takes one trial step; an upload is parsed; a plot is drawn. Each runs as a task
-of a pebble ProcessPool whose check_workers processes fork from a forkserver that has raydamp imported and
-warm up before their first task. Each task has three budgets:
-- CPU time, check_seconds, counted from the worker's CPU clock at the task's start. The kernel is the watchdog
-  (a profiling timer of the budget, armed for each task: its SIGPROF ends a compile that holds the interpreter
-  lock; RLIMIT_CPU would count every task of the worker) and the clock is read again after it. Past it: 422.
-- memory, check_memory_bytes of address space above what the warmed-up worker holds (RLIMIT_AS); a worker that
-  meets it ends, and pebble replaces it. Past it: 422 naming the budget.
-- wall time, _WALL_FACTOR x check_seconds (pebble's timeout: the worker is killed and replaced). Only a loaded
-  machine meets it with the CPU budget kept: 429 with Retry-After, not a refusal of the system.
-At most max_pending_checks tasks run or wait at once, and a task waits for a process at most _START_SECONDS;
-past either, 429.
-
-A check answers with the functions it compiled as bytes (System.compiled_form), which the server loads into
-raydamp's cache of compiled functions (load_compiled); a run then builds its System within compiled_elsewhere(),
-which refuses to compile. The bytes are machine code: they come only from this pool's own processes, over
-pebble's pipes; nothing a client sends reaches load_compiled.
+A check answers with the functions it compiled as bytes (System.compiled_form), which the server loads for the run
+(load_compiled, compiled_elsewhere). They are machine code: only this pool's processes send them, over its pipes.
 """
 
 from __future__ import annotations
@@ -105,13 +93,10 @@ def _status_bytes(field: str) -> int:
 # One small system of each kind, checked before the memory budget applies: what their checks load on first use
 # (SciPy's sparse solvers and their BLAS, LLVM, matplotlib's fonts) is then in place, not charged to a task.
 _WARM_UP = (
-    {"system": {"coordinates": 2, "potential": "q0^2 + q0*q1^3", "damping": {"dampers": [{"on": "q0 - q1"}]},
-                "eps": 0.1}},
-    {"system": {"kind": "chain", "n": 4, "bond": "expression", "parameters": {"potential": "r^2/2 + r^4/4"}}},
-    {"system": {"kind": "linear_structure", "M": {"diagonal": [1.0, 1.0]},
-                "K": {"coo": {"shape": [2, 2], "rows": [0, 0, 1, 1], "cols": [0, 1, 0, 1],
-                               "values": [2.0, -1.0, -1.0, 2.0]}},
-                "alpha": 0.1, "beta": 0.01}},
+    {"coordinates": 2, "potential": "q0^2 + q0*q1^3", "damping": {"dampers": [{"on": "q0 - q1"}]}, "eps": 0.1},
+    {"kind": "chain", "n": 4, "bond": "expression", "parameters": {"potential": "r^2/2 + r^4/4"}},
+    {"kind": "linear_structure", "M": {"diagonal": [1.0, 1.0]}, "alpha": 0.1, "beta": 0.01,
+     "K": {"coo": {"shape": [2, 2], "rows": [0, 0, 1, 1], "cols": [0, 1, 0, 1], "values": [2.0, -1.0, -1.0, 2.0]}}},
 )
 
 
@@ -130,7 +115,7 @@ def _start_worker(settings: Settings) -> None:
     except Exception:  # noqa: BLE001 - a warm-up only; a real plot reports its own errors
         log.warning("check warm-up: a plot", exc_info=True)
     for system in _WARM_UP:
-        spec = {**system, "method": "3s", "h": 0.01, "n_steps": 2, "initial_state": {"rest": True}}
+        spec = {"system": system, "method": "3s", "h": 0.01, "n_steps": 2, "initial_state": {"rest": True}}
         try:
             check_spec(JobSpec.model_validate(spec), settings)
         except Exception:  # noqa: BLE001 - a warm-up only; a real check reports its own errors
@@ -163,18 +148,13 @@ def _task(function, args: tuple, cpu_seconds: float) -> tuple[str, Any]:
     return ("cpu", used) if used > cpu_seconds else answer
 
 
-def _compiled(spec: JobSpec) -> tuple[str, bytes] | None:
-    """(key, bytes) of the compiled functions of a job's expression system, for the server to load."""
+def _check_job(spec: JobSpec, settings: Settings) -> tuple[str, bytes] | None:
+    check_spec(spec, settings, files=_files)
     return spec.compiled_form()
 
 
-def _check_job(spec: JobSpec, settings: Settings) -> tuple[str, bytes] | None:
-    check_spec(spec, settings, files=_files)
-    return _compiled(spec)
-
-
 def _check_sweep(spec: SweepSpec, settings: Settings) -> tuple[int, tuple[str, bytes] | None]:
-    return check_sweep_spec(spec, settings).members, _compiled(spec.job)
+    return check_sweep_spec(spec, settings).members, spec.job.compiled_form()
 
 
 # ---- in the server ----
@@ -193,7 +173,7 @@ class CheckPool:
         self._settings = settings
         self._pending = threading.BoundedSemaphore(settings.max_pending_checks)
         self._pool: ProcessPool | None = None
-        self._closed = False
+        self.closed = False  # stop() was called: the processes are ended
 
     def start(self) -> None:
         """Start the processes; the service answers while they warm up."""
@@ -203,21 +183,15 @@ class CheckPool:
                                  initargs=(self._settings,), context=context)
         self._pool.schedule(int)  # the processes start now: the first check need not wait for the forks
 
-    @property
-    def closed(self) -> bool:
-        """stop() was called: the processes are ended."""
-        return self._closed
-
     def stop(self) -> None:
-        self._closed = True
+        self.closed = True
         if self._pool is not None:
             self._pool.stop()
             self._pool.join(timeout=10)
 
     def job(self, spec: JobSpec, files=None) -> RaydampCall | None:
-        """Every check of a job (limits.check_spec); raises JobError naming the field, or ChecksBusy. The
-        functions the check compiled are loaded here, for the run. Returns the call a check made in this
-        process built (None for a check process's)."""
+        """Every check of a job (limits.check_spec), loading what it compiled; JobError naming the field, or
+        ChecksBusy. The call a check in this process built (None for a check process's)."""
         if not isolated(spec):
             return check_spec(spec, self._settings, files=files)
         _load(self._run(_check_job, (spec, self._settings), ("system",)))
@@ -232,15 +206,13 @@ class CheckPool:
         return members
 
     def call(self, function, *args: Any, where: tuple[str, ...] = ("body",)) -> Any:
-        """function(*args) in a check process (a function of a higher layer, named by reference: a plot's
-        drawing, an upload's parse); JobError at `where` past a budget, ChecksBusy."""
+        """function(*args) in a check process (an upload's parse); JobError at `where` past a budget, ChecksBusy."""
         return self._run(function, args, where)
 
     def plot(self, read, draw, *args: Any) -> bytes:
-        """A stored trajectory's plot as PNG, draw(record, read(), *args) in a check process: matplotlib holds the
-        interpreter lock while it draws, and keeps the memory it took. read() runs once a place is taken, so a
-        refused plot reads nothing. Raises ValueError (a plot this run cannot have), ChecksBusy, or
-        PlotOverBudget."""
+        """A stored trajectory's plot as PNG, draw(record, read(), *args) in a check process (matplotlib holds the
+        interpreter lock, and keeps the memory it took); read() runs once a place is taken. Raises ValueError (a
+        plot this run cannot have), ChecksBusy, or PlotOverBudget."""
         try:
             refused, png = self._run(draw, args, ("query", "width"), read=read)
         except JobError:
@@ -252,10 +224,9 @@ class CheckPool:
         return png
 
     def compile(self, spec: JobSpec) -> None:
-        """Compile a job's expression system in a check process and load its functions here, for a run that did
-        not find them (NotCompiled). Waits for a place among the pending checks; JobError past a budget,
-        ChecksBusy if none came free within check_seconds."""
-        _load(self._run(_compiled, (spec,), ("system",), wait=True))
+        """Compile a job's functions in a check process (waiting for a place) and load them here, for a run that
+        did not find them; JobError past a budget, ChecksBusy if no place came free within check_seconds."""
+        _load(self._run(JobSpec.compiled_form, (spec,), ("system",), wait=True))
 
     def _run(self, function, args: tuple, where: tuple[str, ...], wait: bool = False, read=None) -> Any:
         budget = self._settings.check_seconds
@@ -300,10 +271,8 @@ class CheckPool:
 
 
 def build_for_run(checks: CheckPool | None, spec: JobSpec, run, files=None) -> RaydampCall | None:
-    """A run's call, its system built from functions a check process compiled: those the submission's check
-    loaded, else compiled now by a check process (waiting for a free one; a JobError past a budget fails the
-    run with its message). Never compiled in the server. None if the service stops meanwhile. Without check
-    processes (checks None), built here."""
+    """A run's call, its system built from functions a check process compiled (at submission, else now, waiting
+    for a free process); None if the service stops meanwhile. Without check processes (checks None), built here."""
     if checks is None:
         return build_call(spec, files=files)
     try:

@@ -1,6 +1,5 @@
-"""Uploaded files as raydamp reads them: an upload's check (a Matrix Market matrix by raydamp's reader, whose
-header is checked against the file's size before it reads, plus this service's size limit; a record by
-raydamp.loads.records), and ParsedFiles, each stored upload parsed once."""
+"""Uploaded files as raydamp reads them: an upload's check (a Matrix Market matrix, its header checked against
+the service's size limit first; a record), and ParsedFiles, each stored upload parsed once."""
 
 from __future__ import annotations
 
@@ -14,8 +13,7 @@ from raydamp.loads.records import describe_record, parse_record, record_format
 from raydamp.systems.matrix_market import read_header
 from raydamp.systems.structure import read_matrix
 
-__all__ = ["UploadError", "MatrixFileInfo", "RecordFileInfo", "check_matrix_market", "check_record", "check_upload",
-           "ParsedFiles"]
+__all__ = ["UploadError", "MatrixFileInfo", "RecordFileInfo", "check_upload", "ParsedFiles"]
 
 
 class UploadError(ValueError):
@@ -40,47 +38,33 @@ class RecordFileInfo:
     dt: float | None
 
 
-def check_record(content: bytes, name: str) -> RecordFileInfo:
-    """Read the upload as raydamp reads a load's record; raises UploadError with raydamp's reason (wrong NPTS,
-    a value that is not a number, DT <= 0, times not increasing, a value that is not finite)."""
+def check_upload(content: bytes, name: str, *, max_dim: int) -> MatrixFileInfo | RecordFileInfo:
+    """Read the upload as raydamp will, told apart by the name's suffix (.mtx, .AT2, .npy) and the content: a
+    structure's M or K (once its header shows at most max_dim rows), or a load's record. UploadError says why not."""
     try:
-        record, fmt = parse_record(content, name=name)
+        if record_format(content, name) == "mtx":
+            rows, cols = read_header(content, name).shape
+            if max(rows, cols) > max_dim:
+                raise UploadError(f"the matrix is {rows} x {cols}; this service runs structures of at most "
+                                  f"max_structure_dim = {max_dim} coordinates")
+            matrix = read_matrix(io.BytesIO(content), name)
+            return MatrixFileInfo(shape=matrix.shape, nnz=int(matrix.nnz))
+        try:
+            record, fmt = parse_record(content, name=name)
+        except ValueError as error:
+            raise UploadError(f"not a record raydamp can read: {error}") from None
+    except UploadError:
+        raise
     except ValueError as error:
-        raise UploadError(f"not a record raydamp can read: {error}") from None
+        raise UploadError(str(error)) from None
     described = describe_record(record)
     return RecordFileInfo(format=fmt, samples=described["samples"], columns=1 if record.t is None else 2,
                           t_start=described["t_start"], t_end=described["t_end"], dt=described["dt"])
 
 
-def check_upload(content: bytes, name: str, *, max_dim: int) -> MatrixFileInfo | RecordFileInfo:
-    """A matrix or a record, told apart by the name's suffix (.mtx, .AT2, .npy) and the content."""
-    if record_format(content, name) == "mtx":
-        return check_matrix_market(content, max_dim=max_dim, name=name)
-    return check_record(content, name)
-
-
-def check_matrix_market(content: bytes, *, max_dim: int, name: str = "the matrix") -> MatrixFileInfo:
-    """Read the upload as raydamp reads a structure's M or K (a real square matrix with finite entries, its
-    header first checked against the file's size), once the header shows at most max_dim rows. Raises
-    UploadError with raydamp's reason or the limit."""
-    try:
-        rows, cols = read_header(content, name).shape
-        if max(rows, cols) > max_dim:
-            raise UploadError(f"the matrix is {rows} x {cols}; this service runs structures of at most "
-                              f"max_structure_dim = {max_dim} coordinates")
-        matrix = read_matrix(io.BytesIO(content), name)
-    except UploadError:
-        raise
-    except ValueError as error:
-        raise UploadError(str(error)) from None
-    return MatrixFileInfo(shape=matrix.shape, nnz=int(matrix.nnz))
-
-
 class ParsedFiles:
-    """Uploaded files as raydamp reads them, parsed once per id (an upload never changes).
-    A matrix is a scipy.sparse matrix; a record its (t, values), t None for one column of values.
-    A parse in progress is waited for, not repeated; at most max_entries stored entries (a matrix's
-    nonzeros, a record's numbers) are kept, the least recently used dropped first."""
+    """Uploaded files as raydamp reads them (a scipy.sparse matrix; a record's (t, values)), parsed once per id (a
+    parse in progress is waited for); at most max_entries stored entries, the least recently used dropped first."""
 
     def __init__(self, store: Any, max_entries: int):  # store.file_content(id): the bytes, or None
         self._store, self._max = store, max_entries

@@ -1,12 +1,8 @@
 """Deadlines for slow clients, for a bare `make serve` (a reverse proxy in front does the same: README).
-
 - Headers: a connection's request headers must all arrive within header_seconds of its opening (or of its
-  previous response's end), or it is closed. uvicorn has no such deadline: two clients holding 10,500
-  half-sent connections made the server drop most /healthz probes. This bounds how long each lives, not how
-  many a flood opens (a proxy limits that).
+  previous response's end), or it is closed; uvicorn has no such deadline.
 - Sends: each piece of a response must leave within send_timeout_seconds and, past that, be read at
-  min_send_bytes_per_second on average; one that cannot ends the response and gives back what it held (its
-  background task, the body's source) at once.
+  min_send_bytes_per_second on average; one that cannot ends the response and gives back what it held.
 """
 
 from __future__ import annotations
@@ -63,22 +59,14 @@ class _Deadline:
 
 
 def protocol(header_seconds: float) -> type:
-    """uvicorn's HTTP protocol class (for uvicorn.run(http=...)) with the header deadline."""
-    try:
-        from uvicorn.protocols.http.httptools_impl import HttpToolsProtocol as base
+    """uvicorn's httptools protocol class (uvicorn[standard]; for uvicorn.run(http=...)) with the header
+    deadline."""
+    from uvicorn.protocols.http.httptools_impl import HttpToolsProtocol
 
-        class Protocol(_Deadline, base):
-            def on_headers_complete(self) -> None:
-                self._disarm()
-                super().on_headers_complete()
-    except ImportError:  # uvicorn without httptools: h11, whose cycle starts in handle_events
-        from uvicorn.protocols.http.h11_impl import H11Protocol as base
-
-        class Protocol(_Deadline, base):  # type: ignore[no-redef]
-            def handle_events(self) -> None:
-                super().handle_events()
-                if self._serving():
-                    self._disarm()
+    class Protocol(_Deadline, HttpToolsProtocol):
+        def on_headers_complete(self) -> None:
+            self._disarm()
+            super().on_headers_complete()
 
     Protocol.header_seconds = header_seconds
     return Protocol

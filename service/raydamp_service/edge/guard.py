@@ -1,8 +1,5 @@
-"""The checks every request passes before any route sees it: Host, bearer token, body size.
-
-An ASGI middleware rather than route dependencies, so that a request from an untrusted page,
-without the token, or with a body over the limit is answered before its body is read or parsed.
-"""
+"""The checks every request passes before any route sees it, before its body is read: Host, bearer token, body
+size and deadline, and the number of large bodies handled at once."""
 
 from __future__ import annotations
 
@@ -17,10 +14,8 @@ from ..config import Settings
 
 __all__ = ["RequestGuard", "UNGUARDED_PATHS", "file_too_large", "needs_token"]
 
-# Paths that answer without the token. Liveness probes (the answer says only "ok", the version and
-# the worker count); the page shell, its scripts and the API description, which hold no job data
-# and which a browser fetches by navigation, where it cannot add an Authorization header. The page
-# then asks for the token and sends it with every /v1 request; Swagger UI's Authorize does the same.
+# Paths that answer without the token: the liveness probe, and what holds no job data and a browser fetches by
+# navigation, where it cannot add an Authorization header (the page, its scripts, the API description).
 UNGUARDED_PATHS = frozenset({"/healthz", "/", "/docs", "/openapi.json"})
 UNGUARDED_PREFIXES = ("/static/", "/vendor/")
 UPLOAD_PATH = "/v1/files"  # POST: a Matrix Market upload, limited by max_file_bytes rather than max_body_bytes
@@ -72,8 +67,7 @@ class RequestGuard:
         if not self._large(headers):
             await self._with_body_limit(scope, receive, send)
             return
-        # Its parse and validation hold the event loop (70 ms for a 1.7 MB structure): thirty at once held
-        # /healthz for 2.9 s. So max_large_bodies at once; a client sending more is told to retry.
+        # Its parse and validation hold the event loop (70 ms for a 1.7 MB structure): max_large_bodies at once.
         if self.large_bodies >= self.max_large:
             await JSONResponse({"detail": f"{self.max_large} large request bodies are being handled "
                                           "(max_large_bodies); retry later"}, status_code=429,
@@ -111,8 +105,7 @@ class RequestGuard:
         return scope["path"] == UPLOAD_PATH and scope.get("method") == "POST"
 
     def _limit(self, scope: Scope) -> int:
-        # An upload's limit is its file's, with room for the multipart framing around it (the route
-        # checks the file part itself exactly).
+        # An upload's is its file's, with room for the multipart framing (the route checks the file part exactly).
         return self.max_file + MULTIPART_ALLOWANCE if self._is_upload(scope) else self.max_body
 
     def _too_large(self, scope: Scope) -> JSONResponse:
@@ -122,9 +115,8 @@ class RequestGuard:
                                        "(RAYDAMP_MAX_BODY_BYTES)"}, status_code=413)
 
     async def _with_body_limit(self, scope: Scope, receive: Receive, send: Send) -> None:
-        """A body without Content-Length (chunked) is counted as it arrives; the whole body must arrive within
-        body_seconds, plus 1 / min_body_bytes_per_second for each byte received (later receives, a response's
-        wait for the client to leave, have no deadline)."""
+        """The body is counted as it arrives (chunked: no Content-Length), and must arrive within body_seconds,
+        plus 1 / min_body_bytes_per_second for each byte received."""
         received = 0
         refused: JSONResponse | None = None
         limit = self._limit(scope)

@@ -1,14 +1,7 @@
-"""What every answer needs beyond the routes: HEAD wherever GET works, JSON bodies that name no key twice, 422s
-that survive the input they echo, and 405s whose Allow is right.
-
-- HEAD (RFC 9110): the request runs as its GET, marked in its scope (HEAD); the body is dropped, and once the
-  headers are sent the route is told the client has gone, so a streamed trajectory stops being produced.
-- A body whose JSON names a key twice in one object is refused (422), not read with the last value winning:
-  {"h": 0.1, ..., "h": 10} ran at h = 10. The routers taking JSON use UniqueKeysRoute.
-- FastAPI echoes the offending input in each 422: NaN, Infinity or a lone surrogate in it would turn the 422 into
-  a 500, and a megabyte-long expression would come back whole. The echo is made encodable and cut short.
-- A 405 names in Allow every method the path takes (RFC 9110), not only those of its first route.
-"""
+"""What every answer needs beyond the routes (RFC 9110): HEAD runs as its GET, marked in its scope (HEAD), its body
+dropped and the route told once the headers are out that the client has gone; a JSON body naming a key twice is a
+422 (UniqueKeysRoute); a 422's echo of the input is made encodable and cut short; a 405's Allow names every method
+the path takes."""
 
 from __future__ import annotations
 
@@ -74,8 +67,7 @@ class _UniqueKeysRequest(Request):
             except json.JSONDecodeError:
                 raise
             except ValueError as error:
-                # A key named twice (unique_keys), an integer of over 4300 digits (a 400 naming nothing before):
-                # FastAPI answers a JSONDecodeError with its 422 (loc ["body", position], the message in ctx.error).
+                # A key named twice, an integer of over 4300 digits: as a JSONDecodeError, FastAPI's 422.
                 raise json.JSONDecodeError(str(error), "", 0) from None
         return self._json
 
@@ -91,8 +83,6 @@ class UniqueKeysRoute(APIRoute):
 
 
 MAX_ECHO = 200  # characters of an echoed string; items of an echoed list or object
-
-
 MAX_MESSAGE = 2000  # a message lists the names it knows; it is ours, so only bounded
 
 
@@ -133,11 +123,10 @@ async def validation_error_handler(request: Request, error: RequestValidationErr
 
 async def http_error_handler(request: Request, error: HTTPException) -> Response:
     """FastAPI's own answer to an HTTPException, with a 405's Allow listing the methods /openapi.json documents for
-    the path (Starlette's own path compiler matches it; an undocumented path, as the page's, keeps Starlette's)."""
+    the path (an undocumented path, as the page's, keeps Starlette's)."""
     cause = error.__cause__
     if error.status_code == 400 and isinstance(cause, (RecursionError, UnicodeDecodeError)):
-        # FastAPI's 400 "There was an error parsing the body", without a loc, for a body JSON's parser refused
-        # other than by a JSONDecodeError (which is a 422): the 422 of every other body that is not JSON.
+        # A body JSON's parser refused other than by a JSONDecodeError: the 422 of every other body not JSON.
         why = "nested too deeply" if isinstance(cause, RecursionError) else "not UTF-8"
         return JSONResponse(status_code=422, content={"detail": [{
             "type": "json_invalid", "loc": ["body"], "msg": f"the body is not JSON this service can read ({why})",

@@ -1,5 +1,4 @@
-"""Uploaded files: their table (a matrix for a linear structure's M or K, a record for a load, a ground motion or
-an initial state), kept as uploaded, and handed to raydamp parsed once (checks.uploads.ParsedFiles)."""
+"""Uploaded files: their table (matrices and records, kept as uploaded), handed to raydamp parsed once."""
 
 from __future__ import annotations
 
@@ -15,23 +14,17 @@ from ..tasks.store import UNFINISHED_SQL, Database, now
 
 __all__ = ["FILES_TABLE", "FILE_COLUMNS_ADDED", "FileRecord", "FileStore", "file_resolver"]
 
-FILES_TABLE = """
-CREATE TABLE IF NOT EXISTS files (          -- uploads: a structure's {"file": id}, a load's {"file": {"id": id}}
-    seq INTEGER PRIMARY KEY AUTOINCREMENT,
-    id TEXT NOT NULL UNIQUE,
-    name TEXT NOT NULL,
-    bytes INTEGER NOT NULL,
-    rows INTEGER NOT NULL, cols INTEGER NOT NULL, nnz INTEGER NOT NULL,  -- a record: samples, columns, 0
-    created_at TEXT NOT NULL,
-    content BLOB NOT NULL,                  -- the file as uploaded
-    kind TEXT NOT NULL DEFAULT 'matrix',    -- matrix or record
-    format TEXT NOT NULL DEFAULT 'mtx',     -- mtx, at2, npy or columns (raydamp.loads.records.FORMATS)
-    t_start REAL, t_end REAL, dt REAL       -- a record's time range and uniform sample interval
-);
-"""
-# Columns a files table from before records lacks (JobStore._upgrade adds them).
+# Columns a files table from before records lacks (JobStore._upgrade adds them): kind is matrix or record; format
+# mtx, at2, npy or columns (raydamp.loads.records.FORMATS); a record's time range and uniform sample interval.
 FILE_COLUMNS_ADDED = {"kind": "TEXT NOT NULL DEFAULT 'matrix'", "format": "TEXT NOT NULL DEFAULT 'mtx'",
                       "t_start": "REAL", "t_end": "REAL", "dt": "REAL"}
+# Uploads as uploaded (content). rows, cols, nnz: a matrix's; a record's samples, columns and 0.
+FILES_TABLE = f"""
+CREATE TABLE IF NOT EXISTS files (seq INTEGER PRIMARY KEY AUTOINCREMENT, id TEXT NOT NULL UNIQUE, name TEXT NOT NULL,
+    bytes INTEGER NOT NULL, rows INTEGER NOT NULL, cols INTEGER NOT NULL, nnz INTEGER NOT NULL,
+    created_at TEXT NOT NULL, content BLOB NOT NULL,
+    {", ".join(f"{column} {declaration}" for column, declaration in FILE_COLUMNS_ADDED.items())});
+"""
 
 
 @dataclass(frozen=True)
@@ -55,9 +48,8 @@ _FILE_COLUMNS = "id, name, bytes, rows, cols, nnz, created_at, kind, format, t_s
 
 
 def _file_record(row: sqlite3.Row) -> FileRecord:
-    return FileRecord(id=row["id"], name=row["name"], bytes=row["bytes"], shape=(row["rows"], row["cols"]),
-                      nnz=row["nnz"], created_at=row["created_at"], kind=row["kind"], format=row["format"],
-                      t_start=row["t_start"], t_end=row["t_end"], dt=row["dt"])
+    values = dict(row)
+    return FileRecord(shape=(values.pop("rows"), values.pop("cols")), **values)
 
 
 class FileStore:
@@ -74,18 +66,16 @@ class FileStore:
 
     def add_file(self, name: str, content: bytes, shape: tuple[int, int] = (0, 0), nnz: int = 0,
                  max_total_bytes: int = 0, *, record: RecordFileInfo | None = None) -> FileRecord | None:
-        """Store an upload: a matrix (its shape and nnz) or a record; None (nothing written) when it would take
-        the files past max_total_bytes (0: no bound)."""
+        """Store an upload: a matrix (its shape and nnz) or a record; None (nothing written) past max_total_bytes."""
         if record is not None:
-            file = FileRecord(id=uuid.uuid4().hex, name=name, bytes=len(content),
-                              shape=(record.samples, record.columns),
-                              nnz=0, created_at=now(), kind="record", format=record.format, t_start=record.t_start,
-                              t_end=record.t_end, dt=record.dt)
+            file = FileRecord(id=uuid.uuid4().hex, name=name, bytes=len(content), nnz=0, created_at=now(),
+                              shape=(record.samples, record.columns), kind="record", format=record.format,
+                              t_start=record.t_start, t_end=record.t_end, dt=record.dt)
         else:
             file = FileRecord(id=uuid.uuid4().hex, name=name, bytes=len(content), shape=tuple(shape), nnz=nnz,
                               created_at=now())
         with self.db.transaction() as db:
-            # Checked and inserted in one statement, under the write lock, as create() does for the queue.
+            # Checked and inserted in one statement, under the write lock.
             inserted = db.execute(
                 "INSERT INTO files (id, name, bytes, rows, cols, nnz, created_at, content, kind, format, t_start, "
                 "t_end, dt) SELECT ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ? "
@@ -109,10 +99,8 @@ class FileStore:
         return bytes(row[0]) if row else None
 
     def delete_file(self, file_id: str) -> str:
-        """"deleted", "missing", or "in_use" when a queued or running job refers to it (then nothing changes).
-
-        One statement: a job that names the file and is still to run keeps it, so a run never loses its
-        matrix. Specs are stored as JSON, where the id appears as the string "<id>"."""
+        """"deleted", "missing", or "in_use" when a queued or running job names it (its id as the JSON string "<id>")
+        in the same statement: a run never loses its file."""
         with self.db.transaction() as db:
             deleted = db.execute(
                 f"DELETE FROM files WHERE id = ? AND NOT EXISTS (SELECT 1 FROM {self.TABLE} WHERE status IN "
@@ -133,8 +121,6 @@ class FileStore:
 
 
 def file_resolver(store: FileStore) -> Callable[[str], Any]:
-    """files(ref) for raydamp's job (raydamp.jobs.build_job): a stored upload, parsed once (the store's
-    ParsedFiles): a matrix for a structure's M or K, a record's (t, values) for a load's or ground motion's
-    {"file": {"id": ...}}, a one-column record's values for an initial state's {"file": id}. An unknown id
-    is a ValueError that raydamp reports at the path that names it (system.K.file, load.file.id, ...)."""
+    """files(id) for raydamp.jobs.build_job: a stored upload, parsed once. An unknown id is a ValueError that
+    raydamp reports at the path that names it (system.K.file, load.file.id, ...)."""
     return store.parsed_files

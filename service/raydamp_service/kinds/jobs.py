@@ -1,12 +1,12 @@
-"""The job: one raydamp integration. Its table in the store (its summary, and its trajectory as float64
-blobs in a table of their own), the uploaded Matrix Market files its system may name, and its run."""
+"""The job: one raydamp integration. Its table (its summary; its trajectory as float64 blobs in a table of their
+own), the uploaded files it may name, and its run."""
 
 from __future__ import annotations
 
 import functools
 import sqlite3
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -46,24 +46,21 @@ class JobRecord(TaskRecord):
 
     @functools.cached_property
     def job_spec(self) -> JobSpec:
-        """The stored spec as a JobSpec, validated once per record (a quick run asks twice: JobWork)."""
+        """The stored spec as a JobSpec, validated once per record."""
         return JobSpec.model_validate(self.spec)
 
-    @functools.cached_property
-    def checked_call(self) -> RaydampCall | None:
-        """The run the submission's check built in this process (checked()), else None: the runner builds it."""
-        return None
+    checked_call: ClassVar[RaydampCall | None] = None  # the run the submission's check built here (checked())
 
     def checked(self, spec: JobSpec, call: RaydampCall | None) -> JobRecord:
-        """This record as just stored, with the spec validated at submission and the run its check built: a
-        quick run then neither validates the spec again nor builds the model (a tenth and more of its CPU)."""
-        self.__dict__["job_spec"] = spec  # the cached properties' values (not fields: no columns of the table)
+        """This record as just stored, with the spec validated at submission and the run its check built, which
+        a quick run then does not make again."""
+        self.__dict__["job_spec"] = spec  # the cached properties' values (not fields: no columns)
         self.__dict__["checked_call"] = call
         return self
 
 
 def _blob(array: np.ndarray | None) -> memoryview | None:
-    # The array's own buffer, not a copy of it (a 480 MB q stored as bytes was a second 480 MB).
+    # The array's own buffer, not a copy of it.
     return memoryview(np.ascontiguousarray(array, dtype=_FLOAT).reshape(-1)).cast("B") if array is not None else None
 
 
@@ -76,8 +73,6 @@ def _first_given(*paths: str, otherwise: str = "NULL") -> str:
     return "COALESCE(" + ", ".join([*(f"NULLIF(json_extract({path}), '')" for path in paths), otherwise]) + ")"
 
 
-# A list's label (a built-in model's name, else the system's name or kind) and method (the one run, else
-# the one asked for), read by SQLite from the stored JSON.
 _LABEL = _first_given("spec, '$.model'", "spec, '$.system.name'", "spec, '$.system.kind'", otherwise="'system'")
 _METHOD = _first_given("summary, '$.method'", "spec, '$.method'")
 
@@ -105,10 +100,9 @@ class JobStore(TaskStore[JobRecord], FileStore):
         normalise_stored(db, self.TABLE, JobSpec)
 
     def listing(self, limit: int, status: str | None = None) -> list[sqlite3.Row]:
-        """Newest first, what a list shows of each job: id, status, progress, label (a built-in model's name,
-        else its system's name or kind), method (the one run, else the one asked for), created_at, finished_at.
-        SQLite reads the label and method from the stored JSON: a spec carrying a structure's matrices is
-        not parsed in Python for one line of a list."""
+        """Newest first, what a list shows of each job: id, status, progress, label (a built-in model's name, else
+        its system's name or kind), method (the one run, else the one asked for), created_at, finished_at. SQLite
+        reads label and method from the stored JSON: no spec is parsed in Python for one line of a list."""
         where, args = ("WHERE status = ?", (status,)) if status else ("", ())
         return self.db.connection().execute(
             f"SELECT id, status, progress, created_at, finished_at, {_LABEL} AS label, {_METHOD} AS method "
@@ -120,8 +114,7 @@ class JobStore(TaskStore[JobRecord], FileStore):
     def finish(self, job_id: str, status: str, *, summary: dict[str, Any] | None = None, error: str | None = None,
                failed_step: int | None = None, trajectory: TrajectoryArrays | None = None,
                progress: float | None = None, unclaimed_since: str | None = None) -> bool:
-        """Record the end of a run and its saved points in one transaction: all of it or none (unclaimed_since:
-        TaskStore.finish)."""
+        """Record the end of a run and its saved points in one transaction (TaskStore.finish)."""
         row = None if trajectory is None else (
             f"INSERT OR REPLACE INTO trajectories (job_id, points, dim, momenta, {', '.join(a.name for a in SAVED)}) "
             f"VALUES (?, ?, ?, ?{', ?' * len(SAVED)})",
@@ -151,47 +144,36 @@ class JobStore(TaskStore[JobRecord], FileStore):
         return connection, StoredTrajectory(*row[:4], frozenset(name for name, kept in zip(optional, row[4:]) if kept))
 
 
-def _dim(spec: JobSpec) -> int:
-    """A built-in model's coordinates, read from its initial state (numbers: checks.checked_inline)."""
-    return max(len(spec.initial_state.q), len(spec.initial_state.p), 1)
-
-
 class JobWork:
-    """A job's run: raydamp.integrate on a worker thread (the C++ loop releases the GIL), `workers` at once.
-
-    With the check processes (checks), a system's functions are never compiled here: the check at submission
-    loaded them (checks.py), and a run that does not find them asks a check process for them."""
+    """A job's run: raydamp.integrate on a worker thread (the C++ loop releases the GIL), `workers` at once. A
+    system's functions are compiled by a check process (checks.build_for_run), never here."""
 
     def __init__(self, store: JobStore, settings: Settings, checks: CheckPool | None = None):
         self._store = store
         self._checks = checks
         self.threads, self.fraction = settings.workers, True
-        self.quick_threads = settings.workers  # quick runs do not wait behind long ones (Runner._quick)
+        self.quick_threads = settings.workers
 
     def _call(self, spec: JobSpec, run: Run) -> RaydampCall | None:
         """The job's call, its system from the compiled functions loaded; None if the service is stopping."""
         return build_for_run(self._checks, spec, run, files=file_resolver(self._store))
 
     def quick(self, record: JobRecord) -> bool:
-        """A run of milliseconds: a built-in model without a load (nothing to compile or read) and fewer than
-        10^5 steps x coordinates. It reports no live progress (raydamp calls progress about 100 times a run,
-        each call taking the interpreter lock from the C++ loop: a fifth of the server's CPU per small job, for
-        a progress nobody sees; a cancel still stops it, the token being read without the lock), and the
-        runner records it without a claim (Runner._run_quick)."""
-        spec = record.job_spec
-        return checked_inline(spec) and planned_steps(spec) * _dim(spec) < _QUICK_WORK
+        """A run of milliseconds: a built-in model without a load and fewer than _QUICK_WORK steps x coordinates.
+        It reports no live progress (each report takes the interpreter lock from the C++ loop; a cancel still
+        stops it), and the runner records it without a claim."""
+        spec, state = record.job_spec, record.job_spec.initial_state  # numbers, if checked_inline
+        return checked_inline(spec) and planned_steps(spec) * max(len(state.q), len(state.p), 1) < _QUICK_WORK
 
     def run(self, record: JobRecord, run: Run) -> Outcome:
         spec = record.job_spec
         call = record.checked_call or self._call(spec, run)
         if call is None:
             return Outcome("cancelled", None, run.progress)
-        quick = checked_inline(spec) and planned_steps(spec) * call.model.dim < _QUICK_WORK
-        solution = call.run(progress=None if quick else run.report, cancel=run.token)
+        solution = call.run(progress=None if self.quick(record) else run.report, cancel=run.token)
         result = {"summary": solution.summary(), "trajectory": TrajectoryArrays.of(solution)}
         if solution.status in FAILED:
-            # A blow-up (or a trajectory that outgrew memory) is a failed job that keeps everything
-            # computed up to it.
+            # A blow-up (or a trajectory that outgrew memory) fails, keeping everything computed up to it.
             return Outcome("failed", solution.message, run.progress, {**result, "failed_step": solution.failed_step})
         return Outcome("completed" if solution.status == "completed" else "cancelled", None, run.progress, result)
 

@@ -1,5 +1,5 @@
-"""The sweep: a job over a grid of members, run through raydamp.sweep on a Dask client. Its table in the
-store (members, members done as its progress, outcomes, the NetCDF result as a blob) and its run."""
+"""The sweep: a job over a grid of members, run through raydamp.sweep on a Dask client. Its table (members,
+members done as its progress, outcomes, the NetCDF result as a blob) and its run."""
 
 from __future__ import annotations
 
@@ -50,24 +50,20 @@ class SweepStore(TaskStore[SweepRecord]):
         return SweepWork(self, settings, checks)
 
     def result_handle(self, sweep_id: str) -> tuple[sqlite3.Connection, int, int] | None:
-        """(a read-only connection holding a snapshot, the blob's rowid, its size) for streaming the result;
-        None if there is no result. The caller closes the connection."""
+        """(a read-only snapshot connection, the blob's rowid, its size), or None; the caller closes it."""
         found = self.db.snapshot("SELECT rowid, length(result) FROM sweeps WHERE id = ? AND result IS NOT NULL",
                                  (sweep_id,))
         return (found[0], *found[1]) if found else None
 
 
 class SweepWork:
-    """A sweep's run, one at a time (a sweep already spreads over every worker of the cluster). The Dask client
-    is made at the first sweep: to the scheduler at settings.dask_scheduler, or to a LocalCluster inside this
-    process (threads). Progress is the members of the chunks finished; a cancel keeps them as the result."""
+    """A sweep's run, one at a time (a sweep spreads over every worker of the cluster), on a Dask client made at
+    the first sweep (dask_scheduler, or an in-process LocalCluster). A cancel keeps the finished chunks."""
 
     threads, quick_threads, fraction = 1, 0, False  # members done; a sweep is never quick
 
     def __init__(self, store: SweepStore, settings: Settings, checks: CheckPool | None = None):
-        self._store = store
-        self._settings = settings
-        self._checks = checks
+        self._store, self._settings, self._checks = store, settings, checks
         self._client = self._cluster = None
 
     def _dask_client(self):
@@ -90,12 +86,11 @@ class SweepWork:
                     log.warning("closing the Dask client failed", exc_info=True)
 
     def quick(self, record: SweepRecord) -> bool:
-        """A sweep is never quick: it is claimed, and shows "running" with its members done."""
+        """A sweep is never quick."""
         return False
 
     def _loaded(self, spec: SweepSpec, run: Run) -> bool:
-        """The base system's functions loaded (a restart lost what the submission's check loaded), by a check
-        process (checks.build_for_run). False if the service stops meanwhile."""
+        """The base system's functions loaded by a check process; False if the service stops meanwhile."""
         return self._checks is None or not isolated(spec.job) or build_for_run(self._checks, spec.job, run) is not None
 
     def run(self, record: SweepRecord, run: Run) -> Outcome:

@@ -1,11 +1,6 @@
-"""/v1/files: upload, list and remove files: Matrix Market matrices, which a linear structure's M or K
-names as {"file": id}, and records (PEER .AT2, text columns t, value, .npy), which a load or a ground motion
-names as {"file": {"id": id}} (a one-column record also an initial state's q or p, {"file": id}).
-
-An upload is multipart form data with one part named "file" (`curl -F file=@K.mtx`). Its size is
-counted as it arrives (RequestGuard, max_file_bytes): a larger one gets 413 before it is read whole,
-and the parts go to a temporary file, not to memory. A file that a queued or running job names
-cannot be removed (409) until that job has finished or been cancelled.
+"""/v1/files: upload, list and remove files, multipart with one part named "file" (`curl -F file=@K.mtx`):
+Matrix Market matrices (a linear structure's M or K: {"file": id}) and records (PEER .AT2, text columns, .npy:
+a load's or ground motion's {"file": {"id": id}}). A file a queued or running job names cannot be removed (409).
 """
 
 from __future__ import annotations
@@ -22,8 +17,7 @@ from ..checks.uploads import RecordFileInfo, check_upload
 from ..edge.guard import file_too_large
 from ..kinds.files import FileRecord
 from ..schemas import FileInfo, FileList
-from .deps import SettingsDep, StoreDep
-from .tasks import check_limit, checks_busy
+from .tasks import SettingsDep, StoreDep, check_limit, checks_busy
 
 router = APIRouter(prefix="/v1/files", tags=["files"])
 

@@ -7,7 +7,7 @@ from fastapi import APIRouter
 import raydamp
 
 from ..schemas import Health
-from .deps import SettingsDep, StoreDep
+from .tasks import SettingsDep, StoreDep
 
 router = APIRouter(tags=["health"])
 

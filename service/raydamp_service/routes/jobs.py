@@ -1,14 +1,12 @@
 """/v1/jobs: submit, list, inspect and cancel integration jobs, and fetch their trajectories.
 
-Handlers are plain functions (FastAPI runs them in its thread pool), so SQLite reads never hold up the event
-loop; no handler waits for a run. The submission is the exception: a coroutine whose check runs on the loop
-when it is a built-in model's (microseconds), else in the thread pool, and whose insert (one short write, which
-WAL with synchronous=NORMAL commits without a sync) runs on the loop: a hop to the thread pool cost more.
+Handlers are plain functions (run in the thread pool: SQLite reads never hold up the event loop), but for the
+submission: a coroutine whose insert (one short write) and a built-in model's check run on the loop.
 """
 
 from __future__ import annotations
 
-import shutil
+import secrets
 import tempfile
 import threading
 from pathlib import Path
@@ -34,27 +32,20 @@ from ..tasks.runner import Runner
 from ..tasks.store import FINAL_STATUSES
 from ..trajectories.downloads import draw_plot, write_file
 from ..trajectories.stream import FetchLease, Selection, read_arrays, trajectory_chunks
-from .deps import RunnerDep, SettingsDep, StoreDep
-from .tasks import Tasks, check_limit, checks_busy, invalid
+from .tasks import RunnerDep, SettingsDep, StoreDep, Tasks, check_limit, checks_busy, invalid
 
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"], route_class=UniqueKeysRoute)
 
 _NOT_FOUND = {404: {"description": "no job with this id"}}
 
 
-def _progress(job_id: str, status: str, stored: float, runner: Runner) -> float:
-    live = runner.progress(job_id) if status == "running" else None
-    return live if live is not None else stored
-
-
 def _view(record: JobRecord, runner: Runner) -> JobView:
     return JobView(
-        id=record.id, status=record.status, progress=_progress(record.id, record.status, record.progress, runner),
-        attempts=record.attempts,
-        cancel_requested=record.cancel_requested, error=record.error, failed_step=record.failed_step,
-        summary=record.summary, trajectory=JOBS.url(record.id) + "/trajectory" if record.has_trajectory else None,
-        spec=record.spec, created_at=record.created_at, started_at=record.started_at,
-        finished_at=record.finished_at)
+        id=record.id, status=record.status, progress=runner.progress(record.id, record.status, record.progress),
+        attempts=record.attempts, cancel_requested=record.cancel_requested, error=record.error,
+        failed_step=record.failed_step, summary=record.summary,
+        trajectory=JOBS.url(record.id) + "/trajectory" if record.has_trajectory else None, spec=record.spec,
+        created_at=record.created_at, started_at=record.started_at, finished_at=record.finished_at)
 
 
 JOBS = Tasks("job", "/v1/jobs", _view)
@@ -64,8 +55,6 @@ def with_seed(spec: JobSpec) -> JobSpec:
     """A job at a temperature without a seed gets one now, stored with it: a rerun (after a restart) then
     draws the same noise."""
     if spec.temperature and spec.seed is None:
-        import secrets
-
         return spec.model_copy(update={"seed": secrets.randbits(64)})
     return spec
 
@@ -79,8 +68,7 @@ def with_seed(spec: JobSpec) -> JobSpec:
 async def submit_job(spec: JobSpec, request: Request, response: Response) -> JobCreated:
     """Queue an integration; poll the Location for its status. A system is checked (compiled, one trial
     step) in a check process within check_seconds and check_memory_bytes: past either, 422 on system."""
-    # What the lifespan put on app.state, read here rather than through four Depends: FastAPI solves each
-    # dependency per request (its cache key, scopes, kind of callable), a sixth of the POST's CPU on the loop.
+    # Read from app.state rather than through four Depends, whose solving was a sixth of the POST's CPU.
     state = request.app.state
     store, runner, settings, checks = state.store, state.runner, state.settings, state.checks
     spec = with_seed(spec)
@@ -88,7 +76,6 @@ async def submit_job(spec: JobSpec, request: Request, response: Response) -> Job
         call = _check(spec, store, settings, checks)
     else:  # waits for a check process, or reads uploaded files (whose arrays a queued job should not hold)
         call = await run_in_threadpool(_check, spec, store, settings, checks) and None
-    # The runner gets the row with the spec validated here and the built-in model's run the check built.
     record = JOBS.queue(request, response, store, runner, spec, settings.max_queued, "max_queued", settings,
                         prepare=lambda stored: stored.checked(spec, call))
     return JobCreated(id=record.id, status=record.status)
@@ -109,7 +96,7 @@ def list_jobs(store: StoreDep, runner: RunnerDep, settings: SettingsDep,
               status: Annotated[JobStatus | None, Query(description="only jobs in this state")] = None) -> JobList:
     check_limit(limit, settings)
     return JobList(jobs=[
-        JobListItem(id=r["id"], status=r["status"], progress=_progress(r["id"], r["status"], r["progress"], runner),
+        JobListItem(id=r["id"], status=r["status"], progress=runner.progress(r["id"], r["status"], r["progress"]),
                     model=r["label"], method=r["method"] or "chosen by raydamp", created_at=r["created_at"],
                     finished_at=r["finished_at"], url=JOBS.url(r["id"]))
         for r in store.listing(limit, status)])
@@ -143,8 +130,7 @@ def get_trajectory(job_id: str, request: Request, store: StoreDep, settings: Set
     connection, stored = _opened(record, store)
     selection = Selection(*slice(start, stop, every).indices(stored.points))
     try:
-        # A HEAD of the streamed JSON reads no body (the stream stops at the headers): no slot. A file's HEAD
-        # takes one, as its file is written before the headers go out.
+        # A HEAD of the streamed JSON reads no body: no slot (a file's HEAD takes one: it writes the file).
         lease = FetchLease(None if request.scope.get(HEAD) else
                            _large_slot(request, settings, len(selection) * stored.row_bytes))
     except HTTPException:
@@ -170,8 +156,7 @@ def _opened(record: JobRecord, store: JobStore):
 
 
 def _spec(record: JobRecord) -> JobSpec:
-    """The stored spec validated, for a file or a plot (their names and provenance come from it); 409 if a
-    version that checks more than the one that stored it refuses it. Its points are still served as JSON."""
+    """The stored spec validated, for a file or a plot; 409 if this version refuses what an earlier one stored."""
     try:
         return JobSpec.model_validate(record.spec)
     except ValidationError as error:
@@ -191,19 +176,6 @@ def _large_slot(request: Request, settings: Settings, selected_bytes: int) -> th
     return semaphore
 
 
-class _Download(FetchLease):
-    """A file being sent: its slot and its directory, both given back once, when the response ends (or is
-    collected, the client gone)."""
-
-    def __init__(self, semaphore: threading.Semaphore | None, directory: Path):
-        self._directory = directory
-        super().__init__(semaphore)
-
-    def release(self) -> None:
-        super().release()
-        shutil.rmtree(self._directory, ignore_errors=True)
-
-
 def _trajectory_file(record: JobRecord, store: JobStore, request: Request, settings: Settings, points: slice,
                      fmt: str) -> Response:
     """The selected points written as a file, a slice at a time (downloads.write_file), and sent from disk."""
@@ -212,14 +184,13 @@ def _trajectory_file(record: JobRecord, store: JobStore, request: Request, setti
     try:
         selection = Selection(*points.indices(stored.points))
         if len(selection) == 0:
-            # The same shape as every other 422 (detail[] with loc), as /openapi.json declares.
             raise RequestValidationError([{"type": "value_error", "loc": ("query", "start"), "input": points.start,
                                            "msg": f"start, stop, every select none of the {stored.points} saved "
                                                   "points"}])
-        download = _Download(_large_slot(request, settings, len(selection) * stored.row_bytes),
-                             Path(tempfile.mkdtemp(prefix="raydamp-download-")))
+        slot = _large_slot(request, settings, len(selection) * stored.row_bytes)
+        download = FetchLease(slot, directory := Path(tempfile.mkdtemp(prefix="raydamp-download-")))
         try:
-            path, media_type = write_file(record, spec, connection, stored, selection, fmt, download._directory)
+            path, media_type = write_file(record, spec, connection, stored, selection, fmt, directory)
         except BaseException:
             download.release()
             raise
@@ -227,8 +198,7 @@ def _trajectory_file(record: JobRecord, store: JobStore, request: Request, setti
         connection.close()
     return TimedFileResponse(path, media_type=media_type, background=BackgroundTask(download.release),
                              headers={"Content-Disposition": f'attachment; filename="{record.id}-{path.name}"'},
-                             send_seconds=settings.send_timeout_seconds,
-                                  min_rate=settings.min_send_bytes_per_second)
+                             send_seconds=settings.send_timeout_seconds, min_rate=settings.min_send_bytes_per_second)
 
 
 _PLOT_POINTS = 20_000  # points drawn at most: a plot of more is decimated evenly

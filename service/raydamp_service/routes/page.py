@@ -1,11 +1,5 @@
-"""The web page at / and the API docs at /docs, with every script they load served from here.
-
-No CDN: Plotly's JavaScript comes from the `plotly` package and Swagger UI from `fastapi-offline`'s
-copy of it, so both pages work on a lab network without internet. (Not `swagger-ui-bundle`: its
-Swagger UI 4.15 cannot render OpenAPI 3.1, which FastAPI writes; it shows "does not specify a
-valid version field".) The page itself is static (static/); it
-talks to the service only through the public /v1 API.
-"""
+"""The web page at / and the API docs at /docs, every script they load served from here (no CDN): Plotly from the
+`plotly` package, Swagger UI 5 (OpenAPI 3.1) from `fastapi-offline`. The page (static/) talks only to /v1."""
 
 from __future__ import annotations
 
@@ -25,20 +19,17 @@ SWAGGER_URL = "/vendor/swagger-ui"
 router = APIRouter(include_in_schema=False)
 
 
-def _plotly_js() -> Path:
-    """plotly.min.js as the plotly package ships it (the file its offline HTML export embeds)."""
-    path = Path(str(files("plotly") / "package_data" / "plotly.min.js"))
+def _shipped(package: str, folder: str, name: str) -> Path:
+    """A file a package ships (plotly's plotly.min.js; fastapi-offline's Swagger UI 5), or why the service cannot
+    start."""
+    path = Path(str(files(package) / folder / name))
     if not path.is_file():
-        raise RuntimeError(f"the plotly package has no {path}: reinstall raydamp[service]")
+        raise RuntimeError(f"the {package} package has no {path}: reinstall raydamp[service]")
     return path
 
 
-def _swagger_dir() -> Path:
-    """Swagger UI 5 (swagger-ui-bundle.js, swagger-ui.css, favicon.png) as fastapi-offline ships it."""
-    path = Path(str(files("fastapi_offline") / "static"))
-    if not (path / "swagger-ui-bundle.js").is_file():
-        raise RuntimeError(f"the fastapi-offline package has no Swagger UI in {path}: reinstall raydamp[service]")
-    return path
+def _plotly_js() -> Path:
+    return _shipped("plotly", "package_data", "plotly.min.js")
 
 
 @router.get("/", response_class=FileResponse)
@@ -48,7 +39,7 @@ def page() -> FileResponse:
 
 @router.get("/vendor/plotly.min.js", response_class=FileResponse)
 def plotly_js() -> FileResponse:
-    # The file changes only with the package; a day's caching spares reloading 4 MB on every visit.
+    # The file changes only with the package: a day's caching spares reloading 4 MB.
     return FileResponse(_plotly_js(), media_type="text/javascript", headers={"Cache-Control": "max-age=86400"})
 
 
@@ -63,8 +54,9 @@ def docs() -> HTMLResponse:
 
 
 def mount_assets(app: FastAPI) -> None:
-    """The page's own files under /static and Swagger UI's under /vendor/swagger-ui. Both are checked
-    here, so a missing asset stops the service at start rather than leaving a blank page."""
+    """The page's own files under /static and Swagger UI's under /vendor/swagger-ui, checked here: a missing
+    asset stops the service at start."""
     _plotly_js()
     app.mount("/static", StaticFiles(directory=STATIC_DIR), name="static")
-    app.mount(SWAGGER_URL, StaticFiles(directory=_swagger_dir()), name="swagger-ui")
+    swagger = _shipped("fastapi_offline", "static", "swagger-ui-bundle.js").parent
+    app.mount(SWAGGER_URL, StaticFiles(directory=swagger), name="swagger-ui")

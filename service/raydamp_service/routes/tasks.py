@@ -1,22 +1,45 @@
-"""What every kind of task's routes share (jobs, sweeps): the lifecycle seen over HTTP. Submit
-(a 422 naming the field, a 429 when the queue is full, the Location), list's limit, 404, cancel
-(409 once finished) and delete (204 for a finished task, else a cancel). Each kind's router keeps
-its own endpoints, documentation and views; the rules are written here once."""
+"""What the routes share. Their dependencies: the objects the lifespan put on app.state, overridable in tests, as
+coroutines (FastAPI runs a plain function in its thread pool, a hop costing more than the work:
+tests/service/test_dependencies.py). And every kind of task's lifecycle (jobs, sweeps): submit (a 422 naming the
+field, a 429 when the queue is full, the Location), list's limit, 404, cancel (409 once finished) and delete (204
+once finished, else a cancel)."""
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import Annotated, Any
 
-from fastapi import HTTPException, Request, Response
+from fastapi import Depends, HTTPException, Request, Response
 from fastapi.exceptions import RequestValidationError
 
 from ..checks.limits import JobError
+from ..checks.pool import CheckPool
 from ..config import Settings
+from ..kinds.jobs import JobStore
+from ..kinds.sweeps import SweepStore
 from ..tasks.runner import Runner
 from ..tasks.store import FINAL_STATUSES, FileGone, TaskStore
 
-__all__ = ["Tasks", "invalid", "check_limit", "checks_busy"]
+__all__ = ["Tasks", "invalid", "check_limit", "checks_busy", "SettingsDep", "StoreDep", "RunnerDep", "ChecksDep",
+           "SweepsDep", "SweepRunnerDep"]
+
+
+def _state(name: str):
+    """The dependency answering app.state.<name>."""
+
+    async def dependency(request: Request):
+        return getattr(request.app.state, name)
+
+    dependency.__name__ = dependency.__qualname__ = f"get_{name}"
+    return dependency
+
+
+SettingsDep = Annotated[Settings, Depends(_state("settings"))]
+StoreDep = Annotated[JobStore, Depends(_state("store"))]
+RunnerDep = Annotated[Runner, Depends(_state("runner"))]
+ChecksDep = Annotated[CheckPool, Depends(_state("checks"))]
+SweepsDep = Annotated[SweepStore, Depends(_state("sweeps"))]
+SweepRunnerDep = Annotated[Runner, Depends(_state("sweep_runner"))]
 
 
 def invalid(error: JobError, body: Any = None) -> RequestValidationError:
@@ -50,8 +73,8 @@ def check_limit(limit: int, settings: Settings) -> None:
 
 
 class Tasks:
-    """One kind's lifecycle routes, given its store and runner: its noun, its URL prefix, and
-    view(record, runner), the body a get, cancel or delete answers with."""
+    """One kind's lifecycle routes: its noun, its URL prefix, and view(record, runner), the body a get, cancel or
+    delete answers with."""
 
     def __init__(self, noun: str, prefix: str, view: Callable[[Any, Runner], Any]):
         self.noun, self.prefix, self.view = noun, prefix, view
@@ -73,15 +96,10 @@ class Tasks:
             record = store.create(spec.model_dump(mode="json"), limit, files=spec.uploads(), **columns)
         except FileGone as error:
             raise HTTPException(409, detail=str(error)) from None
-        if record is not None:
-            runner.submit(record.id, prepare(record) if prepare is not None else record)
-        return self._queued(request, response, record, limit, setting, settings)
-
-    def _queued(self, request: Request, response: Response, record: Any, limit: int, setting: str,
-                settings: Settings) -> Any:
         if record is None:
             raise HTTPException(429, detail=f"{limit} {self.noun}s are already queued ({setting}); retry later",
                                 headers={"Retry-After": str(settings.retry_after_seconds)})
+        runner.submit(record.id, prepare(record) if prepare is not None else record)
         # A path, never built from the Host header: a forged Host must not come back as a redirect target.
         response.headers["Location"] = request.scope.get("root_path", "") + self.url(record.id)
         return record

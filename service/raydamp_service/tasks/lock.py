@@ -1,11 +1,7 @@
-"""One service per database: a second one would re-queue the first's running jobs, and two writers through
-two names of one file (a hard link) corrupt it.
-
-The lock is an exclusive flock on a file named by the database's (device, inode), next to the database, so
-every name of the file (a symlink, a hard link beside it) finds the same lock. It is never taken on the
-database itself: closing any descriptor of that file drops the process's POSIX locks, SQLite's included.
-The kernel drops the flock when the process dies; within a process, holds are counted (the command line
-takes it before the lifespan does, to refuse with one line).
+"""One service per database: a second would re-queue the first's running jobs, and two writers through two names
+of one file (a hard link) corrupt it. The lock is an exclusive flock on a file named by the database's (device,
+inode), beside it, so every name of the file finds the same lock; never on the database itself, as closing any
+descriptor of that file drops the process's POSIX locks, SQLite's included. Holds within a process are counted.
 """
 
 from __future__ import annotations

@@ -1,10 +1,6 @@
-"""The runner of one kind of task: worker threads that take queued ids, claim the task in its store, run it
-through the kind's work (jobs.JobWork, sweeps.SweepWork) and record how it ended.
-
-HTTP handlers only write a row and put its id (with the row) on the queue. A cancel stops the run through its
-token and it ends "cancelled" with what it computed; at shutdown the runs are interrupted and handed back to
-the queue, to run again from the start at the next start (as are those a killed process left running). A
-quick run (JobWork.quick) is not claimed: made while its task is still queued, it is recorded by one write.
+"""The runner of one kind of task: worker threads claim queued tasks, run the kind's work (kinds/) and record
+how it ended. A cancel stops a run through its token; at shutdown runs go back to the queue. A quick run is not
+claimed: made while its task is still queued, it is recorded by one write.
 """
 
 from __future__ import annotations
@@ -33,8 +29,8 @@ log = logging.getLogger("raydamp_service.runner")
 
 @dataclass
 class Run:
-    """A task being run: its cancel token, and its live progress in its kind's measure (done / total, or the
-    count done when not `fraction`), saved to the store at most every `every` seconds."""
+    """A task being run: its cancel token and live progress (done / total, or the count done when not
+    `fraction`), saved to the store at most every `every` seconds."""
 
     save: Callable[[float], None]
     every: float
@@ -46,7 +42,7 @@ class Run:
     cancelled_by_user: bool = False
 
     def report(self, done: int, total: int) -> None:
-        """raydamp's progress callback (called once per step of a small job: one Python call, no more)."""
+        """raydamp's progress callback."""
         self.progress = (done / total if total else 1.0) if self.fraction else done
         if time.monotonic() - self.saved_at >= self.every:
             self.saved_at = time.monotonic()
@@ -69,8 +65,7 @@ class Outcome:
 
 
 class Work(Protocol):
-    """What a kind supplies: how many of its runs go at once, its progress measure, its run, and what to
-    release at shutdown."""
+    """What a kind supplies: its threads, its progress measure, its run, and what to release at shutdown."""
 
     threads: int
     quick_threads: int  # threads of their own for quick runs (0: none are quick)
@@ -90,9 +85,8 @@ class Runner:
         self._store = store
         self._settings = settings
         self._work: Work = work if work is not None else store.work(settings)
-        # (id, the row as just stored by a submission, or None: read it from the store), or None: stop.
+        # (id, the row as just stored, or None: read it), or None: stop. Quick runs have a lane of their own.
         self._queue: queue.SimpleQueue[tuple[str, TaskRecord | None] | None] = queue.SimpleQueue()
-        # Quick runs' own lane: a job of milliseconds does not wait behind long runs.
         self._quick: queue.SimpleQueue[tuple[str, TaskRecord | None] | None] = queue.SimpleQueue()
         self._threads: list[threading.Thread] = []
         self._active: dict[str, Run] = {}
@@ -138,8 +132,7 @@ class Runner:
         self._work.close()
 
     def submit(self, task_id: str, record: TaskRecord | None = None) -> None:
-        """Queue a task; record, its row as just stored (a submission), spares a quick run reading it back and
-        sends it to the quick lane."""
+        """Queue a task; record, its row as just stored, spares a quick run reading it back."""
         quick = record is not None and self._work.quick_threads > 0 and self._work.quick(record)
         (self._quick if quick else self._queue).put((task_id, record))
 
@@ -150,10 +143,10 @@ class Runner:
                 run.cancelled_by_user = True
                 run.token.cancel()
 
-    def progress(self, task_id: str) -> float | None:
-        """The live progress of a running task (None if this process is not running it)."""
-        run = self._active.get(task_id)
-        return run.progress if run is not None else None
+    def progress(self, task_id: str, status: str = "running", stored: float | None = None) -> float | None:
+        """The live progress of a running task this process runs, else `stored`."""
+        run = self._active.get(task_id) if status == "running" else None
+        return run.progress if run is not None else stored
 
     # ---- worker threads ----
 
@@ -199,12 +192,10 @@ class Runner:
         """Run the task (stored: its row as submitted, else read here)."""
         run = Run(save=lambda progress: self._save_progress(task_id, progress),
                   every=self._settings.progress_save_seconds, fraction=self._work.fraction, stopping=self._stopping)
-        # Registered before the claim, so a cancel arriving once the task is "running" always finds the token.
+        # Registered before the claim: a cancel arriving once the task is "running" finds the token.
         with self._lock:
             self._active[task_id] = run
         try:
-            # A row handed over by its submission may have been cancelled since: a quick run of it then records
-            # nothing (its write expects "queued"), and a claim fails.
             record = stored if stored is not None else self._store.get(task_id)
             if record is None or record.status != "queued":
                 return  # cancelled while queued (or removed)
@@ -232,10 +223,8 @@ class Runner:
             self._retention_wake.set()
 
     def _run_quick(self, record: TaskRecord, run: Run) -> None:
-        """A run of milliseconds, made while its task is still "queued" in the store and recorded as it ends:
-        queued -> completed (or failed) and its result in one write, where a claim and a finish were two
-        transactions of their own, each more than the run. A cancel meanwhile wins (the write then changes
-        nothing); a crash before the write leaves the task queued, to run at the next start."""
+        """A run of milliseconds, made while its task is still "queued" and recorded in one write as it ends
+        (a claim and a finish cost more than the run). A cancel meanwhile wins: the write then changes nothing."""
         started = now()
         outcome = self._outcome(record, run)
         if not (outcome.status == "cancelled" and run.interrupted):  # else still queued: it runs at the next start

@@ -1,12 +1,7 @@
-"""The SQLite store: one database, one table per kind of task (jobs.py, sweeps.py), one lifecycle.
-
-queued -> running -> completed | failed | cancelled, with progress, attempts, a cancel request,
-delete, retention, and the recovery of runs a dead process left behind, is written here once; a
-kind names its table, its own columns, and how it stores its result.
-
-One connection per thread (sqlite3 connections are not for sharing), WAL so that readers never
-wait for the writer. Every state change is one UPDATE guarded by the state it expects, so a
-cancel and a worker's claim cannot both win.
+"""The SQLite store: one database, one table per kind of task (kinds/), one lifecycle, written here once:
+queued -> running -> completed | failed | cancelled, with progress, attempts, cancel, delete, retention and
+recovery. One connection per thread, WAL so that readers never wait for the writer. Every state change is one
+UPDATE guarded by the state it expects, so a cancel and a worker's claim cannot both win.
 """
 
 from __future__ import annotations
@@ -32,8 +27,7 @@ FINAL_STATUSES = frozenset({"completed", "failed", "cancelled"})
 _FINAL_SQL = "('completed', 'failed', 'cancelled')"
 UNFINISHED_SQL = "('queued', 'running')"
 _INCREMENTAL = 2  # PRAGMA auto_vacuum value
-# The lifecycle's columns, the same in every kind's table. seq: submission order (newest-first listing);
-# spec: the validated spec as JSON.
+# The lifecycle's columns in every kind's table. seq: submission order; spec: the validated spec as JSON.
 _LIFECYCLE = """seq INTEGER PRIMARY KEY AUTOINCREMENT, id TEXT NOT NULL UNIQUE, status TEXT NOT NULL,
     spec TEXT NOT NULL, attempts INTEGER NOT NULL DEFAULT 0, cancel_requested INTEGER NOT NULL DEFAULT 0,
     error TEXT, created_at TEXT NOT NULL, started_at TEXT, finished_at TEXT"""
@@ -75,8 +69,7 @@ class Database:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             connection = self.connection()
             if connection.execute("PRAGMA auto_vacuum").fetchone()[0] != _INCREMENTAL:
-                # Set before the first table exists (or by one VACUUM for an older file), so that
-                # removed tasks give their pages back to the file system (incremental_vacuum).
+                # Before the first table (or by one VACUUM of an older file): removed tasks' pages can go back.
                 connection.execute(f"PRAGMA auto_vacuum = {_INCREMENTAL}")
                 connection.execute("VACUUM")
             with self.transaction() as db:
@@ -113,9 +106,8 @@ class Database:
     @contextmanager
     def transaction(self) -> Iterator[sqlite3.Connection]:
         connection = self.connection()
-        # One writer at a time inside this process: threads queue on a lock that wakes the next at
-        # once, rather than meeting SQLITE_BUSY, whose handler sleeps 1, 2, 5 ... 100 ms between
-        # tries (the tail of the submission latency under concurrent POSTs).
+        # One writer at a time in this process: a lock wakes the next at once, where SQLITE_BUSY's handler
+        # sleeps 1, 2, 5 ... 100 ms between tries.
         with self._write_lock, connection:  # commits, or rolls back on an exception
             yield connection
 
@@ -142,9 +134,8 @@ class Database:
         connection = self.connection()
         with self._write_lock:
             connection.executescript("PRAGMA incremental_vacuum;")  # execute() would free one page per call
-        # TRUNCATE waits for the readers of older snapshots; a client streaming a trajectory may hold
-        # one for seconds, and other writers would wait as long. So wait briefly, and if readers
-        # remain, leave it to the next retention pass.
+        # TRUNCATE waits for readers of older snapshots (a stream may hold one for seconds, and writers would
+        # wait as long): wait briefly, and leave what remains to the next retention pass.
         connection.execute("PRAGMA busy_timeout = 200")
         try:
             busy = connection.execute("PRAGMA wal_checkpoint(TRUNCATE)").fetchone()[0]
@@ -154,9 +145,8 @@ class Database:
 
 
 def normalise_stored(db: sqlite3.Connection, table: str, model: type[BaseModel]) -> None:
-    """Bring the specs a table holds to the model's JSON of today (views send them as stored: _Stored), once
-    per change of the model's schema: a spec stored before a field was added then shows the field's default,
-    as it did when every view validated it again. One that no longer validates is left as it was."""
+    """Bring a table's specs to the model's JSON of today (views send them as stored), once per change of the
+    model's schema: an older spec then shows a new field's default. One that no longer validates is kept."""
     key = f"{table}.spec schema"
     schema = hashlib.sha256(json.dumps(model.model_json_schema(), sort_keys=True).encode()).hexdigest()
     if db.execute("SELECT 1 FROM service WHERE key = ? AND value = ?", (key, schema)).fetchone():
@@ -181,8 +171,7 @@ class FileGone(LookupError):
 
 
 def _require_files(db: sqlite3.Connection, files: tuple[str, ...]) -> None:
-    """In the insert's transaction: a file the check read and a DELETE removed since is FileGone (the DELETE
-    found no task naming it yet: its 204 and the submission's 202 both went out, and the run failed later)."""
+    """In the insert's transaction: a file the check read and a DELETE removed since is FileGone."""
     if not files:
         return
     present = {row[0] for row in db.execute(f"SELECT id FROM files WHERE id IN ({', '.join('?' * len(files))})",
@@ -194,8 +183,8 @@ def _require_files(db: sqlite3.Connection, files: tuple[str, ...]) -> None:
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class TaskRecord:
-    """A task's row: the lifecycle's columns. A kind's record adds its own, with their values at creation as
-    defaults. Fields typed dict are JSON in the table, bool ones 0 or 1."""
+    """A task's row: the lifecycle's columns, then the kind's with their values at creation as defaults.
+    Fields typed dict are JSON in the table, bool ones 0 or 1."""
 
     id: str
     status: str
@@ -212,9 +201,8 @@ Record = TypeVar("Record", bound=TaskRecord)
 
 
 class TaskStore(Generic[Record]):
-    """The tasks of one kind: one table holding the lifecycle's columns (seq, id, status, spec, attempts,
-    cancel_requested, error, created_at, started_at, finished_at, a progress column) and the kind's own.
-    Given a path rather than a Database, the store has a database of its own."""
+    """The tasks of one kind: one table of the lifecycle's columns and the kind's own. Given a path rather
+    than a Database, the store has a database of its own."""
 
     TABLE: ClassVar[str]
     COLUMNS: ClassVar[str]  # the kind's columns in SQL: name type, ...
@@ -300,9 +288,8 @@ class TaskStore(Generic[Record]):
 
     def _change(self, task_id: str, expected: str, changes: str, *args: Any,
                 also: tuple[str, tuple] | None = None) -> bool:
-        """One UPDATE of the task guarded by the states it expects (SQL: "('queued')"), so that a cancel and a
-        worker's claim cannot both win; `also`, a statement of the kind's, runs in the same transaction if it
-        changed the task. True if it did."""
+        """One UPDATE of the task guarded by the states it expects (SQL: "('queued')"); `also`, a statement of
+        the kind's, runs in the same transaction if it changed the task. True if it did."""
         with self.db.transaction() as db:
             changed = db.execute(f"UPDATE {self.TABLE} SET {changes} WHERE id = ? AND status IN {expected}",
                                  (*args, task_id)).rowcount
@@ -311,8 +298,7 @@ class TaskStore(Generic[Record]):
         return bool(changed)
 
     def claim(self, task_id: str) -> Record | None:
-        """queued -> running; None if the task is no longer queued (cancelled meanwhile). One statement, which
-        returns the row it changed."""
+        """queued -> running, in one statement returning the row; None if no longer queued (cancelled)."""
         if sqlite3.sqlite_version_info < (3, 35):  # before RETURNING: the UPDATE, then the row read back
             claimed = self._change(task_id, "('queued')", f"status = 'running', started_at = ?, {self.PROGRESS} = 0, "
                                    "attempts = attempts + 1", now())
@@ -328,11 +314,9 @@ class TaskStore(Generic[Record]):
 
     def finish(self, task_id: str, status: str, *, error: str | None = None, progress: float | None = None,
                also: tuple[str, tuple] | None = None, unclaimed_since: str | None = None, **columns: Any) -> bool:
-        """Record the end of a run: its result in the kind's columns (a dict as JSON), and one more statement
-        (a row of the kind's other table); all of it or none. True if the task changed.
-
-        unclaimed_since: the run was made without a claim (a quick one: Runner), begun at that time. Then the
-        task goes from queued straight to its end (attempts + 1) in this one write, unless a cancel came first."""
+        """Record the end of a run: its result in the kind's columns (a dict as JSON) and `also`; all or none.
+        True if the task changed. unclaimed_since: a quick run made without a claim, begun then: the task goes
+        from queued to its end in this one write, unless a cancel came first."""
         assert status in FINAL_STATUSES
         values = tuple(json.dumps(value) if isinstance(value, dict) else value for value in columns.values())
         changes = (f"status = ?, error = ?, finished_at = ?, {self.PROGRESS} = COALESCE(?, {self.PROGRESS})"
@@ -379,8 +363,7 @@ class TaskStore(Generic[Record]):
         if not (max_jobs or max_age_seconds or max_bytes):
             return 0
         finished = f"FROM {self.TABLE} WHERE status IN {_FINAL_SQL}"
-        # The common case, every bound held, decided by one aggregate in SQLite (which runs without
-        # the GIL) rather than by a Python loop over every finished task once a second.
+        # The common case, every bound held, is one aggregate in SQLite, not a Python loop over every task.
         count, total, oldest = self.db.connection().execute(
             f"SELECT COUNT(*), COALESCE(SUM({self.BYTES}), 0), MIN(finished_at) {finished}").fetchone()
         cutoff = (datetime.now(timezone.utc).timestamp() - max_age_seconds) if max_age_seconds else None

@@ -1,6 +1,5 @@
-"""A job's trajectory as the store keeps it: the arrays a run saves per point (SAVED), each a column of
-float64 blobs in the trajectories table (jobs.py), read in slices (trajectory_stream.py) and turned back
-into a raydamp.Solution (downloads.py)."""
+"""A job's trajectory as the store keeps it: the arrays a run saves per point (SAVED), each a column of float64
+blobs in the trajectories table, read in slices (stream.py) and turned back into a Solution (downloads.py)."""
 
 from __future__ import annotations
 
@@ -14,26 +13,23 @@ __all__ = ["SAVED", "Saved", "StoredTrajectory", "TrajectoryArrays"]
 
 @dataclass(frozen=True)
 class Saved:
-    """An array a run saves per point, kept as a blob column of the trajectories table: the name of its column,
-    of the Solution's attribute and of the Trajectory JSON's field. width: of a row, "" for one value, "dim" the
-    saved coordinates, "momenta" the momentum maps; optional: NULL for a run without it."""
+    """An array a run saves per point: its name (blob column, Solution attribute, Trajectory field); width of a
+    row ("" one value, "dim" the saved coordinates, "momenta" the momentum maps); optional: NULL if not run."""
 
     name: str
     width: str = ""
     optional: bool = False
 
 
-# The arrays of a trajectory, in the order of the table and of the JSON: adding one is a line here, and a field
-# of TrajectoryArrays (and of the Trajectory schema).
+# In the order of the table and the JSON: adding one is a line here and a field of TrajectoryArrays and Trajectory.
 SAVED = (Saved("t"), Saved("q", "dim"), Saved("p", "dim"), Saved("energy"), Saved("momentum", "momenta"),
-         Saved("work", optional=True),  # the damping work W(t): a job with work (NULL in jobs from before it)
-         Saved("load_work", optional=True))  # the load's work W_f(t): a job with work and a load
+         Saved("work", optional=True),  # the damping work W(t)
+         Saved("load_work", optional=True))  # the load's work W_f(t): a job with a load
 
 
 @dataclass(frozen=True)
 class TrajectoryArrays:
-    """The saved points (SAVED): t (N,), q and p (N, n), energy (N,), momentum (N, m), work W(t) (N,) or None, and
-    load_work W_f(t) (N,) or None (a run without a load)."""
+    """The saved points (SAVED): t (N,), q and p (N, n), energy (N,), momentum (N, m), work and load_work (N,)."""
 
     t: np.ndarray
     q: np.ndarray
@@ -51,8 +47,7 @@ class TrajectoryArrays:
 
 @dataclass(frozen=True)
 class StoredTrajectory:
-    """Where a trajectory's blobs are (the row), their shapes, and the optional arrays present (SAVED), for
-    reading them in slices."""
+    """Where a trajectory's blobs are (the row), their shapes, and the optional arrays present."""
 
     rowid: int
     points: int

@@ -1,9 +1,5 @@
-"""A finished job's trajectory as a raydamp.Solution, and as a file (CSV, NPZ, NetCDF).
-
-No numerics or formats here: the stored arrays become a raydamp.Solution carrying the job's spec as its
-provenance, and raydamp writes the file (raydamp.results.io.write_solution) or draws the plot
-(sol.plot.png). The file is written a slice of rows at a time, raydamp asking for each slice and this
-module reading it from the stored blobs, so a download holds a bounded part of the trajectory.
+"""A finished job's trajectory as a raydamp.Solution carrying the job's spec as its provenance, from which raydamp
+writes a file (CSV, NPZ, NetCDF: a slice of rows at a time, read from the blobs) or draws a plot.
 """
 
 from __future__ import annotations
@@ -47,8 +43,7 @@ def stored_solution(record, arrays: TrajectoryArrays, spec: JobSpec) -> raydamp.
 def write_file(record, spec: JobSpec, connection: sqlite3.Connection, stored: StoredTrajectory,
                selection: Selection, fmt: Literal["csv", "npz", "netcdf"], directory: Path) -> tuple[Path, str]:
     """(path, media type) of the selected points written in directory by raydamp, which asks for them a slice
-    at a time: rows [start, stop) of the selection are read from their blobs, never the whole of them. spec:
-    the record's, validated (once for the file, not once per slice)."""
+    at a time, read from the blobs. spec: the record's, validated."""
     head = stored_solution(record, read_arrays(connection, stored, Selection(selection.start, selection.start + 1,
                                                                              selection.every)), spec)
 
@@ -64,8 +59,8 @@ def write_file(record, spec: JobSpec, connection: sqlite3.Connection, stored: St
 
 def draw_plot(record, arrays: TrajectoryArrays, spec: JobSpec, kind: str,
               options: dict) -> tuple[str | None, bytes | None]:
-    """(None, the PNG) of a stored trajectory's plot, or (raydamp's refusal, None): a plot this run cannot have (a
-    projection of one coordinate, an unknown coordinate). Run in a check process (CheckPool.plot)."""
+    """(None, the PNG) of a stored trajectory's plot, or (raydamp's refusal, None) for one this run cannot have.
+    Run in a check process (CheckPool.plot)."""
     try:
         return None, stored_solution(record, arrays, spec).plot.png(kind, **options)
     except ValueError as error:

@@ -1,18 +1,15 @@
-"""A stored trajectory as a JSON body written piece by piece, with start/stop/every decimation.
-
-A 10^6-point trajectory is some 170 MB of JSON; built whole, it cost ~1 GB per request and eight
-fetches froze the machine. Here each array is read from its SQLite blob a bounded slice at a time
-(incremental blob I/O), so a fetch holds about CHUNK_BYTES of floats and their text at once,
-whatever the trajectory's length. The body has exactly the Trajectory schema.
-"""
+"""A stored trajectory as a JSON body (exactly the Trajectory schema) written piece by piece, with start/stop/every
+decimation: each array read from its blob a bounded slice at a time, so a fetch holds about CHUNK_BYTES."""
 
 from __future__ import annotations
 
 import json
+import shutil
 import sqlite3
 import threading
 from collections.abc import Iterator
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -26,22 +23,23 @@ _ROW_READ_LIMIT = 1 << 16  # bytes of one read of a blob
 
 
 class FetchLease:
-    """A slot among the large fetches served at once; released exactly once, by whoever ends first:
-    the body's generator, the response's background task, or the lease's own collection."""
+    """A slot among the large fetches served at once, and a download's directory: given back exactly once, by
+    whoever ends first: the body's generator, the response's background task, or the lease's own collection."""
 
-    def __init__(self, semaphore: threading.Semaphore | None):
-        self._semaphore = semaphore
+    def __init__(self, semaphore: threading.Semaphore | None, directory: Path | None = None):
+        self._semaphore, self._directory = semaphore, directory
         self._lock = threading.Lock()
 
     def release(self) -> None:
         with self._lock:
-            semaphore, self._semaphore = self._semaphore, None
+            semaphore, self._semaphore, directory, self._directory = self._semaphore, None, self._directory, None
         if semaphore is not None:
             semaphore.release()
+        if directory is not None:
+            shutil.rmtree(directory, ignore_errors=True)
 
     def __del__(self) -> None:
-        # A client gone before the first byte: neither the body (never started) nor the background
-        # task (skipped on a disconnect) runs, and the slot would be lost for good.
+        # A client gone before the first byte: neither the body nor the background task runs.
         self.release()
 
 
@@ -53,13 +51,6 @@ class Selection:
 
     def __len__(self) -> int:
         return len(range(self.start, self.stop, self.every))
-
-    def pieces(self, rows: int) -> Iterator[Selection]:
-        """The selection as consecutive parts of at most `rows` points each."""
-        n = len(self)
-        for done in range(0, n, max(1, rows)):
-            first = self.start + done * self.every
-            yield Selection(first, first + min(rows, n - done) * self.every, self.every)
 
 
 _BY_NAME = {array.name: array for array in SAVED}

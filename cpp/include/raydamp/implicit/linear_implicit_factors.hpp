@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-#include "raydamp/implicit/sparse_ldlt.hpp"
+#include "raydamp/linalg/sparse_ldlt.hpp"
 #include "raydamp/models/linear_structure.hpp"
 
 namespace raydamp {

@@ -55,11 +55,6 @@
 
 namespace raydamp {
 
-template <class Model>
-struct is_linear_structure : std::false_type {};
-template <class Mass>
-struct is_linear_structure<LinearStructure<Mass>> : std::true_type {};
-
 namespace detail {
 
 // The largest factor by which one backward implicit-midpoint sub-step of length s < 0
@@ -225,7 +220,7 @@ class LinearImplicitStepper {
   template <class Model>
   static std::shared_ptr<const LinearImplicitFactors> prepare(const Model& model, const Composition& composition,
                                                              const RunSpec& spec) {
-    static_assert(is_linear_structure<Model>::value, "the linear implicit methods run a LinearStructure");
+    static_assert(is_linear_system<Model>::value, "the linear implicit methods run a LinearStructure");
     auto factors = std::make_shared<LinearImplicitFactors>(detail::LinearSystem(model));
     for (int j = 0; j < composition.stages(); ++j)
       for (const double h : {spec.h, spec.h_last}) checked(*factors, composition, composition.gamma(j) * h);
@@ -286,22 +281,5 @@ class LinearImplicitStepper {
   int stages_;
   std::array<const detail::ImplicitFactor<Scalar>*, kMaxCompositionStages> regular_{}, last_{};
 };
-
-// Calls f(MethodType{}) for the method named `name` on a model of type Model: with_method
-// (catalogue.hpp), and the linear implicit methods for a LinearStructure, refused for any
-// other kind with a message naming the method.
-template <class Model, class F>
-decltype(auto) with_method_for(const std::string& name, F&& f) {
-  const MethodEntry& entry = method_entry(name);
-  if (!entry.linear_implicit) return with_method(name, f);
-  if constexpr (is_linear_structure<Model>::value) {
-    if (entry.table == Gauss4::name) return f(Gauss4{});
-    return f(ImplicitMidpoint{});
-  } else {
-    throw std::invalid_argument("method: '" + name + "' is an implicit step of a linear structure's whole system "
-                                "M q'' + C q' + K q = f, and runs only a raydamp.LinearStructure; for this model "
-                                "use 3s, 2s or rks");
-  }
-}
 
 }  // namespace raydamp

@@ -16,7 +16,7 @@
 
 #include "raydamp/damping/sparse_rayleigh_damping.hpp"
 #include "raydamp/damping/spectral_bound.hpp"
-#include "raydamp/implicit/sparse_ldlt.hpp"
+#include "raydamp/linalg/sparse_ldlt.hpp"
 #include "raydamp/mass/sparse_mass.hpp"
 #include "raydamp/state.hpp"
 #include "raydamp/system/small_dense.hpp"
@@ -94,6 +94,7 @@ template <class Mass>
 struct LinearStructure {
   static constexpr int dim = Eigen::Dynamic;
   static constexpr int n_momenta = 0;
+  static constexpr bool linear_system = true;  // runs the implicit methods (catalogue.hpp's with_method_for)
   using Vec = Vector<dim>;
 
   double eps;  // 1 when damped (D = alpha M + beta K), 0 when alpha = beta = 0

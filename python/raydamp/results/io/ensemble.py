@@ -10,9 +10,9 @@ from typing import Any
 import numpy as np
 
 from ..._validation import replaceable_store
-from ..ensemble_solution import STATUSES, EnsembleSolution
+from ...jobs.statuses import STATUSES
 
-__all__ = ["ensemble_to_xarray", "ensemble_from_xarray", "save_ensemble", "ENSEMBLE_FORMATS"]
+__all__ = ["ensemble_to_xarray", "save_ensemble", "ENSEMBLE_FORMATS"]
 
 ENSEMBLE_FORMATS = (".nc", ".zarr")
 
@@ -24,7 +24,7 @@ def _member_coordinates(parameters: dict[str, np.ndarray]) -> dict[str, Any]:
     return coords
 
 
-def ensemble_to_xarray(ens: EnsembleSolution):
+def ensemble_to_xarray(ens: Any):
     """The ensemble as an xarray.Dataset: dims (member, time, dof, momentum_map), a member
     coordinate per swept parameter, the provenance and shared scalars in attrs. Statuses are
     stored as codes (``status.attrs['flag_meanings']``) and the messages of members that did not
@@ -64,36 +64,7 @@ def ensemble_to_xarray(ens: EnsembleSolution):
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
 
-def ensemble_from_xarray(ds) -> EnsembleSolution:
-    """An EnsembleSolution from ``ensemble_to_xarray``'s Dataset, provenance included."""
-    attrs = dict(ds.attrs)
-    codes = np.asarray(ds["status"].values)
-    if codes.size and not ((codes >= 0) & (codes < len(STATUSES))).all():  # was STATUSES[c]'s IndexError
-        raise ValueError(f"status: codes must be 0..{len(STATUSES) - 1} ({' '.join(STATUSES)}), got "
-                         f"{int(codes[(codes < 0) | (codes >= len(STATUSES))][0])}")
-    status = tuple(STATUSES[int(c)] for c in codes)
-    steps = np.asarray(ds["steps"].values, np.int64)
-    messages = json.loads(attrs["messages"])
-    message = tuple(messages.get(str(i), f"completed {steps[i]} steps") for i in range(len(status)))
-    members = ds.sizes["member"]
-
-    def values(name):
-        return np.asarray(ds[name].values, float)
-
-    return EnsembleSolution(
-        t=values("t"), q=values("q"), p=values("p"), energy=values("energy"),
-        momentum=values("momentum").reshape(members, ds.sizes["time"], -1),
-        rows=np.asarray(ds["rows"].values, np.int64),
-        t_final=values("t_final"), q_final=values("q_final"), p_final=values("p_final"),
-        energy_final=values("energy_final"), momentum_final=values("momentum_final").reshape(members, -1),
-        status=status, steps=steps, failed_step=np.asarray(ds["failed_step"].values, np.int64), message=message,
-        max_momentum_drift=values("max_momentum_drift"), q0=values("q0"), p0=values("p0"),
-        parameters={name: values(name) for name in json.loads(attrs["parameters"])}, method=str(attrs["method"]),
-        tableau=str(attrs["tableau"]) or None, composition=str(attrs["composition"]) or None, h=float(attrs["h"]),
-        wall_time=float(attrs["wall_time"]), threads=int(attrs["threads"]), origin=json.loads(attrs["provenance"]))
-
-
-def save_ensemble(ens: EnsembleSolution, path) -> None:
+def save_ensemble(ens: Any, path) -> None:
     """Write ``ens`` to ``path``: .nc (NetCDF via h5netcdf) or .zarr (a Zarr store, replaced if present)."""
     path = Path(path)
     suffix = path.suffix.lower()

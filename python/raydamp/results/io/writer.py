@@ -21,14 +21,13 @@ import os
 import zipfile
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import IO
+from typing import IO, Any
 
 import numpy as np
 
-from ..solution import Solution
-from .solution import _attributes, _csv_table, to_xarray
+from .dataset import _FORMAT_OF_SUFFIX, FORMATS, _attributes, _csv_table, to_xarray
 
-__all__ = ["write_solution", "SLICE_BYTES", "WRITE_FORMATS", "ReadRows"]
+__all__ = ["write_solution", "save", "SLICE_BYTES", "WRITE_FORMATS", "ReadRows"]
 
 SLICE_BYTES = 4 << 20  # floats read and written at once
 WRITE_FORMATS = ("csv", "npz", "netcdf")
@@ -40,17 +39,17 @@ Target = str | os.PathLike | IO[bytes]
 _WIDE = ("q", "p", "momentum")
 
 
-def _columns(head: Solution) -> list[str]:
+def _columns(head: Any) -> list[str]:
     """The stored columns in the order every format writes them (np.savez's member order)."""
     return (["t", "q", "p", "energy", "momentum"] + (["work"] if head.work is not None else [])
             + (["load_work"] if head.load_work is not None else []))
 
 
-def _width(head: Solution, column: str) -> int | None:
+def _width(head: Any, column: str) -> int | None:
     return {"q": head.q.shape[1], "p": head.p.shape[1], "momentum": head.momentum.shape[1]}.get(column)
 
 
-def write_solution(target: Target, fmt: str, head: Solution, read: ReadRows | None = None,
+def write_solution(target: Target, fmt: str, head: Any, read: ReadRows | None = None,
                    rows: int | None = None, *, slice_bytes: int = SLICE_BYTES) -> None:
     """Write a trajectory to ``target`` (a path, or a binary file object: NetCDF needs one open for
     reading and writing, ``"w+b"``) as ``fmt`` ("csv", "npz" or "netcdf"), at most about
@@ -83,7 +82,7 @@ def write_solution(target: Target, fmt: str, head: Solution, read: ReadRows | No
     {"csv": _write_csv, "npz": _write_npz, "netcdf": _write_netcdf}[fmt](target, head, read, bounds)
 
 
-def _slice(head: Solution, read: ReadRows, start: int, stop: int) -> Solution:
+def _slice(head: Any, read: ReadRows, start: int, stop: int) -> Any:
     """Rows [start, stop) as a Solution with head's names, scalars and provenance."""
     arrays = {column: np.asarray(read(column, start, stop), dtype=float) for column in _columns(head)}
     return dataclasses.replace(head, **arrays)
@@ -96,7 +95,7 @@ def _opened(target: Target, mode: str):
     return target, False
 
 
-def _write_csv(target: Target, head: Solution, read: ReadRows, bounds: list[tuple[int, int]]) -> None:
+def _write_csv(target: Target, head: Any, read: ReadRows, bounds: list[tuple[int, int]]) -> None:
     out, owned = _opened(target, "wb")
     try:
         for i, (start, stop) in enumerate(bounds):
@@ -108,7 +107,7 @@ def _write_csv(target: Target, head: Solution, read: ReadRows, bounds: list[tupl
             out.close()
 
 
-def _write_npz(target: Target, head: Solution, read: ReadRows, bounds: list[tuple[int, int]]) -> None:
+def _write_npz(target: Target, head: Any, read: ReadRows, bounds: list[tuple[int, int]]) -> None:
     rows = bounds[-1][1]
     # As np.savez does: stored (not compressed) members, each with zip64 sizes, as it may pass 4 GB.
     with zipfile.ZipFile(target, "w", zipfile.ZIP_STORED, allowZip64=True) as out:
@@ -124,7 +123,7 @@ def _write_npz(target: Target, head: Solution, read: ReadRows, bounds: list[tupl
             np.lib.format.write_array(member, np.array(json.dumps(_attributes(head), allow_nan=True)))
 
 
-def _write_netcdf(target: Target, head: Solution, read: ReadRows, bounds: list[tuple[int, int]]) -> None:
+def _write_netcdf(target: Target, head: Any, read: ReadRows, bounds: list[tuple[int, int]]) -> None:
     import h5netcdf
 
     slices: Iterator[tuple[int, int]] = iter(bounds)
@@ -139,3 +138,13 @@ def _write_netcdf(target: Target, head: Solution, read: ReadRows, bounds: list[t
                 values = read(column, start, end)
                 if np.size(values) and column in out.variables:  # momentum of width 0: nothing stored
                     out.variables[column][start:end, ...] = values
+
+
+def save(sol: Any, path) -> None:
+    """Write ``sol`` to ``path``, the format chosen by the suffix (.nc, .npz, .csv), a slice of rows at a
+    time (write_solution, which the service's downloads use too)."""
+    path = Path(path)
+    fmt = _FORMAT_OF_SUFFIX.get(path.suffix.lower())
+    if fmt is None:
+        raise ValueError(f"path: unknown format {path.suffix!r} (known: {', '.join(FORMATS)})")
+    write_solution(path, fmt, sol)

@@ -15,8 +15,7 @@ string parser (which dies with SIGFPE on ``2**2**40``)::
 error is a ValueError "<field>: ... at column N ...".
 """
 
-from .parser import parse
-from .symbolic import Expression
+from .expression import Expression, parse
 from .tree import FUNCTIONS, MAX_DEPTH, MAX_EXPONENT, MAX_LENGTH, MAX_NODES, Binary, Call, Name, Node, Number, Unary
 
 __all__ = ["parse", "Expression", "FUNCTIONS", "MAX_LENGTH", "MAX_NODES", "MAX_DEPTH", "MAX_EXPONENT",

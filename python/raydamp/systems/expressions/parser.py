@@ -24,10 +24,9 @@ import re
 from collections.abc import Mapping
 from typing import NamedTuple
 
-from .symbolic import Expression
 from .tree import FUNCTIONS, MAX_DEPTH, MAX_LENGTH, MAX_NODES, Binary, Call, Name, Node, Number, Unary, fold
 
-__all__ = ["parse"]
+__all__ = ["parse_tree"]
 
 # Printable ASCII plus the whitespace we allow ('\r' too, so CRLF text pastes fine).
 _NOT_ALLOWED = re.compile(r"[^\x20-\x7e\t\n\r]")
@@ -61,11 +60,8 @@ def _plural(kind: str) -> str:
     return {"momentum": "momenta"}.get(kind, kind + "s")
 
 
-def parse(text: str, *, field: str = "expression", names: Mapping[str, str] | None = None) -> Expression:
-    """Parse ``text`` into an Expression that may use the ``names`` (name -> kind, such
-    as "coordinate", "parameter" or "momentum"), the constant ``pi`` (unless ``names``
-    has its own "pi") and the FUNCTIONS. Raises ValueError "<field>: ...".
-    """
+def parse_tree(text: str, field: str, names: Mapping[str, str] | None) -> tuple[Node, frozenset[str], dict[str, str]]:
+    """The folded tree of ``text`` (expression.parse), the names it uses, and their kinds."""
     field = str(field)
     if not isinstance(text, str):
         # The type only: the repr of an arbitrary object may be huge or hostile.
@@ -90,7 +86,7 @@ def parse(text: str, *, field: str = "expression", names: Mapping[str, str] | No
         raise ValueError(f"{field}: expression nested too deeply") from None
     tree = fold(tree, field)
     used = frozenset(parser.used)
-    return Expression(text, tree, used, field, {name: allowed[name] for name in used})
+    return tree, used, {name: allowed[name] for name in used}
 
 
 def _tokenize(text: str, field: str) -> list[_Token]:

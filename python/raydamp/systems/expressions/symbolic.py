@@ -1,4 +1,4 @@
-"""Expression: a parsed expression, and its SymEngine form built from the tree.
+"""The SymEngine form of a parsed expression (expression.Expression.to_symengine), built from its tree.
 
 SymEngine objects are made only through its Python API (Symbol, +, *, **, se.sin,
 ...), never from text. Before SymEngine sees a tree, ``tree.fold`` has computed every
@@ -16,7 +16,7 @@ import symengine as se
 
 from .tree import FUNCTIONS, OPERATORS, Binary, Call, Name, Node, Number, Unary, fold, postorder
 
-__all__ = ["Expression", "number"]
+__all__ = ["number", "to_symengine"]
 
 _ONE_THIRD = se.Rational(1, 3)
 _INFINITY = se.RealDouble(math.inf)
@@ -53,87 +53,33 @@ def _finite_real(value: se.Basic) -> bool:
         return False
 
 
-class Expression:
-    """A parsed, validated expression. Made by ``parse``; immutable.
+def to_symengine(tree: Node, names: frozenset[str], field: str, symbols: Mapping[str, object]) -> se.Basic:
+    """The SymEngine expression of a parsed tree (Expression.to_symengine), with ``symbols[name]`` for each of
+    its ``names``."""
+    numeric: dict[str, float] = {}
+    symbolic: dict[str, se.Basic] = {}
+    for name in sorted(names):
+        if name not in symbols:
+            raise ValueError(f"{field}: to_symengine needs a value for {name!r}")
+        value = symbols[name]
+        if isinstance(value, bool) or not isinstance(value, (numbers.Real, se.Basic)):
+            # Strings in particular: se.sympify would parse them, which is what
+            # this package exists to avoid.
+            raise ValueError(f"{field}: the value for {name!r} must be a SymEngine expression or a real "
+                             f"number, got {type(value).__name__}")
+        if isinstance(value, numbers.Real) or value.is_Number:
+            if not _finite_real(value):
+                raise ValueError(f"{field}: the value for {name!r} is not a finite real number")
+            numeric[name] = float(value)
+        else:
+            symbolic[name] = value
 
-    ``text`` is the original text, ``tree`` the root node (constants folded), ``names``
-    the names it uses (not 'pi', not functions), ``field`` what its messages start with.
-    """
-
-    __slots__ = ("text", "tree", "names", "field", "_kinds")
-
-    def __init__(self, text: str, tree: Node, names: frozenset[str], field: str, kinds: Mapping[str, str]):
-        for slot, value in (("text", text), ("tree", tree), ("names", frozenset(names)), ("field", field),
-                            ("_kinds", dict(kinds))):
-            object.__setattr__(self, slot, value)
-
-    def __setattr__(self, name, value):
-        raise AttributeError("Expression is immutable")
-
-    def __delattr__(self, name):
-        raise AttributeError("Expression is immutable")
-
-    def to_symengine(self, symbols: Mapping[str, object]) -> se.Basic:
-        """The SymEngine expression, with ``symbols[name]`` for each name in ``names``:
-        a SymEngine expression (usually a Symbol) to keep it symbolic, or a real number
-        (int, float, se.Integer, se.RealDouble, ...) to substitute.
-
-        Raises ValueError "<field>: ..." if a value is missing or not real, or if the
-        values make something undefined or over a limit (x/k with k = 0, x^k with
-        k = 10**6), or if SymEngine's simplification leaves no finite real value
-        (1/(x - x) is 1/0)."""
-        field = self.field
-        numeric: dict[str, float] = {}
-        symbolic: dict[str, se.Basic] = {}
-        for name in sorted(self.names):
-            if name not in symbols:
-                raise ValueError(f"{field}: to_symengine needs a value for {name!r}")
-            value = symbols[name]
-            if isinstance(value, bool) or not isinstance(value, (numbers.Real, se.Basic)):
-                # Strings in particular: se.sympify would parse them, which is what
-                # this package exists to avoid.
-                raise ValueError(f"{field}: the value for {name!r} must be a SymEngine expression or a real "
-                                 f"number, got {type(value).__name__}")
-            if isinstance(value, numbers.Real) or value.is_Number:
-                if not _finite_real(value):
-                    raise ValueError(f"{field}: the value for {name!r} is not a finite real number")
-                numeric[name] = float(value)
-            else:
-                symbolic[name] = value
-
-        tree = fold(self.tree, field, numeric)
-        result = _build(tree, symbolic, field, find_infinity=False)
-        if result.has(_INFINITY) or result.has(-_INFINITY):
-            # Rare, so found cheaply here and located by a second, slower build.
-            _build(tree, symbolic, field, find_infinity=True)
-        return result
-
-    def __str__(self) -> str:
-        return self.text
-
-    def __repr__(self) -> str:
-        return f"Expression({self.text!r}, field={self.field!r})"
-
-    # Equality by text and names: the tree is a function of them. (Comparing trees
-    # would recurse as deep as the tree.)
-    def __eq__(self, other) -> bool:
-        if not isinstance(other, Expression):
-            return NotImplemented
-        return self.text == other.text and self.names == other.names
-
-    def __hash__(self) -> int:
-        return hash((self.text, self.names))
-
-    def __copy__(self) -> Expression:
-        return self
-
-    def __deepcopy__(self, memo) -> Expression:
-        return self
-
-    def __reduce__(self):
-        # Pickled as its text and re-parsed on load: the tree may be deeper than
-        # pickle's recursion limit, and a loaded expression gets validated again.
-        return (_rebuild, (self.text, self.field, dict(self._kinds)))
+    tree = fold(tree, field, numeric)
+    result = _build(tree, symbolic, field, find_infinity=False)
+    if result.has(_INFINITY) or result.has(-_INFINITY):
+        # Rare, so found cheaply here and located by a second, slower build.
+        _build(tree, symbolic, field, find_infinity=True)
+    return result
 
 
 def _build(tree: Node, symbolic: Mapping[str, se.Basic], field: str, find_infinity: bool) -> se.Basic:
@@ -172,8 +118,3 @@ def _build(tree: Node, symbolic: Mapping[str, se.Basic], field: str, find_infini
         return result
 
     return postorder(tree, visit)
-
-
-def _rebuild(text: str, field: str, kinds: dict[str, str]) -> Expression:
-    from .parser import parse  # here, not at the top: parser imports this module
-    return parse(text, field=field, names=kinds)
