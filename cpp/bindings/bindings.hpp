@@ -13,4 +13,5 @@ void bind_system_dense_mass(pybind11::module_& m);
 void bind_chain(pybind11::module_& m);
 void bind_linear_structure(pybind11::module_& m);
 void bind_kepler(pybind11::module_& m);
+void bind_events(pybind11::module_& m);
 }  // namespace raydamp::bindings

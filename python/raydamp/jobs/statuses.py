@@ -22,7 +22,8 @@ MEANINGS: dict[str, str] = {
     "diverged": "the run blew up while its state was still finite: its energy gained more than `divergence` "
                 "times what its start, its load and its temperature can give it (see raydamp.integrate); it "
                 "stopped at failed_step, keeping its rows.",
-    "event": "reserved: an event function stopped the run.",
+    "event": "a terminal event (raydamp.Event(..., terminal=True)) ended the run at its crossing time, the last "
+             "step shortened to land there; the message names the event.",
     "not_converged": "reserved: an implicit step's iteration did not converge.",
 }
 
