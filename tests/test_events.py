@@ -184,3 +184,32 @@ def test_a_terminal_event_stops_each_ensemble_member_as_its_single_run():
         np.testing.assert_array_equal(member.t, single.events.t)
         np.testing.assert_array_equal(member.q, single.events.q)
         np.testing.assert_array_equal(member.event, single.events.event)
+
+
+def test_the_job_json_takes_events_and_the_provenance_runs_again():
+    from raydamp.jobs import job_arguments
+
+    job = {"model": "damped_pendulum", "parameters": {"eps": 0.0}, "method": "sv", "composition": "yoshida4",
+           "h": 1e-3, "t_end": 10.0, "initial_state": {"q": [1.0], "p": [0.0]}, "work": False,
+           "events": [{"g": "q[0]", "direction": -1, "terminal": True, "name": "vertical"}]}
+    model, q0, p0, options = job_arguments(job)
+    sol = raydamp.integrate(model, q0, p0, **options)
+    assert sol.status == "event" and abs(sol.t[-1] - ellipk(math.sin(0.5) ** 2)) < 1e-12
+    summary = sol.summary()["events"]
+    assert summary["count"] == 1 and summary["name"] == ["vertical"] and summary["direction"] == [-1]
+    again = raydamp.integrate(*job_arguments(sol.provenance)[:3], **job_arguments(sol.provenance)[3])
+    assert again.t[-1] == sol.t[-1]
+
+
+@pytest.mark.parametrize("events, path", [
+    ([{"g": "q[0] + y"}], r"events\[0\]\.g"),
+    ([{"g": "q[0]", "direction": 2}], r"events\.0\.direction|events\[0\]\.direction"),
+])
+def test_a_bad_event_in_a_job_names_its_path(events, path):
+    from raydamp.jobs import job_arguments
+
+    job = {"model": "damped_pendulum", "h": 0.1, "t_end": 1.0, "initial_state": {"q": [1.0], "p": [0.0]},
+           "events": events}
+    with pytest.raises(ValueError, match=path):
+        model, q0, p0, options = job_arguments(job)
+        raydamp.integrate(model, q0, p0, **options)
