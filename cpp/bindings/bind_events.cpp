@@ -1,5 +1,6 @@
-// The events a run locates (raydamp/events/): an EventSet built from Python's compiled event
-// functions (python/raydamp/run/events.py), which keeps them alive while a run holds the set.
+// The events a run locates (raydamp/events/): an EventSet of the events' directions and names and the
+// one function that computes every g (python/raydamp/run/events.py, which keeps it alive while a run
+// holds the set).
 #include <pybind11/stl.h>
 
 #include <cstdint>
@@ -17,23 +18,23 @@ namespace raydamp::bindings {
 void bind_events(py::module_& m) {
   py::class_<EventSet>(m, "EventSet")
       .def(py::init<>())
-      .def("add",
-           [](EventSet& set, std::uintptr_t fn, std::uintptr_t data, const std::vector<std::tuple<int, int>>& slots,
-              int direction, bool terminal, const std::string& name) {
-             EventFunction ev;
-             ev.fn.fn = reinterpret_cast<CompiledFunction::Fn>(fn);
-             ev.fn.data = reinterpret_cast<void*>(data);
+      .def("set_function",
+           [](EventSet& set, std::uintptr_t fn, std::uintptr_t data, const std::vector<std::tuple<int, int>>& slots) {
+             set.fn.fn = reinterpret_cast<CompiledFunction::Fn>(fn);
+             set.fn.data = reinterpret_cast<void*>(data);
+             set.slots.clear();
              for (const auto& [kind, index] : slots) {
                if (kind < 0 || kind > static_cast<int>(EventSlot::Kind::f))
                  throw std::invalid_argument("events: slot kind " + std::to_string(kind) + " is not one of t, q, p, v, f");
-               ev.slots.push_back({static_cast<EventSlot::Kind>(kind), index});
+               set.slots.push_back({static_cast<EventSlot::Kind>(kind), index});
              }
-             ev.direction = direction;
-             ev.terminal = terminal;
-             ev.name = name;
-             set.events.push_back(std::move(ev));
            },
-           py::arg("fn"), py::arg("data"), py::arg("slots"), py::arg("direction"), py::arg("terminal"), py::arg("name"))
+           py::arg("fn"), py::arg("data"), py::arg("slots"))
+      .def("add",
+           [](EventSet& set, int direction, bool terminal, const std::string& name) {
+             set.events.push_back({direction, terminal, name});
+           },
+           py::arg("direction"), py::arg("terminal"), py::arg("name"))
       .def("__len__", [](const EventSet& set) { return set.events.size(); });
 }
 

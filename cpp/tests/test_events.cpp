@@ -18,13 +18,9 @@ void angle(double* out, const double* in, void*) {
 
 EventSet angle_events(int direction, bool terminal) {
   EventSet set;
-  EventFunction ev;
-  ev.fn.fn = &angle;
-  ev.slots = {{EventSlot::Kind::q, 0}, {EventSlot::Kind::v, 0}};
-  ev.direction = direction;
-  ev.terminal = terminal;
-  ev.name = "vertical";
-  set.events.push_back(ev);
+  set.fn.fn = &angle;
+  set.slots = {{EventSlot::Kind::q, 0}, {EventSlot::Kind::v, 0}};
+  set.events.push_back({direction, terminal, "vertical"});
   return set;
 }
 
@@ -98,14 +94,12 @@ int main() {
     static double level;
     level = theta0 - 1e-9;  // the turning point is at q = theta0 (energy conserved to the method's error)
     EventSet events;
-    EventFunction ev;
-    ev.fn.fn = [](double* out, const double* in, void*) {
+    events.fn.fn = [](double* out, const double* in, void*) {
       out[0] = in[0] - level;
       out[1] = in[1];
     };
-    ev.slots = {{EventSlot::Kind::q, 0}, {EventSlot::Kind::v, 0}};
-    ev.name = "near top";
-    events.events.push_back(ev);
+    events.slots = {{EventSlot::Kind::q, 0}, {EventSlot::Kind::v, 0}};
+    events.events.push_back({0, false, "near top"});
     RunSpec spec{0.05, 200, 0.05, 1};
     State<1> start{Vector<1>(0.0), Vector<1>(2.0 * std::sin(theta0 / 2.0))};  // energy of the release at theta0
     spec.events = &events;
@@ -124,7 +118,7 @@ int main() {
     spec.events = &events;
     CHECK(test::throws([&] { integrate<StormerVerlet>(pendulum, tab, z0, spec); }));
     events.events[0].direction = 0;
-    events.events[0].slots[0].index = 3;
+    events.slots[0].index = 3;
     CHECK(test::throws([&] { integrate<StormerVerlet>(pendulum, tab, z0, spec); }));
   }
   return test::failures == 0 ? 0 : 1;

@@ -24,7 +24,9 @@ System's functions, in the names:
 - a System's coordinate names and ``p_<name>`` for their momenta;
 - ``q[i]`` and ``p[i]`` for any model (a Chain's site i, a LinearStructure's degree of freedom i).
 
-Its rate dg/dt is derived symbolically. The step loop calls the compiled code without Python.
+Its rate dg/dt is derived symbolically, and every event's g and rate are compiled into one function,
+which the step loop calls once per step end, without Python. A step where every g and its rate keep
+their signs costs that call and a branch-free scan; the root finder runs only where one changes sign.
 """
 
 from __future__ import annotations
@@ -162,6 +164,7 @@ def prepare(model, events, dense, *, temperature: float) -> Prepared | None:
         return None
     if not isinstance(dense, bool):
         raise ValueError(f"dense must be True or False, got {dense!r}")
+    asked = events is not None
     if events is None:
         events = ()
     if isinstance(events, (str, Event, Mapping)) or not isinstance(events, Sequence):
@@ -176,13 +179,15 @@ def prepare(model, events, dense, *, temperature: float) -> Prepared | None:
         raise ValueError("events: two events share a name")
     # An empty list still hands the core a set: the run steps whole steps with nothing watched (the
     # baseline events are compared with, bit for bit and in time).
-    core = None if events is None and dense else _core.EventSet()
+    core = _core.EventSet() if asked else None
     owners = []
     if checked:
+        keys = tuple(_key(model, e.g, f"events[{i}].g") for i, e in enumerate(checked))
+        fn, address, data, slots = _compile(keys)
+        owners.append(fn)
+        core.set_function(address, data, slots)
         for i, e in enumerate(checked):
-            fn, address, data, slots = _compiled(model, e.g, f"events[{i}].g")
-            owners.append(fn)
-            core.add(address, data, slots, e.direction, e.terminal, names[i])
+            core.add(e.direction, e.terminal, names[i])
     return Prepared(core, dense, names, checked, tuple(owners))
 
 
@@ -203,8 +208,9 @@ def _event(i: int, e) -> Event:
     raise ValueError(f"events[{i}] must be a raydamp.Event or a dict, got {type(e).__name__}")
 
 
-def _compiled(model, g: str, field: str):
-    """(the compiled function, its address and data, its slots) of g on model."""
+def _key(model, g: str, field: str):
+    """What g compiles from on model: its text (q[i] written q_i_), its names' kinds, the slot of each
+    coordinate, momentum or t, and the parameters' values; a hashable tuple (compiled once per tuple)."""
     text = _INDEXED.sub(lambda m: f"{m.group(1)}_{m.group(2)}_", g) if isinstance(g, str) else g
     dim = model.dim
     kinds: dict[str, str] = {}
@@ -229,55 +235,53 @@ def _compiled(model, g: str, field: str):
         found = _INDEXED_NAME.fullmatch(name)
         if found and int(found.group(2)) >= dim:
             raise ValueError(f"{field}: {found.group(1)}[{found.group(2)}] is not a coordinate (0..{dim - 1})")
-    key = (text, tuple(sorted(index.items())), tuple(sorted(constants.items())))
-    return _compile(key, field, tuple(sorted(kinds.items())))
+    return text, field, tuple(sorted(kinds.items())), tuple(sorted(index.items())), tuple(sorted(constants.items()))
 
 
 _INDEXED_NAME = re.compile(r"([qp])_(\d+)_")
 
 
 @functools.lru_cache(maxsize=128)
-def _compile(key, field: str, kinds):
+def _compile(keys):
+    """Every event's g and dg/dt in one compiled function (one call per step end however many events):
+    (the function, its address and data, its slots: (kind, index) per input, events/types.hpp)."""
     import symengine as se
 
     from ..systems.expressions import parse
     from ..systems.system.compile import _jit, number
 
-    text, index, constants = key
-    index, constants = dict(index), dict(constants)
-    expr = parse(text, field=field, names=dict(kinds))
-    symbols: dict[str, Any] = {}
-    inputs, slots = [], []
-    derivative = se.Integer(0)
-    time = None
-    for name in sorted(expr.names):
-        if name in constants:
-            symbols[name] = number(constants[name])
-            continue
-        kind, i = index[name]
-        symbol = se.Symbol(f"_{kind}{i}")
-        symbols[name] = symbol
-    g = expr.to_symengine(symbols)
-    for name in sorted(expr.names):
-        if name in constants:
-            continue
-        kind, i = index[name]
-        symbol = symbols[name]
-        if kind == "t":
-            time = symbol
-            inputs.append(symbol)
-            slots.append((_SLOT_KINDS["t"], 0))
-            continue
-        rate = se.Symbol(f"_{'v' if kind == 'q' else 'f'}{i}")
-        inputs += [symbol, rate]
-        slots += [(_SLOT_KINDS[kind], i), (_SLOT_KINDS["v" if kind == "q" else "f"], i)]
-        derivative += se.diff(g, symbol) * rate
-    if time is not None:
-        derivative += se.diff(g, time)
-    if not inputs:
-        raise ValueError(f"{field}: g is a constant; it names no coordinate, momentum or t")
+    parsed = []
+    used: dict[tuple[str, int], se.Symbol] = {}
+    for text, field, kinds, index, constants in keys:
+        index, constants = dict(index), dict(constants)
+        expr = parse(text, field=field, names=dict(kinds))
+        symbols: dict[str, Any] = {}
+        for name in expr.names:
+            if name in constants:
+                symbols[name] = number(constants[name])
+            else:
+                kind, i = index[name]
+                symbols[name] = used.setdefault((kind, i), se.Symbol(f"_{kind}{i}"))
+        if not any(name not in constants for name in expr.names):
+            raise ValueError(f"{field}: g is a constant; it names no coordinate, momentum or t")
+        parsed.append(expr.to_symengine(symbols))
+    inputs, slots, rates = [], [], {}
+    for (kind, i), symbol in sorted(used.items()):
+        inputs.append(symbol)
+        slots.append((_SLOT_KINDS[kind], i))
+        if kind != "t":  # q's rate is v = M^-1 p, p's the force f
+            rate_kind = "v" if kind == "q" else "f"
+            rates[symbol] = se.Symbol(f"_{rate_kind}{i}")
+            inputs.append(rates[symbol])
+            slots.append((_SLOT_KINDS[rate_kind], i))
+    outputs = []
+    for g in parsed:
+        derivative = se.Integer(0)
+        for symbol in g.free_symbols:
+            derivative += se.diff(g, symbol) * rates.get(symbol, se.Integer(1))  # t's rate is 1
+        outputs += [g, derivative]
     try:
-        fn, address, data = _jit(inputs, [g, derivative], (field,))
+        fn, address, data = _jit(inputs, outputs, ("events",))
     except ValueError as error:  # SpecError: named by the path given
         raise ValueError(str(error)) from None
     return fn, address, data, slots

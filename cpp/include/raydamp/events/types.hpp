@@ -17,24 +17,25 @@ struct EventSlot {
   int index = 0;
 };
 
-// g(t, q, p) compiled from an expression: fn(out, in) with in the slots' values in order and
-// out = (g, dg/dt), dg/dt by the chain rule on the slots' derivatives (python/raydamp/run/events.py).
+// One event: which zeros of its g count, and what they do.
 struct EventFunction {
-  CompiledFunction fn;
-  std::vector<EventSlot> slots;
   int direction = 0;     // +1: g rising through 0, -1: falling, 0: both
   bool terminal = false;  // the run ends at the first such crossing
   std::string name;
 };
 
+// Every event's g(t, q, p) in one function compiled from their expressions (one call per step end,
+// however many events): fn(out, in) with in the slots' values in order and out = (g_0, dg_0/dt, g_1,
+// dg_1/dt, ...), each rate by the chain rule on the slots' derivatives (python/raydamp/run/events.py).
 struct EventSet {
+  CompiledFunction fn;
+  std::vector<EventSlot> slots;
   std::vector<EventFunction> events;
   bool empty() const { return events.empty(); }
   // Whether any g reads p (then the force at every step end is computed, for p's interpolant).
   bool reads_momenta() const {
-    for (const EventFunction& e : events)
-      for (const EventSlot& s : e.slots)
-        if (s.kind == EventSlot::Kind::p || s.kind == EventSlot::Kind::f) return true;
+    for (const EventSlot& s : slots)
+      if (s.kind == EventSlot::Kind::p || s.kind == EventSlot::Kind::f) return true;
     return false;
   }
 };

@@ -8,7 +8,8 @@
 // asks finish() to step from the crossing step's start to the crossing time only.
 //
 // Its cost when off is one branch per step; the work sits in observe(), kept out of line so that the
-// flattened step loops do not carry copies of it.
+// flattened step loops do not carry copies of it. On, a step costs one call of the events' compiled
+// function and a branch-free scan of the signs of g and dg/dt at both ends (detect()).
 #pragma once
 
 #include <algorithm>
@@ -48,21 +49,19 @@ class EventWatcher {
     forces_ = spec.dense;
     if (set_) {
       const auto& events = set_->events;
-      std::size_t slots = 0;
+      if (!set_->fn) throw std::invalid_argument("events: no compiled function");
       for (std::size_t e = 0; e < events.size(); ++e) {
-        const EventFunction& ev = events[e];
-        if (!ev.fn) throw std::invalid_argument("events[" + std::to_string(e) + "].g: no compiled function");
-        if (ev.direction < -1 || ev.direction > 1)
+        if (events[e].direction < -1 || events[e].direction > 1)
           throw std::invalid_argument("events[" + std::to_string(e) + "].direction must be -1, 0 or +1");
-        for (const EventSlot& s : ev.slots)
-          if (s.kind != Kind::t && (s.index < 0 || s.index >= n_))
-            throw std::invalid_argument("events[" + std::to_string(e) + "].g: coordinate " + std::to_string(s.index) +
-                                        " is not one of the model's 0.." + std::to_string(n_ - 1));
-        slots = std::max(slots, ev.slots.size());
-        terminal_ = terminal_ || ev.terminal;
+        terminal_ = terminal_ || events[e].terminal;
       }
+      for (const EventSlot& s : set_->slots)
+        if (s.kind != Kind::t && (s.index < 0 || s.index >= n_))
+          throw std::invalid_argument("events: g reads coordinate " + std::to_string(s.index) +
+                                      ", not one of the model's 0.." + std::to_string(n_ - 1));
       forces_ = forces_ || set_->reads_momenta();
-      in_.assign(slots, 0.0);
+      in_.assign(set_->slots.size(), 0.0);
+      out_.assign(2 * events.size(), 0.0);
       g0_.assign(events.size(), 0.0);
       g1_ = dg0_ = dg1_ = g0_;
       found_.reserve(3 * events.size());
@@ -152,12 +151,12 @@ class EventWatcher {
     model_.mass.velocity(x.p, v1_);
     if (forces_) force(q1_, p1_, t, f1_);
     if (!set_) return;
+    const std::vector<EventSlot>& slots = set_->slots;
+    for (std::size_t k = 0; k < slots.size(); ++k) in_[k] = end_value(slots[k], f1_);
+    set_->fn(out_.data(), in_.data());
     for (std::size_t e = 0; e < g1_.size(); ++e) {
-      const EventFunction& ev = set_->events[e];
-      for (std::size_t k = 0; k < ev.slots.size(); ++k) in_[k] = end_value(ev.slots[k], f1_);
-      ev.fn(out_, in_.data());
-      g1_[e] = out_[0];
-      dg1_[e] = out_[1];
+      g1_[e] = out_[2 * e];
+      dg1_[e] = out_[2 * e + 1];
     }
   }
 
@@ -182,12 +181,12 @@ class EventWatcher {
 
   // g (which = 0) or dg/dt (which = 1) of event e on the step's interpolant at s in [0, 1].
   double on_step(std::size_t e, double s, int which) {
-    const EventFunction& ev = set_->events[e];
+    const std::vector<EventSlot>& slots = set_->slots;
     const double h = t1_ - t0_;
     const hermite::Weights w = hermite::value(s), d = hermite::slope(s);
-    for (std::size_t k = 0; k < ev.slots.size(); ++k) {
-      const int j = ev.slots[k].index;
-      switch (ev.slots[k].kind) {
+    for (std::size_t k = 0; k < slots.size(); ++k) {
+      const int j = slots[k].index;
+      switch (slots[k].kind) {
         case Kind::t: in_[k] = s == 1.0 ? t1_ : t0_ + s * h; break;
         case Kind::q: in_[k] = hermite::at(w, q0_[j], v0_[j], q1_[j], v1_[j], h); break;
         case Kind::p: in_[k] = hermite::at(w, p0_[j], f0_[j], p1_[j], f1_[j], h); break;
@@ -195,8 +194,8 @@ class EventWatcher {
         case Kind::f: in_[k] = hermite::rate_at(d, p0_[j], f0_[j], p1_[j], f1_[j], h); break;
       }
     }
-    ev.fn(out_, in_.data());
-    return out_[which];
+    set_->fn(out_.data(), in_.data());
+    return out_[2 * e + which];
   }
 
   // A root of on_step(e, ., which) in (a, b], where its values fa, fb have opposite signs (or fb = 0):
@@ -235,15 +234,25 @@ class EventWatcher {
 
   // The crossings of step [t0, t1], in time order, into the log; a terminal one stops the run there.
   void detect() {
+    // The common step, scanned without a branch per event: every g and its rate keep their signs and
+    // no g is zero. (A NaN may pass either way: the loop below skips it.)
+    const std::size_t m = g1_.size();
+    bool maybe = false;
+    for (std::size_t e = 0; e < m; ++e)
+      maybe |= (std::signbit(g0_[e]) != std::signbit(g1_[e])) | (std::signbit(dg0_[e]) != std::signbit(dg1_[e])) |
+               (g0_[e] == 0.0) | (g1_[e] == 0.0);
+    if (!maybe) return;
     found_.clear();
-    for (std::size_t e = 0; e < g1_.size(); ++e) {
+    for (std::size_t e = 0; e < m; ++e) {
       const double ga = g0_[e], gb = g1_[e];
+      const bool ga_negative = ga < 0.0, rate_negative = dg0_[e] < 0.0;
       if (!std::isfinite(ga) || !std::isfinite(gb)) continue;
       // Points of [0, 1] between which g is monotone on the interpolant: the ends and, where g keeps
       // its sign but its rate changes sign, the extremum between (a touch or two crossings).
       double s[3] = {0.0, 1.0, 1.0}, g[3] = {ga, gb, gb};
       int points = 2;
-      if (ga != 0.0 && (ga < 0.0) == (gb < 0.0) && dg0_[e] * dg1_[e] < 0.0) {
+      if (ga != 0.0 && ga_negative == (gb < 0.0) && dg0_[e] != 0.0 && dg1_[e] != 0.0 &&
+          rate_negative != (dg1_[e] < 0.0)) {
         s[1] = root(e, 0.0, 1.0, dg0_[e], dg1_[e], 1);
         g[1] = on_step(e, s[1], 0);
         points = std::isfinite(g[1]) ? 3 : 2;
@@ -316,7 +325,7 @@ class EventWatcher {
   double t0_ = 0.0, t1_ = 0.0, t_stop_ = 0.0;
   Vec q0_, p0_, v0_, f0_, q1_, p1_, v1_, f1_, grad_, rate_, fa_, fb_;
   std::vector<double> in_, g0_, g1_, dg0_, dg1_;
-  double out_[2] = {0.0, 0.0};
+  std::vector<double> out_;
   std::vector<Found> found_;
   RecMarks marks0_{}, marks1_{};
 };
