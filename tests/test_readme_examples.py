@@ -50,6 +50,7 @@ GROUPS = {
     "structures": ('raydamp.LinearStructure("M.mtx"', 'method="gauss4", h=0.5', "raydamp.advise(s"),
     "loads": ("raydamp.GroundMotion(",),
     "thermal": ("temperature=0.5, seed=2024",),
+    "events": ('raydamp.Event("sin(0.6*t)"',),
 }
 
 
@@ -607,3 +608,21 @@ def test_thermal_block_finds_raydamp_analysis_after_import_raydamp():
     done = subprocess.run([sys.executable, "-c", "import raydamp; raydamp.analysis.kinetic_temperature"],
                           capture_output=True, text=True, timeout=60)
     assert done.returncode == 0, done.stderr[-500:]
+
+
+def test_events_block(tmp_path, monkeypatch):
+    from scipy.special import ellipk
+
+    monkeypatch.chdir(tmp_path)
+    s = Session()
+    s.run('raydamp.Event("sin(0.6*t)"')
+    # "572 points, one per period 2 pi / 1.2", each at the section: sin(0.6 t) = 0 to rounding of t.
+    assert s.at("len(sol.events)").value == 572
+    sol = s.names["sol"]
+    np.testing.assert_allclose(sol.events.t, 2 * np.pi * np.arange(1, 573) / 1.2, rtol=0, atol=1e-11)
+    # "("event", 1.674993916...): within 1e-12 of K"
+    status, t_stop = s.at("quarter.status, quarter.t[-1]").value
+    assert status == "event" and abs(t_stop - ellipk(math.sin(0.5) ** 2)) < 1e-12, t_stop
+    # "(q, p) at the vertical: q ~ 0": 1e-7 of the quarter period away, so |q| ~ 1e-7 |p|.
+    q, p = s.at("swing.at(1.6749939)").value
+    assert abs(q[0]) < 1e-6 and abs(p[0]) > 0.9, (q, p)

@@ -118,3 +118,19 @@ def test_a_pulse_is_a_harmonic_term_with_an_end():
     np.testing.assert_allclose(values, [2 * np.sin(1.5), 2 * np.sin(3.0), 0.0, 0.0], rtol=0, atol=1e-15)
     with pytest.raises(ValueError, match="^t_end"):
         raydamp.Load.harmonic([2.0], 5.0, t_end=float("nan"))
+
+
+def test_events_on_springs_watch_but_a_terminal_one_is_refused():
+    """A terminal event shortens the last step by running it again from its start, which the springs' committed
+    state cannot do yet: refused naming events[i].terminal; a watching event finds the yield crossing."""
+    s = raydamp.Structure(np.eye(1), springs=[raydamp.Spring((0,), ElasticPlastic(10.0, 7.5))], alpha=0.1)
+    with pytest.raises(ValueError, match=r"^events\[1\]\.terminal: a terminal event on a Structure with springs"):
+        raydamp.integrate(s, [0.0], [10.0], method="3s", h=0.01, t_end=1.0,
+                          events=[raydamp.Event("q[0]"), raydamp.Event("q[0] - 0.5", terminal=True)])
+    sol = raydamp.integrate(s, [0.0], [10.0], method="3s", h=1e-3, t_end=1.0,
+                            events=[raydamp.Event("q[0] - 0.5", direction=1, name="half")])
+    # elastic up to q = 0.75 (fy / k): from rest at q = 0 with p = 10 (m = 1, k = 10, light damping) q = 0.5 is
+    # crossed once, on the way up, at t ~ asin(0.5 / (10 / sqrt(10))) / sqrt(10) (the damping shifts it a little)
+    crossings = sol.events["half"].t
+    assert len(crossings) == 1
+    assert abs(crossings[0] - np.arcsin(0.5 / np.sqrt(10.0)) / np.sqrt(10.0)) < 5e-3

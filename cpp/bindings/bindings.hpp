@@ -14,4 +14,5 @@ void bind_chain(pybind11::module_& m);
 void bind_linear_structure(pybind11::module_& m);
 void bind_structure(pybind11::module_& m);
 void bind_kepler(pybind11::module_& m);
+void bind_events(pybind11::module_& m);
 }  // namespace raydamp::bindings

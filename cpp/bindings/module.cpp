@@ -14,6 +14,7 @@ PYBIND11_MODULE(_core, m) {
   py::register_exception<raydamp::ChebyshevDegreeError>(m, "ChebyshevDegreeError", PyExc_ValueError);
   raydamp::bindings::bind_catalogue(m);
   raydamp::bindings::bind_load(m);
+  raydamp::bindings::bind_events(m);  // before the kinds, whose integrate takes an EventSet
   raydamp::bindings::bind_models(m);
   raydamp::bindings::bind_integrate(m);
   raydamp::bindings::bind_system_scalar_mass(m);

@@ -34,12 +34,36 @@ inline py::array_t<double> to_numpy(std::vector<double>&& data, std::vector<py::
   return py::array_t<double>(shape, owned->data(), owner);
 }
 
+// A run's events (events/types.hpp): event index, direction, t, and (q, p) of every coordinate there.
+inline py::dict events_dict(EventLog&& log) {
+  const py::ssize_t k = log.size();
+  py::dict d;
+  d["event"] = py::array_t<int>(k, log.event.data());
+  d["direction"] = py::array_t<int>(k, log.direction.data());
+  d["t"] = to_numpy(std::move(log.t), {k});
+  d["q"] = to_numpy(std::move(log.q), {k, log.n});
+  d["p"] = to_numpy(std::move(log.p), {k, log.n});
+  return d;
+}
+
+// What dense output interpolates: t, q, p, v = M^{-1} p and f = pdot at every step end.
+inline py::dict dense_dict(DenseRecord&& rec) {
+  const py::ssize_t k = rec.rows();
+  py::dict d;
+  d["t"] = to_numpy(std::move(rec.t), {k});
+  d["q"] = to_numpy(std::move(rec.q), {k, rec.n});
+  d["p"] = to_numpy(std::move(rec.p), {k, rec.n});
+  d["v"] = to_numpy(std::move(rec.v), {k, rec.n});
+  d["f"] = to_numpy(std::move(rec.f), {k, rec.n});
+  return d;
+}
+
 template <class Model>
 py::dict run(const Model& model, const std::string& method, const std::string& tableau,
              const std::string& composition, const typename Model::Vec& q0, const typename Model::Vec& p0, double h, long n_steps, double h_last,
              long save_every, bool track_work, py::object progress, CancelToken* cancel,
              const std::vector<int>& save_dofs, const BoundLoad* load, double temperature, std::uint64_t seed,
-             std::uint64_t stream, double divergence) {
+             std::uint64_t stream, double divergence, const EventSet* events, bool dense) {
   const MethodEntry& entry = method_entry(method);
   require_applicable(entry, model);
   const ButcherTableau& tab = resolve_tableau(entry, tableau);
@@ -51,6 +75,8 @@ py::dict run(const Model& model, const std::string& method, const std::string& t
   spec.seed = seed;
   spec.stream = stream;
   spec.divergence = divergence;
+  spec.events = events;
+  spec.dense = dense;
   Control control;
   if (cancel) control.cancel = &cancel->flag;
   if (!progress.is_none())
@@ -81,6 +107,8 @@ py::dict run(const Model& model, const std::string& method, const std::string& t
   out["momentum"] = to_numpy(std::move(tr.momentum), {rows, tr.n_momenta});
   out["work"] = track_work ? py::object(to_numpy(std::move(tr.work), {rows})) : py::none();
   out["load_work"] = track_work && spec.load ? py::object(to_numpy(std::move(tr.load_work), {rows})) : py::none();
+  if (events) out["events"] = events_dict(std::move(r.events));
+  if (dense) out["dense"] = dense_dict(std::move(r.dense));
   return out;
 }
 
@@ -97,7 +125,8 @@ void def_integrate(py::module_&) {
           py::arg("track_work"), py::arg("progress"), py::arg("cancel").none(true),
           py::arg("save_dofs") = std::vector<int>{}, py::arg("load").none(true) = py::none(),
           py::arg("temperature") = 0.0, py::arg("seed") = 0, py::arg("stream") = 0,
-          py::arg("divergence") = kDefaultDivergence);
+          py::arg("divergence") = kDefaultDivergence, py::arg("events").none(true) = py::none(),
+          py::arg("dense") = false);
 }
 
 }  // namespace raydamp::bindings

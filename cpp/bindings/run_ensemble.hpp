@@ -48,6 +48,26 @@ Model with_parameters(const Model& base, const std::vector<int>& slots, const do
   }
 }
 
+// The members' events as one table in member order: member, event, direction, t, q, p.
+inline py::dict ensemble_events(std::vector<EventLog>&& logs, int n) {
+  EventLog all;
+  all.n = n;
+  std::vector<long> member;
+  for (std::size_t i = 0; i < logs.size(); ++i) {
+    EventLog& log = logs[i];
+    member.insert(member.end(), log.t.size(), static_cast<long>(i));
+    all.event.insert(all.event.end(), log.event.begin(), log.event.end());
+    all.direction.insert(all.direction.end(), log.direction.begin(), log.direction.end());
+    all.t.insert(all.t.end(), log.t.begin(), log.t.end());
+    all.q.insert(all.q.end(), log.q.begin(), log.q.end());
+    all.p.insert(all.p.end(), log.p.begin(), log.p.end());
+    log = EventLog{};
+  }
+  py::dict d = events_dict(std::move(all));
+  d["member"] = py::array_t<long>(static_cast<py::ssize_t>(member.size()), member.data());
+  return d;
+}
+
 template <class Model>
 py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long, py::array::c_style | py::array::forcecast> model_index,
                       const std::vector<std::string>& names, Rows values, const std::string& method,
@@ -55,7 +75,7 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
                       long n_steps, double h_last, long save_every, int threads, py::object progress,
                       CancelToken* cancel, bool vector_sine, const std::vector<const BoundLoad*>& loads,
                       py::array_t<long, py::array::c_style | py::array::forcecast> load_index, double temperature,
-                      std::uint64_t seed, std::uint64_t first_stream) {
+                      std::uint64_t seed, std::uint64_t first_stream, const EventSet* events) {
   if (q0.ndim() != 2 || q0.shape(0) < 1) throw std::invalid_argument("q0: expected an array of shape (members, n), members >= 1");
   const long members = static_cast<long>(q0.shape(0));
   if (models.empty()) throw std::invalid_argument("models: empty");
@@ -72,6 +92,8 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
   RunSpec spec{h, n_steps, h_last, save_every, false};
   spec.temperature = temperature;
   spec.seed = seed;
+  spec.events = events;
+  std::vector<EventLog> member_events(events ? members : 0);  // each worker fills its members' slots
   // Each member's load: loads[load_index[i]] (none without loads).
   std::vector<const Load*> member_load(members, nullptr);
   if (!loads.empty()) {
@@ -164,6 +186,7 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
     dd[i] = r.max_momentum_drift;
     status[i] = status_name(r.status);
     message[i] = std::move(r.message);
+    if (events) member_events[i] = std::move(r.events);
   };
   int factorisations = 0;  // of the linear implicit methods, over the whole ensemble
   {
@@ -195,6 +218,7 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
   out["message"] = message;
   out["threads"] = ensemble_threads(threads, members);
   out["factorisations"] = factorisations;
+  if (events) out["events"] = ensemble_events(std::move(member_events), n);
   return out;
 }
 
@@ -210,7 +234,7 @@ void def_integrate_ensemble(py::module_&) {
                  py::arg("save_every"), py::arg("threads"), py::arg("progress"), py::arg("cancel").none(true),
                  py::arg("vector_sine") = false, py::arg("loads") = std::vector<const BoundLoad*>{},
                  py::arg("load_index") = py::array_t<long>(), py::arg("temperature") = 0.0, py::arg("seed") = 0,
-                 py::arg("first_stream") = 0);
+                 py::arg("first_stream") = 0, py::arg("events").none(true) = py::none());
 }
 
 }  // namespace raydamp::bindings

@@ -21,6 +21,7 @@
 #include "raydamp/amplification.hpp"
 #include "raydamp/composed_step.hpp"
 #include "raydamp/step.hpp"
+#include "raydamp/events/watcher.hpp"
 #include "raydamp/materials/commit.hpp"
 #include "raydamp/record/divergence.hpp"
 #include "raydamp/record/recorder.hpp"
@@ -276,6 +277,31 @@ inline double run_block(const Model& model, const Tab& tab, const Stepper& stepp
     return run_block_body<Mergeable>(model, tab, stepper, ws, state, k, end, merge, track_momenta, advance, step_drift);
 }
 
+// Steps k .. end-1 of z: in place for a state on the heap (see run_block), else on the local y; a
+// flattened loop without load or noise runs on the workspace as Unhooked (workspace.hpp).
+template <bool Mergeable, class Model, class Tab, class Stepper, class WS, int Dim, class Advance, class Drift>
+inline double run_block_on(const Model& model, const Tab& tab, const Stepper& stepper, Unhooked<WS>& unhooked,
+                           State<Dim>& z, State<Dim>& y, long k, long end, bool merge, bool track_momenta,
+                           const Advance& advance, const Drift& step_drift) {
+  WS& ws = unhooked;
+  if constexpr (Dim == Eigen::Dynamic) {
+    return run_block<Mergeable>(model, tab, stepper, ws, z, k, end, merge, track_momenta, advance, step_drift);
+  } else {
+    y = z;
+    double block_drift = 0.0;
+    bool plain = false;
+    if constexpr (flattens_step_loop<Model>::value) {
+      if ((plain = !ws.load && ws.sigma == 0.0))
+        block_drift =
+            run_block<Mergeable>(model, tab, stepper, unhooked, y, k, end, merge, track_momenta, advance, step_drift);
+    }
+    if (!plain)
+      block_drift = run_block<Mergeable>(model, tab, stepper, ws, y, k, end, merge, track_momenta, advance, step_drift);
+    z = y;
+    return block_drift;
+  }
+}
+
 // A save that ran out of memory ends the run at its last saved row (rows are saved every save_every
 // steps from step 0), so steps and the last row agree, as for every other way a run ends.
 inline long out_of_memory(RunResult& result, long N, long save_every, long at) {
@@ -298,7 +324,8 @@ template <class Method>
 bool merges_steps(const RunSpec& spec) {
   if constexpr (is_mergeable<Method>()) {
     const bool noisy_join = spec.temperature > 0.0 && is_damping_flow(Method::stages[0].flow);
-    return spec.merge_steps && !spec.track_work && !noisy_join;
+    // Events and dense output read every step's end: steps run whole.
+    return spec.merge_steps && !spec.track_work && !noisy_join && !spec.events && !spec.dense;
   } else {
     return false;
   }
@@ -365,6 +392,27 @@ long replay_block(WS& ws, Rec& rec, Held& before, State<Dim>& z, long k, long en
   return end;
 }
 
+// After a terminal event (watch.stopped()): z becomes the state at the event's time, the crossing step
+// run again from its start with its duration cut to that time; returns the steps taken.
+template <class Method, class Watch, class Model, class Tab, class WS, class Rec, int Dim>
+long finish_at_event(Watch& watch, const Model& model, const Tab& tab, const Composition& composition,
+                     const RunSpec& spec, WS& ws, Rec& rec, State<Dim>& z, RunResult& result) {
+  const long steps = watch.finish(z, rec, [&](State<Dim>& x, long i, double dt) {
+    RunSpec last = spec;  // a run of i + 1 steps whose last is dt long
+    last.n_steps = i + 1;
+    last.h_last = dt;
+    last.implicit_factors = nullptr;  // an ensemble's shared factors hold no sub-step of dt: made for it
+    const auto stepper = make_stepper<Method>(model, composition, last);
+    ws.time = step_time(i, spec.h, spec.n_steps, spec.h_last);
+    stepper.step(model, tab, x, i, ws);
+    rec.on_step(x, dt, watch.stop_time());
+  });
+  result.status = Status::event;
+  result.message = "event '" + watch.stop_name() + "' at t = " + std::to_string(watch.stop_time()) + " (step " +
+                   std::to_string(steps) + ", shortened to it)";
+  return steps;
+}
+
 // The loop: advance a block of steps, check it (finite, not diverged), save, report, cancel. The
 // recorder observes the steps and keeps the rows; a checkpoint at each block's start lets a block
 // that blew up be replayed step by step to find the failing step exactly.
@@ -387,6 +435,7 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
   constexpr bool trapezoid = !integrates_work<Method>::value;
   hook_workspace(ws, spec, model.size());
   Recorder<Model, Dim, trapezoid> rec(model, spec, ws, result.trajectory);
+  EventWatcher<Model, Dim, typename decltype(rec)::Marks> watch(model, spec, result, z, 0.0);  // events
   auto time_at = [&](long k) { return step_time(k, spec.h, N, spec.h_last); };
   auto stop = [&](Status status, long failed_step, std::string message) {
     result.status = status;
@@ -410,18 +459,20 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
   const bool merge = merges_steps<Method>(spec);
   const auto step_drift = drift_from_law<Method>(model, mb, stepper, time_at);
   auto advance = [&](auto& w, State<Dim>& x, long i) {  // w: ws, or the same as Unhooked
+    if (watch.stopped()) return;  // a terminal event ended the run inside this block
     if (ws.load) ws.time = time_at(i);
     if constexpr (trapezoid && has_step_by_stage<std::decay_t<decltype(stepper)>>::value) {
       if (rec.tracks_work() && stepper.stages() > 1) {  // the trapezoid's points: the stage boundaries
         double t = time_at(i);
         stepper.step_by_stage(model, tab, x, i, w, [&](double dt) { rec.on_step(x, dt, t += dt); });
         commit_materials(model);
-        return;
+        return watch.after_step(x, i, time_at(i + 1), rec);
       }
     }
     stepper.step(model, tab, x, i, w);
     commit_materials(model);
     rec.on_step(x, i == N - 1 ? spec.h_last : spec.h, time_at(i + 1));
+    watch.after_step(x, i, time_at(i + 1), rec);
   };
   const long progress_every = std::max(1L, N / std::max(1L, control.max_progress_calls));
   long next_save = spec.save_every, next_progress = progress_every, k = 0;
@@ -435,20 +486,11 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
     checkpoint.take(z, ws, rec);  // a replay draws the same noise
     save_materials(model);        // and starts from the same material states
     ws.time = time_at(k);  // the merged loop's clock; advance() sets it per step
-    double block_drift = 0.0;
-    if constexpr (Dim == Eigen::Dynamic) {  // stepped in place (see run_block)
-      block_drift = run_block<mergeable>(model, tab, stepper, ws, z, k, end, merge, track_momenta, advance, step_drift);
-    } else {
-      y = z;
-      bool plain = false;  // a flattened loop without load or noise runs Unhooked (workspace.hpp)
-      if constexpr (flattens_step_loop<Model>::value) {
-        if ((plain = !ws.load && ws.sigma == 0.0))
-          block_drift =
-              run_block<mergeable>(model, tab, stepper, unhooked, y, k, end, merge, track_momenta, advance, step_drift);
-      }
-      if (!plain)
-        block_drift = run_block<mergeable>(model, tab, stepper, ws, y, k, end, merge, track_momenta, advance, step_drift);
-      z = y;
+    const double block_drift =
+        run_block_on<mergeable>(model, tab, stepper, unhooked, z, y, k, end, merge, track_momenta, advance, step_drift);
+    if (watch.stopped()) {  // a terminal event: the run ends at its time, its step shortened to it
+      k = finish_at_event<Method>(watch, model, tab, composition, spec, ws, rec, z, result);
+      break;
     }
     if (!z.all_finite()) {
       checkpoint.restore(z, ws, rec);
@@ -483,7 +525,8 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
     }
   }
   // The final state is always the last row, saved or not by save_every.
-  if (result.trajectory.t.back() != time_at(k) && result.status != Status::out_of_memory && !rec.save(z, time_at(k)))
+  const double t_last = watch.stopped() ? watch.stop_time() : time_at(k);
+  if (result.trajectory.t.back() != t_last && result.status != Status::out_of_memory && !rec.save(z, t_last))
     k = out_of_memory(result, N, spec.save_every, k);
   if (control.progress && result.status == Status::completed && next_progress - progress_every != N) control.progress(N, N);
   result.steps = k;

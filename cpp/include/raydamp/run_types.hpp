@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "raydamp/events/types.hpp"
 #include "raydamp/load.hpp"
 #include "raydamp/state.hpp"
 #include "raydamp/status.hpp"
@@ -46,6 +47,10 @@ struct RunSpec {
   std::shared_ptr<const LinearImplicitFactors> implicit_factors{};
   // The divergence test's factor G (record/divergence.hpp); 0 turns the test off.
   double divergence = kDefaultDivergence;
+  // Events to locate (events/watcher.hpp), or none; and whether to keep what dense output needs at
+  // every step end. Either runs whole steps (merges_steps), so that every step has an end to read.
+  const EventSet* events = nullptr;
+  bool dense = false;
 };
 
 struct Control {
@@ -72,6 +77,8 @@ struct RunResult {
   // the law the exact flow follows, a = momentum_decay_rate(model) (0: conserved; see run_steps).
   double max_momentum_drift = 0.0;
   Trajectory trajectory;
+  EventLog events;    // empty unless RunSpec::events
+  DenseRecord dense;  // empty unless RunSpec::dense
 };
 
 template <class Model, int Dim>

@@ -149,6 +149,10 @@ def build_job(spec: JobSpec, files: FileResolver | None = None) -> JobCall:
         options["save_dofs"] = list(spec.save_dofs)
     if spec.divergence != _core.DEFAULT_DIVERGENCE:
         options["divergence"] = spec.divergence
+    if spec.events:
+        options["events"] = [e.model_dump(exclude_none=True) for e in spec.events]
+    if spec.dense:
+        options["dense"] = True
     if spec.temperature:
         options.update({"temperature": spec.temperature, "seed": spec.seed, "stream": spec.stream})
     load = job_load(spec, files)

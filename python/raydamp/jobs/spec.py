@@ -30,6 +30,7 @@ from ..loads.forms import LOAD_TAGS, GroundMotionInput, LoadInput
 from ..methods.catalogue import compositions, methods
 from ..systems.models import MODELS, make_model
 from .errors import JobError
+from .event_forms import MAX_EVENTS, EventInput
 from .forms import (
     FILE_ID,
     MAX_VECTOR,
@@ -223,6 +224,10 @@ class JobSpec(ModelSpec):
         "the divergence test's factor G: a run whose energy gains more than G times what its start, its load and "
         "its temperature can give it stops with status \"diverged\", keeping its rows (raydamp.integrate's "
         "divergence documents the rule); 0 turns the test off"))
+    events: bounded(EventInput, MAX_EVENTS) | None = Field(
+        None, description="events to locate: [{\"g\": \"q[0]\", \"direction\": -1, \"terminal\": false, "
+                          "\"name\": \"...\"}]; their crossings are the result's events table (raydamp.Event)")
+    dense: bool = Field(False, description="keep t, q, p, M^-1 p and pdot at every step end, for dense output")
     _h_key: str = PrivateAttr("h")
 
     @model_validator(mode="wrap")
@@ -277,7 +282,7 @@ class JobSpec(ModelSpec):
     def compiles(self) -> bool:
         """Whether checking or running the job compiles machine code (an expression system, a chain of
         expression bonds, an expression in the load or the ground motion)."""
-        return (self.system is not None and self.system.compiles()) or any(
+        return bool(self.events) or (self.system is not None and self.system.compiles()) or any(
             getattr(self, field) is not None and getattr(self, field).compiles() for field in ("load", "ground_motion"))
 
     def compiled_form(self) -> tuple[str, bytes] | None:

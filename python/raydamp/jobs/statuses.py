@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from .. import _core
 
-__all__ = ["STATUSES", "MEANINGS", "FAILED"]
+__all__ = ["STATUSES", "MEANINGS", "FAILED", "FINISHED"]
 
 STATUSES: tuple[str, ...] = tuple(_core.STATUSES)
 
@@ -22,13 +22,16 @@ MEANINGS: dict[str, str] = {
     "diverged": "the run blew up while its state was still finite: its energy gained more than `divergence` "
                 "times what its start, its load and its temperature can give it (see raydamp.integrate); it "
                 "stopped at failed_step, keeping its rows.",
-    "event": "reserved: an event function stopped the run.",
+    "event": "a terminal event (raydamp.Event(..., terminal=True)) ended the run at its crossing time, the last "
+             "step shortened to land there; the message names the event.",
     "not_converged": "reserved: an implicit step's iteration did not converge.",
 }
 
 # The statuses of a run that failed (a blow-up or a lack of memory), as against one that completed
 # or was stopped on purpose.
 FAILED = frozenset({"non_finite", "out_of_memory", "diverged", "not_converged"})
+# The statuses of a run that did what it was asked: every step, or up to its terminal event.
+FINISHED = frozenset({"completed", "event"})
 
 if set(MEANINGS) != set(STATUSES):  # the core's list and these names must be the same list
     raise ImportError(f"raydamp.jobs.statuses: core statuses {STATUSES} differ from the documented "

@@ -15,7 +15,20 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from .statuses import STATUSES
 
-__all__ = ["JobSummary", "summary_values"]
+__all__ = ["JobSummary", "EventsSummary", "MAX_SUMMARY_EVENTS", "summary_values"]
+
+
+MAX_SUMMARY_EVENTS = 1000  # crossings a summary lists; count says how many there were
+
+
+class EventsSummary(BaseModel):
+    """The events table of a run (raydamp.run.events.EventTable): name, t and direction of each crossing,
+    the first MAX_SUMMARY_EVENTS of them."""
+
+    count: int = Field(description="crossings found (the lists hold the first 1000)")
+    name: list[str]
+    t: list[float]
+    direction: list[int] = Field(description="+1 rising through 0, -1 falling")
 
 
 class JobSummary(BaseModel):
@@ -48,6 +61,8 @@ class JobSummary(BaseModel):
     kinetic_temperature: float | None = Field(
         None, description="<p^T M^-1 p> / n over the second half of the saved points (at most 2000, evenly "
                           "spaced), to compare with the job's temperature kT (jobs at a temperature)")
+    events: EventsSummary | None = Field(None, description="the crossings of the job's events, in time order "
+                                                           "(jobs with events)")
     wall_time: float
 
     @model_validator(mode="before")

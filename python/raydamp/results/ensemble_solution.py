@@ -74,6 +74,7 @@ class EnsembleSolution:
     threads: int = field(default=1)
     # (system, options) of the run, or the provenance dict itself for a loaded ensemble.
     origin: Any = field(default=None, compare=False)
+    events: Any = field(default=None, compare=False)  # run/events.py's EventTable (with member), with events=
 
     @property
     def members(self) -> int:
@@ -158,7 +159,8 @@ class EnsembleSolution:
                         steps=int(self.steps[i]), failed_step=None if failed < 0 else failed,
                         message=self.message[i], method=self.method, tableau=self.tableau,
                         composition=self.composition, h=self.h,
-                        max_momentum_drift=float(self.max_momentum_drift[i]), origin=self._member_spec(i))
+                        max_momentum_drift=float(self.max_momentum_drift[i]), origin=self._member_spec(i),
+                        events=None if self.events is None else self.events.of_member(i))
 
     def _member_spec(self, i: int) -> dict[str, Any] | None:
         """Member i's job JSON: the base spec with its parameters and initial state."""

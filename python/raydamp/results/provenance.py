@@ -18,7 +18,8 @@ __all__ = ["PROVENANCE_KEYS", "job_spec"]
 def job_spec(model: Model, q0: np.ndarray, p0: np.ndarray, *, method: str, tableau: str | None,
              composition: str | None, h: float, t_end: float | None, n_steps: int | None, save_every: int,
              work: bool, save_dofs: list[int] | None = None, load=None, thermal=None,
-             method_reason: str | None = None, divergence: float | None = None) -> dict[str, Any]:
+             method_reason: str | None = None, divergence: float | None = None, events: list | None = None,
+             dense: bool = False) -> dict[str, Any]:
     """The job spec of a run: what Solution.provenance holds; ``method_reason`` says why the method was
     chosen when the run named none (raydamp.run.choose_method)."""
     spec = describe_model(model)
@@ -33,6 +34,10 @@ def job_spec(model: Model, q0: np.ndarray, p0: np.ndarray, *, method: str, table
         spec["divergence"] = divergence
     if load is not None:
         spec["load"] = load.to_dict()
+    if events:
+        spec["events"] = events
+    if dense:
+        spec["dense"] = True
     if thermal is not None:
         kT, seed, stream = thermal
         spec.update({"temperature": kT, "seed": seed})

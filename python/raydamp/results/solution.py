@@ -80,9 +80,18 @@ class Solution:
     dofs: np.ndarray | None = field(default=None)
     load_work: np.ndarray | None = field(default=None)
     load: Any = field(default=None, compare=False)
+    events: Any = field(default=None, compare=False)  # run/events.py's EventTable, with events=
+    dense: Any = field(default=None, compare=False)  # results/dense.py's DenseOutput, with dense=True
     # (model, q0, p0, options) of the run, turned into `provenance` when asked for (cheap
     # runs stay cheap); or the provenance dict itself, for a loaded solution.
     origin: Any = field(default=None, compare=False)
+
+    def at(self, t):
+        """(q, p) at time(s) t inside the run, by dense output (:mod:`raydamp.results.dense`): needs a run
+        with ``dense=True``."""
+        if self.dense is None:
+            raise ValueError("at: this run kept no dense output; integrate with dense=True")
+        return self.dense.at(t)
 
     def _run_load(self, what: str):
         """The run's load, None if it had none: its own, or (a loaded file, an ensemble member) rebuilt from the
@@ -266,6 +275,7 @@ class Solution:
             load_work_final=num(float(self.load_work[-1])) if self.load_work is not None else None,
             energy_balance_max=num(float(np.max(np.abs(self.energy_balance)))) if self.work is not None else None,
             kinetic_temperature=None if kinetic is None else num(kinetic),
+            events=None if self.events is None else self.events.summary(),
             wall_time=self.wall_time,
         )
 

@@ -14,6 +14,7 @@ from .._validation import MAX_SEED, _short, flag, integer, numeric_array, real, 
 from ..loads import Load
 from ..results.ensemble_solution import EnsembleSolution
 from ..systems.models import Model
+from . import events as _events
 from .choose_method import choose_method
 from .integrate import MAX_SAVED_BYTES, MAX_STEPS, CancelToken, _catalogue, span
 from .save_grid import save_rows
@@ -76,7 +77,7 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
                        progress: Callable[[int, int], object] | None = None,
                        cancel: CancelToken | None = None, vector_sine: bool = False,
                        load: Load | None = None, temperature: float | None = None, seed: int | None = None,
-                       first_stream: int = 0) -> EnsembleSolution:
+                       first_stream: int = 0, events=None) -> EnsembleSolution:
     """Integrate many members of one system in one compiled call, spread over threads.
 
     Parameters
@@ -198,6 +199,7 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
                          f"{members * rows * row_bytes / 2**30:.1f} GiB (limit {MAX_SAVED_BYTES / 2**30:.0f} GiB); "
                          "raise save_every or split the ensemble")
 
+    watch = _events.prepare(system, events, False, temperature=kT)  # each member's events (run/events.py)
     models, index, core_names, core_values = system.member_models(params, members)
     start = time.perf_counter()
     cores = [m._core_model for m in models]
@@ -205,7 +207,7 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
                                             composition or "", q0, p0, h, n_steps, h_last, save_every, threads,
                                             progress, cancel, vector_sine=vector_sine, loads=loads,
                                             load_index=load_index, temperature=kT, seed=seed,
-                                            first_stream=first_stream)
+                                            first_stream=first_stream, **({"events": watch.core} if watch else {}))
     wall = time.perf_counter() - start
     composition_name = None if resolved_composition == "none" else resolved_composition
     options = {"method": method, "tableau": tableau, "composition": composition_name, "h": h, "t_end": t_end,
@@ -227,7 +229,8 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
         failed_step=out["failed_step"], message=tuple(out["message"]), max_momentum_drift=out["max_momentum_drift"],
         q0=q0, p0=p0, parameters={**params, **load_arrays}, method=method,
         tableau=resolved_tableau if method in with_tableau else None, composition=composition_name, h=h,
-        wall_time=wall, threads=out["threads"], origin=(system, options))
+        wall_time=wall, threads=out["threads"], origin=(system, options),
+        **(_events.results(watch, out) if watch else {}))
 
 
 def _split_load_parameters(parameters, load: Load | None) -> tuple[Any, dict[str, Any]]:

@@ -18,6 +18,7 @@ from ..loads import Load
 from ..methods.user_tableau import resolve_user_tableau
 from ..results.solution import Solution
 from ..systems.models import Model
+from . import events as _events
 from .choose_method import choose_method
 
 __all__ = ["integrate", "steps_for", "row_bytes", "CancelToken", "MAX_SAVED_BYTES", "MAX_STEPS", "MAX_AMPLIFICATION"]
@@ -140,7 +141,8 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
               composition: str | None = None, work: bool = False, save_dofs=None,
               progress: bool | Callable[[int, int], object] | None = None,
               cancel: CancelToken | None = None, load: Load | None = None, temperature: float | None = None,
-              seed: int | None = None, stream: int = 0, divergence: float = DEFAULT_DIVERGENCE) -> Solution:
+              seed: int | None = None, stream: int = 0, divergence: float = DEFAULT_DIVERGENCE,
+              events=None, dense: bool = False) -> Solution:
     """Integrate ``model`` from (q0, p0) with fixed steps of size ``h``.
 
     Parameters
@@ -229,6 +231,11 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
         every 256 steps and at the end; a blow-up that overflows before a check ends "non_finite". An
         expression load's F is sampled (4096 times over the run and at each check): a pulse narrower
         than that from rest can go unseen, so such a run may want ``divergence=0``.
+    events : a list of :class:`raydamp.Event` (g an expression, direction, terminal, name): their crossings,
+        located on each step's dense output, are ``Solution.events``; a terminal one ends the run there
+        (status "event"). The run steps whole steps (see :mod:`raydamp.run.events`).
+    dense : keep what ``Solution.at(t)`` needs at every step end: t, q, p, M^-1 p and pdot, 8 (n_steps + 1)
+        (1 + 4 dim) bytes whatever ``save_every`` (:mod:`raydamp.results.dense`). Whole steps, as events.
 
     The step loop runs in C++ with the GIL released.
     """
@@ -286,13 +293,18 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
         if size > MAX_SAVED_BYTES:
             raise ValueError(f"save_every: {rows} saved points would take {size / 2**30:.1f} GiB "
                              f"(limit {MAX_SAVED_BYTES / 2**30:.0f} GiB); raise save_every")
+    watch = None if events is None and dense is False else _events.prepare(model, events, dense, temperature=kT)
+    if dense and _events.dense_bytes(n_steps, dim) > MAX_SAVED_BYTES:
+        raise ValueError(f"dense: {_events.dense_bytes(n_steps, dim) / 2**30:.1f} GiB of dense output (limit "
+                         f"{MAX_SAVED_BYTES / 2**30:.0f} GiB); take fewer steps")
 
     start = time.perf_counter()
     try:
         # positional: pybind11 matches keyword arguments by name, a microsecond of a short call
         out = model._core_model.integrate(method, tableau_name, composition or "", q0, p0, h, n_steps, h_last,
                                           save_every, work, progress, cancel, [] if dofs is None else dofs,
-                                          core_load, kT, seed, stream, divergence)
+                                          core_load, kT, seed, stream, divergence,
+                                          *((watch.core, watch.dense) if watch else ()))
     except ValueError as error:  # the core names the method it runs ("rk" for "rk4"): the caller's name here
         named = re.sub(r"^temperature: method '[^']*'", f"temperature: method {method!r}", str(error))
         if named == str(error):
@@ -308,7 +320,13 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
         message = f"{message}: {why}"
     composition = None if resolved_composition == "none" else resolved_composition
     loaded = load if core_load is not None else None
-    return _solution({
+    options = {
+        "method": method, "tableau": tableau, "composition": composition, "h": h,
+        "t_end": t_end, "n_steps": None if t_end is not None else n_steps,
+        "save_every": save_every, "work": work, "save_dofs": dofs, "load": loaded,
+        "thermal": (kT, seed, stream) if kT > 0 else None, "method_reason": method_reason,
+        "divergence": None if divergence == DEFAULT_DIVERGENCE else divergence}
+    fields = {
         "t": out["t"], "q": out["q"], "p": out["p"], "energy": out["energy"], "momentum": out["momentum"],
         "status": out["status"], "steps": out["steps"], "failed_step": out["failed_step"], "message": message,
         "method": method, "tableau": resolved_tableau if method in with_tableau else None,
@@ -316,12 +334,11 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
         "wall_time": wall, "load_work": out["load_work"], "load": loaded,
         "dofs": None if dofs is None else np.asarray(dofs, dtype=np.int64),
         # q0 and p0 are the run's own arrays (_state), so the provenance keeps them uncopied
-        "origin": (model, q0, p0, {
-            "method": method, "tableau": tableau, "composition": composition, "h": h,
-            "t_end": t_end, "n_steps": None if t_end is not None else n_steps,
-            "save_every": save_every, "work": work, "save_dofs": dofs, "load": loaded,
-            "thermal": (kT, seed, stream) if kT > 0 else None, "method_reason": method_reason,
-            "divergence": None if divergence == DEFAULT_DIVERGENCE else divergence})})
+        "origin": (model, q0, p0, options)}
+    if watch:
+        fields.update(_events.results(watch, out))
+        options.update(events=[e.to_dict() for e in watch.events], dense=dense)
+    return _solution(fields)
 
 
 def _bar(n_steps: int):

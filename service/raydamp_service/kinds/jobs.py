@@ -11,7 +11,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from raydamp.jobs import JobSpec
-from raydamp.jobs.statuses import FAILED
+from raydamp.jobs.statuses import FAILED, FINISHED
 
 from ..checks.limits import RaydampCall, planned_steps
 from ..checks.pool import CheckPool, build_for_run, checked_inline
@@ -175,7 +175,7 @@ class JobWork:
         if solution.status in FAILED:
             # A blow-up (or a trajectory that outgrew memory) fails, keeping everything computed up to it.
             return Outcome("failed", solution.message, run.progress, {**result, "failed_step": solution.failed_step})
-        return Outcome("completed" if solution.status == "completed" else "cancelled", None, run.progress, result)
+        return Outcome("completed" if solution.status in FINISHED else "cancelled", None, run.progress, result)
 
     def close(self) -> None:
         """Nothing held between runs."""

@@ -82,6 +82,8 @@ int run_members(const std::vector<const Model*>& models, const std::vector<const
     throw std::invalid_argument("vector_sine: only the damped pendulum's 3s, 2s and sv ensembles run their "
                                 "sines as SIMD lanes");
   if (ens.vector_sine && loaded) throw std::invalid_argument("vector_sine: the SIMD lanes take no load");
+  const bool watched = (spec.events && !spec.events->empty()) || spec.dense;  // events/watcher.hpp
+  if (ens.vector_sine && watched) throw std::invalid_argument("vector_sine: the SIMD lanes locate no events");
   // The linear implicit methods' factorisations: made here, once per distinct model and sub-step length,
   // before any thread starts, and read by every member of that model (each with scratch of its own).
   int factorisations = 0;
@@ -111,7 +113,7 @@ int run_members(const std::vector<const Model*>& models, const std::vector<const
     }
   };
   if constexpr (lanes) {
-    if (!loaded) {  // the lanes' step has no clock: loaded members run one by one
+    if (!loaded && !watched) {  // the lanes' step has no clock, nor events: such members run one by one
       // Runs of members sharing eps go as the lanes of one run (lanes.hpp).
       const std::vector<LaneBatch> batches =
           lane_batches(models, batch_lanes(members, ensemble_threads(ens.threads, members)));

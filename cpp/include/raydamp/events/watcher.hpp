@@ -1,0 +1,333 @@
+// The step loop's observer of events and dense output (issue 41). After every whole step it reads
+// the step's end: q, p, v = M^{-1} p and, where needed, f = pdot = -grad V - eps D M^{-1} p + load;
+// keeps that row for dense output; evaluates each event function g and its rate dg/dt; and where g
+// changes sign over the step, or its rate does (an extremum inside the step: a touch or a double
+// crossing), locates the crossing on the step's cubic Hermite interpolant (events/hermite.hpp) by a
+// bracketing root finder to within a few roundings of t. It never changes the state it observes, so
+// the stepped trajectory is the same with and without it. A terminal event stops it; the loop then
+// asks finish() to step from the crossing step's start to the crossing time only.
+//
+// Its cost when off is one branch per step; the work sits in observe(), kept out of line so that the
+// flattened step loops do not carry copies of it. On, a step costs one call of the events' compiled
+// function and a branch-free scan of the signs of g and dg/dt at both ends (detect()).
+#pragma once
+
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "raydamp/events/hermite.hpp"
+#include "raydamp/events/types.hpp"
+#include "raydamp/run_types.hpp"
+
+#if defined(__GNUC__) || defined(__clang__)
+#define RAYDAMP_NOINLINE __attribute__((noinline))
+#else
+#define RAYDAMP_NOINLINE
+#endif
+
+namespace raydamp {
+
+template <class Model, int Dim, class RecMarks>
+class EventWatcher {
+  using Vec = typename Model::Vec;
+  using Kind = EventSlot::Kind;
+
+ public:
+  // From the initial state z at t: each g must be finite there (a g that is not is refused, naming it).
+  EventWatcher(const Model& model, const RunSpec& spec, RunResult& result, const State<Dim>& z, double t)
+      : model_(model), set_(spec.events && !spec.events->empty() ? spec.events : nullptr), load_(spec.load),
+        dense_(spec.dense ? &result.dense : nullptr), log_(result.events), on_(set_ != nullptr || spec.dense) {
+    if (!on_) return;
+    n_ = model.size();
+    for (Vec* v : {&q0_, &p0_, &v0_, &f0_, &q1_, &p1_, &v1_, &f1_, &grad_, &rate_, &fa_, &fb_}) v->setZero(n_);
+    log_.n = n_;
+    forces_ = spec.dense;
+    if (set_) {
+      const auto& events = set_->events;
+      if (!set_->fn) throw std::invalid_argument("events: no compiled function");
+      for (std::size_t e = 0; e < events.size(); ++e) {
+        if (events[e].direction < -1 || events[e].direction > 1)
+          throw std::invalid_argument("events[" + std::to_string(e) + "].direction must be -1, 0 or +1");
+        terminal_ = terminal_ || events[e].terminal;
+      }
+      for (const EventSlot& s : set_->slots)
+        if (s.kind != Kind::t && (s.index < 0 || s.index >= n_))
+          throw std::invalid_argument("events: g reads coordinate " + std::to_string(s.index) +
+                                      ", not one of the model's 0.." + std::to_string(n_ - 1));
+      forces_ = forces_ || set_->reads_momenta();
+      in_.assign(set_->slots.size(), 0.0);
+      out_.assign(2 * events.size(), 0.0);
+      g0_.assign(events.size(), 0.0);
+      g1_ = dg0_ = dg1_ = g0_;
+      found_.reserve(3 * events.size());
+      log_.t.reserve(256);
+    }
+    if (dense_) {
+      const std::size_t rows = static_cast<std::size_t>(spec.n_steps) + 1;  // reserved now: no allocation per step
+      dense_->n = n_;
+      dense_->t.reserve(rows);
+      for (auto* v : {&dense_->q, &dense_->p, &dense_->v, &dense_->f}) v->reserve(rows * n_);
+    }
+    if (z.all_finite()) start(z, t);  // else the loop stops before its first step
+  }
+
+  bool on() const { return on_; }
+  bool stopped() const { return stopped_; }
+  double stop_time() const { return t_stop_; }
+  const std::string& stop_name() const { return set_->events[stop_event_].name; }
+
+  // After step i, ending at t, of a state that rec (the recorder) observed.
+  template <class Rec>
+  void after_step(const State<Dim>& x, long i, double t, const Rec& rec) {
+    if (on_) observe(x, i, t, rec);
+  }
+
+  // After a terminal event: z becomes the state at the crossing time, stepped by restep(z, i, dt) from
+  // the start of the crossing step (dt = the crossing time minus that start; the recorder's sums back
+  // where they were); the dense record's last row is that state. Returns the steps taken.
+  template <class Rec, class Restep>
+  long finish(State<Dim>& z, Rec& rec, const Restep& restep) {
+    if (t_stop_ == t1_) {  // on the step's end: the stepped state itself
+      z.q = q1_;
+      z.p = p1_;
+      return step_ + 1;
+    }
+    z.q = q0_;
+    z.p = p0_;
+    rec.restore(marks0_);
+    restep(z, step_, t_stop_ - t0_);
+    if (dense_) {
+      resize_dense(dense_->rows() - 1);
+      read_end(z, t_stop_);
+      push_dense();
+    }
+    return step_ + 1;
+  }
+
+ private:
+  void start(const State<Dim>& z, double t) {
+    if (!on_) return;
+    read_end(z, t);
+    if (set_)
+      for (std::size_t e = 0; e < g1_.size(); ++e)
+        if (!std::isfinite(g1_[e]))
+          throw std::invalid_argument("events[" + std::to_string(e) + "].g ('" + set_->events[e].name +
+                                      "') is not finite at the initial state");
+    push_dense();
+  }
+
+  template <class Rec>
+  RAYDAMP_NOINLINE void observe(const State<Dim>& x, long i, double t, const Rec& rec) {
+    // A state that is not finite ends the run (dense output ends at the last finite one); a block replayed
+    // to find that step (integrate.hpp) runs steps already observed again, which add nothing.
+    if (i <= step_ || !x.all_finite()) return;
+    std::swap(q0_, q1_);
+    std::swap(p0_, p1_);
+    std::swap(v0_, v1_);
+    std::swap(f0_, f1_);
+    std::swap(g0_, g1_);
+    std::swap(dg0_, dg1_);
+    t0_ = t1_;
+    if (terminal_) {
+      marks0_ = marks1_;
+      marks1_ = rec.marks();
+    }
+    step_ = i;
+    read_end(x, t);
+    push_dense();
+    if (set_) detect();
+  }
+
+  // q1, p1, v1 (and f1 where needed) from x at t, and g, dg/dt there.
+  void read_end(const State<Dim>& x, double t) {
+    t1_ = t;
+    q1_ = x.q;
+    p1_ = x.p;
+    model_.mass.velocity(x.p, v1_);
+    if (forces_) force(q1_, p1_, t, f1_);
+    if (!set_) return;
+    const std::vector<EventSlot>& slots = set_->slots;
+    for (std::size_t k = 0; k < slots.size(); ++k) in_[k] = end_value(slots[k], f1_);
+    set_->fn(out_.data(), in_.data());
+    for (std::size_t e = 0; e < g1_.size(); ++e) {
+      g1_[e] = out_[2 * e];
+      dg1_[e] = out_[2 * e + 1];
+    }
+  }
+
+  double end_value(const EventSlot& s, const Vec& f) const {
+    switch (s.kind) {
+      case Kind::t: return t1_;
+      case Kind::q: return q1_[s.index];
+      case Kind::p: return p1_[s.index];
+      case Kind::v: return v1_[s.index];
+      case Kind::f: return f[s.index];
+    }
+    return 0.0;
+  }
+
+  // pdot at (q, p, t): -grad V(q) - eps D(q) M^{-1} p + f(t).
+  void force(const Vec& q, const Vec& p, double t, Vec& out) {
+    model_.gradient(q, grad_);
+    model_.damping.rate(q, p, rate_);
+    out = -(grad_ + rate_);
+    if (load_ && !load_->empty()) load_->add(t, 1.0, out.data());
+  }
+
+  // g (which = 0) or dg/dt (which = 1) of event e on the step's interpolant at s in [0, 1].
+  double on_step(std::size_t e, double s, int which) {
+    const std::vector<EventSlot>& slots = set_->slots;
+    const double h = t1_ - t0_;
+    const hermite::Weights w = hermite::value(s), d = hermite::slope(s);
+    for (std::size_t k = 0; k < slots.size(); ++k) {
+      const int j = slots[k].index;
+      switch (slots[k].kind) {
+        case Kind::t: in_[k] = s == 1.0 ? t1_ : t0_ + s * h; break;
+        case Kind::q: in_[k] = hermite::at(w, q0_[j], v0_[j], q1_[j], v1_[j], h); break;
+        case Kind::p: in_[k] = hermite::at(w, p0_[j], f0_[j], p1_[j], f1_[j], h); break;
+        case Kind::v: in_[k] = hermite::rate_at(d, q0_[j], v0_[j], q1_[j], v1_[j], h); break;
+        case Kind::f: in_[k] = hermite::rate_at(d, p0_[j], f0_[j], p1_[j], f1_[j], h); break;
+      }
+    }
+    set_->fn(out_.data(), in_.data());
+    return out_[2 * e + which];
+  }
+
+  // A root of on_step(e, ., which) in (a, b], where its values fa, fb have opposite signs (or fb = 0):
+  // false position with the Illinois halving, a bisection every fourth step, until the bracket spans a
+  // few roundings of t; the end with the smaller value.
+  double root(std::size_t e, double a, double b, double fa, double fb, int which) {
+    if (fb == 0.0) return b;
+    const double h = t1_ - t0_;
+    const double tol = 4.0 * DBL_EPSILON * std::max(std::abs(t1_), h) / h;
+    int side = 0;
+    for (int it = 0; it < 400 && b - a > tol; ++it) {
+      double m = (it % 4 == 3) ? 0.5 * (a + b) : (a * fb - b * fa) / (fb - fa);
+      if (!(m > a && m < b)) m = 0.5 * (a + b);
+      if (!(m > a && m < b)) break;
+      const double fm = on_step(e, m, which);
+      if (fm == 0.0) return m;
+      if (!std::isfinite(fm)) break;
+      if ((fm < 0.0) == (fa < 0.0)) {
+        a = m, fa = fm;
+        if (side == -1) fb *= 0.5;
+        side = -1;
+      } else {
+        b = m, fb = fm;
+        if (side == 1) fa *= 0.5;
+        side = 1;
+      }
+    }
+    return std::abs(fa) < std::abs(fb) ? a : b;
+  }
+
+  struct Found {
+    double s;
+    std::size_t e;
+    int direction;
+  };
+
+  // The crossings of step [t0, t1], in time order, into the log; a terminal one stops the run there.
+  void detect() {
+    // The common step, scanned without a branch per event: every g and its rate keep their signs and
+    // no g is zero. (A NaN may pass either way: the loop below skips it.)
+    const std::size_t m = g1_.size();
+    bool maybe = false;
+    for (std::size_t e = 0; e < m; ++e)
+      maybe |= (std::signbit(g0_[e]) != std::signbit(g1_[e])) | (std::signbit(dg0_[e]) != std::signbit(dg1_[e])) |
+               (g0_[e] == 0.0) | (g1_[e] == 0.0);
+    if (!maybe) return;
+    found_.clear();
+    for (std::size_t e = 0; e < m; ++e) {
+      const double ga = g0_[e], gb = g1_[e];
+      const bool ga_negative = ga < 0.0, rate_negative = dg0_[e] < 0.0;
+      if (!std::isfinite(ga) || !std::isfinite(gb)) continue;
+      // Points of [0, 1] between which g is monotone on the interpolant: the ends and, where g keeps
+      // its sign but its rate changes sign, the extremum between (a touch or two crossings).
+      double s[3] = {0.0, 1.0, 1.0}, g[3] = {ga, gb, gb};
+      int points = 2;
+      if (ga != 0.0 && ga_negative == (gb < 0.0) && dg0_[e] != 0.0 && dg1_[e] != 0.0 &&
+          rate_negative != (dg1_[e] < 0.0)) {
+        s[1] = root(e, 0.0, 1.0, dg0_[e], dg1_[e], 1);
+        g[1] = on_step(e, s[1], 0);
+        points = std::isfinite(g[1]) ? 3 : 2;
+        if (points == 2) s[1] = 1.0, g[1] = gb;
+      }
+      for (int k = 0; k + 1 < points; ++k) {
+        if (g[k] == 0.0 || (g[k + 1] != 0.0 && (g[k] < 0.0) == (g[k + 1] < 0.0))) continue;
+        const int direction = g[k] < 0.0 ? 1 : -1;
+        const int wanted = set_->events[e].direction;
+        if (wanted != 0 && wanted != direction) continue;
+        found_.push_back({root(e, s[k], s[k + 1], g[k], g[k + 1], 0), e, direction});
+      }
+    }
+    if (found_.empty()) return;
+    std::sort(found_.begin(), found_.end(), [](const Found& x, const Found& y) { return x.s < y.s; });
+    for (const Found& f : found_) {
+      const double t = f.s == 1.0 ? t1_ : t0_ + f.s * (t1_ - t0_);
+      record(f, t);
+      if (set_->events[f.e].terminal) {
+        stopped_ = true;
+        t_stop_ = t;
+        stop_event_ = f.e;
+        return;
+      }
+    }
+  }
+
+  // The log's row: q and p of every coordinate on the interpolant at the crossing.
+  void record(const Found& f, double t) {
+    const double h = t1_ - t0_;
+    const Vec* fa = &f0_;
+    const Vec* fb = &f1_;
+    if (!forces_) {  // p's interpolant needs the force at both ends; computed here, at a crossing only
+      force(q0_, p0_, t0_, fa_);
+      force(q1_, p1_, t1_, fb_);
+      fa = &fa_, fb = &fb_;
+    }
+    const hermite::Weights w = hermite::value(f.s);
+    log_.event.push_back(static_cast<int>(f.e));
+    log_.direction.push_back(f.direction);
+    log_.t.push_back(t);
+    for (int j = 0; j < n_; ++j) log_.q.push_back(hermite::at(w, q0_[j], v0_[j], q1_[j], v1_[j], h));
+    for (int j = 0; j < n_; ++j) log_.p.push_back(hermite::at(w, p0_[j], (*fa)[j], p1_[j], (*fb)[j], h));
+  }
+
+  void push_dense() {
+    if (!dense_) return;
+    dense_->t.push_back(t1_);
+    dense_->q.insert(dense_->q.end(), q1_.data(), q1_.data() + n_);
+    dense_->p.insert(dense_->p.end(), p1_.data(), p1_.data() + n_);
+    dense_->v.insert(dense_->v.end(), v1_.data(), v1_.data() + n_);
+    dense_->f.insert(dense_->f.end(), f1_.data(), f1_.data() + n_);
+  }
+
+  void resize_dense(long rows) {
+    dense_->t.resize(rows);
+    for (auto* v : {&dense_->q, &dense_->p, &dense_->v, &dense_->f}) v->resize(rows * n_);
+  }
+
+  const Model& model_;
+  const EventSet* set_;
+  const Load* load_;
+  DenseRecord* dense_;
+  EventLog& log_;
+  const bool on_;
+  bool forces_ = false, terminal_ = false, stopped_ = false;
+  int n_ = 0;
+  long step_ = -1;
+  std::size_t stop_event_ = 0;
+  double t0_ = 0.0, t1_ = 0.0, t_stop_ = 0.0;
+  Vec q0_, p0_, v0_, f0_, q1_, p1_, v1_, f1_, grad_, rate_, fa_, fb_;
+  std::vector<double> in_, g0_, g1_, dg0_, dg1_;
+  std::vector<double> out_;
+  std::vector<Found> found_;
+  RecMarks marks0_{}, marks1_{};
+};
+
+}  // namespace raydamp

@@ -1,0 +1,125 @@
+// Events and dense output (events/watcher.hpp): crossing times against a closed form, a terminal
+// event's shortened last step, and the stepped trajectory unchanged by watching it.
+#include <cmath>
+#include <cstdio>
+
+#include "check.hpp"
+#include "raydamp/raydamp.hpp"
+
+using namespace raydamp;
+
+namespace {
+
+// g = q0, dg/dt = v0: the event function Python compiles for "q[0]" (slots q0, v0).
+void angle(double* out, const double* in, void*) {
+  out[0] = in[0];
+  out[1] = in[1];
+}
+
+EventSet angle_events(int direction, bool terminal) {
+  EventSet set;
+  set.fn.fn = &angle;
+  set.slots = {{EventSlot::Kind::q, 0}, {EventSlot::Kind::v, 0}};
+  set.events.push_back({direction, terminal, "vertical"});
+  return set;
+}
+
+// The complete elliptic integral of the first kind, K(k), by the arithmetic-geometric mean.
+double ellipk(double k) {
+  double a = 1.0, b = std::sqrt(1.0 - k * k);
+  for (int i = 0; i < 40; ++i) {
+    const double next = 0.5 * (a + b);
+    b = std::sqrt(a * b);
+    a = next;
+  }
+  return M_PI / (2.0 * a);
+}
+
+}  // namespace
+
+int main() {
+  const DampedPendulum pendulum(0.0);
+  const ButcherTableau& tab = builtin_tableau("heun");
+  const Composition& yoshida = builtin_composition("yoshida4");
+  const double theta0 = 1.0;
+  const double quarter = ellipk(std::sin(theta0 / 2.0));  // omega_0 = 1
+  State<1> z0{Vector<1>(theta0), Vector<1>(0.0)};
+
+  // A terminal event at the first downward crossing of the vertical: the quarter period, to order 4.
+  {
+    const EventSet events = angle_events(-1, true);
+    double err[2];
+    const double hs[2] = {0.02, 0.01};
+    for (int k = 0; k < 2; ++k) {
+      RunSpec spec{hs[k], static_cast<long>(std::lround(5.0 / hs[k])), hs[k], 1};
+      spec.events = &events;
+      RunResult r = integrate<StormerVerlet>(pendulum, tab, yoshida, z0, spec);
+      CHECK(r.status == Status::event);
+      CHECK(r.events.size() == 1);
+      err[k] = std::abs(r.events.t[0] - quarter);
+      CHECK_NEAR(r.trajectory.t.back(), r.events.t[0], 0.0);  // the last row is at the event
+      CHECK_NEAR(r.trajectory.q.back(), 0.0, 1e-7);           // the shortened step lands on it
+      CHECK(r.steps == static_cast<long>(std::ceil(quarter / hs[k])));
+    }
+    std::printf("quarter period errors %.3g %.3g, slope %.2f\n", err[0], err[1], std::log2(err[0] / err[1]));
+    CHECK(err[1] < 1e-8);
+    CHECK(std::log2(err[0] / err[1]) > 3.8);
+  }
+
+  // Both directions over several periods: crossings alternate, half a period apart; the trajectory
+  // equals the run without events bit for bit (both whole steps: sv's merged kicks are off with events).
+  {
+    const EventSet events = angle_events(0, false);
+    RunSpec spec{0.01, 2000, 0.01, 1};
+    spec.merge_steps = false;
+    RunResult plain = integrate<StormerVerlet>(pendulum, tab, yoshida, z0, spec);
+    spec.events = &events;
+    spec.dense = true;
+    RunResult watched = integrate<StormerVerlet>(pendulum, tab, yoshida, z0, spec);
+    CHECK(watched.status == Status::completed);
+    CHECK(watched.trajectory.q == plain.trajectory.q && watched.trajectory.p == plain.trajectory.p);
+    CHECK(watched.events.size() == static_cast<long>(std::floor((20.0 / quarter + 1.0) / 2.0)));
+    for (long i = 0; i < watched.events.size(); ++i) {
+      CHECK_NEAR(watched.events.t[i], (2 * i + 1) * quarter, 1e-7);
+      CHECK(watched.events.direction[i] == (i % 2 == 0 ? -1 : 1));
+      CHECK_NEAR(watched.events.q[i], 0.0, 1e-12);
+    }
+    CHECK(watched.dense.rows() == 2001);
+    CHECK(watched.dense.q == plain.trajectory.q);
+    CHECK_NEAR(watched.dense.f[1], -std::sin(watched.dense.q[1]), 0.0);
+  }
+
+  // A touch inside one step: g = q - q_max + tiny dips below zero between two step ends.
+  {
+    static double level;
+    level = theta0 - 1e-9;  // the turning point is at q = theta0 (energy conserved to the method's error)
+    EventSet events;
+    events.fn.fn = [](double* out, const double* in, void*) {
+      out[0] = in[0] - level;
+      out[1] = in[1];
+    };
+    events.slots = {{EventSlot::Kind::q, 0}, {EventSlot::Kind::v, 0}};
+    events.events.push_back({0, false, "near top"});
+    RunSpec spec{0.05, 200, 0.05, 1};
+    State<1> start{Vector<1>(0.0), Vector<1>(2.0 * std::sin(theta0 / 2.0))};  // energy of the release at theta0
+    spec.events = &events;
+    RunResult r = integrate<StormerVerlet>(pendulum, tab, yoshida, start, spec);
+    long rows_above = 0;
+    for (double q : r.trajectory.q) rows_above += q > level;
+    std::printf("touch: %ld crossings, %ld rows above the level\n", r.events.size(), rows_above);
+    CHECK(r.events.size() >= 2);  // found though no step end need lie above the level
+    for (long i = 0; i + 1 < r.events.size(); i += 2) CHECK(r.events.direction[i] == 1 && r.events.direction[i + 1] == -1);
+  }
+
+  // Refusals, each naming the argument.
+  {
+    EventSet events = angle_events(2, false);
+    RunSpec spec{0.1, 10, 0.1, 1};
+    spec.events = &events;
+    CHECK(test::throws([&] { integrate<StormerVerlet>(pendulum, tab, z0, spec); }));
+    events.events[0].direction = 0;
+    events.slots[0].index = 3;
+    CHECK(test::throws([&] { integrate<StormerVerlet>(pendulum, tab, z0, spec); }));
+  }
+  return test::failures == 0 ? 0 : 1;
+}
