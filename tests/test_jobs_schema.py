@@ -158,4 +158,4 @@ def test_every_system_kind_answers_its_files(system):
     spec = parse_job({"system": system, "h": 0.1, "t_end": 1.0,
                       "initial_state": {"q": {"file": "a" * 32}, "p": {"file": "b" * 32}}})
     assert spec.uploads() == ("a" * 32, "b" * 32)
-    assert list(spec.system.files(("system",))) == []
+    assert list(spec.system.files(("system",))) == [] and list(spec.sizes()) == [] and not spec.compiles()

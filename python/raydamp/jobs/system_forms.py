@@ -114,7 +114,21 @@ MassInput = Annotated[Annotated[FiniteFloat, Tag("number form")]
                       Discriminator(_mass_form)]
 
 
-class SystemInput(Input):
+class SystemKind(Input):
+    """What every system kind answers for a job (JobSpec walks no JSON): the files it reads, the sizes it
+    carries inline and whether it compiles. A kind that reads, carries or compiles nothing keeps these."""
+
+    def files(self, at: tuple) -> Iterator[tuple[tuple, str, str]]:
+        return iter(())
+
+    def sizes(self, at: tuple) -> Iterator[tuple[tuple, str, int]]:
+        return iter(())
+
+    def compiles(self) -> bool:
+        return False
+
+
+class SystemInput(SystemKind):
     """A user-defined system: raydamp.System.to_dict()'s form. H = 1/2 p^T M^{-1} p + V(q) with
     damping -eps D(q) M^{-1} p; M constant SPD, D(q) symmetric PSD."""
 
@@ -193,7 +207,7 @@ class ChainOnSiteInput(Input):
     g: FiniteFloat | None = Field(None, ge=0, description="sine: U = g (1 - cos q)")
 
 
-class ChainInput(Input):
+class ChainInput(SystemKind):
     """A lattice: raydamp.Chain.to_dict()'s form. n sites of mass m, neighbours joined by bonds of one
     family, dashpots on chosen bonds or friction on chosen sites (raydamp.chain documents it)."""
 
@@ -240,7 +254,7 @@ class ChainInput(Input):
 MAX_KEPLER_PARTICLES = 10**6
 
 
-class KeplerInput(Input):
+class KeplerInput(SystemKind):
     """Test particles around a fixed central body with linear drag, stepped with the exact Kepler drift:
     raydamp.Kepler.to_dict()'s form (raydamp.systems.kepler documents it)."""
 
@@ -256,10 +270,6 @@ class KeplerInput(Input):
         coordinates = [f"{a}{i}" for i in range(self.particles) for a in axes]
         chosen = [coordinates[i] for i in save_dofs] if save_dofs is not None else coordinates
         return chosen, (["L"] if self.dim == 2 else ["Lx", "Ly", "Lz"])[:momenta]
-
-    def files(self, at: tuple) -> Iterator[tuple[tuple, str, str]]:
-        """A Kepler system reads no file (its start may: JobSpec walks that)."""
-        return iter(())
 
     def build(self, files: FileResolver | None = None):
         from ..systems.kepler import Kepler
@@ -321,7 +331,7 @@ MatrixInput = Annotated[Annotated[CooForm, Tag("coo form")] | Annotated[Diagonal
                                                            '/v1/files>"}')]
 
 
-class LinearStructureInput(Input):
+class LinearStructureInput(SystemKind):
     """A linear structure M q'' + (alpha M + beta K) q' + K q = f: raydamp.LinearStructure.to_dict()'s
     form, with a matrix also given as {"file": id} of an uploaded Matrix Market file. M symmetric
     positive definite (a diagonal M is a lumped mass), K symmetric positive semi-definite (both

@@ -155,6 +155,23 @@ def _is_diagonal(matrix) -> bool:
     return bool(np.all(coo.row[coo.data != 0] == coo.col[coo.data != 0]))
 
 
+
+def load_vector(f, n: int) -> np.ndarray:
+    """The constant load f of a structure of n coordinates, checked: n finite real numbers."""
+    try:  # numbers only: asarray(dtype=float) read "1" as 1.0 and failed on 1j with a TypeError
+        load = np.asarray(f)
+    except (TypeError, ValueError):
+        load = None
+    if load is None or load.dtype.kind not in "iuf":
+        raise ValueError(f"f must be None or a vector of {n} real numbers, got {_short(f)}")
+    load = load.astype(float).reshape(-1)
+    if load.shape != (n,):
+        raise ValueError(f"f must be None or a vector of length {n}")
+    if not np.isfinite(load).all():
+        raise ValueError("f must be finite")
+    return load
+
+
 class LinearStructure(SharedModel):
     """A linear structure M q'' + (alpha M + beta K) q' + K q = f, sparse, run by every method.
 
@@ -190,20 +207,7 @@ class LinearStructure(SharedModel):
         if stiffness.shape != mass.shape:
             raise ValueError(f"K must have the shape of M, {mass.shape}, got {stiffness.shape}")
         _require_symmetric("M", mass)  # the core's Cholesky factorisation reads one triangle only
-        if f is None:
-            load = np.zeros(0)
-        else:
-            try:  # numbers only: asarray(dtype=float) read "1" as 1.0 and failed on 1j with a TypeError
-                load = np.asarray(f)
-            except (TypeError, ValueError):
-                load = None
-            if load is None or load.dtype.kind not in "iuf":
-                raise ValueError(f"f must be None or a vector of {n} real numbers, got {_short(f)}")
-            load = load.astype(float).reshape(-1)
-            if load.shape != (n,):
-                raise ValueError(f"f must be None or a vector of length {n}")
-            if not np.isfinite(load).all():
-                raise ValueError("f must be finite")
+        load = np.zeros(0) if f is None else load_vector(f, n)
         lumped = _is_diagonal(mass)
         object.__setattr__(self, "alpha", alpha)
         object.__setattr__(self, "beta", beta)

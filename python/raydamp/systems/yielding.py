@@ -56,6 +56,7 @@ from .structure import (
     _require_semidefinite,
     _require_symmetric,
     _scipy_sparse,
+    load_vector,
 )
 
 __all__ = ["Spring", "Structure"]
@@ -146,7 +147,7 @@ class Structure(LinearStructure):
             raise ValueError(f"K must have the shape of M, {mass.shape}, got {stiffness.shape}")
         _require_symmetric("M", mass)
         springs = _springs(springs, n, np.asarray(mass.diagonal(), dtype=float))
-        load = self._load_vector(f, n)
+        load = np.zeros(n) if f is None else load_vector(f, n)
         lumped = _is_diagonal(mass)
         object.__setattr__(self, "alpha", alpha)
         object.__setattr__(self, "beta", beta)
@@ -177,23 +178,6 @@ class Structure(LinearStructure):
         if not allow_indefinite_stiffness:
             _require_semidefinite(self._stiffness, mass, core.spectral_bound)
         self._freeze()
-
-    @staticmethod
-    def _load_vector(f, n: int) -> np.ndarray:
-        if f is None:
-            return np.zeros(n)
-        try:
-            load = np.asarray(f)
-        except (TypeError, ValueError):
-            load = None
-        if load is None or load.dtype.kind not in "iuf":
-            raise ValueError(f"f must be None or a vector of {n} real numbers, got {_short(f)}")
-        load = load.astype(float).reshape(-1)
-        if load.shape != (n,):
-            raise ValueError(f"f must be None or a vector of length {n}")
-        if not np.isfinite(load).all():
-            raise ValueError("f must be finite")
-        return load
 
     # -- what it is ---------------------------------------------------------
     @property
