@@ -24,18 +24,26 @@ def _refuse(message: str) -> None:
     sys.exit(2)
 
 
-def serve_command(argv: list[str]) -> int:
-    """`raydamp serve [--host H] [--port P] [--workers N]`: what follows `serve` on the library's command line."""
-    main(argv, prog="raydamp serve")
-    return 0
-
-
-def main(argv: list[str] | None = None, prog: str = "raydamp-service") -> None:
-    parser = argparse.ArgumentParser(prog=prog, description="Serve the raydamp job API.")
+def _arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("--host", help="address to bind (default: RAYDAMP_HOST or 127.0.0.1)")
     parser.add_argument("--port", type=int, help="port to bind (default: RAYDAMP_PORT or 8000)")
     parser.add_argument("--workers", type=int, help="runs executed at once (default: RAYDAMP_WORKERS or 2)")
-    args = parser.parse_args(argv)
+    return parser
+
+
+def serve_command(argv: list[str]) -> int:
+    """`raydamp serve [--host H] [--port P] [--workers N]`: what follows `serve` on the library's command line,
+    checked under its own name (its --help says "raydamp serve"), then handed to main."""
+    parser = argparse.ArgumentParser(prog="raydamp serve",
+                                     description="run the job service (same as python -m raydamp_service)")
+    main([arg for name, value in vars(_arguments(parser).parse_args(argv)).items() if value is not None
+          for arg in (f"--{name}", str(value))])
+    return 0
+
+
+def main(argv: list[str] | None = None) -> None:
+    args = _arguments(argparse.ArgumentParser(prog="raydamp-service", description="Serve the raydamp job API.")
+                      ).parse_args(argv)
     # Command-line values win over the environment; absent ones fall back to it.
     overrides = {name: value for name, value in vars(args).items() if value is not None}
     try:

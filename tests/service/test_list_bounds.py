@@ -49,6 +49,11 @@ EXAMPLES = [
                   "system": {"kind": "linear_structure", "M": {"diagonal": [1.0, 1.0]},
                              "K": {"coo": {"shape": [2, 2], "rows": [0, 1], "cols": [0, 1], "values": [1.0, 1.0]}},
                              "f": [1.0, 0.0]}}),
+    ("/v1/jobs", {**_JOB, "initial_state": {"rest": True},
+                  "system": {"kind": "structure", "M": {"diagonal": [1.0, 1.0]}, "f": [1.0, 0.0],
+                             "springs": [{"dofs": [0], "material": {"kind": "elastic_plastic", "k": 1.0, "fy": 1.0}},
+                                         {"dofs": [0, 1], "material": {"kind": "elastic_plastic", "k": 1.0,
+                                                                      "fy": 1.0}}]}}),
     ("/v1/sweeps", {"job": {**_JOB, "model": "damped_pendulum", "work": False}, "grid": {"eps": [0.1, 0.2]}}),
 ]
 

@@ -414,6 +414,11 @@ class BoucWenForm(Input):
 MaterialInput = Annotated[ElasticPlasticForm | BilinearForm | BoucWenForm, Field(discriminator="kind")]
 
 
+# A job's springs are objects of some 60 bytes and more: a bound below what a body can carry makes a long list of
+# bad items one length error, read before its items (a list as long as a structure's would be read item by item).
+MAX_SPRINGS = 10_000
+
+
 class SpringInput(Input):
     dofs: bounded(Annotated[int, Field(ge=0)], 2, min_length=1) = Field(
         description="[j]: d = q_j (to the ground); [i, j]: d = q_j - q_i")
@@ -426,8 +431,9 @@ class StructureInput(LinearStructureInput):
 
     kind: Literal["structure"]
     K: MatrixInput | None = Field(None, description="the linear stiffness besides the springs; null for none")
-    springs: bounded(SpringInput, MAX_STRUCTURE_DIM) = Field(
-        default_factory=list, description='[{"dofs": [i, j], "material": {"kind": "bilinear", "k", "fy", "b"}}]')
+    springs: bounded(SpringInput, MAX_SPRINGS) = Field(
+        default_factory=list, description='[{"dofs": [i, j], "material": {"kind": "bilinear", "k", "fy", "b"}}]; at '
+                                          f'most {MAX_SPRINGS:,} in a job (raydamp.Structure has no such bound)')
 
     def files(self, at: tuple) -> Iterator[tuple[tuple, str, str]]:
         for key in ("M", "K"):

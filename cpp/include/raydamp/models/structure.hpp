@@ -50,6 +50,9 @@ struct Structure : LinearStructure<Mass> {
   using Base = LinearStructure<Mass>;
   using Vec = typename Base::Vec;
   static constexpr const char* name = "structure";
+  // Springs make the system nonlinear: the implicit methods, which solve M q'' + C q' + K q = f as one linear
+  // system (catalogue.hpp's with_method_for), are refused, naming the method.
+  static constexpr bool linear_system = false;
 
   materials::Springs springs;
 
