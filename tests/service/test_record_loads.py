@@ -311,6 +311,9 @@ def test_records_are_parsed_once_by_their_content():
             self.reads += 1
             return self.files.get(file_id)
 
+        def file_exists(self, file_id):
+            return file_id in self.files
+
     values = ground_acceleration()[:50]
     store = Store({"a" * 32: at2_text(values).encode(), "b" * 32: npy_bytes(values)})
     parsed = ParsedFiles(store, max_entries=10**6)

@@ -76,11 +76,17 @@ class _StoredFiles:
         self._db = db
         self._connection: sqlite3.Connection | None = None
 
-    def file_content(self, file_id: str) -> bytes | None:
+    def _read(self, sql: str, file_id: str):
         if self._connection is None:
             self._connection = sqlite3.connect(Path(self._db).as_uri() + "?mode=ro", uri=True)
-        row = self._connection.execute("SELECT content FROM files WHERE id = ?", (file_id,)).fetchone()
+        return self._connection.execute(sql, (file_id,)).fetchone()
+
+    def file_content(self, file_id: str) -> bytes | None:
+        row = self._read("SELECT content FROM files WHERE id = ?", file_id)
         return bytes(row[0]) if row else None
+
+    def file_exists(self, file_id: str) -> bool:
+        return self._read("SELECT 1 FROM files WHERE id = ?", file_id) is not None
 
 
 def _status_bytes(field: str) -> int:

@@ -66,7 +66,7 @@ class ParsedFiles:
     """Uploaded files as raydamp reads them (a scipy.sparse matrix; a record's (t, values)), parsed once per id (a
     parse in progress is waited for); at most max_entries stored entries, the least recently used dropped first."""
 
-    def __init__(self, store: Any, max_entries: int):  # store.file_content(id): the bytes, or None
+    def __init__(self, store: Any, max_entries: int):  # store.file_content(id): the bytes, or None; file_exists(id)
         self._store, self._max = store, max_entries
         self._lock = threading.Lock()
         self._parsed: OrderedDict[str, tuple[threading.Lock, Any]] = OrderedDict()
@@ -81,6 +81,11 @@ class ParsedFiles:
         lock, _ = entry
         with lock:  # one parse per id; the others wait for it
             matrix = self._parsed.get(file_id, (None, None))[1]
+            if matrix is not None and not self._store.file_exists(file_id):
+                # Deleted since it was parsed: a check process's cache is not told (the server's forgets), and a
+                # stale parse let a check pass that the job's insert then refused as deleted meanwhile (409).
+                self.forget(file_id)
+                matrix = None
             if matrix is None:
                 content = self._store.file_content(file_id)
                 if content is None:

@@ -98,6 +98,9 @@ class FileStore:
         row = self.db.connection().execute("SELECT content FROM files WHERE id = ?", (file_id,)).fetchone()
         return bytes(row[0]) if row else None
 
+    def file_exists(self, file_id: str) -> bool:
+        return self.db.connection().execute("SELECT 1 FROM files WHERE id = ?", (file_id,)).fetchone() is not None
+
     def delete_file(self, file_id: str) -> str:
         """"deleted", "missing", or "in_use" when a queued or running job names it (its id as the JSON string "<id>")
         in the same statement: a run never loses its file."""
