@@ -66,8 +66,8 @@ serve: setup
 	$(PY) -m raydamp_service --host $(HOST) --port $(PORT)
 
 # The C++ tests need only Eigen and the build tools: they build while the package installs and pytest
-# runs, at the lowest priority, taking what those leave (pytest keeps about one of the two cores
-# busy: 250 s of CPU in 265 s). The build is a session of its own (so that it can be ended as one),
+# runs, at the lowest priority, taking what those leave (pytest's two workers keep both cores busy, so most
+# of this build runs after them). The build is a session of its own (so that it can be ended as one),
 # and Linux's autogroups share the processor between sessions before nice counts within one, so its
 # session's nice is lowered too (with nice alone, pytest took 6:33 instead of 4:25). Then ctest runs;
 # a failure of pytest or ctest fails the target once both have run.
