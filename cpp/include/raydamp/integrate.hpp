@@ -22,6 +22,7 @@
 #include "raydamp/composed_step.hpp"
 #include "raydamp/step.hpp"
 #include "raydamp/events/watcher.hpp"
+#include "raydamp/math/flush_subnormals.hpp"
 #include "raydamp/materials/commit.hpp"
 #include "raydamp/record/divergence.hpp"
 #include "raydamp/record/recorder.hpp"
@@ -420,6 +421,7 @@ template <class Method, class Model, class Tab, int Dim>
 RunResult run_steps(const Model& model, const Tab& tab, const Composition& composition, State<Dim> z,
                     const RunSpec& spec, const Control& control) {
   static_assert(is_model_v<Model>, "Model lacks part of the interface listed in raydamp/concepts.hpp");
+  const FlushSubnormals flush;  // a decayed state would otherwise cycle among subnormals, 25x slower
   if (spec.temperature != 0.0) check_temperature<Method, Model>(model, composition, spec.temperature);
   // At eps = 0 every damping flow is the identity, so 3s is sv with identities between its
   // drifts. Run as sv's table, it equals sv bit for bit: its merged steps would otherwise
