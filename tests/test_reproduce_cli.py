@@ -5,13 +5,22 @@ from __future__ import annotations
 import subprocess
 import sys
 
+import pytest
+
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 
-def test_reproduce_quick_writes_figures_and_report(tmp_path):
-    out = tmp_path / "repro"
+@pytest.fixture(scope="module")
+def reproduced(tmp_path_factory):
+    """`raydamp reproduce --quick` run once as a user runs it: (run, its output folder)."""
+    out = tmp_path_factory.mktemp("repro")
     run = subprocess.run([sys.executable, "-m", "raydamp", "reproduce", "--out", str(out), "--quick"],
                          capture_output=True, text=True, timeout=600)
+    return run, out
+
+
+def test_reproduce_quick_writes_figures_and_report(reproduced):
+    run, out = reproduced
     assert run.returncode == 0, run.stderr
     assert "claims hold" in run.stdout
     assert "12/12" in run.stderr  # the progress bar reached the end
@@ -27,6 +36,15 @@ def test_reproduce_quick_writes_figures_and_report(tmp_path):
     # The reduced run still shows every claim but the one explained disagreement.
     assert "20 of 21 claims hold" in run.stdout
     assert report.count("| FAIL |") == 1
+
+
+def test_every_figure_passes_the_legibility_check(reproduced):
+    # The report lists what raydamp.reproduce.legibility found in each of the 8 figures as it was saved
+    # (figures.PROBLEMS); tests/test_reproduce_figures.py shows the check catches each kind of problem.
+    run, out = reproduced
+    report = (out / "REPORT.md").read_text()
+    assert len(sorted(out.glob("*.png"))) == 8
+    assert "every figure passes." in report, report[report.index("## Figures"):][:3000]
 
 
 def test_cli_needs_a_command():
