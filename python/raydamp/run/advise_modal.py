@@ -90,24 +90,39 @@ def _power_coefficients(m, s, n):
 
 def numerical_x(S: np.ndarray, x0: np.ndarray, v0: np.ndarray, n: np.ndarray) -> np.ndarray:
     """x after n steps of the step matrices S (modes, 2, 2) acting on (x, v): (modes, samples).
-    Well-separated eigenvalues (all but near-critically damped modes): the two powers apart, two complex
-    exponentials an entry; the rest by _power_coefficients."""
+    S^n = A_n S - det(S) A_{n-1} I with A_n = (l+^n - l-^n) / (l+ - l-), l+- = m +- s its eigenvalues.
+    Complex conjugate eigenvalues (every oscillating mode) in real arithmetic: l+ = r e^{i theta}, s = i sigma,
+    A_n = r^n sin(n theta) / sigma. Other well-separated ones: the two powers apart, a complex exponential
+    each. The rest (near-double eigenvalues) by _power_coefficients."""
     a, b, c, d = S[:, 0, 0], S[:, 0, 1], S[:, 1, 0], S[:, 1, 1]
-    m = ((a + d) / 2).astype(complex)
-    s = np.sqrt((((a - d) / 2) ** 2 + b * c).astype(complex))
+    half_trace = (a + d) / 2
+    disc = ((a - d) / 2) ** 2 + b * c
+    m = half_trace.astype(complex)
+    s = np.sqrt(disc.astype(complex))
     det = a * d - b * c
     first = a * x0 + b * v0
     out = np.empty((S.shape[0], n.size))
     with np.errstate(all="ignore"):
         apart = np.abs(s) > 1e-3 * np.abs(m)
         k = n[None, :].astype(float)
-        if apart.any():
-            mm, ss = m[apart][:, None], s[apart][:, None]
+        rotating = apart & (disc < 0)
+        if rotating.any():
+            sigma = np.sqrt(-disc[rotating])[:, None]
+            log_r = 0.5 * np.log(half_trace[rotating] ** 2 + sigma[:, 0] ** 2)[:, None]
+            theta = np.arctan2(sigma[:, 0], half_trace[rotating])[:, None]
+            angle = k * theta
+            power = np.exp(k * log_r) * np.sin(angle) / sigma                                  # A_n
+            before = np.exp((k - 1) * log_r) * (np.sin(angle) * np.cos(theta)
+                                                  - np.cos(angle) * np.sin(theta)) / sigma  # A_{n-1}
+            out[rotating] = power * first[rotating][:, None] - det[rotating][:, None] * before * x0[rotating][:, None]
+        real = apart & ~rotating
+        if real.any():
+            mm, ss = m[real][:, None], s[real][:, None]
             plus, minus = np.log(mm + ss), np.log(mm - ss)
             high, low = np.exp((k - 1) * plus), np.exp((k - 1) * minus)   # l^{n-1}
             power = (high * (mm + ss) - low * (mm - ss)) / (2 * ss)      # A_n
             before = (high - low) / (2 * ss)                              # A_{n-1}
-            out[apart] = np.real(power * first[apart][:, None] - det[apart][:, None] * before * x0[apart][:, None])
+            out[real] = np.real(power * first[real][:, None] - det[real][:, None] * before * x0[real][:, None])
         rest = ~apart
         if rest.any():
             mm, ss = m[rest][:, None], s[rest][:, None]
