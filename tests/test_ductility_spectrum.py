@@ -38,7 +38,7 @@ def test_the_exact_solution_at_the_fy_found_has_the_target_ductility(spectrum):
 def test_larger_strengths_stay_below_the_target(spectrum):
     for i, period in enumerate(PERIODS):
         ratio, f0 = float(spectrum.fy_ratio[1, i]), float(spectrum.Ay[1, i] / spectrum.fy_ratio[1, i])
-        for above in np.linspace(ratio * 1.02, 1.5, 4):
+        for above in (ratio * 1.02, 0.5 * (ratio + 1.5)):
             assert peak_ductility(T_REC, A_G, period, 0.05, above * f0) < 4.0, (period, above)
 
 
@@ -64,8 +64,9 @@ def test_a_bilinear_material_keeps_its_b_and_reaches_the_target():
 @pytest.mark.parametrize("arguments,name", [
     ({"ductility": 0.5}, "ductility"), ({"ductility": [2.0, float("nan")]}, "ductility"),
     ({"periods": [0.5, -1.0]}, "periods"), ({"damping": 1.0}, "damping"), ({"material": "epp"}, "material"),
-    ({"steps_per_period": 4}, "steps_per_period"), ({"tolerance": 0.5}, "tolerance"), ({"record": "x"}, "x")])
-def test_bad_input_names_its_argument(arguments, name):
+    ({"steps_per_period": 4}, "steps_per_period"), ({"tolerance": 0.5}, "tolerance"),
+    ({"record": (T_REC, 0.0 * A_G)}, "record")])
+def test_bad_input_names_its_argument_first(arguments, name):
     call = {"record": (T_REC, A_G), "periods": [0.5], "ductility": 2.0, **arguments}
-    with pytest.raises(ValueError, match=name):
+    with pytest.raises(ValueError, match=f"^{name}"):
         raydamp.ductility_spectrum(call.pop("record"), call.pop("periods"), call.pop("ductility"), **call)

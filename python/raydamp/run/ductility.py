@@ -27,6 +27,7 @@ __all__ = ["ductility_spectrum"]
 _DOWN = 0.8       # the search's step down in fy between rounds, until the target ductility is passed
 _LOWEST = 1e-3    # ... down to fy = _LOWEST f0, below which the target counts as not reached
 _ROUNDS = 60      # rounds of the bracketed search at most
+_BAND = 4.0       # the periods of one ensemble call are within this factor of each other
 
 
 def ductility_spectrum(record, periods, ductility, damping: float = 0.05, material: Material | None = None, *,
@@ -40,7 +41,9 @@ def ductility_spectrum(record, periods, ductility, damping: float = 0.05, materi
     0.8 per round until the achieved ductility passes mu; the last step brackets the largest fy that gives mu
     (one that lies in an earlier step, where mu(fy) rose past mu and fell back within one step, is not seen),
     and a regula falsi (Illinois) narrows the bracket until the ductility is within ``tolerance`` of mu, or fy
-    within ``tolerance`` relative. A round runs every period still searching as members of one ensemble.
+    within ``tolerance`` relative. A round runs every period still searching as members of ensembles, one per
+    band of periods within a factor 4 of each other (0.05-5 s: four calls a round), since each member runs as
+    long as the longest record of its call in its own time.
 
     The peak deformation u_m is the largest |u| over the record and the free vibration that follows, up to its
     first turning point (u' = 0) after the record's end: the turning points are located on each step's
@@ -137,7 +140,17 @@ class _Search:
         self.turning = [Event("p[0]", name="turning")]
 
     def ductility(self, period_of: np.ndarray, amplitude: np.ndarray) -> np.ndarray:
-        """Peak |x| of the members (period_of[m], load amplitude[m]) over each one's window."""
+        """Peak |x| of the members (period_of[m], load amplitude[m]) over each one's window: one ensemble per band
+        of periods within a factor _BAND of each other (a member runs as long as its band's longest window, so a
+        band bounds the free vibration it runs past its own)."""
+        peak = np.empty(period_of.size)
+        band = np.floor(np.log(self.window[period_of] / self.window.min()) / np.log(_BAND)).astype(int)
+        for b in np.unique(band):
+            members = np.flatnonzero(band == b)
+            peak[members] = self._band(period_of[members], amplitude[members])
+        return peak
+
+    def _band(self, period_of: np.ndarray, amplitude: np.ndarray) -> np.ndarray:
         members = period_of.size
         # past the longest window by 1.5 periods (3 pi): time for the turning point that follows it
         t_end = float(np.max(self.window[period_of])) + 3.0 * np.pi
