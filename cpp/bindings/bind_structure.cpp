@@ -65,6 +65,10 @@ void bind_structure_kind(py::module_& m, const char* name) {
       .def_property_readonly("damping_rate_bound", [](const Model& s) { return s.damping.rate_bound(); })
       .def_property_readonly("dense", [](const Model& s) { return s.damping.dense(); })
       .def_property_readonly("n_springs", [](const Model& s) { return s.springs.size(); })
+      // Whether runs split steps at the springs' kinks (materials/kinks.hpp); set once, before any run.
+      .def_property(
+          "locate_kinks", [](const Model& s) { return s.springs.phased(); },
+          [](Model& s, bool on) { s.springs.set_phased(on); })
       .def("chebyshev_degrees", [](const Model& s, double t) {
         const auto series = s.damping.chebyshev(t);
         return py::make_tuple(series->exp.degree(), series->t_phi1.degree());

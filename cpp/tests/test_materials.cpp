@@ -4,6 +4,9 @@
 // - Bouc-Wen (n = 1): the closed-form return map against a fine RK4 integration of dz/dd along a path
 //   with reversals and crossings of z = 0, to 1e-11;
 // - trial and commit: a force answers from the committed state whatever trials came before it;
+// - the phases of kink location (materials/phases.hpp): each law equals the return map along a monotonic
+//   drift inside its range, meets the next phase's law at the kink without a jump, and its range ends where
+//   the return map's law changes; the cubic root finder of kinks.hpp finds the first rise to rounding;
 // - a structure without springs steps as its LinearStructure bit for bit; with springs, a run does not
 //   change the model it was given (its materials are the run's own), two runs give the same bits, and
 //   the gradient allocates nothing.
@@ -15,6 +18,7 @@
 #include "check.hpp"
 #include "counting_new.hpp"
 #include "raydamp/ensemble/driver.hpp"
+#include "raydamp/materials/kinks.hpp"
 #include "raydamp/models/structure.hpp"
 #include "raydamp/raydamp.hpp"
 
@@ -210,7 +214,57 @@ void structure_runs() {
 
 }  // namespace
 
+// Phase laws against the return maps: from a state, a drift up to d inside the phase's range (the return map
+// exact for it), then past the range's end in the next phase.
+void phases() {
+  {
+    const ElasticPlastic m{10.0, 7.5};
+    ElasticPlastic::State c, t;
+    const Range r = phase_range(m, c, 0);
+    CHECK_NEAR(r.upper, 0.75, 1e-16);
+    CHECK_NEAR(phase_force(m, c, 0, 0.5), m.force(c, 0.5, t), 1e-15);
+    const int up = phase_after_exit(m, c, 0, true);
+    CHECK(up == 1);
+    CHECK_NEAR(phase_force(m, c, up, r.upper), phase_force(m, c, 0, r.upper), 1e-14);  // no jump at yield
+    CHECK_NEAR(phase_force(m, c, up, 2.0), m.force(c, 2.0, t), 1e-15);
+    const ElasticPlastic::State at = phase_state(m, c, up, 2.0);
+    CHECK_NEAR(at.plastic, t.plastic, 1e-15);
+    CHECK(phase_after_reversal(m, at, up) == 0);
+    CHECK_NEAR(phase_force(m, at, 0, 2.0), 7.5, 1e-14);  // unloading starts at fy
+  }
+  {
+    const Bilinear m(10.0, 7.5, 0.1);
+    Bilinear::State c, t;
+    const double yield = phase_range(m, c, 0).lower;
+    CHECK_NEAR(phase_force(m, c, -1, yield), phase_force(m, c, 0, yield), 1e-14);
+    CHECK_NEAR(phase_force(m, c, -1, -3.0), m.force(c, -3.0, t), 1e-14);
+    const Bilinear::State at = phase_state(m, c, -1, -3.0);
+    CHECK_NEAR(at.plastic, t.plastic, 1e-15);
+    CHECK_NEAR(at.back, t.back, 1e-14);
+  }
+  {
+    const BoucWen m(10.0, 7.5, 0.1, 0.6, 0.3);
+    BoucWen::State c, t;
+    c.z = -0.5;  // w < 0 on an upward drift: phase +1 until z = 0, then +2
+    const Range r = phase_range(m, c, 1);
+    CHECK(std::isinf(r.lower) && r.upper > 0.0);
+    CHECK_NEAR(phase_z(m, c, 1, r.upper), 0.0, 1e-14);
+    CHECK_NEAR(phase_force(m, c, 1, 0.5 * r.upper), m.force(c, 0.5 * r.upper, t), 1e-14);
+    const BoucWen::State at = phase_state(m, c, 1, r.upper);
+    CHECK(phase_after_exit(m, at, 1, true) == 2);
+    CHECK_NEAR(phase_force(m, at, 2, 3.0), m.force(c, 3.0, t), 1e-13);  // the two pieces make the return map
+    CHECK(phase_after_reversal(m, phase_state(m, at, 2, 3.0), 2) == -1);
+  }
+  // first_rise: g = (s - 0.3)(s + 1)(2 - s) rises through 0 at 0.3 only; -g never rises in (0, 1]
+  const kinks::Cubic g{-0.6, 1.7, 1.3, -1.0};
+  CHECK_NEAR(kinks::first_rise(g), 0.3, 1e-15);
+  CHECK(kinks::first_rise({0.6, -1.7, -1.3, 1.0}) == kinks::kNone);
+  // a touch: g = -(s - 0.5)^2 + 1e-6 rises at 0.5 - 1e-3, inside the step, with both ends negative
+  CHECK_NEAR(kinks::first_rise({-0.25 + 1e-6, 1.0, -1.0, 0.0}), 0.5 - 1e-3, 1e-12);
+}
+
 int main() {
+  phases();
   elastic_plastic();
   bilinear();
   bouc_wen();

@@ -18,6 +18,7 @@ from .results.ensemble_solution import EnsembleSolution
 from .results.io import load
 from .results.solution import Solution
 from .run.advise import Advice, MethodAdvice, advise
+from .run.ductility import ductility_spectrum
 from .run.ensemble import integrate_ensemble
 from .run.events import Event
 from .run.integrate import CancelToken, integrate, steps_for
@@ -37,7 +38,7 @@ __all__ = ["__version__", "models", "Load", "GroundMotion", "System", "Chain", "
            "MethodAdvice", "CancelToken", "Solution", "integrate_ensemble", "EnsembleSolution", "sweep",
            "check_sweep", "parse_grid_item", "SweepPlan", "load", "rayleigh_coefficients", "modal_damping_ratio",
            "methods", "tableaux", "compositions", "MethodInfo", "TableauInfo", "CompositionInfo",
-           "response_spectrum", "Event"]
+           "response_spectrum", "ductility_spectrum", "Event"]
 
 # Subpackages a user reaches as attributes (raydamp.analysis.kinetic_temperature, as the README writes it),
 # imported when first used: raydamp.analysis needs SciPy (the analysis extra), and `import raydamp` needs NumPy

@@ -535,6 +535,7 @@ class LinearStructure_consistent:
     def spectral_bound(self) -> float:
         ...
 class Structure_lumped:
+    locate_kinks: bool
     @staticmethod
     def integrate_ensemble(models: collections.abc.Sequence[Structure_lumped], model_index: typing.Annotated[numpy.typing.ArrayLike, numpy.int64], names: collections.abc.Sequence[str], values: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], method: str, tableau: str, composition: str, q0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], p0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], h: typing.SupportsFloat | typing.SupportsIndex, n_steps: typing.SupportsInt | typing.SupportsIndex, h_last: typing.SupportsFloat | typing.SupportsIndex, save_every: typing.SupportsInt | typing.SupportsIndex, threads: typing.SupportsInt | typing.SupportsIndex, progress: typing.Any, cancel: CancelToken, vector_sine: bool = False, loads: collections.abc.Sequence[Load] = [], load_index: typing.Annotated[numpy.typing.ArrayLike, numpy.int64] = ..., temperature: typing.SupportsFloat | typing.SupportsIndex = 0.0, seed: typing.SupportsInt | typing.SupportsIndex = 0, first_stream: typing.SupportsInt | typing.SupportsIndex = 0, events: EventSet = None) -> dict:
         ...
@@ -597,6 +598,7 @@ class Structure_lumped:
     def spectral_bound(self) -> float:
         ...
 class Structure_consistent:
+    locate_kinks: bool
     @staticmethod
     def integrate_ensemble(models: collections.abc.Sequence[Structure_consistent], model_index: typing.Annotated[numpy.typing.ArrayLike, numpy.int64], names: collections.abc.Sequence[str], values: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], method: str, tableau: str, composition: str, q0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], p0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], h: typing.SupportsFloat | typing.SupportsIndex, n_steps: typing.SupportsInt | typing.SupportsIndex, h_last: typing.SupportsFloat | typing.SupportsIndex, save_every: typing.SupportsInt | typing.SupportsIndex, threads: typing.SupportsInt | typing.SupportsIndex, progress: typing.Any, cancel: CancelToken, vector_sine: bool = False, loads: collections.abc.Sequence[Load] = [], load_index: typing.Annotated[numpy.typing.ArrayLike, numpy.int64] = ..., temperature: typing.SupportsFloat | typing.SupportsIndex = 0.0, seed: typing.SupportsInt | typing.SupportsIndex = 0, first_stream: typing.SupportsInt | typing.SupportsIndex = 0, events: EventSet = None) -> dict:
         ...

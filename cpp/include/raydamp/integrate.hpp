@@ -24,6 +24,7 @@
 #include "raydamp/events/watcher.hpp"
 #include "raydamp/math/flush_subnormals.hpp"
 #include "raydamp/materials/commit.hpp"
+#include "raydamp/materials/kinks.hpp"
 #include "raydamp/record/divergence.hpp"
 #include "raydamp/record/recorder.hpp"
 #include "raydamp/record/save_grid.hpp"
@@ -393,6 +394,19 @@ long replay_block(WS& ws, Rec& rec, Held& before, State<Dim>& z, long k, long en
   return end;
 }
 
+// One step of tau of Method (composed), outside the run's own step sizes: a piece of a step split at a kink.
+template <class Method, class Model, class Tab, int Dim, class WS>
+void step_for(const Model& model, const Tab& tab, const Composition& composition, State<Dim>& z, double tau,
+              WS& ws) {
+  if constexpr (has_own_stepper<Method>::value) {
+    throw std::invalid_argument(std::string("method '") + Method::name + "' cannot step a piece of a step");
+  } else if constexpr (is_mergeable<Method>()) {
+    ComposedStepper<Method>(composition, tau, tau, 1).step(model, tab, z, 0, ws);
+  } else {
+    raydamp::step<Method>(model, tab, z, tau, ws);
+  }
+}
+
 // After a terminal event (watch.stopped()): z becomes the state at the event's time, the crossing step
 // run again from its start with its duration cut to that time; returns the steps taken.
 template <class Method, class Watch, class Model, class Tab, class WS, class Rec, int Dim>
@@ -458,11 +472,21 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
   rec.start(z);
   const auto stepper = make_stepper<Method>(model, composition, spec);
   constexpr bool mergeable = is_mergeable<Method>();
-  const bool merge = merges_steps<Method>(spec);
+  KinkLocator<Model, Dim> kinks(model, spec);  // a Structure's springs with locate_kinks: steps split at kinks
+  const bool merge = merges_steps<Method>(spec) && !kinks.on();
   const auto step_drift = drift_from_law<Method>(model, mb, stepper, time_at);
   auto advance = [&](auto& w, State<Dim>& x, long i) {  // w: ws, or the same as Unhooked
     if (watch.stopped()) return;  // a terminal event ended the run inside this block
     if (ws.load) ws.time = time_at(i);
+    if constexpr (has_materials_v<Model>) {
+      if (kinks.on()) {
+        kinks.step(x, time_at(i), i == N - 1 ? spec.h_last : spec.h, ws, rec, [&](State<Dim>& y, double tau, bool whole) {
+          if (whole) stepper.step(model, tab, y, i, w);
+          else step_for<Method>(model, tab, composition, y, tau, w);
+        });
+        return watch.after_step(x, i, time_at(i + 1), rec);
+      }
+    }
     if constexpr (trapezoid && has_step_by_stage<std::decay_t<decltype(stepper)>>::value) {
       if (rec.tracks_work() && stepper.stages() > 1) {  // the trapezoid's points: the stage boundaries
         double t = time_at(i);

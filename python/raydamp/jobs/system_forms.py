@@ -434,6 +434,8 @@ class StructureInput(LinearStructureInput):
     springs: bounded(SpringInput, MAX_SPRINGS) = Field(
         default_factory=list, description='[{"dofs": [i, j], "material": {"kind": "bilinear", "k", "fy", "b"}}]; at '
                                           f'most {MAX_SPRINGS:,} in a job (raydamp.Structure has no such bound)')
+    locate_kinks: bool = Field(False, description="split each step at the springs' and the load's kinks, so that "
+                                                  "every method keeps its order (help(raydamp.Structure))")
 
     def files(self, at: tuple) -> Iterator[tuple[tuple, str, str]]:
         for key in ("M", "K"):

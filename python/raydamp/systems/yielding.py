@@ -22,17 +22,53 @@ tangent-stiffness choice is not offered yet.
 Methods. The splittings (3s, 2s, rks, baoab, and sv undamped; their compositions) apply the springs in the
 kick, at the kick's q; each material answers from the state committed at the step's start and commits once
 per full step, so a composition's backward sub-steps never create plastic flow. The implicit methods
-(midpoint, gauss4) step a linear system and refuse a Structure with springs. A kink of sigma (yield,
-unloading) inside a step limits every fixed-step method to order 2 (kinks are not located yet; each
-material gives the deformations at which it next yields, materials.hpp's elastic_range, for that). On
-Chopra's elastic-perfectly-plastic SDOF (tests/test_structure_springs.py), measured: the fitted order over
-h = 0.01/2 .. 0.01/16 is 1.93 for 3s, 2s and rks and 2.02 for baoab; the worst error over every step at h =
-0.01/9, 0.01/10, 0.01/11 is 6.0e-6 u_max (baoab) to 9.5e-6 u_max (3s); Newmark's average acceleration
-(with Newton) errs about twice as much as 3s at the same h (its peak 6.2% low at h = 0.1).
+(midpoint, gauss4) step a linear system and refuse a Structure with springs.
+
+Kinks. A kink of sigma (yield, unloading; for Bouc-Wen its reversals and z = 0) or of the load (a harmonic
+term's ``t_end``, a series' samples) inside a step makes a derivative of q jump there, and limits every
+fixed-step method to order 2, whatever its order on smooth problems. ``locate_kinks=True`` splits the steps
+there (cpp/include/raydamp/materials/kinks.hpp): between two kinks each spring follows one smooth law, its
+phase (elastic, or yielding in one direction), which every kick of the step reads, extended past its range, so
+a composition's stages, backward and overshooting ones included, all see one smooth force; after each step the
+deformations' cubic Hermite interpolants (fourth order) give the first time a phase ends, and the step is run
+again to that time, the spring changes phase, and the rest of the step is a new piece. A load's kinks end
+pieces too, unless they lie on a step end (to 1e-9 h), as a record's samples do when h divides its dt. Each
+method then keeps its order. It is an option of the Structure, not of ``integrate``, because it is a property
+of how this system's forces are stepped: every run of it (``integrate``, ``integrate_ensemble``, sweeps, a
+job's ``"locate_kinks": true``) honours it without an argument of its own. Its cost: a step without a kink
+reads each spring's d and d' at the step's end and scans a cubic (a mass solve and a few dozen flops per
+spring); a kink costs the rest of its step again; steps run whole (no first-same-as-last merging); a
+temperature is refused (a piece run again would draw its noise twice). Off (the default), the springs' return
+maps are read at each kick, as above.
+
+Measured on Chopra's elastic-perfectly-plastic SDOF (tests/test_structure_springs.py without,
+tests/test_structure_kinks.py with kink location): the fitted order over h = 0.04 .. 0.005 (0.01/2 .. 0.01/16
+for the order-2 methods without), and the worst error over every step at h = 0.01/9, 0.01/10, 0.01/11 over 40 s:
+
+==================  ================  ===============  ====================
+method              order without     order with       worst error with
+==================  ================  ===============  ====================
+3s                  1.93              1.99             8.6e-6 u_max
+2s                  1.93              1.99             8.4e-6 u_max
+rks                 1.93              1.99             8.3e-6 u_max
+baoab               2.02              2.01             6.0e-6 u_max
+3s + yoshida4       2.10              4.00             6.2e-10 u_max
+3s + suzuki4                          3.99             4.1e-11 u_max
+==================  ================  ===============  ====================
+
+Without kink location the worst error is 6.0e-6 (baoab) to 9.5e-6 u_max (3s): the order-2 splittings' error is
+their own, not the kinks'; what kink location buys is a composition's higher order. Bilinear and Bouc-Wen show
+order 4 with yoshida4 too (about 2 without). Newmark's average acceleration (with Newton) errs about twice as
+much as 3s at the same h (its peak 6.2% low at h = 0.1).
 
 Cost. A spring adds a return map per kick to the linear structure's step: on the 10-storey frame
-(benchmarks/bench_springs.py) 1.1-1.4x the springless step for ElasticPlastic and Bilinear, about 1.8x
-for BoucWen (one phi1 per spring and kick).
+(benchmarks/bench_springs.py, in CPU time: 124 ns a springless 3s step) 1.14-1.23x the springless step for
+ElasticPlastic and Bilinear, 1.49-1.61x for BoucWen. Kink location costs a step run whole plus, per step, the
+deformations' read and the cubics' scan, and per kink the rest of its step again: `--kinks` measured 4.0-4.8x
+(ElasticPlastic, Bilinear) and 11-14x (BoucWen, whose reversals and z = 0 crossings are kinks) the springless
+step before the scan's fast rejection and root finder; a C++ run of a like frame after them (10 storeys, a
+harmonic ground motion, 3s, 8,000 steps, about 0.16 kinks a step) gives 800 ns a step for ElasticPlastic
+(1,020 before), 690 for Bilinear and 1,280 for BoucWen (1,460 before), against 135-190 without.
 """
 
 from __future__ import annotations
@@ -61,7 +97,8 @@ from .structure import (
 
 __all__ = ["Spring", "Structure"]
 
-PLAIN_KEYS = ("kind", "M", "K", "springs", "alpha", "beta", "f", "damping_stiffness", "allow_indefinite_stiffness")
+PLAIN_KEYS = ("kind", "M", "K", "springs", "alpha", "beta", "f", "damping_stiffness", "allow_indefinite_stiffness",
+              "locate_kinks")
 _CORE_ORDER = ("elastic_plastic", "bilinear", "bouc_wen")  # the core keeps springs by kind, in this order
 
 
@@ -126,6 +163,10 @@ class Structure(LinearStructure):
     f : constant load vector, or None.
     damping_stiffness : "initial" (K0, the default and so far the only choice; see the module docstring).
     allow_indefinite_stiffness : as for LinearStructure, checked on K0.
+    locate_kinks : False (default): each kick reads the springs' return maps, and a kink inside a step limits
+        every method to order 2. True: every run of this structure splits its steps at the springs' kinks
+        (yield, unloading) and at its load's (a harmonic term's ``t_end``, a series' sample times), so each
+        method keeps its order (see the module docstring, "Kinks").
 
     ``help(raydamp.systems.yielding)`` says how the springs are stepped and what the damping costs.
     """
@@ -133,7 +174,8 @@ class Structure(LinearStructure):
     name = "structure"
 
     def __init__(self, M, K=None, *, springs=(), alpha: float = 0.0, beta: float = 0.0, f=None,
-                 damping_stiffness: str = "initial", allow_indefinite_stiffness: bool = False):
+                 damping_stiffness: str = "initial", allow_indefinite_stiffness: bool = False,
+                 locate_kinks: bool = False):
         alpha = real("alpha", alpha, nonnegative=True)
         beta = real("beta", beta, nonnegative=True)
         if damping_stiffness != "initial":
@@ -172,6 +214,13 @@ class Structure(LinearStructure):
                             dense_limit=_DENSE_LIMIT)
         except ValueError as error:
             raise ValueError(str(error)) from None
+        locate_kinks = flag("locate_kinks", locate_kinks)
+        if locate_kinks and not springs:
+            raise ValueError("locate_kinks: a Structure without springs has no kinks of its own (it is a "
+                             "LinearStructure); give it springs, or leave locate_kinks False")
+        if springs:
+            core.locate_kinks = locate_kinks
+        object.__setattr__(self, "locate_kinks", locate_kinks)
         object.__setattr__(self, "_core_model", core)
         allow_indefinite_stiffness = flag("allow_indefinite_stiffness", allow_indefinite_stiffness)
         object.__setattr__(self, "allow_indefinite_stiffness", allow_indefinite_stiffness)
@@ -209,7 +258,8 @@ class Structure(LinearStructure):
                 "K": {"coo": _coo_plain(self._linear_stiffness)} if self._linear_stiffness.nnz else None,
                 "springs": [s.to_dict() for s in self.springs], "alpha": self.alpha, "beta": self.beta,
                 "f": self._load.tolist() if self._load.any() else None,
-                **({"allow_indefinite_stiffness": True} if self.allow_indefinite_stiffness else {})}
+                **({"allow_indefinite_stiffness": True} if self.allow_indefinite_stiffness else {}),
+                **({"locate_kinks": True} if self.locate_kinks else {})}
 
     @classmethod
     def from_dict(cls, data, *, files=None) -> Structure:
@@ -242,16 +292,19 @@ class Structure(LinearStructure):
             raise ValueError(f"f: must be null or a list of {n} numbers")
         return cls(mass, stiffness, springs=springs, alpha=data.get("alpha", 0.0), beta=data.get("beta", 0.0), f=f,
                    damping_stiffness=data.get("damping_stiffness", "initial"),
-                   allow_indefinite_stiffness=data.get("allow_indefinite_stiffness", False) is True)
+                   allow_indefinite_stiffness=data.get("allow_indefinite_stiffness", False) is True,
+                   locate_kinks=data.get("locate_kinks", False))
 
     def replace(self, **changes) -> Structure:
-        known = {"M", "K", "springs", "alpha", "beta", "f", "damping_stiffness", "allow_indefinite_stiffness"}
+        known = {"M", "K", "springs", "alpha", "beta", "f", "damping_stiffness", "allow_indefinite_stiffness",
+                 "locate_kinks"}
         unknown = set(changes) - known
         if unknown:
             raise ValueError(f"{sorted(unknown)[0]}: Structure has no such argument ({', '.join(sorted(known))})")
         args = {"M": self._mass, "K": self._linear_stiffness, "springs": self.springs, "alpha": self.alpha,
                 "beta": self.beta, "f": self._load, "damping_stiffness": self.damping_stiffness,
-                "allow_indefinite_stiffness": self.allow_indefinite_stiffness, **changes}
+                "allow_indefinite_stiffness": self.allow_indefinite_stiffness, "locate_kinks": self.locate_kinks,
+                **changes}
         return Structure(args.pop("M"), args.pop("K"), **args)
 
     def __repr__(self) -> str:

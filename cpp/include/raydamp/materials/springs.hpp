@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "raydamp/materials/materials.hpp"
+#include "raydamp/materials/phases.hpp"
 
 namespace raydamp::materials {
 
@@ -22,6 +23,9 @@ struct SpringSet {
   std::vector<int> i, j;  // d = q[j] - q[i], or q[j] where i < 0
   std::vector<Material> material;
   mutable std::vector<State> committed, trial, saved;
+  // Where kinks are located (materials/kinks.hpp): each spring's phase, and kicks that read its law.
+  mutable std::vector<signed char> phase, saved_phase;
+  bool phased = false;
 
   std::size_t size() const { return j.size(); }
 
@@ -32,6 +36,8 @@ struct SpringSet {
     committed.emplace_back();
     trial.emplace_back();
     saved.emplace_back();
+    phase.push_back(static_cast<signed char>(initial_phase(m)));
+    saved_phase.push_back(phase.back());
   }
 
   template <class Vec>
@@ -43,9 +49,21 @@ struct SpringSet {
   // holds their initial stiffness k r r^T. Writes the trial states.
   template <class Vec>
   void add_correction(const Vec& q, Vec& g) const {
+    if (phased) return add_phase_correction(q, g);
     for (std::size_t s = 0; s < j.size(); ++s) {
       const double d = deformation(q, s);
       const double f = material[s].force(committed[s], d, trial[s]) - material[s].stiffness() * d;
+      g[j[s]] += f;
+      if (i[s] >= 0) g[i[s]] -= f;
+    }
+  }
+
+  // The same from each spring's phase law (phases.hpp), the states untouched.
+  template <class Vec>
+  void add_phase_correction(const Vec& q, Vec& g) const {
+    for (std::size_t s = 0; s < j.size(); ++s) {
+      const double d = deformation(q, s);
+      const double f = phase_force(material[s], committed[s], phase[s], d) - material[s].stiffness() * d;
       g[j[s]] += f;
       if (i[s] >= 0) g[i[s]] -= f;
     }
@@ -98,14 +116,19 @@ struct SpringSet {
   }
 
   void commit() const { std::copy(trial.begin(), trial.end(), committed.begin()); }
-  void save() const { std::copy(committed.begin(), committed.end(), saved.begin()); }
+  void save() const {
+    std::copy(committed.begin(), committed.end(), saved.begin());
+    std::copy(phase.begin(), phase.end(), saved_phase.begin());
+  }
   void restore() const {
     std::copy(saved.begin(), saved.end(), committed.begin());
     std::copy(saved.begin(), saved.end(), trial.begin());
+    std::copy(saved_phase.begin(), saved_phase.end(), phase.begin());
   }
   void reset() const {
     std::fill(committed.begin(), committed.end(), State{});
     std::fill(trial.begin(), trial.end(), State{});
+    for (std::size_t s = 0; s < j.size(); ++s) phase[s] = static_cast<signed char>(initial_phase(material[s]));
   }
 };
 
@@ -158,6 +181,11 @@ struct Springs {
   void reset() const {
     for_each([](const auto& set) { set.reset(); });
   }
+  // Kicks read each spring's phase law: set on a structure whose step loop locates kinks (kinks.hpp).
+  void set_phased(bool on) {
+    for_each([on](auto& set) { set.phased = on; });
+  }
+  bool phased() const { return elastic_plastic.phased; }
 };
 
 }  // namespace raydamp::materials
