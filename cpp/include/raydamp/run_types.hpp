@@ -10,6 +10,7 @@
 
 #include "raydamp/events/types.hpp"
 #include "raydamp/load.hpp"
+#include "raydamp/record/envelope_types.hpp"
 #include "raydamp/state.hpp"
 #include "raydamp/status.hpp"
 
@@ -51,6 +52,8 @@ struct RunSpec {
   // every step end. Either runs whole steps (merges_steps), so that every step has an end to read.
   const EventSet* events = nullptr;
   bool dense = false;
+  // Peaks to take at every step's end (record/envelope.hpp), or none; steps then run whole.
+  const EnvelopeSpec* envelope = nullptr;
 };
 
 struct Control {
@@ -79,6 +82,7 @@ struct RunResult {
   Trajectory trajectory;
   EventLog events;    // empty unless RunSpec::events
   DenseRecord dense;  // empty unless RunSpec::dense
+  EnvelopeRecord envelope;  // empty unless RunSpec::envelope
 };
 
 template <class Model, int Dim>

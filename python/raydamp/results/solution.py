@@ -82,6 +82,7 @@ class Solution:
     load: Any = field(default=None, compare=False)
     events: Any = field(default=None, compare=False)  # run/events.py's EventTable, with events=
     dense: Any = field(default=None, compare=False)  # results/dense.py's DenseOutput, with dense=True
+    envelope: Any = field(default=None, compare=False)  # an xarray Dataset of peaks (run/envelope.py), with envelope=
     # (model, q0, p0, options) of the run, turned into `provenance` when asked for (cheap
     # runs stay cheap); or the provenance dict itself, for a loaded solution.
     origin: Any = field(default=None, compare=False)
@@ -255,7 +256,7 @@ class Solution:
         (None for a model without momentum maps); ``kinetic_temperature`` is <p^T M^-1 p> / n over the second
         half of the saved points (at most 2000 of them, evenly spaced) for a run at a temperature, to compare
         with its kT (None otherwise, and for a run that saved only some coordinates)."""
-        from ..jobs.summary import summary_values
+        from ..jobs.summary import envelope_summary, summary_values
         from .temperature import summary_kinetic_temperature
 
         def num(x: float) -> float | None:
@@ -276,6 +277,7 @@ class Solution:
             energy_balance_max=num(float(np.max(np.abs(self.energy_balance)))) if self.work is not None else None,
             kinetic_temperature=None if kinetic is None else num(kinetic),
             events=None if self.events is None else self.events.summary(),
+            envelope=None if self.envelope is None else envelope_summary(self.envelope),
             wall_time=self.wall_time,
         )
 
