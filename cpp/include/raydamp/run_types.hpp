@@ -68,6 +68,8 @@ struct Trajectory {
   int n = 0, n_momenta = 0;
   std::vector<double> t, q, p, energy, momentum, work;  // work: empty unless tracked
   std::vector<double> load_work;  // W_f = int f . M^{-1} p dt; empty unless tracked with a load
+  int n_springs = 0;  // with work tracked on a structure with springs: spring_work[k*n_springs + s], each
+  std::vector<double> spring_work;  // spring's hysteretic work (record/spring_work.hpp), the core's order
   long rows() const { return static_cast<long>(t.size()); }
 };
 

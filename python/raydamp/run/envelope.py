@@ -140,6 +140,15 @@ def dataset(prepared: Prepared, out: dict, q_final: np.ndarray, *, ensemble: boo
     return xr.Dataset(variables, attrs={"collapsed_spring": int(users)})
 
 
+def users_springs(model, values):
+    """An array (..., springs) in the core's order of the springs (grouped by kind) in ``model``'s order, or
+    None for None."""
+    if values is None:
+        return None
+    _, order, _, _ = _spring_columns(model)
+    return _users_order(np.asarray(values), order)
+
+
 def _as_given(collapse):
     """A collapse limit as the job JSON holds it: a number, or a list of them."""
     if collapse is None:

@@ -348,6 +348,7 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
         "method": method, "tableau": resolved_tableau if method in with_tableau else None,
         "composition": composition, "h": h, "max_momentum_drift": out["max_momentum_drift"], "work": out["work"],
         "wall_time": wall, "load_work": out["load_work"], "load": loaded,
+        "hysteretic_work": _envelope.users_springs(model, out.get("spring_work")),
         "dofs": None if dofs is None else np.asarray(dofs, dtype=np.int64),
         # q0 and p0 are the run's own arrays (_state), so the provenance keeps them uncopied
         "origin": (model, q0, p0, options)}

@@ -30,6 +30,17 @@ h = 0.01/2 .. 0.01/16 is 1.93 for 3s, 2s and rks and 2.02 for baoab; the worst e
 0.01/9, 0.01/10, 0.01/11 is 6.0e-6 u_max (baoab) to 9.5e-6 u_max (3s); Newmark's average acceleration
 (with Newton) errs about twice as much as 3s at the same h (its peak 6.2% low at h = 0.1).
 
+Energy. With ``work=True`` a run records, besides the damping work W (the viscous work of C, initial stiffness
+included: the spurious part a yielded spring's beta k_s d_s' adds is in it) and the load's work W_f, each spring's
+hysteretic work W_h,s = int sigma_s dd_s - stored_s (``Solution.hysteretic_work``, record/spring_work.hpp), so that
+H - H(0) + W + sum_s W_h,s - W_f closes to O(h^2) for the splittings (``Solution.energy_balance``; H = T + the
+stored energy, ``kinetic_energy`` and ``stored_energy``). Measured in tests/test_spring_work.py.
+
+P-Delta. K may carry a constant geometric stiffness (negative: K = -sum_s (P_s / h_s) r_s r_s^T for gravity loads
+P_s over storeys of height h_s). K0 = K + the springs' initial stiffness is what is checked positive semidefinite
+(``allow_indefinite_stiffness=True`` lifts the check); after yield a storey's tangent b k_s - P_s / h_s may be
+negative, and the frame can then collapse (raydamp.ida stops such runs).
+
 Cost. A spring adds a return map per kick to the linear structure's step: on the 10-storey frame
 (benchmarks/bench_springs.py) 1.1-1.4x the springless step for ElasticPlastic and Bilinear, about 1.8x
 for BoucWen (one phi1 per spring and kick).
