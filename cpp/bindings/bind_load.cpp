@@ -33,6 +33,12 @@ LoadTerm term_from(const py::dict& d) {
     direction->value = numbers<double>(d, "value");
     term.direction = std::move(direction);
   }
+  if (d.contains("ground_index")) {  // a ground motion's influence vector r
+    auto ground = std::make_shared<LoadDirection>();
+    ground->index = numbers<int>(d, "ground_index");
+    ground->value = numbers<double>(d, "ground_value");
+    term.ground = std::move(ground);
+  }
   if (shape == "harmonic") {
     term.shape = LoadTerm::Shape::harmonic;
     term.omega = d["omega"].cast<double>();

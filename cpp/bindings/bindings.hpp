@@ -15,4 +15,5 @@ void bind_linear_structure(pybind11::module_& m);
 void bind_structure(pybind11::module_& m);
 void bind_kepler(pybind11::module_& m);
 void bind_events(pybind11::module_& m);
+void bind_envelope(pybind11::module_& m);
 }  // namespace raydamp::bindings

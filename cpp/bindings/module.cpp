@@ -15,6 +15,7 @@ PYBIND11_MODULE(_core, m) {
   raydamp::bindings::bind_catalogue(m);
   raydamp::bindings::bind_load(m);
   raydamp::bindings::bind_events(m);  // before the kinds, whose integrate takes an EventSet
+  raydamp::bindings::bind_envelope(m);  // and an EnvelopeSpec
   raydamp::bindings::bind_models(m);
   raydamp::bindings::bind_integrate(m);
   raydamp::bindings::bind_system_scalar_mass(m);

@@ -46,6 +46,18 @@ inline py::dict events_dict(EventLog&& log) {
   return d;
 }
 
+// A run's envelope (record/envelope.hpp): each peak asked for, as {name: (peak, time)}.
+inline py::dict envelope_dict(EnvelopeRecord&& rec) {
+  py::dict d;
+  for (int k = 0; k < kPeaks; ++k) {
+    if (rec.peak[k].empty()) continue;
+    const py::ssize_t size = static_cast<py::ssize_t>(rec.peak[k].size());
+    d[kPeakNames[k]] = py::make_tuple(to_numpy(std::move(rec.peak[k]), {size}), to_numpy(std::move(rec.time[k]), {size}));
+  }
+  d["collapse_spring"] = rec.collapse_spring;
+  return d;
+}
+
 // What dense output interpolates: t, q, p, v = M^{-1} p and f = pdot at every step end.
 inline py::dict dense_dict(DenseRecord&& rec) {
   const py::ssize_t k = rec.rows();
@@ -63,7 +75,8 @@ py::dict run(const Model& model, const std::string& method, const std::string& t
              const std::string& composition, const typename Model::Vec& q0, const typename Model::Vec& p0, double h, long n_steps, double h_last,
              long save_every, bool track_work, py::object progress, CancelToken* cancel,
              const std::vector<int>& save_dofs, const BoundLoad* load, double temperature, std::uint64_t seed,
-             std::uint64_t stream, double divergence, const EventSet* events, bool dense) {
+             std::uint64_t stream, double divergence, const EventSet* events, bool dense,
+             const EnvelopeSpec* envelope) {
   const MethodEntry& entry = method_entry(method);
   require_applicable(entry, model);
   const ButcherTableau& tab = resolve_tableau(entry, tableau);
@@ -77,6 +90,7 @@ py::dict run(const Model& model, const std::string& method, const std::string& t
   spec.divergence = divergence;
   spec.events = events;
   spec.dense = dense;
+  spec.envelope = envelope;
   Control control;
   if (cancel) control.cancel = &cancel->flag;
   if (!progress.is_none())
@@ -107,8 +121,11 @@ py::dict run(const Model& model, const std::string& method, const std::string& t
   out["momentum"] = to_numpy(std::move(tr.momentum), {rows, tr.n_momenta});
   out["work"] = track_work ? py::object(to_numpy(std::move(tr.work), {rows})) : py::none();
   out["load_work"] = track_work && spec.load ? py::object(to_numpy(std::move(tr.load_work), {rows})) : py::none();
+  out["spring_work"] = tr.n_springs > 0 ? py::object(to_numpy(std::move(tr.spring_work), {rows, tr.n_springs}))
+                                        : py::none();
   if (events) out["events"] = events_dict(std::move(r.events));
   if (dense) out["dense"] = dense_dict(std::move(r.dense));
+  if (envelope) out["envelope"] = envelope_dict(std::move(r.envelope));
   return out;
 }
 
@@ -126,7 +143,7 @@ void def_integrate(py::module_&) {
           py::arg("save_dofs") = std::vector<int>{}, py::arg("load").none(true) = py::none(),
           py::arg("temperature") = 0.0, py::arg("seed") = 0, py::arg("stream") = 0,
           py::arg("divergence") = kDefaultDivergence, py::arg("events").none(true) = py::none(),
-          py::arg("dense") = false);
+          py::arg("dense") = false, py::arg("envelope").none(true) = py::none());
 }
 
 }  // namespace raydamp::bindings

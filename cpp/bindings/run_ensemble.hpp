@@ -68,6 +68,31 @@ inline py::dict ensemble_events(std::vector<EventLog>&& logs, int n) {
   return d;
 }
 
+// The members' envelopes as arrays (member, size) per peak, NaN for a member that recorded none (refused
+// before its first step), and each member's collapsed spring (core order) or -1.
+inline py::dict ensemble_envelopes(const std::vector<EnvelopeRecord>& records) {
+  const py::ssize_t members = static_cast<py::ssize_t>(records.size());
+  py::dict d;
+  for (int k = 0; k < kPeaks; ++k) {
+    std::size_t size = 0;
+    for (const EnvelopeRecord& r : records) size = std::max(size, r.peak[k].size());
+    if (size == 0) continue;
+    py::array_t<double> peak({members, static_cast<py::ssize_t>(size)}), time({members, static_cast<py::ssize_t>(size)});
+    std::fill(peak.mutable_data(), peak.mutable_data() + peak.size(), std::numeric_limits<double>::quiet_NaN());
+    std::fill(time.mutable_data(), time.mutable_data() + time.size(), std::numeric_limits<double>::quiet_NaN());
+    for (py::ssize_t i = 0; i < members; ++i) {
+      const EnvelopeRecord& r = records[i];
+      std::copy(r.peak[k].begin(), r.peak[k].end(), peak.mutable_data() + i * size);
+      std::copy(r.time[k].begin(), r.time[k].end(), time.mutable_data() + i * size);
+    }
+    d[kPeakNames[k]] = py::make_tuple(peak, time);
+  }
+  py::array_t<long> collapsed(members);
+  for (py::ssize_t i = 0; i < members; ++i) collapsed.mutable_data()[i] = records[i].collapse_spring;
+  d["collapse_spring"] = collapsed;
+  return d;
+}
+
 template <class Model>
 py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long, py::array::c_style | py::array::forcecast> model_index,
                       const std::vector<std::string>& names, Rows values, const std::string& method,
@@ -75,7 +100,8 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
                       long n_steps, double h_last, long save_every, int threads, py::object progress,
                       CancelToken* cancel, bool vector_sine, const std::vector<const BoundLoad*>& loads,
                       py::array_t<long, py::array::c_style | py::array::forcecast> load_index, double temperature,
-                      std::uint64_t seed, std::uint64_t first_stream, const EventSet* events) {
+                      std::uint64_t seed, std::uint64_t first_stream, const EventSet* events,
+                      const EnvelopeSpec* envelope) {
   if (q0.ndim() != 2 || q0.shape(0) < 1) throw std::invalid_argument("q0: expected an array of shape (members, n), members >= 1");
   const long members = static_cast<long>(q0.shape(0));
   if (models.empty()) throw std::invalid_argument("models: empty");
@@ -93,7 +119,9 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
   spec.temperature = temperature;
   spec.seed = seed;
   spec.events = events;
-  std::vector<EventLog> member_events(events ? members : 0);  // each worker fills its members' slots
+  spec.envelope = envelope;
+  std::vector<EventLog> member_events(events ? members : 0);
+  std::vector<EnvelopeRecord> member_envelopes(envelope ? members : 0);  // each worker fills its members' slots
   // Each member's load: loads[load_index[i]] (none without loads).
   std::vector<const Load*> member_load(members, nullptr);
   if (!loads.empty()) {
@@ -187,6 +215,7 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
     status[i] = status_name(r.status);
     message[i] = std::move(r.message);
     if (events) member_events[i] = std::move(r.events);
+    if (envelope) member_envelopes[i] = std::move(r.envelope);
   };
   int factorisations = 0;  // of the linear implicit methods, over the whole ensemble
   {
@@ -219,6 +248,7 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
   out["threads"] = ensemble_threads(threads, members);
   out["factorisations"] = factorisations;
   if (events) out["events"] = ensemble_events(std::move(member_events), n);
+  if (envelope) out["envelope"] = ensemble_envelopes(member_envelopes);
   return out;
 }
 
@@ -234,7 +264,8 @@ void def_integrate_ensemble(py::module_&) {
                  py::arg("save_every"), py::arg("threads"), py::arg("progress"), py::arg("cancel").none(true),
                  py::arg("vector_sine") = false, py::arg("loads") = std::vector<const BoundLoad*>{},
                  py::arg("load_index") = py::array_t<long>(), py::arg("temperature") = 0.0, py::arg("seed") = 0,
-                 py::arg("first_stream") = 0, py::arg("events").none(true) = py::none());
+                 py::arg("first_stream") = 0, py::arg("events").none(true) = py::none(),
+                 py::arg("envelope").none(true) = py::none());
 }
 
 }  // namespace raydamp::bindings

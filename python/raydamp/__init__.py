@@ -21,6 +21,7 @@ from .run.advise import Advice, MethodAdvice, advise
 from .run.ductility import ductility_spectrum
 from .run.ensemble import integrate_ensemble
 from .run.events import Event
+from .run.ida import ida
 from .run.integrate import CancelToken, integrate, steps_for
 from .run.spectrum import response_spectrum
 from .run.sweep import SweepPlan, check_sweep, parse_grid_item, sweep
@@ -38,7 +39,7 @@ __all__ = ["__version__", "models", "Load", "GroundMotion", "System", "Chain", "
            "MethodAdvice", "CancelToken", "Solution", "integrate_ensemble", "EnsembleSolution", "sweep",
            "check_sweep", "parse_grid_item", "SweepPlan", "load", "rayleigh_coefficients", "modal_damping_ratio",
            "methods", "tableaux", "compositions", "MethodInfo", "TableauInfo", "CompositionInfo",
-           "response_spectrum", "ductility_spectrum", "Event"]
+           "response_spectrum", "ductility_spectrum", "Event", "ida"]
 
 # Subpackages a user reaches as attributes (raydamp.analysis.kinetic_temperature, as the README writes it),
 # imported when first used: raydamp.analysis needs SciPy (the analysis extra), and `import raydamp` needs NumPy

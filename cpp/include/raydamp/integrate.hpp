@@ -26,6 +26,7 @@
 #include "raydamp/materials/commit.hpp"
 #include "raydamp/materials/kinks.hpp"
 #include "raydamp/record/divergence.hpp"
+#include "raydamp/record/envelope.hpp"
 #include "raydamp/record/recorder.hpp"
 #include "raydamp/record/save_grid.hpp"
 #include "raydamp/run_types.hpp"
@@ -326,8 +327,8 @@ template <class Method>
 bool merges_steps(const RunSpec& spec) {
   if constexpr (is_mergeable<Method>()) {
     const bool noisy_join = spec.temperature > 0.0 && is_damping_flow(Method::stages[0].flow);
-    // Events and dense output read every step's end: steps run whole.
-    return spec.merge_steps && !spec.track_work && !noisy_join && !spec.events && !spec.dense;
+    // Events, dense output and envelopes read every step's end: steps run whole.
+    return spec.merge_steps && !spec.track_work && !noisy_join && !spec.events && !spec.dense && !spec.envelope;
   } else {
     return false;
   }
@@ -454,10 +455,9 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
   EventWatcher<Model, Dim, typename decltype(rec)::Marks> watch(model, spec, result, z, 0.0);  // events
   auto time_at = [&](long k) { return step_time(k, spec.h, N, spec.h_last); };
   auto stop = [&](Status status, long failed_step, std::string message) {
-    result.status = status;
-    result.failed_step = failed_step;
-    result.message = std::move(message);
+    result.status = status, result.failed_step = failed_step, result.message = std::move(message);
   };
+  EnvelopeRecorder<Model, Dim> envelope(model, spec, result, z);  // peaks at every step's end
   if (!z.all_finite()) {
     stop(Status::non_finite, 0, "the initial state is not finite");
     return result;
@@ -476,7 +476,7 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
   const bool merge = merges_steps<Method>(spec) && !kinks.on();
   const auto step_drift = drift_from_law<Method>(model, mb, stepper, time_at);
   auto advance = [&](auto& w, State<Dim>& x, long i) {  // w: ws, or the same as Unhooked
-    if (watch.stopped()) return;  // a terminal event ended the run inside this block
+    if (watch.stopped() || envelope.stopped()) return;  // a terminal event or a collapse ended the run
     if (ws.load) ws.time = time_at(i);
     if constexpr (has_materials_v<Model>) {
       if (kinks.on()) {
@@ -492,13 +492,13 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
         double t = time_at(i);
         stepper.step_by_stage(model, tab, x, i, w, [&](double dt) { rec.on_step(x, dt, t += dt); });
         commit_materials(model);
-        return watch.after_step(x, i, time_at(i + 1), rec);
+        return envelope.after_step(x, i), watch.after_step(x, i, time_at(i + 1), rec);
       }
     }
     stepper.step(model, tab, x, i, w);
     commit_materials(model);
     rec.on_step(x, i == N - 1 ? spec.h_last : spec.h, time_at(i + 1));
-    watch.after_step(x, i, time_at(i + 1), rec);
+    envelope.after_step(x, i), watch.after_step(x, i, time_at(i + 1), rec);
   };
   const long progress_every = std::max(1L, N / std::max(1L, control.max_progress_calls));
   long next_save = spec.save_every, next_progress = progress_every, k = 0;
@@ -514,8 +514,9 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
     ws.time = time_at(k);  // the merged loop's clock; advance() sets it per step
     const double block_drift =
         run_block_on<mergeable>(model, tab, stepper, unhooked, z, y, k, end, merge, track_momenta, advance, step_drift);
-    if (watch.stopped()) {  // a terminal event: the run ends at its time, its step shortened to it
-      k = finish_at_event<Method>(watch, model, tab, composition, spec, ws, rec, z, result);
+    if (watch.stopped() || envelope.stopped()) {  // a terminal event (its step shortened to it), or a collapse
+      k = watch.stopped() ? finish_at_event<Method>(watch, model, tab, composition, spec, ws, rec, z, result)
+                          : envelope.stop(result);
       break;
     }
     if (!z.all_finite()) {

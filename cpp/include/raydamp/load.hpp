@@ -87,6 +87,9 @@ struct LoadTerm {
   std::shared_ptr<const LoadSeries> series;
   CompiledFunction expression;       // (t) -> s(t), the user's expression with its parameters bound
   std::shared_ptr<const LoadDirection> direction;  // unset for a series of width n
+  // A ground motion's term (force -M r a_g(t)): its influence vector r, so that r a_g(t), the ground's own
+  // acceleration, can be added back to a relative one (add_ground). Unset for every other term.
+  std::shared_ptr<const LoadDirection> ground;
 };
 
 class Load {
@@ -111,6 +114,18 @@ class Load {
       if (s == 0.0) continue;
       const LoadDirection& d = *term.direction;
       for (std::size_t j = 0; j < d.index.size(); ++j) out[d.index[j]] += s * d.value[j];
+    }
+  }
+
+  // out[i] += r_i a_g(t) summed over the ground motion's terms: the ground's acceleration, which turns a
+  // relative acceleration into an absolute one (record/envelope.hpp).
+  void add_ground(double t, double* out) const {
+    for (const LoadTerm& term : terms_) {
+      if (!term.ground) continue;
+      const double s = term.scale * scalar(term, t);
+      if (s == 0.0) continue;
+      const LoadDirection& r = *term.ground;
+      for (std::size_t j = 0; j < r.index.size(); ++j) out[r.index[j]] += s * r.value[j];
     }
   }
 
@@ -189,6 +204,10 @@ class Load {
     if (d.index.size() != d.value.size()) fail("direction indices and values differ in length");
     for (int i : d.index)
       if (i < 0 || i >= n_) fail("direction index " + std::to_string(i) + " is not a coordinate");
+    if (!term.ground) return;
+    if (term.ground->index.size() != term.ground->value.size()) fail("ground indices and values differ in length");
+    for (int i : term.ground->index)
+      if (i < 0 || i >= n_) fail("ground index " + std::to_string(i) + " is not a coordinate");
   }
 
   std::vector<LoadTerm> terms_;

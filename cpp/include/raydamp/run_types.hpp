@@ -10,6 +10,7 @@
 
 #include "raydamp/events/types.hpp"
 #include "raydamp/load.hpp"
+#include "raydamp/record/envelope_types.hpp"
 #include "raydamp/state.hpp"
 #include "raydamp/status.hpp"
 
@@ -51,6 +52,8 @@ struct RunSpec {
   // every step end. Either runs whole steps (merges_steps), so that every step has an end to read.
   const EventSet* events = nullptr;
   bool dense = false;
+  // Peaks to take at every step's end (record/envelope.hpp), or none; steps then run whole.
+  const EnvelopeSpec* envelope = nullptr;
 };
 
 struct Control {
@@ -65,6 +68,8 @@ struct Trajectory {
   int n = 0, n_momenta = 0;
   std::vector<double> t, q, p, energy, momentum, work;  // work: empty unless tracked
   std::vector<double> load_work;  // W_f = int f . M^{-1} p dt; empty unless tracked with a load
+  int n_springs = 0;  // with work tracked on a structure with springs: spring_work[k*n_springs + s], each
+  std::vector<double> spring_work;  // spring's hysteretic work (record/spring_work.hpp), the core's order
   long rows() const { return static_cast<long>(t.size()); }
 };
 
@@ -79,6 +84,7 @@ struct RunResult {
   Trajectory trajectory;
   EventLog events;    // empty unless RunSpec::events
   DenseRecord dense;  // empty unless RunSpec::dense
+  EnvelopeRecord envelope;  // empty unless RunSpec::envelope
 };
 
 template <class Model, int Dim>

@@ -153,6 +153,10 @@ def build_job(spec: JobSpec, files: FileResolver | None = None) -> JobCall:
         options["events"] = [e.model_dump(exclude_none=True) for e in spec.events]
     if spec.dense:
         options["dense"] = True
+    if spec.envelope:
+        options["envelope"] = list(spec.envelope)
+    if spec.collapse is not None:
+        options["collapse"] = spec.collapse
     if spec.temperature:
         options.update({"temperature": spec.temperature, "seed": spec.seed, "stream": spec.stream})
     load = job_load(spec, files)

@@ -29,6 +29,7 @@ from .. import _core
 from ..loads.forms import LOAD_TAGS, GroundMotionInput, LoadInput
 from ..methods.catalogue import compositions, methods
 from ..systems.models import MODELS, make_model
+from .envelope_forms import COLLAPSE_TAGS, ENVELOPE_QUANTITIES, CollapseValue, EnvelopeName
 from .errors import JobError
 from .event_forms import MAX_EVENTS, EventInput
 from .forms import (
@@ -90,7 +91,8 @@ TableauChoice = Annotated[Annotated[TableauName, Tag("name form")] | Annotated[T
                           Discriminator(lambda value: "name form" if isinstance(value, str) else "table form")]
 UNION_TAGS = {"tableau": frozenset({"name form", "table form"}),
               "initial_state": frozenset({"q, p form", "mode form", "rest form"}), "system": SYSTEM_TAGS,
-              "M": MATRIX_TAGS, "K": MATRIX_TAGS, "q": STATE_VECTOR_TAGS, "p": STATE_VECTOR_TAGS, **FORM_TAGS}
+              "M": MATRIX_TAGS, "K": MATRIX_TAGS, "q": STATE_VECTOR_TAGS, "p": STATE_VECTOR_TAGS,
+              "collapse": COLLAPSE_TAGS, **FORM_TAGS}
 GRID_TAGS = frozenset({"range", "values"})  # a sweep's axis forms (sweep_spec.py)
 
 
@@ -228,6 +230,14 @@ class JobSpec(ModelSpec):
         None, description="events to locate: [{\"g\": \"q[0]\", \"direction\": -1, \"terminal\": false, "
                           "\"name\": \"...\"}]; their crossings are the result's events table (raydamp.Event)")
     dense: bool = Field(False, description="keep t, q, p, M^-1 p and pdot at every step end, for dense output")
+    envelope: bounded(EnvelopeName, len(ENVELOPE_QUANTITIES), min_length=1) | None = Field(
+        None, description="peaks to take at every step's end (max |x| and its time), not only at saved rows: "
+                          "displacement, velocity, acceleration, abs_acceleration (relative + ground), "
+                          "residual_displacement per coordinate; drift (a spring's deformation: a shear frame's "
+                          "interstorey drift), force, residual_drift per spring (raydamp.run.envelope)")
+    collapse: CollapseValue | None = Field(
+        None, description="a limit of |drift| for every spring (a number, or one per spring): the run stops at the "
+                          "first step's end past it, status \"collapsed\"")
     _h_key: str = PrivateAttr("h")
 
     @model_validator(mode="wrap")

@@ -25,13 +25,16 @@ MEANINGS: dict[str, str] = {
     "event": "a terminal event (raydamp.Event(..., terminal=True)) ended the run at its crossing time, the last "
              "step shortened to land there; the message names the event.",
     "not_converged": "reserved: an implicit step's iteration did not converge.",
+    "collapsed": "a spring's drift passed its collapse limit (integrate's collapse, raydamp.ida's collapse_drift): "
+                 "the run stopped at that step's end, keeping its rows and its envelope; the message names the "
+                 "spring.",
 }
 
 # The statuses of a run that failed (a blow-up or a lack of memory), as against one that completed
 # or was stopped on purpose.
 FAILED = frozenset({"non_finite", "out_of_memory", "diverged", "not_converged"})
-# The statuses of a run that did what it was asked: every step, or up to its terminal event.
-FINISHED = frozenset({"completed", "event"})
+# The statuses of a run that did what it was asked: every step, or up to its terminal event or collapse.
+FINISHED = frozenset({"completed", "event", "collapsed"})
 
 if set(MEANINGS) != set(STATUSES):  # the core's list and these names must be the same list
     raise ImportError(f"raydamp.jobs.statuses: core statuses {STATUSES} differ from the documented "

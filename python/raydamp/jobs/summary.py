@@ -9,13 +9,15 @@ Non-finite numbers are None (JSON null).
 
 from __future__ import annotations
 
+import math
 from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from .statuses import STATUSES
 
-__all__ = ["JobSummary", "EventsSummary", "MAX_SUMMARY_EVENTS", "summary_values"]
+__all__ = ["JobSummary", "EventsSummary", "EnvelopeSummary", "MAX_SUMMARY_EVENTS", "MAX_SUMMARY_PEAKS",
+           "summary_values", "envelope_summary"]
 
 
 MAX_SUMMARY_EVENTS = 1000  # crossings a summary lists; count says how many there were
@@ -29,6 +31,22 @@ class EventsSummary(BaseModel):
     name: list[str]
     t: list[float]
     direction: list[int] = Field(description="+1 rising through 0, -1 falling")
+
+
+MAX_SUMMARY_PEAKS = 1000  # coordinates or springs a summary lists per quantity; size says how many there are
+
+
+class EnvelopeSummary(BaseModel):
+    """A run's envelope (raydamp.run.envelope): per quantity the peak |x| of each coordinate or spring and the
+    time it happened (the first MAX_SUMMARY_PEAKS of them), the residuals at the run's end, and the spring
+    whose drift passed its collapse limit."""
+
+    peaks: dict[str, list[float | None]] = Field(description="{quantity: max |x| of each coordinate or spring}")
+    times: dict[str, list[float | None]] = Field(description="{quantity: the time of each peak}")
+    residuals: dict[str, list[float | None]] = Field(description="{residual_drift | residual_displacement: the "
+                                                                 "value at the run's end, signed}")
+    size: dict[str, int] = Field(description="{quantity: coordinates or springs (the lists hold the first 1000)}")
+    collapsed_spring: int | None = Field(None, description="the spring whose drift passed its collapse limit")
 
 
 class JobSummary(BaseModel):
@@ -63,6 +81,8 @@ class JobSummary(BaseModel):
                           "spaced), to compare with the job's temperature kT (jobs at a temperature)")
     events: EventsSummary | None = Field(None, description="the crossings of the job's events, in time order "
                                                            "(jobs with events)")
+    envelope: EnvelopeSummary | None = Field(None, description="the peaks of the job's envelope (jobs with "
+                                                               "envelope)")
     wall_time: float
 
     @model_validator(mode="before")
@@ -74,6 +94,26 @@ class JobSummary(BaseModel):
 
 class _Built(JobSummary):
     model_config = ConfigDict(extra="forbid")
+
+
+def envelope_summary(envelope) -> dict[str, Any]:
+    """The plain values of EnvelopeSummary from a Solution's envelope Dataset (non-finite numbers as None)."""
+    def plain(values) -> list[float | None]:
+        return [float(x) if math.isfinite(x) else None for x in values[:MAX_SUMMARY_PEAKS].tolist()]
+
+    peaks, times, residuals, size = {}, {}, {}, {}
+    for name, variable in envelope.data_vars.items():
+        if name.endswith("_time") or name == "collapsed_spring":
+            continue
+        size[name] = int(variable.size)
+        if name.startswith("residual_"):
+            residuals[name] = plain(variable.values)
+        else:
+            peaks[name] = plain(variable.values)
+            times[name] = plain(envelope[f"{name}_time"].values)
+    collapsed = int(envelope.attrs.get("collapsed_spring", -1))
+    return {"peaks": peaks, "times": times, "residuals": residuals, "size": size,
+            "collapsed_spring": None if collapsed < 0 else collapsed}
 
 
 def summary_values(**values: Any) -> dict[str, Any]:

@@ -199,6 +199,10 @@ class Load:
                 core_terms.append(term.core(vector, address))
             else:
                 core_terms.append(term.core(vector))
+            if isinstance(d, T.Ground):  # r itself, so that r a_g(t) can be added back (an absolute acceleration)
+                r = _length("ground_motion.direction", d.r, n)
+                core_terms[-1]["ground_index"] = np.flatnonzero(r).astype(np.int32)
+                core_terms[-1]["ground_value"] = np.asarray(r, dtype=float)[np.flatnonzero(r)]
         return _core.Load(n, core_terms, owners)
 
     def values(self, model, t) -> np.ndarray:

@@ -75,6 +75,7 @@ class EnsembleSolution:
     # (system, options) of the run, or the provenance dict itself for a loaded ensemble.
     origin: Any = field(default=None, compare=False)
     events: Any = field(default=None, compare=False)  # run/events.py's EventTable (with member), with events=
+    envelope: Any = field(default=None, compare=False)  # a Dataset (member, dof | spring) of peaks, with envelope=
 
     @property
     def members(self) -> int:
@@ -160,7 +161,8 @@ class EnsembleSolution:
                         message=self.message[i], method=self.method, tableau=self.tableau,
                         composition=self.composition, h=self.h,
                         max_momentum_drift=float(self.max_momentum_drift[i]), origin=self._member_spec(i),
-                        events=None if self.events is None else self.events.of_member(i))
+                        events=None if self.events is None else self.events.of_member(i),
+                        envelope=None if self.envelope is None else self.envelope.isel(member=i))
 
     def _member_spec(self, i: int) -> dict[str, Any] | None:
         """Member i's job JSON: the base spec with its parameters and initial state."""

@@ -44,6 +44,10 @@ class Solution:
     work : (N,) damping work W(t) if the run was asked for it (``work=True``), else None.
     load_work : (N,) the load's work W_f(t) = int f . qdot dt for a run with a load and ``work=True``,
         else None.
+    hysteretic_work : (N, springs) each spring's hysteretic (dissipated) work W_h,s(t) = int sigma_s dd_s -
+        stored_s(t), for a run of a :class:`raydamp.Structure` with springs and ``work=True`` (springs in the
+        Structure's order), else None. ``kinetic_energy`` and ``stored_energy`` (H - T: the linear part's and
+        the springs' recoverable energy) split H; ``energy_balance`` subtracts the springs' work too.
     load : the run's :class:`raydamp.Load` (or GroundMotion), or None; a loaded file's and an
         ensemble member's is rebuilt from the provenance by ``load_values()``, ``absolute_acceleration()`` and
         ``raydamp.analysis.energy_error``, which need it.
@@ -79,9 +83,11 @@ class Solution:
     composition: str | None = field(default=None)
     dofs: np.ndarray | None = field(default=None)
     load_work: np.ndarray | None = field(default=None)
+    hysteretic_work: np.ndarray | None = field(default=None)
     load: Any = field(default=None, compare=False)
     events: Any = field(default=None, compare=False)  # run/events.py's EventTable, with events=
     dense: Any = field(default=None, compare=False)  # results/dense.py's DenseOutput, with dense=True
+    envelope: Any = field(default=None, compare=False)  # an xarray Dataset of peaks (run/envelope.py), with envelope=
     # (model, q0, p0, options) of the run, turned into `provenance` when asked for (cheap
     # runs stay cheap); or the provenance dict itself, for a loaded solution.
     origin: Any = field(default=None, compare=False)
@@ -200,12 +206,28 @@ class Solution:
 
     @property
     def energy_balance(self) -> np.ndarray:
-        """H(t) - H(0) + W(t) - W_f(t): zero for the exact flow; needs ``work=True``.
-        (H is the unforced energy; W the damping's work, W_f the load's.)"""
+        """H(t) - H(0) + W(t) + sum_s W_h,s(t) - W_f(t): zero for the exact flow; needs ``work=True``.
+        (H is the unforced energy, the springs' stored energy in it; W the damping's work, W_h,s each spring's
+        hysteretic work, W_f the load's.)"""
         if self.work is None:
             raise ValueError("work: this run did not record the damping work; pass work=True to integrate")
         balance = self.energy - self.energy[0] + self.work
+        if self.hysteretic_work is not None:
+            balance = balance + self.hysteretic_work.sum(axis=1)
         return balance if self.load_work is None else balance - self.load_work
+
+    @property
+    def kinetic_energy(self) -> np.ndarray:
+        """T = 1/2 p^T M^-1 p at the saved points (a run saving every coordinate)."""
+        if self.dofs is not None:
+            raise ValueError("kinetic_energy: needs every coordinate saved (save_dofs=None)")
+        core = self._model("kinetic_energy")._core_model
+        return np.array([0.5 * float(np.dot(p, np.asarray(core.velocity(p)).ravel())) for p in self.p])
+
+    @property
+    def stored_energy(self) -> np.ndarray:
+        """H - T: the potential energy, the springs' recoverable energy in it (a run saving every coordinate)."""
+        return self.energy - self.kinetic_energy
 
     def load_values(self) -> np.ndarray:
         """f(t) at the saved times, (N, n) over every coordinate (zeros without a load)."""
@@ -255,7 +277,7 @@ class Solution:
         (None for a model without momentum maps); ``kinetic_temperature`` is <p^T M^-1 p> / n over the second
         half of the saved points (at most 2000 of them, evenly spaced) for a run at a temperature, to compare
         with its kT (None otherwise, and for a run that saved only some coordinates)."""
-        from ..jobs.summary import summary_values
+        from ..jobs.summary import envelope_summary, summary_values
         from .temperature import summary_kinetic_temperature
 
         def num(x: float) -> float | None:
@@ -276,6 +298,7 @@ class Solution:
             energy_balance_max=num(float(np.max(np.abs(self.energy_balance)))) if self.work is not None else None,
             kinetic_temperature=None if kinetic is None else num(kinetic),
             events=None if self.events is None else self.events.summary(),
+            envelope=None if self.envelope is None else envelope_summary(self.envelope),
             wall_time=self.wall_time,
         )
 

@@ -14,6 +14,7 @@ from .._validation import MAX_SEED, _short, flag, integer, numeric_array, real, 
 from ..loads import Load
 from ..results.ensemble_solution import EnsembleSolution
 from ..systems.models import Model
+from . import envelope as _envelope
 from . import events as _events
 from .choose_method import choose_method
 from .integrate import MAX_SAVED_BYTES, MAX_STEPS, CancelToken, _catalogue, span
@@ -77,7 +78,7 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
                        progress: Callable[[int, int], object] | None = None,
                        cancel: CancelToken | None = None, vector_sine: bool = False,
                        load: Load | None = None, temperature: float | None = None, seed: int | None = None,
-                       first_stream: int = 0, events=None) -> EnsembleSolution:
+                       first_stream: int = 0, events=None, envelope=None, collapse=None) -> EnsembleSolution:
     """Integrate many members of one system in one compiled call, spread over threads.
 
     Parameters
@@ -127,6 +128,10 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
         rounding (about 1e-15 relative over 10^3 steps), not bit for bit; each member's result
         still does not depend on ``threads``, on the other members or on the machine. Other
         systems and methods refuse it with a ValueError. Recorded in ``provenance``.
+
+    envelope, collapse : each member's peaks and collapse limits, as :func:`raydamp.integrate`'s;
+        ``EnsembleSolution.envelope`` is a Dataset with dims (member, dof | spring), its
+        ``collapsed_spring`` per member (-1: none). A collapsed member stops alone ("collapsed").
 
     Member i's result equals ``raydamp.integrate`` of that member alone, bit for bit, whatever
     ``threads`` is: each member runs the same compiled step loop. A member that blows up stops
@@ -200,6 +205,8 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
                          "raise save_every or split the ensemble")
 
     watch = _events.prepare(system, events, False, temperature=kT)  # each member's events (run/events.py)
+    peaks = None if envelope is None and collapse is None else _envelope.prepare(
+        system, envelope, collapse=_envelope.limits(system, collapse), given_collapse=collapse)
     models, index, core_names, core_values = system.member_models(params, members)
     start = time.perf_counter()
     cores = [m._core_model for m in models]
@@ -207,7 +214,8 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
                                             composition or "", q0, p0, h, n_steps, h_last, save_every, threads,
                                             progress, cancel, vector_sine=vector_sine, loads=loads,
                                             load_index=load_index, temperature=kT, seed=seed,
-                                            first_stream=first_stream, **({"events": watch.core} if watch else {}))
+                                            first_stream=first_stream, **({"events": watch.core} if watch else {}),
+                                            **({"envelope": peaks.core} if peaks else {}))
     wall = time.perf_counter() - start
     composition_name = None if resolved_composition == "none" else resolved_composition
     options = {"method": method, "tableau": tableau, "composition": composition_name, "h": h, "t_end": t_end,
@@ -222,6 +230,8 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
         options["load"] = load
     if kT > 0:
         options["thermal"] = (kT, seed, first_stream)
+    if peaks is not None:
+        options.update(envelope=list(peaks.names), collapse=peaks.collapse)
     return EnsembleSolution(
         t=out["t"], q=out["q"], p=out["p"], energy=out["energy"], momentum=out["momentum"], rows=out["rows"],
         t_final=out["t_final"], q_final=out["q_final"], p_final=out["p_final"], energy_final=out["energy_final"],
@@ -230,7 +240,8 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
         q0=q0, p0=p0, parameters={**params, **load_arrays}, method=method,
         tableau=resolved_tableau if method in with_tableau else None, composition=composition_name, h=h,
         wall_time=wall, threads=out["threads"], origin=(system, options),
-        **(_events.results(watch, out) if watch else {}))
+        **(_events.results(watch, out) if watch else {}),
+        **({"envelope": _envelope.dataset(peaks, out, out["q_final"], ensemble=True)} if peaks else {}))
 
 
 def _split_load_parameters(parameters, load: Load | None) -> tuple[Any, dict[str, Any]]:

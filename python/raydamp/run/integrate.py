@@ -18,6 +18,7 @@ from ..loads import Load
 from ..methods.user_tableau import resolve_user_tableau
 from ..results.solution import Solution
 from ..systems.models import Model
+from . import envelope as _envelope
 from . import events as _events
 from .choose_method import choose_method
 
@@ -142,7 +143,7 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
               progress: bool | Callable[[int, int], object] | None = None,
               cancel: CancelToken | None = None, load: Load | None = None, temperature: float | None = None,
               seed: int | None = None, stream: int = 0, divergence: float = DEFAULT_DIVERGENCE,
-              events=None, dense: bool = False) -> Solution:
+              events=None, dense: bool = False, envelope=None, collapse=None) -> Solution:
     """Integrate ``model`` from (q0, p0) with fixed steps of size ``h``.
 
     Parameters
@@ -236,6 +237,14 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
         (status "event"). The run steps whole steps (see :mod:`raydamp.run.events`).
     dense : keep what ``Solution.at(t)`` needs at every step end: t, q, p, M^-1 p and pdot, 8 (n_steps + 1)
         (1 + 4 dim) bytes whatever ``save_every`` (:mod:`raydamp.results.dense`). Whole steps, as events.
+    envelope : a list of quantities whose peaks (max |x| and its time) are taken at every step's end, not
+        only at saved rows: "displacement", "velocity", "acceleration", "abs_acceleration" (relative plus the
+        ground's), "residual_displacement" per coordinate; "drift" (a spring's deformation: a shear frame's
+        interstorey drift), "force", "residual_drift" per spring of a :class:`raydamp.Structure`.
+        ``Solution.envelope`` is an xarray Dataset (:mod:`raydamp.run.envelope` documents each). Whole steps.
+    collapse : a limit of |drift| for every spring (a number, or one per spring in the Structure's order), or
+        None: the first step's end at which a spring's drift passes its limit ends the run, status
+        "collapsed" (its message names the spring), keeping its rows and envelope (raydamp.ida's collapse).
 
     The step loop runs in C++ with the GIL released.
     """
@@ -294,6 +303,11 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
             raise ValueError(f"save_every: {rows} saved points would take {size / 2**30:.1f} GiB "
                              f"(limit {MAX_SAVED_BYTES / 2**30:.0f} GiB); raise save_every")
     watch = None if events is None and dense is False else _events.prepare(model, events, dense, temperature=kT)
+    peaks = None if envelope is None and collapse is None else _envelope.prepare(
+        model, envelope, collapse=_envelope.limits(model, collapse), given_collapse=collapse)
+    if peaks is not None and dofs is not None and set(peaks.names) & set(_envelope.RESIDUALS):
+        raise ValueError("envelope: a residual is read from the final state of every coordinate, and save_dofs "
+                         "keeps only some; leave save_dofs None, or drop the residual")
     if dense and _events.dense_bytes(n_steps, dim) > MAX_SAVED_BYTES:
         raise ValueError(f"dense: {_events.dense_bytes(n_steps, dim) / 2**30:.1f} GiB of dense output (limit "
                          f"{MAX_SAVED_BYTES / 2**30:.0f} GiB); take fewer steps")
@@ -304,7 +318,9 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
         out = model._core_model.integrate(method, tableau_name, composition or "", q0, p0, h, n_steps, h_last,
                                           save_every, work, progress, cancel, [] if dofs is None else dofs,
                                           core_load, kT, seed, stream, divergence,
-                                          *((watch.core, watch.dense) if watch else ()))
+                                          *((watch.core, watch.dense) if watch else ()),
+                                          *(() if peaks is None else ((None, False) if watch is None else ()) +
+                                            (peaks.core,)))
     except ValueError as error:  # the core names the method it runs ("rk" for "rk4"): the caller's name here
         named = re.sub(r"^temperature: method '[^']*'", f"temperature: method {method!r}", str(error))
         if named == str(error):
@@ -332,12 +348,16 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
         "method": method, "tableau": resolved_tableau if method in with_tableau else None,
         "composition": composition, "h": h, "max_momentum_drift": out["max_momentum_drift"], "work": out["work"],
         "wall_time": wall, "load_work": out["load_work"], "load": loaded,
+        "hysteretic_work": _envelope.users_springs(model, out.get("spring_work")),
         "dofs": None if dofs is None else np.asarray(dofs, dtype=np.int64),
         # q0 and p0 are the run's own arrays (_state), so the provenance keeps them uncopied
         "origin": (model, q0, p0, options)}
     if watch:
         fields.update(_events.results(watch, out))
         options.update(events=[e.to_dict() for e in watch.events], dense=dense)
+    if peaks is not None:
+        fields["envelope"] = _envelope.dataset(peaks, out, out["q"][-1])
+        options.update(envelope=list(peaks.names), collapse=peaks.collapse)
     return _solution(fields)
 
 

@@ -61,6 +61,17 @@ their own, not the kinks'; what kink location buys is a composition's higher ord
 order 4 with yoshida4 too (about 2 without). Newmark's average acceleration (with Newton) errs about twice as
 much as 3s at the same h (its peak 6.2% low at h = 0.1).
 
+Energy. With ``work=True`` a run records, besides the damping work W (the viscous work of C, initial stiffness
+included: the spurious part a yielded spring's beta k_s d_s' adds is in it) and the load's work W_f, each spring's
+hysteretic work W_h,s = int sigma_s dd_s - stored_s (``Solution.hysteretic_work``, record/spring_work.hpp), so that
+H - H(0) + W + sum_s W_h,s - W_f closes to O(h^2) for the splittings (``Solution.energy_balance``; H = T + the
+stored energy, ``kinetic_energy`` and ``stored_energy``). Measured in tests/test_spring_work.py.
+
+P-Delta. K may carry a constant geometric stiffness (negative: K = -sum_s (P_s / h_s) r_s r_s^T for gravity loads
+P_s over storeys of height h_s). K0 = K + the springs' initial stiffness is what is checked positive semidefinite
+(``allow_indefinite_stiffness=True`` lifts the check); after yield a storey's tangent b k_s - P_s / h_s may be
+negative, and the frame can then collapse (raydamp.ida stops such runs).
+
 Cost. A spring adds a return map per kick to the linear structure's step: on the 10-storey frame
 (benchmarks/bench_springs.py, in CPU time: 124 ns a springless 3s step) 1.14-1.23x the springless step for
 ElasticPlastic and Bilinear, 1.49-1.61x for BoucWen. Kink location costs a step run whole plus, per step, the

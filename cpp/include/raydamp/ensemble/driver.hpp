@@ -82,7 +82,8 @@ int run_members(const std::vector<const Model*>& models, const std::vector<const
     throw std::invalid_argument("vector_sine: only the damped pendulum's 3s, 2s and sv ensembles run their "
                                 "sines as SIMD lanes");
   if (ens.vector_sine && loaded) throw std::invalid_argument("vector_sine: the SIMD lanes take no load");
-  const bool watched = (spec.events && !spec.events->empty()) || spec.dense;  // events/watcher.hpp
+  // events/watcher.hpp and record/envelope.hpp: read at every member's step end
+  const bool watched = (spec.events && !spec.events->empty()) || spec.dense || spec.envelope;
   if (ens.vector_sine && watched) throw std::invalid_argument("vector_sine: the SIMD lanes locate no events");
   // The linear implicit methods' factorisations: made here, once per distinct model and sub-step length,
   // before any thread starts, and read by every member of that model (each with scratch of its own).

@@ -20,6 +20,7 @@
 #include "raydamp/concepts.hpp"
 #include "raydamp/diagnostics.hpp"
 #include "raydamp/record/save_grid.hpp"
+#include "raydamp/record/spring_work.hpp"
 #include "raydamp/run_types.hpp"
 #include "raydamp/workspace.hpp"
 
@@ -37,12 +38,13 @@ class Recorder {
 
   Recorder(const Model& model, const RunSpec& spec, WorkspaceFor<Model>& ws, Trajectory& out)
       : model_(model), ws_(ws), out_(out), dofs_(spec.save_dofs), j_(momentum_count(model)),
-        track_(spec.track_work && Trapezoid), track_load_(track_ && ws.load) {
+        track_(spec.track_work && Trapezoid), track_load_(track_ && ws.load), springs_(model, spec.track_work) {
     const int n = model.size();
     for (int i : dofs_)
       if (i < 0 || i >= n) throw std::invalid_argument("save_dofs: " + std::to_string(i) + " is not a coordinate");
     out.n = dofs_.empty() ? n : static_cast<int>(dofs_.size());
     out.n_momenta = static_cast<int>(j_.size());
+    out.n_springs = static_cast<int>(springs_.size());
     // Reserved up to kReserveRows rows; past that the buffers grow at save points (never inside a
     // block of steps), so a run asking for more rows than memory holds saves what fits and stops
     // with out_of_memory instead of failing before its first step.
@@ -54,12 +56,14 @@ class Recorder {
     out.momentum.reserve(rows * j_.size());
     if (spec.track_work) out.work.reserve(rows);
     if (spec.track_work && ws.load) out.load_work.reserve(rows);
+    out.spring_work.reserve(rows * springs_.size());
   }
 
   bool tracks_work() const { return track_; }
 
   // Row 0 and the powers the trapezoids start from.
   void start(const State<Dim>& z) {
+    springs_.start(z);
     save_row(z, 0.0);
     if (track_) power_ = dissipated_power(model_, z, ws_);
     if (track_load_) power_f_ = load_power(z, 0.0);
@@ -67,6 +71,7 @@ class Recorder {
 
   // After a step or stage of length dt that ended at t.
   void on_step(const State<Dim>& x, double dt, double t) {
+    springs_.on_point(x, t);  // each spring's hysteretic work (record/spring_work.hpp), with work tracked
     if constexpr (Trapezoid) {
       if (!track_) return;
       const double next = dissipated_power(model_, x, ws_);
@@ -82,7 +87,8 @@ class Recorder {
 
   bool save(const State<Dim>& z, double t) {
     const std::size_t sizes[] = {out_.t.size(), out_.q.size(), out_.p.size(), out_.energy.size(),
-                                 out_.momentum.size(), out_.work.size(), out_.load_work.size()};
+                                 out_.momentum.size(), out_.work.size(), out_.load_work.size(),
+                                 out_.spring_work.size()};
     try {
       save_row(z, t);
       return true;
@@ -94,6 +100,7 @@ class Recorder {
       out_.momentum.resize(sizes[4]);
       out_.work.resize(sizes[5]);
       out_.load_work.resize(sizes[6]);
+      out_.spring_work.resize(sizes[7]);
       return false;
     }
   }
@@ -117,6 +124,7 @@ class Recorder {
     out_.t.push_back(t);
     if (ws_.track_work) out_.work.push_back(ws_.work);
     if (ws_.track_work && ws_.load) out_.load_work.push_back(ws_.load_work);
+    springs_.append(out_.spring_work);
     if (dofs_.empty()) {
       out_.q.insert(out_.q.end(), z.q.data(), z.q.data() + z.q.size());
       out_.p.insert(out_.p.end(), z.p.data(), z.p.data() + z.p.size());
@@ -137,6 +145,7 @@ class Recorder {
   std::vector<double> j_;  // the momentum maps of a saved row
   const bool track_, track_load_;
   double power_ = 0.0, power_f_ = 0.0;  // the trapezoids' last points
+  SpringWork<Model> springs_;
 };
 
 // What a restart needs: the state, the recorder's sums and the noise streams' position. The loop

@@ -1,0 +1,189 @@
+"""The IDA case of bench_vs_opensees.py (issue 42): incremental dynamic analysis of a yielding shear frame.
+
+The frame: 10 storeys, storey masses 1e5 kg, storeys of initial stiffness 2e8 N/m that yield (Bilinear: kinematic
+hardening, post-yield ratio B, yield forces falling from 2.4 MN at the base to 1.2 MN at the top), fixed base,
+lumped M, 2% Rayleigh damping in modes 1 and 3 of the initial stiffness (C = alpha M + beta K0). In OpenSees:
+zeroLength elements with Steel01 (Fy, E0 = k, b = B, no isotropic hardening: the default a1..a4 = 0, 1, 0, 1)
+and "-doRayleigh 1", ops.rayleigh(alpha, 0, beta, 0) (beta on the initial stiffness), Newmark(1/2, 1/4), Newton,
+NormDispIncr 1e-10, BandGeneral, and an EnvelopeElement recorder of the springs' deformations (the interstorey
+drifts), which takes the peaks at every step as raydamp's envelope does. raydamp: raydamp.ida (3s; the members
+on threads through integrate_ensemble, no trajectory saved).
+
+The records: synthetic accelerograms (filtered noise under a build-up/decay envelope, seeded), 40 s at
+dt = 0.01 s, each run at every scale. The peak interstorey drift of every storey of every record x scale is
+the figure compared:
+
+1. references: each tool at dt/16; the two must agree to 1e-4 (relative to each run's largest peak drift);
+2. each tool at the largest h = dt/k (k = 1, 2, 4, 8, 16) that brings every peak drift within 1e-3 of its own
+   reference (relative to the run's largest peak drift; at k = 16 a tool is its reference, error 0);
+3. the time of the analysis alone at that h (OpenSees' ops.analyze; raydamp.ida's members, its model built
+   before), per record-run, their ratio, and raydamp on 1 and on 2 threads.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+import time
+
+import numpy as np
+import scipy.linalg
+
+import raydamp
+from raydamp.materials import Bilinear
+
+STOREYS, MASS, STIFFNESS, ZETA, B = 10, 1.0e5, 2.0e8, 0.02, 0.05
+FY_BASE, FY_TOP = 2.4e6, 1.2e6
+DT, SECONDS = 0.01, 40.0
+AGREE, WITHIN = 1e-4, 1e-3
+
+
+def yield_forces() -> np.ndarray:
+    return np.linspace(FY_BASE, FY_TOP, STOREYS)
+
+
+def record(seed: int) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(1000 + seed)
+    t = np.arange(int(round(SECONDS / DT)) + 1) * DT
+    smooth = np.convolve(rng.standard_normal(t.size), np.ones(5) / 5, mode="same")
+    envelope = np.minimum(1.0, t / 2.0) * np.exp(-np.maximum(0.0, t - 12.0) / 5.0)
+    a = smooth * envelope
+    return t, a / np.max(np.abs(a))  # peak 1 m/s^2: the scale is the peak ground acceleration
+
+
+def rayleigh() -> tuple[float, float, np.ndarray]:
+    K0 = np.zeros((STOREYS, STOREYS))
+    for i in range(STOREYS):
+        K0[i, i] += STIFFNESS
+        if i + 1 < STOREYS:
+            K0[i, i] += STIFFNESS
+            K0[i, i + 1] = K0[i + 1, i] = -STIFFNESS
+    w = np.sqrt(np.sort(scipy.linalg.eigh(K0, np.eye(STOREYS) * MASS, eigvals_only=True)))
+    alpha, beta = raydamp.rayleigh_coefficients(w[0], w[2], ZETA, ZETA)
+    return alpha, beta, w
+
+
+def structure(alpha: float, beta: float) -> raydamp.Structure:
+    springs = [raydamp.Spring((s - 1, s) if s else (0,), Bilinear(STIFFNESS, fy, B))
+               for s, fy in enumerate(yield_forces())]
+    return raydamp.Structure(np.eye(STOREYS) * MASS, springs=springs, alpha=alpha, beta=beta)
+
+
+def raydamp_peaks(model, records, scales, k: int, threads: int):
+    """(peak drifts (records, scales, storeys), seconds of the analysis, CPU seconds of the call)."""
+    motions = [raydamp.GroundMotion((t, a), np.ones(STOREYS)) for t, a in records]
+    cpu = time.process_time()
+    result = raydamp.ida(model, motions, scales, h=DT / k, t_end=SECONDS, collapse_drift=1e9, threads=threads)
+    cpu = time.process_time() - cpu
+    assert not result["collapsed"].values.any() and (result["status"].values == "completed").all()
+    return result["peak_drift"].values, result.attrs["wall_time"], cpu
+
+
+def opensees_peaks(ops, alpha: float, beta: float, records, scales, k: int):
+    """(peak drifts (records, scales, storeys), seconds of the analyses alone (ops.analyze), their CPU seconds)."""
+    peaks = np.empty((len(records), len(scales), STOREYS))
+    seconds = cpu = 0.0
+    with tempfile.TemporaryDirectory() as folder:
+        for r, (t, a) in enumerate(records):
+            for s, scale in enumerate(scales):
+                path = os.path.join(folder, f"drift_{r}_{s}.out")
+                opensees_model(ops, alpha, beta, t, a * scale, path)
+                start, start_cpu = time.perf_counter(), time.process_time()
+                status = ops.analyze(k * (t.size - 1), DT / k)
+                seconds += time.perf_counter() - start
+                cpu += time.process_time() - start_cpu
+                ops.wipe()  # closes the recorder's file
+                if status != 0:
+                    raise RuntimeError(f"OpenSees analyze failed (record {r}, scale {scale})")
+                peaks[r, s] = np.loadtxt(path)[-1]  # the envelope's rows: min, max, absmax
+    return peaks, seconds, cpu
+
+
+def opensees_model(ops, alpha: float, beta: float, t, a, path: str) -> None:
+    ops.wipe()
+    ops.model("basic", "-ndm", 1, "-ndf", 1)
+    for i in range(STOREYS + 1):
+        ops.node(i, 0.0)
+    ops.fix(0, 1)
+    for i in range(1, STOREYS + 1):
+        ops.mass(i, MASS)
+    for i, fy in enumerate(yield_forces(), start=1):
+        ops.uniaxialMaterial("Steel01", i, float(fy), STIFFNESS, B)
+        ops.element("zeroLength", i, i - 1, i, "-mat", i, "-dir", 1, "-doRayleigh", 1)
+    ops.rayleigh(alpha, 0.0, beta, 0.0)
+    ops.timeSeries("Path", 1, "-dt", float(t[1] - t[0]), "-values", *a.tolist())
+    ops.pattern("UniformExcitation", 1, 1, "-accel", 1)
+    ops.recorder("EnvelopeElement", "-file", path, "-precision", 17, "-ele", *range(1, STOREYS + 1), "deformations")
+    ops.constraints("Plain")
+    ops.numberer("Plain")
+    ops.system("BandGeneral")
+    ops.test("NormDispIncr", 1e-10, 50)
+    ops.algorithm("Newton")
+    ops.integrator("Newmark", 0.5, 0.25)
+    ops.analysis("Transient")
+
+
+def relative(peaks, reference) -> float:
+    """max over runs and storeys of |peak - reference| / (the run's largest reference peak)."""
+    scale = np.max(np.abs(reference), axis=2, keepdims=True)
+    return float(np.max(np.abs(peaks - reference) / scale))
+
+
+def run(ops, quick: bool = False) -> None:
+    n_records, scales = (4, np.array([0.5, 2.0, 4.0])) if quick else (20, np.linspace(0.4, 4.0, 10))
+    records = [record(seed) for seed in range(n_records)]
+    alpha, beta, w = rayleigh()
+    model = structure(alpha, beta)
+    runs = n_records * scales.size
+    steps = records[0][0].size - 1
+    print(f"\nIDA: {STOREYS}-storey Bilinear shear frame (b = {B}, yield drift {FY_BASE / STIFFNESS * 1e3:.0f}-"
+          f"{FY_TOP / STIFFNESS * 1e3:.0f} mm), T1 = {2 * np.pi / w[0]:.3f} s, {ZETA:.0%} Rayleigh in modes 1 and 3 "
+          f"(alpha = {alpha:.3g}, beta = {beta:.3g} on K0); {n_records} records x {scales.size} scales "
+          f"(PGA {scales.min():g}-{scales.max():g} m/s^2) = {runs} runs of {SECONDS:g} s at dt = {DT:g}")
+    raydamp_peaks(model, records[:1], scales[:1], 1, threads=1)  # imports and first calls, before any timing
+    ours = {}
+    for k in (16, 1, 2, 4, 8):
+        ours[k] = raydamp_peaks(model, records, scales, k, threads=1)
+    theirs = {}
+    if ops is not None:
+        for k in (16, 1, 2, 4, 8):
+            theirs[k] = opensees_peaks(ops, alpha, beta, records, scales, k)
+    reference = ours[16][0]
+    print(f"    largest peak drift {reference.max() * 1e3:.1f} mm (yield drift "
+          f"{FY_TOP / STIFFNESS * 1e3:.0f}-{FY_BASE / STIFFNESS * 1e3:.0f} mm); "
+          f"raydamp's reference (dt/16) in {ours[16][1]:.2f} s (load average {os.getloadavg()[0]:.1f} on "
+          f"{os.cpu_count()} cores)")
+    if theirs:
+        agree = relative(theirs[16][0], reference)
+        print(f"    references at dt/16: OpenSees against raydamp {agree:.1e} (target {AGREE:g}: "
+              f"{'met' if agree <= AGREE else 'NOT met'}); OpenSees' reference in {theirs[16][1]:.1f} s")
+    print(f"    {'h':>9}  {'raydamp 3s: error, per run: wall, cpu':>52}  {'OpenSees Newmark: the same':>52}")
+    chosen = {}
+    for k in (1, 2, 4, 8, 16):  # at dt/16 a tool is its own reference: chosen only if no coarser h is within
+        cells = []
+        for name, found in (("raydamp", ours), ("opensees", theirs)):
+            if k not in found:
+                cells.append(f"{'(not installed)':>34}")
+                continue
+            error = relative(found[k][0], found[16][0])
+            per_run, cpu_run = found[k][1] / runs, found[k][2] / runs
+            if error <= WITHIN and name not in chosen:
+                chosen[name] = (k, per_run, cpu_run)
+            cells.append(f"{error:9.2e} {per_run * 1e3:9.2f} ms, cpu {cpu_run * 1e3:9.2f} ms "
+                         f"({1e9 * found[k][2] / (runs * k * steps):6.0f} ns/step)")
+        print(f"    {DT / k:9.5f}  " + "  ".join(cells))
+    print("    (error: max over runs and storeys of |peak drift - own reference| / the run's largest; "
+          f"within {WITHIN:g} picks h)")
+    if "raydamp" in chosen:
+        k = chosen["raydamp"][0]
+        one = min(raydamp_peaks(model, records, scales, k, threads=1)[1:] for _ in range(2))
+        two = min(raydamp_peaks(model, records, scales, k, threads=2)[1:] for _ in range(2))
+        print(f"    raydamp at h = dt/{k}: {1e3 * one[0] / runs:.3f} ms per record-run on 1 thread (cpu "
+              f"{1e3 * one[1] / runs:.3f}), {1e3 * two[0] / runs:.3f} on 2 (cpu {1e3 * two[1] / runs:.3f}): "
+              f"{one[0] / two[0]:.2f}x in wall time (on a machine shared with other work, the process's CPU share, "
+              "not its thread count, can bound this: compare cpu with wall)")
+        if "opensees" in chosen:
+            k_ops, per_run, cpu_run = chosen["opensees"]
+            print(f"    OpenSees at h = dt/{k_ops}: {1e3 * per_run:.3f} ms per record-run (cpu {1e3 * cpu_run:.3f}); "
+                  f"per record-run OpenSees / raydamp (1 thread) = {per_run / (one[0] / runs):.0f}x in wall time, "
+                  f"{cpu_run / (one[1] / runs):.0f}x in CPU time")
