@@ -484,7 +484,7 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
           if (whole) stepper.step(model, tab, y, i, w);
           else step_for<Method>(model, tab, composition, y, tau, w);
         });
-        return watch.after_step(x, i, time_at(i + 1), rec);
+        return envelope.after_step(x, i), watch.after_step(x, i, time_at(i + 1), rec);
       }
     }
     if constexpr (trapezoid && has_step_by_stage<std::decay_t<decltype(stepper)>>::value) {
