@@ -7,10 +7,11 @@
 
 namespace raydamp {
 
-enum class Status { completed, non_finite, cancelled, out_of_memory, diverged, event, not_converged };
+enum class Status { completed, non_finite, cancelled, out_of_memory, diverged, event, not_converged, constraint_failed };
 
-inline constexpr std::array<const char*, 7> kStatusNames = {
-    "completed", "non_finite", "cancelled", "out_of_memory", "diverged", "event", "not_converged"};
+inline constexpr std::array<const char*, 8> kStatusNames = {
+    "completed", "non_finite", "cancelled", "out_of_memory", "diverged", "event", "not_converged",
+    "constraint_failed"};
 
 inline const char* status_name(Status s) { return kStatusNames[static_cast<std::size_t>(s)]; }
 

@@ -25,11 +25,14 @@ MEANINGS: dict[str, str] = {
     "event": "a terminal event (raydamp.Event(..., terminal=True)) ended the run at its crossing time, the last "
              "step shortened to land there; the message names the event.",
     "not_converged": "reserved: an implicit step's iteration did not converge.",
+    "constraint_failed": "a constrained System's position constraint could not be solved at failed_step (its "
+                         "Newton iteration did not reach constraint_tol, or the constraints' gradients became "
+                         "dependent); the message names the constraint, and the rows before that step are kept.",
 }
 
 # The statuses of a run that failed (a blow-up or a lack of memory), as against one that completed
 # or was stopped on purpose.
-FAILED = frozenset({"non_finite", "out_of_memory", "diverged", "not_converged"})
+FAILED = frozenset({"non_finite", "out_of_memory", "diverged", "not_converged", "constraint_failed"})
 # The statuses of a run that did what it was asked: every step, or up to its terminal event.
 FINISHED = frozenset({"completed", "event"})
 

@@ -63,6 +63,12 @@ class JobSummary(BaseModel):
                           "spaced), to compare with the job's temperature kT (jobs at a temperature)")
     events: EventsSummary | None = Field(None, description="the crossings of the job's events, in time order "
                                                            "(jobs with events)")
+    constraint_residual: float | None = Field(
+        None, description="max_i |g_i(q)| / s_i over every drift of the run, s_i the constraint's scale (the sum of "
+                          "its terms' absolute values): what the constraint solve reached (constrained systems)")
+    constraint_velocity_residual: float | None = Field(
+        None, description="max_i |(G M^-1 p)_i| / (|G_i| |M^-1 p|) after every projection: how far p stayed "
+                          "from the tangent space (constrained systems)")
     wall_time: float
 
     @model_validator(mode="before")
