@@ -310,3 +310,25 @@ def test_spherical_pendulum_at_a_temperature_samples_the_constrained_boltzmann_l
     standard_error = blocks.std(ddof=1) / math.sqrt(blocks.size)
     assert abs(cos.mean() - exact) <= 3 * standard_error, (cos.mean(), exact, standard_error)
     assert standard_error < 0.01
+
+
+def test_the_compiled_form_carries_the_constraints():
+    from raydamp.systems.system import compiled_elsewhere, load_compiled
+    from raydamp.systems.system.compile import CompiledSystemFunctions, _cache
+
+    system = double_pendulum()
+    key, data = system.compiled_form()
+    loaded = CompiledSystemFunctions.from_bytes(data)
+    assert loaded.constraint_pattern == system._compiled.constraint_pattern == ((0, 0, 1, 1, 1, 1), (0, 1, 0, 1, 2, 3))
+    x = np.array([0.3, -0.9, 0.8, -1.4])
+    for name in ("constraint_values", "constraint_jacobian"):
+        mine, theirs = (np.asarray(getattr(c, name)(x)) for c in (system._compiled, loaded))
+        assert mine.tobytes() == theirs.tobytes(), name
+    # Built in a process that must not compile: from the loaded functions, the same run.
+    _cache.pop(key)
+    load_compiled(key, data)
+    with compiled_elsewhere():
+        again = double_pendulum()
+    q0, p0 = cartesian([1.2, -0.5, 0.3, 1.1])
+    runs = [raydamp.integrate(s, q0, p0, method="2s", h=0.01, n_steps=100) for s in (system, again)]
+    np.testing.assert_array_equal(runs[0].q, runs[1].q)

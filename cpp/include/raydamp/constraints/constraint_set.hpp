@@ -83,7 +83,7 @@ struct ConstraintWork {
   Eigen::VectorXd u, v;           // n
   ConstraintFailure failure;
   double max_residual = 0.0;      // max_i |g_i| / s_i after the drifts of the run
-  double max_velocity_residual = 0.0;  // max_i |(G M^{-1} p)_i| / (|G_i| |M^{-1} p|) after the projections
+  double max_velocity_residual = 0.0;  // max_i |(G M^{-1} p)_i| / (|G_i| |M^{-1} p|) after the drifts
   bool track = false;             // whether the run's flows update the two maxima above
 
   void prepare(const ConstraintSet& set) {

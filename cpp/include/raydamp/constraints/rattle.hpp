@@ -88,9 +88,10 @@ void fail(State<Dim>& z, ConstraintWork& w, int constraint, double residual, dou
   w.valid = false;
 }
 
-// p <- P(q) p: the M-orthogonal projection onto the tangent space at q.
+// p <- P(q) p: the M-orthogonal projection onto the tangent space at q; `measure`: and the largest
+// |(G M^{-1} p)_i| / (|G_i| |M^{-1} p|) left after it, into the run's summary.
 template <class Model, int Dim>
-void project(const Model& model, State<Dim>& z, ConstraintWork& w) {
+void project(const Model& model, State<Dim>& z, ConstraintWork& w, bool measure = false) {
   if (!z.all_finite()) return;  // blown up elsewhere: the step loop reports it as it is
   if (!factored_at(model, z.q, w)) {
     fail(z, w, 0, 0.0, 0.0, 0, true);
@@ -101,7 +102,7 @@ void project(const Model& model, State<Dim>& z, ConstraintWork& w) {
   times_G(set, w.G, w.v, w.mu);
   w.llt.solveInPlace(w.mu);
   minus_Gt(set, w.G, w.mu, 1.0, z.p);
-  if (w.track) {  // |G M^{-1} p| after the projection, relative to |G_i| |M^{-1} p|
+  if (measure && w.track) {
     model.mass.velocity(z.p, w.v);
     times_G(set, w.G, w.v, w.mu);
     const double speed = w.v.norm();
@@ -124,6 +125,7 @@ void drift(const Model& model, State<Dim>& z, double t, WS& ws) {
   w.lambda.setZero();
   const double q_size = z.q.template lpNorm<Eigen::Infinity>();
   int it = 0;
+  bool evaluated_here = true;  // w.g holds g at the current q (else q moved by a last, rounding-sized step)
   for (;; ++it) {
     set.values(w.g.data(), z.q.data());
     int worst = 0;
@@ -146,15 +148,18 @@ void drift(const Model& model, State<Dim>& z, double t, WS& ws) {
     w.v.noalias() = w.W * w.mu;
     z.q -= w.v;
     // A correction at the rounding of q cannot reduce g further: g is then as small as doubles allow.
-    if (w.v.template lpNorm<Eigen::Infinity>() <= 8 * std::numeric_limits<double>::epsilon() * q_size) break;
+    if (w.v.template lpNorm<Eigen::Infinity>() <= 8 * std::numeric_limits<double>::epsilon() * q_size) {
+      evaluated_here = false;
+      break;
+    }
   }
   if (it > 0 && t != 0.0) minus_Gt(set, w.G, w.lambda, 1.0 / t, z.p);
   if (w.track) {
-    set.values(w.g.data(), z.q.data());
+    if (!evaluated_here) set.values(w.g.data(), z.q.data());
     for (int a = 0; a < set.k; ++a)
       if (w.g[set.k + a] > 0.0) w.max_residual = std::max(w.max_residual, std::abs(w.g[a]) / w.g[set.k + a]);
   }
-  project(model, z, w);
+  project(model, z, w, true);
 }
 
 // Sub-flow F of a constrained model: the constrained drift, or the free sub-flow then the projection.
