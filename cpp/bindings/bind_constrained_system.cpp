@@ -89,6 +89,11 @@ void bind_constrained_kind(py::module_& m, const char* name) {
       py::arg("load").none(true) = py::none(), py::arg("temperature") = 0.0, py::arg("seed") = 0,
       py::arg("stream") = 0, py::arg("divergence") = kDefaultDivergence, py::arg("events").none(true) = py::none(),
       py::arg("dense") = false);
+  // Every kind answers integrate_ensemble; this one refuses, naming why (its solve's scratch is per run).
+  cls.def_static("integrate_ensemble", [](py::args, py::kwargs) -> py::dict {
+    throw std::invalid_argument("system.constraints: a constrained System does not run as an ensemble yet; run its "
+                                "members one by one with raydamp.integrate");
+  });
   // One constrained sub-flow or projection at a time, for tests and the initial checks.
   cls.def("constrained_flow", [](const Model& model, const std::string& flow, const Eigen::VectorXd& q,
                                  const Eigen::VectorXd& p, double t) {

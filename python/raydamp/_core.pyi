@@ -357,6 +357,9 @@ class System_dense_dampers:
     def n_momenta(self) -> int:
         ...
 class ConstrainedSystem_scalar_isotropic:
+    @staticmethod
+    def integrate_ensemble(*args, **kwargs) -> dict:
+        ...
     def __init__(self, n: typing.SupportsInt | typing.SupportsIndex, eps: typing.SupportsFloat | typing.SupportsIndex, mass: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], damping_scalar: typing.SupportsFloat | typing.SupportsIndex, damping_matrix: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], functions: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], n_momenta: typing.SupportsInt | typing.SupportsIndex, keep_alive: typing.Any, k: typing.SupportsInt | typing.SupportsIndex, constraint_functions: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], rows: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], cols: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], tol: typing.SupportsFloat | typing.SupportsIndex, max_iterations: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
     def constrained_flow(self, arg0: str, arg1: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], arg2: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], arg3: typing.SupportsFloat | typing.SupportsIndex) -> tuple[typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"], typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]]:
@@ -395,6 +398,9 @@ class ConstrainedSystem_scalar_isotropic:
     def n_momenta(self) -> int:
         ...
 class ConstrainedSystem_scalar_constant:
+    @staticmethod
+    def integrate_ensemble(*args, **kwargs) -> dict:
+        ...
     def __init__(self, n: typing.SupportsInt | typing.SupportsIndex, eps: typing.SupportsFloat | typing.SupportsIndex, mass: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], damping_scalar: typing.SupportsFloat | typing.SupportsIndex, damping_matrix: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], functions: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], n_momenta: typing.SupportsInt | typing.SupportsIndex, keep_alive: typing.Any, k: typing.SupportsInt | typing.SupportsIndex, constraint_functions: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], rows: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], cols: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], tol: typing.SupportsFloat | typing.SupportsIndex, max_iterations: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
     def constrained_flow(self, arg0: str, arg1: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], arg2: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], arg3: typing.SupportsFloat | typing.SupportsIndex) -> tuple[typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"], typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]]:
@@ -433,6 +439,9 @@ class ConstrainedSystem_scalar_constant:
     def n_momenta(self) -> int:
         ...
 class ConstrainedSystem_dense_isotropic:
+    @staticmethod
+    def integrate_ensemble(*args, **kwargs) -> dict:
+        ...
     def __init__(self, n: typing.SupportsInt | typing.SupportsIndex, eps: typing.SupportsFloat | typing.SupportsIndex, mass: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], damping_scalar: typing.SupportsFloat | typing.SupportsIndex, damping_matrix: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], functions: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], n_momenta: typing.SupportsInt | typing.SupportsIndex, keep_alive: typing.Any, k: typing.SupportsInt | typing.SupportsIndex, constraint_functions: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], rows: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], cols: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], tol: typing.SupportsFloat | typing.SupportsIndex, max_iterations: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
     def constrained_flow(self, arg0: str, arg1: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], arg2: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], arg3: typing.SupportsFloat | typing.SupportsIndex) -> tuple[typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"], typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]]:
@@ -471,6 +480,9 @@ class ConstrainedSystem_dense_isotropic:
     def n_momenta(self) -> int:
         ...
 class ConstrainedSystem_dense_constant:
+    @staticmethod
+    def integrate_ensemble(*args, **kwargs) -> dict:
+        ...
     def __init__(self, n: typing.SupportsInt | typing.SupportsIndex, eps: typing.SupportsFloat | typing.SupportsIndex, mass: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], damping_scalar: typing.SupportsFloat | typing.SupportsIndex, damping_matrix: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], functions: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], n_momenta: typing.SupportsInt | typing.SupportsIndex, keep_alive: typing.Any, k: typing.SupportsInt | typing.SupportsIndex, constraint_functions: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], rows: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], cols: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], tol: typing.SupportsFloat | typing.SupportsIndex, max_iterations: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
     def constrained_flow(self, arg0: str, arg1: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], arg2: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], arg3: typing.SupportsFloat | typing.SupportsIndex) -> tuple[typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"], typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]]:
