@@ -45,6 +45,7 @@ GROUPS = {
                 "ens.member(17)"),
     "sweep": ("raydamp.sweep(spec, grid",),
     "system": ("kepler = raydamp.System(",),
+    "constraints": ("double = raydamp.System(",),
     "orbits": ("raydamp.Kepler(mu=1.0, eps=1e-3)",),
     "chains": ("raydamp.Chain(32",),
     "structures": ('raydamp.LinearStructure("M.mtx"', 'method="gauss4", h=0.5', "raydamp.advise(s"),
@@ -626,3 +627,24 @@ def test_events_block(tmp_path, monkeypatch):
     # "(q, p) at the vertical: q ~ 0": 1e-7 of the quarter period away, so |q| ~ 1e-7 |p|.
     q, p = s.at("swing.at(1.6749939)").value
     assert abs(q[0]) < 1e-6 and abs(p[0]) > 0.9, (q, p)
+
+
+def test_constraints_block(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    s = Session()
+    s.run("double = raydamp.System(")
+    # The double pendulum: "< 1e-12, the tolerance" (measured 9.999e-13: Newton stops once within it);
+    # "O(h^2), ~2e-5 here (7e-5 at h = 0.002)": measured 1.84e-5 and 7.37e-5, a ratio of 4.0.
+    residual = s.at('sol.summary()["constraint_residual"]').value
+    assert 0 <= residual <= 1e-12, residual
+    balance = s.at("abs(sol.energy_balance).max()").value
+    assert balance < 4e-5, balance
+    # The cable: "'completed'", every link still 0.01 long (1e-12 of it).
+    assert s.at("sol.status").value == "completed"
+    cable = s.at("sol.status").names["sol"]
+    xy = cable.q[-1].reshape(-1, 2)
+    lengths = np.linalg.norm(np.diff(np.vstack([[0.0, 0.0], xy]), axis=0), axis=1)
+    assert np.abs(lengths - 0.01).max() <= 1e-12 * 0.01
+    # The sphere at kT = 0.5: "~ 1/2 - coth 2 = -0.537" within 0.05 (some 200 independent samples, sd 0.4).
+    shown = s.at("sol.q[10:, 2].mean()").value
+    assert abs(shown - (0.5 - 1 / math.tanh(2.0))) < 0.05, shown

@@ -10,6 +10,7 @@ void bind_models(pybind11::module_& m);
 void bind_integrate(pybind11::module_& m);
 void bind_system_scalar_mass(pybind11::module_& m);
 void bind_system_dense_mass(pybind11::module_& m);
+void bind_constrained_system(pybind11::module_& m);
 void bind_chain(pybind11::module_& m);
 void bind_linear_structure(pybind11::module_& m);
 void bind_structure(pybind11::module_& m);

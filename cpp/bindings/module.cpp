@@ -20,6 +20,7 @@ PYBIND11_MODULE(_core, m) {
   raydamp::bindings::bind_integrate(m);
   raydamp::bindings::bind_system_scalar_mass(m);
   raydamp::bindings::bind_system_dense_mass(m);
+  raydamp::bindings::bind_constrained_system(m);
   raydamp::bindings::bind_chain(m);
   raydamp::bindings::bind_linear_structure(m);
   raydamp::bindings::bind_structure(m);

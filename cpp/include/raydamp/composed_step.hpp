@@ -174,7 +174,14 @@ class ComposedStepper {
     const double* t = d.body.data();
     for (int s = 0; s < d.m; ++s, t += StepDurations<Method>::stride) {
       detail::inner_stages<Method>(model, tab, z, t, ws, std::make_index_sequence<S - 2>{});
-      if (s + 1 < d.m) apply_flow<Method::stages[0].flow>(model, tab, z, t[S - 2], ws);
+      if (s + 1 < d.m) {
+        if constexpr (has_constraints<Model>::value) {  // a constrained drift for a, then b, is not the one for a + b
+          apply_flow<Method::stages[S - 1].flow>(model, tab, z, Method::stages[S - 1].fraction * d.stage[s], ws);
+          apply_flow<Method::stages[0].flow>(model, tab, z, Method::stages[0].fraction * d.stage[s + 1], ws);
+        } else {
+          apply_flow<Method::stages[0].flow>(model, tab, z, t[S - 2], ws);
+        }
+      }
     }
   }
 

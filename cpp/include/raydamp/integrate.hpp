@@ -473,7 +473,8 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
   const auto stepper = make_stepper<Method>(model, composition, spec);
   constexpr bool mergeable = is_mergeable<Method>();
   KinkLocator<Model, Dim> kinks(model, spec);  // a Structure's springs with locate_kinks: steps split at kinks
-  const bool merge = merges_steps<Method>(spec) && !kinks.on();
+  // A constrained drift for h/2 twice is not the one for h (each ends on the manifold): steps run whole.
+  const bool merge = merges_steps<Method>(spec) && !kinks.on() && !has_constraints<Model>::value;
   const auto step_drift = drift_from_law<Method>(model, mb, stepper, time_at);
   auto advance = [&](auto& w, State<Dim>& x, long i) {  // w: ws, or the same as Unhooked
     if (watch.stopped() || envelope.stopped()) return;  // a terminal event or a collapse ended the run

@@ -7,10 +7,12 @@
 
 namespace raydamp {
 
-enum class Status { completed, non_finite, cancelled, out_of_memory, diverged, event, not_converged, collapsed };
+enum class Status {
+  completed, non_finite, cancelled, out_of_memory, diverged, event, not_converged, collapsed, constraint_failed };
 
-inline constexpr std::array<const char*, 8> kStatusNames = {
-    "completed", "non_finite", "cancelled", "out_of_memory", "diverged", "event", "not_converged", "collapsed"};
+inline constexpr std::array<const char*, 9> kStatusNames = {
+    "completed", "non_finite", "cancelled", "out_of_memory", "diverged", "event", "not_converged", "collapsed",
+    "constraint_failed"};
 
 inline const char* status_name(Status s) { return kStatusNames[static_cast<std::size_t>(s)]; }
 

@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <utility>
 
+#include "raydamp/constraints/hook.hpp"
 #include "raydamp/flows/exact.hpp"
 #include "raydamp/flows/runge_kutta.hpp"
 #include "raydamp/methods/splitting.hpp"
@@ -13,7 +14,8 @@ namespace raydamp {
 
 template <Flow F, class Model, class Tab, int Dim, class WS>
 inline void apply_flow(const Model& model, const Tab& tab, State<Dim>& z, double t, WS& ws) {
-  if constexpr (F == Flow::drift) flows::drift(model, z, t, ws);
+  if constexpr (has_constraints<Model>::value) constraints::flow<F>(model, tab, z, t, ws);  // RATTLE's sub-flows
+  else if constexpr (F == Flow::drift) flows::drift(model, z, t, ws);
   else if constexpr (F == Flow::kick) flows::kick(model, z, t, ws);
   else if constexpr (F == Flow::damp) flows::damp(model, z, t, ws);
   else if constexpr (F == Flow::kick_damp) flows::kick_damp(model, z, t, ws);

@@ -28,11 +28,14 @@ MEANINGS: dict[str, str] = {
     "collapsed": "a spring's drift passed its collapse limit (integrate's collapse, raydamp.ida's collapse_drift): "
                  "the run stopped at that step's end, keeping its rows and its envelope; the message names the "
                  "spring.",
+    "constraint_failed": "a constrained System's position constraint could not be solved at failed_step (its "
+                         "Newton iteration did not reach constraint_tol, or the constraints' gradients became "
+                         "dependent); the message names the constraint, and the rows before that step are kept.",
 }
 
 # The statuses of a run that failed (a blow-up or a lack of memory), as against one that completed
 # or was stopped on purpose.
-FAILED = frozenset({"non_finite", "out_of_memory", "diverged", "not_converged"})
+FAILED = frozenset({"non_finite", "out_of_memory", "diverged", "not_converged", "constraint_failed"})
 # The statuses of a run that did what it was asked: every step, or up to its terminal event or collapse.
 FINISHED = frozenset({"completed", "event", "collapsed"})
 

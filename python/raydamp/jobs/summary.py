@@ -83,6 +83,12 @@ class JobSummary(BaseModel):
                                                            "(jobs with events)")
     envelope: EnvelopeSummary | None = Field(None, description="the peaks of the job's envelope (jobs with "
                                                                "envelope)")
+    constraint_residual: float | None = Field(
+        None, description="max_i |g_i(q)| / s_i over every drift of the run, s_i the constraint's scale (the sum of "
+                          "its terms' absolute values): what the constraint solve reached (constrained systems)")
+    constraint_velocity_residual: float | None = Field(
+        None, description="max_i |(G M^-1 p)_i| / (|G_i| |M^-1 p|) after each drift's projection: how far p "
+                          "stayed from the tangent space (constrained systems)")
     wall_time: float
 
     @model_validator(mode="before")

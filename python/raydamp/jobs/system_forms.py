@@ -146,6 +146,13 @@ class SystemInput(SystemKind):
     momenta: dict[Name, Expression] = Field(default_factory=dict, max_length=16,
                                             description="quantities tracked at every step; momenta are p_<coordinate>")
     name: str | None = Field(None, max_length=200)
+    constraints: list[Expression] = Field(
+        default_factory=list, max_length=128,
+        description="holonomic constraints g_i(q), each held at 0 (rods, rigid links), run by RATTLE; fewer than n")
+    constraint_tol: FiniteFloat = Field(
+        1e-12, gt=0, lt=0.01, description="the constraint solve's tolerance, relative to each constraint's scale")
+    project_initial: bool = Field(
+        False, description="project q0 onto the constraints and p0 onto their tangent space (else refuse them)")
 
     def files(self, at: tuple) -> Iterator[tuple[tuple, str, str]]:
         return iter(())

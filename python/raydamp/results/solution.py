@@ -88,6 +88,9 @@ class Solution:
     events: Any = field(default=None, compare=False)  # run/events.py's EventTable, with events=
     dense: Any = field(default=None, compare=False)  # results/dense.py's DenseOutput, with dense=True
     envelope: Any = field(default=None, compare=False)  # an xarray Dataset of peaks (run/envelope.py), with envelope=
+    # A constrained System's residuals over the run (raydamp.jobs.JobSummary describes both), else None.
+    constraint_residual: float | None = field(default=None)
+    constraint_velocity_residual: float | None = field(default=None)
     # (model, q0, p0, options) of the run, turned into `provenance` when asked for (cheap
     # runs stay cheap); or the provenance dict itself, for a loaded solution.
     origin: Any = field(default=None, compare=False)
@@ -299,6 +302,8 @@ class Solution:
             kinetic_temperature=None if kinetic is None else num(kinetic),
             events=None if self.events is None else self.events.summary(),
             envelope=None if self.envelope is None else envelope_summary(self.envelope),
+            constraint_residual=getattr(self, "constraint_residual", None),
+            constraint_velocity_residual=getattr(self, "constraint_velocity_residual", None),
             wall_time=self.wall_time,
         )
 

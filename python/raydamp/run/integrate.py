@@ -268,7 +268,7 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
         h = real("h", h, positive=True)
     dim, most_row_bytes = _facts(model)
     q0 = model.check_configuration("q0", _state("q0", q0, dim))
-    p0 = _state("p0", p0, dim)
+    p0 = model.check_momenta("p0", q0, _state("p0", p0, dim))  # a constrained System: on the tangent space
     if not (type(save_every) is int and 1 <= save_every <= MAX_STEPS):
         save_every = integer("save_every", save_every, maximum=MAX_STEPS)
     if divergence is not DEFAULT_DIVERGENCE:
@@ -350,6 +350,8 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
         "wall_time": wall, "load_work": out["load_work"], "load": loaded,
         "hysteretic_work": _envelope.users_springs(model, out.get("spring_work")),
         "dofs": None if dofs is None else np.asarray(dofs, dtype=np.int64),
+        "constraint_residual": out.get("constraint_residual"),
+        "constraint_velocity_residual": out.get("constraint_velocity_residual"),
         # q0 and p0 are the run's own arrays (_state), so the provenance keeps them uncopied
         "origin": (model, q0, p0, options)}
     if watch:

@@ -84,6 +84,11 @@ class Model:
         """Refuse a configuration outside the model's configuration space; returns q."""
         return q
 
+    def check_momenta(self, name: str, q: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """Refuse momenta the model cannot start from at q (a constrained System: off the tangent space);
+        returns p."""
+        return p
+
     def check_configurations(self, name: str, qs: np.ndarray) -> None:
         """check_configuration on every row of qs (members, n), naming the first bad one
         ``name[i]``. Kinds whose check is not the identity vectorise it where they can."""

@@ -62,24 +62,37 @@ class CompiledSystemFunctions:
     damper_norm: float | None = None
     damper_projection: Any | None = None
     damp_then_3s_body: Any | None = None
+    # The constraints (constraints.py): q -> (g, scales), q -> G's non-zeros at (rows, cols).
+    constraint_values: Any | None = None
+    constraint_jacobian: Any | None = None
+    constraint_pattern: tuple[tuple[int, ...], tuple[int, ...]] = ((), ())
 
     @classmethod
     def of(cls, potential: Any, gradient: Any, hessian_product: Any, damper_gradients: Any | None = None,
            momenta: Any | None = None, damper_norm: float | None = None, damper_projection: Any | None = None,
-           damp_then_3s_body: Any | None = None) -> CompiledSystemFunctions:
+           damp_then_3s_body: Any | None = None, constraint_values: Any | None = None,
+           constraint_jacobian: Any | None = None,
+           constraint_pattern: tuple[tuple[int, ...], tuple[int, ...]] = ((), ())) -> CompiledSystemFunctions:
         """The functions with their addresses, taken from the functions themselves: after a compile, and
         after loading them in another process (an address is of this process's copy of the code)."""
         functions = (potential, gradient, hessian_product, damper_gradients, momenta, damper_projection,
                      damp_then_3s_body)
         addresses = tuple(a for fn in functions for a in _address(fn))
         return cls(addresses, potential, gradient, hessian_product, damper_gradients, momenta, damper_norm,
-                   damper_projection, damp_then_3s_body)
+                   damper_projection, damp_then_3s_body, constraint_values, constraint_jacobian,
+                   (tuple(constraint_pattern[0]), tuple(constraint_pattern[1])))
+
+    @property
+    def constraint_addresses(self) -> tuple[int, ...]:
+        """(function, data) of the constraints' values, then of their Jacobian, as the bindings take them."""
+        return (*_address(self.constraint_values), *_address(self.constraint_jacobian))
 
     def to_bytes(self) -> bytes:
         """The compiled functions as bytes (their object code, as SymEngine pickles an LLVM Lambdify: a few kB
         each) for another process of this machine to load with :meth:`from_bytes`, without compiling again."""
         functions = [getattr(self, name) for name in _FUNCTIONS]
-        return pickle.dumps((_FORMAT, functions, self.damper_norm), protocol=pickle.HIGHEST_PROTOCOL)
+        pattern = [list(self.constraint_pattern[0]), list(self.constraint_pattern[1])]
+        return pickle.dumps((_FORMAT, functions, self.damper_norm, pattern), protocol=pickle.HIGHEST_PROTOCOL)
 
     @classmethod
     def from_bytes(cls, data: bytes) -> CompiledSystemFunctions:
@@ -91,17 +104,19 @@ class CompiledSystemFunctions:
         cannot be checked: bytes from a client, a file or the network must never come here.
         """
         found = _TrustedUnpickler(io.BytesIO(data)).load()
-        if not (isinstance(found, tuple) and len(found) == 3 and found[0] == _FORMAT
-                and isinstance(found[1], list) and len(found[1]) == len(_FUNCTIONS)):
+        if not (isinstance(found, tuple) and len(found) == 4 and found[0] == _FORMAT
+                and isinstance(found[1], list) and len(found[1]) == len(_FUNCTIONS)
+                and isinstance(found[3], list) and len(found[3]) == 2
+                and all(isinstance(i, int) for side in found[3] for i in side)):
             raise ValueError("compiled system functions: not what CompiledSystemFunctions.to_bytes writes")
-        _, functions, damper_norm = found
-        return cls.of(*functions[:5], damper_norm, *functions[5:])
+        _, functions, damper_norm, pattern = found
+        return cls.of(*functions[:5], damper_norm, *functions[5:], constraint_pattern=(pattern[0], pattern[1]))
 
 
 # The order of the functions in to_bytes, and that form's version.
 _FUNCTIONS = ("potential", "gradient", "hessian_product", "damper_gradients", "momenta", "damper_projection",
-              "damp_then_3s_body")
-_FORMAT = "raydamp.compiled_system.1"
+              "damp_then_3s_body", "constraint_values", "constraint_jacobian")
+_FORMAT = "raydamp.compiled_system.2"
 # What an LLVM Lambdify's pickle names (SymEngine's llvm_loading_func rebuilds it from its object code).
 _LOADABLE = {("symengine.lib.symengine_wrapper", "llvm_loading_func"), ("numpy", "float64"), ("numpy", "dtype")}
 
@@ -258,6 +273,7 @@ def compile_key(spec: SystemSpec) -> str:
              "parameters": sorted(spec.parameters.items()), "mass": spec.mass.tolist(),
              "dampers": [d.on.text for d in spec.dampers],
              "momenta": [(name, e.text) for name, e in spec.momenta.items()],
+             "constraints": [c.text for c in spec.constraints],
              "fused_table": [list(row) for row in _core.splitting(FUSED_METHOD)] if len(spec.dampers) == 1 else None}
     return hashlib.sha256(json.dumps(plain, separators=(",", ":")).encode()).hexdigest()
 
@@ -351,8 +367,15 @@ def _compile(spec: SystemSpec) -> CompiledSystemFunctions:
         with_p.update({f"p_{name}": pi for name, pi in zip(spec.coordinates, p)})
         outputs = [expr.to_symengine(with_p) for expr in spec.momenta.values()]
         momenta_fn = _jit(q + p, outputs, ("momenta",))[0]
+    values_fn = jacobian_fn = None
+    pattern: tuple[tuple[int, ...], tuple[int, ...]] = ((), ())
+    if spec.constraints:
+        from .constraints import constraint_functions
+        values, nonzeros, pattern = constraint_functions(spec, symbols, q)
+        values_fn = _jit(q, values, ("constraints",))[0]
+        jacobian_fn = _jit(q, nonzeros, ("constraints",))[0]
     return CompiledSystemFunctions.of(pot_fn, grad_fn, hv_fn, damper_fn, momenta_fn, damper_norm, projection_fn,
-                                      fused_fn)
+                                      fused_fn, values_fn, jacobian_fn, pattern)
 
 
 # The method whose merged steps a System with one constant-norm dashpot runs in one

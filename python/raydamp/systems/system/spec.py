@@ -18,15 +18,17 @@ from ..expressions import FUNCTIONS, Expression, parse
 from .errors import SpecError
 
 __all__ = ["SystemSpec", "normalise", "MAX_COORDINATES", "MAX_PARAMETERS", "MAX_DAMPERS", "MAX_MOMENTA",
-           "MAX_DENSE_DAMPING", "KEYS", "DAMPING_FORMS"]
+           "MAX_DENSE_DAMPING", "MAX_CONSTRAINTS", "KEYS", "DAMPING_FORMS"]
 
 MAX_COORDINATES = 256   # expression systems; large structures are the sparse kinds' business
 MAX_PARAMETERS = 256
 MAX_DAMPERS = 32        # kMaxDampers in cpp/include/raydamp/system/small_dense.hpp
 MAX_DENSE_DAMPING = 32  # kMaxDenseDim: n for a constant-matrix D or dashpots
 MAX_MOMENTA = 16
+MAX_CONSTRAINTS = 128   # the constraint solve factors a dense k x k matrix (constraints/rattle.hpp)
 _SAVED_COLUMNS = frozenset({"t", "energy", "work", "load_work"})
-KEYS = ("coordinates", "potential", "parameters", "mass", "damping", "eps", "momenta", "name")
+KEYS = ("coordinates", "potential", "parameters", "mass", "damping", "eps", "momenta", "name", "constraints",
+        "constraint_tol", "project_initial")
 DAMPING_FORMS = ("scalar", "diagonal", "matrix", "dampers")
 
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
@@ -34,7 +36,8 @@ _RESERVED = frozenset(FUNCTIONS) | {"pi"}
 
 OUTSIDE_CLASS = ("a mass matrix that depends on q (a double pendulum in joint angles, say) is outside the class "
                  "these methods need (the paper's section 2: the drift exp(t X_T) must be explicit, so M is "
-                 "constant). Write such a system in Cartesian coordinates, with stiff springs for the rigid links.")
+                 "constant). Write such a system in Cartesian coordinates, with its rigid links as constraints "
+                 "(constraints=['(x2 - x1)^2 + (y2 - y1)^2 - l^2', ...]).")
 
 
 @dataclass(frozen=True)
@@ -60,6 +63,9 @@ class SystemSpec:
     eps: float
     momenta: dict[str, Expression]
     name: str | None
+    constraints: tuple[Expression, ...] = ()
+    constraint_tol: float = 1e-12
+    project_initial: bool = False
 
     @property
     def n(self) -> int:
@@ -242,8 +248,33 @@ def damping_strength(eps, damping_form: str | None) -> float:
     return eps
 
 
+def _constraints(value, n: int, names, damping_form) -> tuple[Expression, ...]:
+    path = ("constraints",)
+    if value is None:
+        return ()
+    if isinstance(value, (str, bytes)) or not isinstance(value, (list, tuple)):
+        raise SpecError(path, f'must be a list of expressions g(q) (each held at 0), e.g. ["x^2 + y^2 - l^2"]; '
+                              f"got {_show(value)}")
+    if not value:
+        return ()
+    if len(value) > MAX_CONSTRAINTS:
+        raise SpecError(path, f"at most {MAX_CONSTRAINTS} constraints, got {len(value)}")
+    if len(value) >= n:
+        raise SpecError(path, f"{len(value)} constraints on {n} coordinates leave no motion; give fewer than {n}")
+    if damping_form == "dampers":
+        raise SpecError(path, "constraints with dashpot damping are not supported yet; give damping as scalar, "
+                              "diagonal or matrix")
+    out = []
+    for i, text in enumerate(value):
+        expr = _expression(path + (i,), text, names)
+        if not expr.names & {key for key, kind in names.items() if kind == "coordinate"}:
+            raise SpecError(path + (i,), f"{text!r} uses no coordinate: a constraint g(q) = 0 must depend on q")
+        out.append(expr)
+    return tuple(out)
+
+
 def normalise(*, coordinates, potential, parameters=None, mass=1.0, damping=None, eps=0.0, momenta=None,
-              name=None) -> SystemSpec:
+              name=None, constraints=None, constraint_tol=1e-12, project_initial=False) -> SystemSpec:
     """Validate a system description; raises SpecError naming the field."""
     coords, as_count = _coordinates(coordinates)
     n = len(coords)
@@ -282,9 +313,17 @@ def normalise(*, coordinates, potential, parameters=None, mass=1.0, damping=None
         moms[key] = _expression(("momenta", key), text, with_momenta)
     if name is not None and (not isinstance(name, str) or len(name) > 200):
         raise SpecError(("name",), "must be a string of at most 200 characters")
-    used = expr.names.union(*(d.on.names for d in dampers), *(e.names for e in moms.values()))
+    cons = _constraints(constraints, n, names, d_form)
+    tol = _real(("constraint_tol",), constraint_tol, positive=True)
+    if not tol < 1e-2:
+        raise SpecError(("constraint_tol",), f"must be < 0.01 (relative to each constraint's scale), got {tol!r}")
+    if not isinstance(project_initial, bool):
+        raise SpecError(("project_initial",), f"must be true or false, got {_show(project_initial)}")
+    used = expr.names.union(*(d.on.names for d in dampers), *(e.names for e in moms.values()),
+                            *(c.names for c in cons))
     unused = [key for key in params if key not in used]
     if unused:  # accepted silently (a sweep over it changed nothing), where Load.expression refuses one
-        raise SpecError(("parameters", unused[0]), "is used by none of the potential, the dampers and the momenta")
+        raise SpecError(("parameters", unused[0]), "is used by none of the potential, the dampers, the momenta and "
+                                                   "the constraints")
     return SystemSpec(coords, as_count, expr, params, m, mass_form, d_form, d_scalar, d_matrix, dampers, eps, moms,
-                      name)
+                      name, cons, tol, project_initial)

@@ -30,7 +30,7 @@ class System(Model):
     V(q), a constant symmetric positive definite M, and a symmetric positive
     semi-definite dissipation tensor D(q). (A mass matrix that depends on q, such as
     a double pendulum's in joint angles, is outside the class: write such a system in
-    Cartesian coordinates with stiff springs for the rigid links.)
+    Cartesian coordinates with its rigid links as ``constraints``.)
 
     Parameters
     ----------
@@ -61,6 +61,23 @@ class System(Model):
     momenta : {name: expression} quantities to track at every step (momentum maps
         of symmetries); momenta are named ``p_<coordinate>``.
     name : an optional label.
+    constraints : a list of expressions g_i(q), each held at g_i(q) = 0 (rods, rigid links, a particle on a
+        surface): ``["x^2 + y^2 - l^2"]`` makes (x, y) a pendulum of length l. Parsed by the same parser,
+        their Jacobian G(q) derived symbolically, compiled. Every method without a Runge-Kutta stage that
+        moves q runs with them (sv, 3s, 2s, baoab, rks and their compositions): each drift is SHAKE (the
+        position constraint solved by Newton for the multipliers, p corrected by the same impulse) then
+        RATTLE's projection of p onto the tangent space G M^{-1} p = 0, and every kick, damping and noise flow
+        is followed by that projection. For D = c M (damping ``{"scalar": c}``, or any D with D M^{-1} a
+        multiple of I) the damping and noise flows are then exact on the tangent space, and the noise's
+        stationary law is the constrained Boltzmann one; for another constant D the damping sub-flow is the
+        exact flow of the frozen-q operator eps D M^{-1} followed by the projection (consistent, the method's
+        order, not the exact projected flow). Not with dashpot damping yet; ensembles of a constrained system
+        are not supported yet.
+    constraint_tol : the constraint solve's tolerance, relative to each constraint's scale (the sum of the
+        absolute values of its top-level terms: |r - l| <= tol l for a rod written ``x^2 + y^2 - l^2``);
+        default 1e-12.
+    project_initial : False (default): a q0 off the constraints or a p0 off their tangent space is refused,
+        naming the constraint and its residual. True: they are projected onto them before the run.
 
     A System is immutable: to change it, build another (``system.replace(eps=...)``).
     ``to_dict()``/``from_dict()`` give the plain form, which is also the JSON the
@@ -71,9 +88,11 @@ class System(Model):
 
     def __init__(self, coordinates, potential: str, *, parameters: Mapping[str, float] | None = None,
                  mass=1.0, damping: Mapping[str, Any] | None = None, eps: float = 0.0,
-                 momenta: Mapping[str, str] | None = None, name: str | None = None):
+                 momenta: Mapping[str, str] | None = None, name: str | None = None, constraints=None,
+                 constraint_tol: float = 1e-12, project_initial: bool = False):
         spec = normalise(coordinates=coordinates, potential=potential, parameters=parameters, mass=mass,
-                         damping=damping, eps=eps, momenta=momenta, name=name)
+                         damping=damping, eps=eps, momenta=momenta, name=name, constraints=constraints,
+                         constraint_tol=constraint_tol, project_initial=project_initial)
         object.__setattr__(self, "_spec", spec)
         object.__setattr__(self, "momentum_names", tuple(spec.momenta))
         object.__setattr__(self, "label", spec.name)
@@ -136,6 +155,9 @@ class System(Model):
         }
         if s.name is not None:
             out["name"] = s.name
+        if s.constraints:
+            from .constraints import describe
+            out.update(describe(s))
         return out
 
     @classmethod
@@ -203,6 +225,9 @@ class System(Model):
         if self._python is not None:
             raise ValueError("system: a System built from Python functions runs Python in its step loop and "
                              "cannot run as an ensemble; write its potential as an expression")
+        if self._spec.constraints:
+            raise ValueError("system.constraints: a constrained System does not run as an ensemble yet; run its "
+                             "members one by one with raydamp.integrate")
         if not parameters:
             return MemberModels.shared(self, members)
         names = list(parameters)
@@ -245,6 +270,8 @@ class System(Model):
         if self._python is not None:
             return self._check_functions(name, q)
         c = self._compiled
+        if self._spec.constraints:  # on g = 0 (or moved there) before V is checked there
+            q = self._constraint_checks().check_configuration(name, q)
         for label, fn, path in (("V", c.potential, "potential"), ("grad V", c.gradient, "potential")):
             if not np.isfinite(evaluate(fn, q)).all():
                 raise SpecError((path,), f"{label} is not finite at {name} = {q.tolist()} (a division by zero or a "
@@ -257,6 +284,33 @@ class System(Model):
                                     f"the gradient of {self._spec.dampers[i].on.text!r} is not finite at {name} = "
                                     f"{q.tolist()} (a division by zero or a function outside its domain there)")
         return q
+
+    def check_momenta(self, name: str, q: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """p on the constraints' tangent space at q (or projected there with project_initial); returns p."""
+        if not self._spec.constraints:
+            return p
+        return self._constraint_checks().check_momenta(name, q, p)
+
+    def _constraint_checks(self):
+        from .constraints import ConstraintChecks
+        return ConstraintChecks(self._spec, self._compiled, np.linalg.inv(self._spec.mass))
+
+    @property
+    def constraints(self) -> tuple[str, ...]:
+        """The constraints g_i(q) = 0, as written."""
+        return tuple(c.text for c in self._spec.constraints)
+
+    def constraint_values(self, q) -> np.ndarray:
+        """g(q), the constraints' values at q."""
+        if not self._spec.constraints:
+            return np.zeros(0)
+        return self._constraint_checks().values(np.asarray(q, dtype=float))[0]
+
+    def constraint_jacobian(self, q) -> np.ndarray:
+        """G(q) = dg/dq, k x n."""
+        if not self._spec.constraints:
+            return np.zeros((0, len(self.coordinates)))
+        return self._constraint_checks().jacobian(np.asarray(q, dtype=float))
 
     def check_configurations(self, name: str, qs: np.ndarray) -> None:
         # The compiled functions broadcast over rows: one call each for every member (an
@@ -352,9 +406,20 @@ def _build_core(spec: SystemSpec, addresses, damper_coefficients, n_momenta: int
     mass_kind = "scalar" if spec.mass_form == "scalar" else "dense"
     damping_kind = {None: "isotropic", "scalar": "isotropic", "diagonal": "constant", "matrix": "constant",
                     "dampers": "dampers"}[spec.damping_form]
-    cls = getattr(_core, f"System_{mass_kind}_{damping_kind}")
     # Undamped: eps has nothing to act on, and the core's eps decides whether sv may run.
     eps = 0.0 if spec.damping_form is None else spec.eps
+    if spec.constraints:
+        cls = getattr(_core, f"ConstrainedSystem_{mass_kind}_{damping_kind}")
+        rows, cols = owner.constraint_pattern
+        try:
+            return cls(spec.n, eps, spec.mass, spec.damping_scalar if spec.damping_form == "scalar" else 0.0,
+                       spec.damping_matrix if spec.damping_matrix.size else np.zeros((spec.n, spec.n)),
+                       list(addresses), n_momenta, owner, len(spec.constraints), list(owner.constraint_addresses),
+                       list(rows), list(cols), spec.constraint_tol, 50)
+        except ValueError as err:
+            field, _, message = str(err).partition(": ")
+            raise SpecError(tuple(field.split(".")), message or str(err)) from None
+    cls = getattr(_core, f"System_{mass_kind}_{damping_kind}")
     try:
         return cls(spec.n, eps, spec.mass, spec.damping_scalar if spec.damping_form == "scalar" else 0.0,
                    spec.damping_matrix if spec.damping_matrix.size else np.zeros((spec.n, spec.n)),

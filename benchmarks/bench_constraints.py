@@ -1,0 +1,82 @@
+#!/usr/bin/env python3
+"""A constrained step beside the unconstrained step of the same system: ns/step.
+
+Two systems, each run twice in the same process, interleaved, best of several repeats:
+- the damped double pendulum in Cartesian coordinates (4 coordinates), with its two rods as constraints,
+  and the same system without them (the masses then fall freely: the same potential, mass and damping);
+- a damped chain of N links hanging under gravity (2 (N) coordinates, N rods, the first from the origin),
+  with and without the rods.
+Target (issue 45): constrained <= 2x unconstrained at the default tolerance (1e-12). The figures are printed
+beside it; the script exits 0 whatever they are (a benchmark, not a test).
+
+    .venv/bin/python benchmarks/bench_constraints.py            # about a minute (the chain's compile)
+    .venv/bin/python benchmarks/bench_constraints.py --quick    # a 20-link chain
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+import numpy as np
+
+import raydamp
+
+TARGET = 2.0
+G = 9.81
+
+
+def double_pendulum(constrained: bool) -> tuple[raydamp.System, np.ndarray, np.ndarray]:
+    system = raydamp.System(["x1", "y1", "x2", "y2"], "g*(m1*y1 + m2*y2)",
+                            parameters={"g": G, "m1": 1.0, "m2": 0.7, **({"a": 1.0, "b": 0.8} if constrained else {})},
+                            mass=[1.0, 1.0, 0.7, 0.7], damping={"scalar": 1.0}, eps=0.1,
+                            constraints=["x1^2 + y1^2 - a^2", "(x2 - x1)^2 + (y2 - y1)^2 - b^2"] if constrained
+                            else None)
+    a, b = 1.2, -0.5
+    x1, y1 = math.sin(a), -math.cos(a)
+    q0 = np.array([x1, y1, x1 + 0.8 * math.sin(b), y1 - 0.8 * math.cos(b)])
+    v1 = 0.3 * np.array([math.cos(a), math.sin(a)])
+    v2 = v1 + 0.8 * 1.1 * np.array([math.cos(b), math.sin(b)])
+    return system, q0, np.concatenate([v1, 0.7 * v2])
+
+
+def chain(links: int, constrained: bool) -> tuple[raydamp.System, np.ndarray, np.ndarray]:
+    names = [f"{c}{i}" for i in range(1, links + 1) for c in "xy"]
+    rods = ["x1^2 + y1^2 - l^2"] + [f"(x{i} - x{i - 1})^2 + (y{i} - y{i - 1})^2 - l^2" for i in range(2, links + 1)]
+    system = raydamp.System(names, " + ".join(f"g*y{i}" for i in range(1, links + 1)),
+                            parameters={"g": G, **({"l": 0.1} if constrained else {})}, mass=0.05,
+                            damping={"scalar": 1.0}, eps=0.5, constraints=rods if constrained else None)
+    # hanging at 30 degrees from the vertical, at rest: it swings down
+    q0 = np.array([v for i in range(1, links + 1) for v in (0.1 * i * 0.5, -0.1 * i * math.sqrt(3) / 2)])
+    return system, q0, np.zeros(2 * links)
+
+
+def ns_per_step(system, q0, p0, method: str, h: float, steps: int, repeats: int) -> float:
+    best = math.inf
+    for _ in range(repeats):
+        sol = raydamp.integrate(system, q0, p0, method=method, h=h, n_steps=steps, save_every=steps)
+        assert sol.status == "completed", sol.message
+        best = min(best, sol.wall_time / steps * 1e9)
+    return best
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--quick", action="store_true")
+    args = parser.parse_args()
+    links = 20 if args.quick else 100
+    cases = [("double pendulum", double_pendulum, 1e-3, 200_000), (f"{links}-link chain", lambda c: chain(links, c),
+                                                                   1e-3, 2_000)]
+    print(f"{'system':<18} {'method':<6} {'free ns/step':>13} {'constrained':>12} {'ratio':>7}  target <= {TARGET}x")
+    for label, build, h, steps in cases:
+        free, q0, p0 = build(False)
+        constrained, _, _ = build(True)
+        for method in ("3s", "2s", "baoab"):
+            a = ns_per_step(free, q0, p0, method, h, steps, 5)
+            b = ns_per_step(constrained, q0, p0, method, h, steps, 5)
+            print(f"{label:<18} {method:<6} {a:>13.0f} {b:>12.0f} {b / a:>7.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

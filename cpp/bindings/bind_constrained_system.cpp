@@ -1,0 +1,124 @@
+// Compiled systems with holonomic constraints (models/constrained_system.hpp): each (mass, damping) kind
+// bound once, as for the free kinds (bind_system.hpp); the constraints are data.
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "bind_system.hpp"
+#include "raydamp/constraints/rattle.hpp"
+#include "raydamp/models/constrained_system.hpp"
+
+namespace raydamp::bindings {
+
+namespace {
+
+// The message of a run the constraint solve stopped (the step loop saw a state no longer finite).
+std::string constraint_message(const ConstraintFailure& f, const py::dict& out) {
+  const std::string at = out["failed_step"].is_none() ? std::string("")
+                                                        : " at step " + py::str(out["failed_step"]).cast<std::string>();
+  if (f.singular)
+    return "constraints: G M^{-1} G^T is singular" + at + " (the constraints' gradients became dependent); the last "
+           "state before it is saved";
+  char buffer[160];
+  std::snprintf(buffer, sizeof buffer, " did not converge%s: |g| = %.3g after %d Newton iterations, allowed %.3g",
+                at.c_str(), f.residual, f.iterations, f.allowed);
+  return "constraints[" + std::to_string(f.constraint) + "]" + buffer +
+         "; the last state before it is saved (a smaller h, or a larger constraint_tol)";
+}
+
+template <class Mass, class Damping>
+void bind_constrained_kind(py::module_& m, const char* name) {
+  using Model = ConstrainedSystem<Mass, Damping>;
+  py::class_<Model> cls(m, name);
+  cls.def(py::init([](int n, double eps, const Eigen::MatrixXd& mass, double damping_scalar,
+                      const Eigen::MatrixXd& damping_matrix, const FunctionAddresses& functions, int n_momenta,
+                      py::object /*keep_alive*/, int k, const FunctionAddresses& constraint_functions,
+                      std::vector<int> rows, std::vector<int> cols, double tol, int max_iterations) {
+            if (mass.rows() != n || mass.cols() != n) throw std::invalid_argument("mass: expected an n x n matrix");
+            if (functions.size() != 14) throw std::invalid_argument("functions: expected 7 (function, data) pairs");
+            if (constraint_functions.size() != 4)
+              throw std::invalid_argument("constraint_functions: expected 2 (function, data) pairs");
+            const SystemFunctions f{compiled(functions, 0), compiled(functions, 1), compiled(functions, 2),
+                                    compiled(functions, 4), CompiledFunction{}};
+            CompiledSystem<Mass, Damping> base(
+                n, eps, make_mass<Mass>(mass),
+                make_damping<Damping>(mass, eps, damping_scalar, damping_matrix, {}, CompiledFunction{},
+                                      std::numeric_limits<double>::quiet_NaN(), CompiledFunction{}),
+                f, n_momenta);
+            return Model(std::move(base), ConstraintSet(k, n, compiled(constraint_functions, 0),
+                                                        compiled(constraint_functions, 1), std::move(rows),
+                                                        std::move(cols), tol, max_iterations));
+          }),
+          py::arg("n"), py::arg("eps"), py::arg("mass"), py::arg("damping_scalar"), py::arg("damping_matrix"),
+          py::arg("functions"), py::arg("n_momenta"), py::arg("keep_alive"), py::arg("k"),
+          py::arg("constraint_functions"), py::arg("rows"), py::arg("cols"), py::arg("tol"),
+          py::arg("max_iterations"),
+          // The compiled code lives as long as the Python object that owns it.
+          py::keep_alive<1, 9>());
+  add_model_functions<Model>(cls);
+  // run() with the constraint solve's scratch made ready first and read after: the residuals the run
+  // reached, and the constraint that stopped it, if one did.
+  cls.def(
+      "integrate",
+      [](const Model& model, const std::string& method, const std::string& tableau, const std::string& composition,
+         const Eigen::VectorXd& q0, const Eigen::VectorXd& p0, double h, long n_steps, double h_last, long save_every,
+         bool track_work, py::object progress, CancelToken* cancel, const std::vector<int>& save_dofs,
+         const BoundLoad* load, double temperature, std::uint64_t seed, std::uint64_t stream, double divergence,
+         const EventSet* events, bool dense) {
+        ConstraintWork& w = constraint_work();
+        w.prepare(model.constraints);
+        w.track = true;
+        py::dict out = run<Model>(model, method, tableau, composition, q0, p0, h, n_steps, h_last, save_every,
+                                  track_work, progress, cancel, save_dofs, load, temperature, seed, stream,
+                                  divergence, events, dense);
+        w.track = false;
+        if (w.failure.constraint >= 0) {
+          if (out["status"].cast<std::string>() == status_name(Status::non_finite)) {
+            out["status"] = status_name(Status::constraint_failed);
+            out["message"] = constraint_message(w.failure, out);
+            out["failed_constraint"] = w.failure.constraint;
+          }
+        }
+        out["constraint_residual"] = w.max_residual;
+        out["constraint_velocity_residual"] = w.max_velocity_residual;
+        return out;
+      },
+      py::arg("method"), py::arg("tableau"), py::arg("composition"), py::arg("q0"), py::arg("p0"), py::arg("h"),
+      py::arg("n_steps"), py::arg("h_last"), py::arg("save_every"), py::arg("track_work"), py::arg("progress"),
+      py::arg("cancel").none(true), py::arg("save_dofs") = std::vector<int>{},
+      py::arg("load").none(true) = py::none(), py::arg("temperature") = 0.0, py::arg("seed") = 0,
+      py::arg("stream") = 0, py::arg("divergence") = kDefaultDivergence, py::arg("events").none(true) = py::none(),
+      py::arg("dense") = false);
+  // Every kind answers integrate_ensemble; this one refuses, naming why (its solve's scratch is per run).
+  cls.def_static("integrate_ensemble", [](py::args, py::kwargs) -> py::dict {
+    throw std::invalid_argument("system.constraints: a constrained System does not run as an ensemble yet; run its "
+                                "members one by one with raydamp.integrate");
+  });
+  // One constrained sub-flow or projection at a time, for tests and the initial checks.
+  cls.def("constrained_flow", [](const Model& model, const std::string& flow, const Eigen::VectorXd& q,
+                                 const Eigen::VectorXd& p, double t) {
+    State<Eigen::Dynamic> z{q, p};
+    WorkspaceFor<Model> ws(model.size(), 1);
+    ConstraintWork& w = constraint_work();
+    w.prepare(model.constraints);
+    const ButcherTableau& tab = builtin_tableau("euler");
+    if (flow == "drift") constraints::flow<Flow::drift>(model, tab, z, t, ws);
+    else if (flow == "kick") constraints::flow<Flow::kick>(model, tab, z, t, ws);
+    else if (flow == "damp") constraints::flow<Flow::damp>(model, tab, z, t, ws);
+    else if (flow == "kick_damp") constraints::flow<Flow::kick_damp>(model, tab, z, t, ws);
+    else if (flow == "project") constraints::project(model, z, w);
+    else throw std::invalid_argument("flow: unknown sub-flow '" + flow + "' (known: drift, kick, damp, kick_damp, project)");
+    return py::make_tuple(z.q, z.p);
+  });
+}
+
+}  // namespace
+
+void bind_constrained_system(py::module_& m) {
+  bind_constrained_kind<ScalarMass, IsotropicDamping>(m, "ConstrainedSystem_scalar_isotropic");
+  bind_constrained_kind<ScalarMass, ConstantDamping>(m, "ConstrainedSystem_scalar_constant");
+  bind_constrained_kind<DenseMass, IsotropicDamping>(m, "ConstrainedSystem_dense_isotropic");
+  bind_constrained_kind<DenseMass, ConstantDamping>(m, "ConstrainedSystem_dense_constant");
+}
+
+}  // namespace raydamp::bindings

@@ -1,0 +1,31 @@
+// A user's system with holonomic constraints g(q) = 0: a compiled system (models/compiled_system.hpp) and
+// its ConstraintSet. The capability is the `constraints` member: the step loop sees it at compile time
+// (constraints/rattle.hpp, has_constraints) and runs the constrained sub-flows; a model without it runs
+// the same loop as before, with no test and no call more.
+#pragma once
+
+#include <utility>
+
+#include "raydamp/constraints/constraint_set.hpp"
+#include "raydamp/models/compiled_system.hpp"
+
+namespace raydamp {
+
+template <class Mass, class Damping>
+struct ConstrainedSystem : CompiledSystem<Mass, Damping> {
+  using Base = CompiledSystem<Mass, Damping>;
+  // Its drift is SHAKE + RATTLE on the constraint manifold, not q += t M^{-1} p: the methods that step a
+  // free drift inside a Runge-Kutta stage (rksb, heun, rk4, rk) refuse it (catalogue.hpp).
+  static constexpr bool free_drift = false;
+  static constexpr const char* name = "the constrained system (SHAKE and RATTLE on g(q) = 0)";
+
+  ConstraintSet constraints;
+
+  ConstrainedSystem(Base base, ConstraintSet constraints_) : Base(std::move(base)), constraints(std::move(constraints_)) {
+    if (constraints.n != this->n) throw std::invalid_argument("constraints: made for another number of coordinates");
+    // 3s's fused body (a dashpot's) has no constraint hook.
+    this->functions.damp_then_3s_body = CompiledFunction{};
+  }
+};
+
+}  // namespace raydamp
