@@ -15,10 +15,11 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from .statuses import STATUSES
 
-__all__ = ["JobSummary", "EventsSummary", "MAX_SUMMARY_EVENTS", "summary_values"]
+__all__ = ["JobSummary", "EventsSummary", "MAX_SUMMARY_EVENTS", "MAX_SUMMARY_EVENT_DIM", "summary_values"]
 
 
 MAX_SUMMARY_EVENTS = 1000  # crossings a summary lists; count says how many there were
+MAX_SUMMARY_EVENT_DIM = 8  # coordinates up to which it lists q and p at each crossing too (at most 16,000 numbers)
 
 
 class EventsSummary(BaseModel):
@@ -29,6 +30,10 @@ class EventsSummary(BaseModel):
     name: list[str]
     t: list[float]
     direction: list[int] = Field(description="+1 rising through 0, -1 falling")
+    q: list[list[float]] | None = Field(None, description=(
+        f"positions at each listed crossing (every coordinate), for a model of at most {MAX_SUMMARY_EVENT_DIM} "
+        "coordinates; else null"))
+    p: list[list[float]] | None = Field(None, description="momenta likewise")
 
 
 class JobSummary(BaseModel):

@@ -294,7 +294,7 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
             raise ValueError(f"save_every: {rows} saved points would take {size / 2**30:.1f} GiB "
                              f"(limit {MAX_SAVED_BYTES / 2**30:.0f} GiB); raise save_every")
     watch = None if events is None and dense is False else _events.prepare(model, events, dense, temperature=kT)
-    if dense and _events.dense_bytes(n_steps, dim) > MAX_SAVED_BYTES:
+    if watch is not None and watch.dense and _events.dense_bytes(n_steps, dim) > MAX_SAVED_BYTES:
         raise ValueError(f"dense: {_events.dense_bytes(n_steps, dim) / 2**30:.1f} GiB of dense output (limit "
                          f"{MAX_SAVED_BYTES / 2**30:.0f} GiB); take fewer steps")
 
