@@ -13,6 +13,10 @@ Cases:
   10-storey frame      benchmarks/ground_motion_frame.py's shear frame, free vibration from a first-mode
                        shape, h = 0.005, midpoint, 2 10^5 steps, roof drift event q[9] - 0.01 and ten levels
 
+Beside them: the watcher's floor, one event g = t - 1e9 that never crosses (each step end read: q, p and
+M^-1 p copied, g and dg/dt from their coefficients, a sign scan), and on the pendulum the same event as one
+compiled call (g = q[0] + 1e-300 sin(q[0]) is not affine, so it runs through the compiled function).
+
 Runs are interleaved and the median over rounds printed, so a busy machine shifts all cases alike.
 
     .venv/bin/python benchmarks/bench_events.py           # about half a minute
@@ -41,12 +45,15 @@ def pendulum_case(steps: int):
     q0, p0 = [2.0], [0.0]
     one = [raydamp.Event("q[0]", name="vertical")]
     ten = [raydamp.Event(f"q[0] - {0.1 * k}", name=f"level{k}") for k in range(10)]
+    clock = [raydamp.Event("t - 1e9", name="never")]
+    compiled = [raydamp.Event("q[0] + 1e-300*sin(q[0])", name="vertical")]
 
     def run(events=None):
         return raydamp.integrate(model, q0, p0, method="3s", h=0.01, n_steps=steps, save_every=steps,
                                  events=events)
     return {"plain (merged)": lambda: run(), "plain, whole steps": lambda: run([]),
-            "1 event": lambda: run(one), "10 events": lambda: run(ten)}
+            "floor: 1 event g = t - 1e9": lambda: run(clock), "1 event": lambda: run(one),
+            "1 event, compiled call": lambda: run(compiled), "10 events": lambda: run(ten)}
 
 
 def frame_case(steps: int):
@@ -59,11 +66,13 @@ def frame_case(steps: int):
     p0 = np.zeros(10)
     one = [raydamp.Event("q[9] - 0.01", name="drift")]
     ten = [raydamp.Event(f"q[{k}] - 0.005", name=f"storey{k}") for k in range(10)]
+    clock = [raydamp.Event("t - 1e9", name="never")]
 
     def run(events=None):
         return raydamp.integrate(model, q0, p0, method="midpoint", h=0.005, n_steps=steps, save_every=steps,
                                  events=events)
-    return {"plain, whole steps": lambda: run(), "1 event": lambda: run(one), "10 events": lambda: run(ten)}
+    return {"plain, whole steps": lambda: run(), "floor: 1 event g = t - 1e9": lambda: run(clock),
+            "1 event": lambda: run(one), "10 events": lambda: run(ten)}
 
 
 def measure(cases: dict, rounds: int) -> dict[str, float]:

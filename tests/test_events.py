@@ -154,8 +154,8 @@ def test_bad_events_name_the_argument(events, match):
 def test_bad_event_direction_and_dense_refusals():
     with pytest.raises(ValueError, match="direction must be -1, 0 or"):
         raydamp.Event("q[0]", direction=3)
-    with pytest.raises(ValueError, match="g: a Python callable is not taken"):
-        raydamp.Event(lambda t, q, p: q[0])
+    with pytest.raises(ValueError, match="terminal: a Python callable g is found after the run"):
+        raydamp.Event(lambda t, q, p: q[:, 0], terminal=True)
     with pytest.raises(ValueError, match="events: a run at a temperature has no dense output"):
         raydamp.integrate(DampedPendulum(), [1.0], [0.0], h=0.1, t_end=1.0, temperature=0.1, seed=1,
                           events=[raydamp.Event("q[0]")])

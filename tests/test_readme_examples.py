@@ -621,6 +621,8 @@ def test_events_block(tmp_path, monkeypatch):
     assert s.at("len(sol.events)").value == 572
     sol = s.names["sol"]
     np.testing.assert_allclose(sol.events.t, 2 * np.pi * np.arange(1, 573) / 1.2, rtol=0, atol=1e-11)
+    # "0 to rounding: every point is on the section" (Henon's step), and there are points to speak of.
+    assert s.at("np.abs(crossings.q[:, 0]).max()").value < 1e-13 and len(s.names["crossings"]) > 10
     # "("event", 1.674993916...): within 1e-12 of K"
     status, t_stop = s.at("quarter.status, quarter.t[-1]").value
     assert status == "event" and abs(t_stop - ellipk(math.sin(0.5) ** 2)) < 1e-12, t_stop

@@ -4,8 +4,11 @@
 #include <pybind11/stl.h>
 
 #include <cstdint>
+#include <optional>
+#include <stdexcept>
 #include <string>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include "bindings.hpp"
@@ -31,10 +34,24 @@ void bind_events(py::module_& m) {
            },
            py::arg("fn"), py::arg("data"), py::arg("slots"))
       .def("add",
-           [](EventSet& set, int direction, bool terminal, const std::string& name) {
-             set.events.push_back({direction, terminal, name});
+           [](EventSet& set, int direction, bool terminal, const std::string& name,
+              const std::optional<std::vector<std::tuple<int, int, double>>>& terms, double constant, bool henon) {
+             EventFunction e{direction, terminal, name};
+             e.henon = henon;
+             if (terms) {  // g = constant + sum of coefficient * (t, q_index or p_index)
+               e.affine = true;
+               e.constant = constant;
+               for (const auto& [kind, index, coefficient] : *terms) {
+                 if (kind < 0 || kind > static_cast<int>(EventSlot::Kind::p))
+                   throw std::invalid_argument("events: an affine term's kind " + std::to_string(kind) +
+                                               " is not one of t, q, p");
+                 e.terms.push_back({static_cast<EventSlot::Kind>(kind), index, coefficient});
+               }
+             }
+             set.events.push_back(std::move(e));
            },
-           py::arg("direction"), py::arg("terminal"), py::arg("name"))
+           py::arg("direction"), py::arg("terminal"), py::arg("name"), py::kw_only(), py::arg("terms") = py::none(),
+           py::arg("constant") = 0.0, py::arg("henon") = false)
       .def("__len__", [](const EventSet& set) { return set.events.size(); });
 }
 

@@ -111,6 +111,41 @@ int main() {
     for (long i = 0; i + 1 < r.events.size(); i += 2) CHECK(r.events.direction[i] == 1 && r.events.direction[i + 1] == -1);
   }
 
+  // An affine g evaluated from its coefficients (no compiled call; bounded inside a step) finds the same
+  // crossings as the compiled call, bit for bit for a unit coefficient; and Henon's step lands each crossing
+  // of the section q = 0 on it, at the flow's crossing from a stepped state: closer to the exact times
+  // (2k + 1) K than the interpolant's at a coarse step of an order-6 composition.
+  {
+    const Composition& sixth = builtin_composition("kahan_li6");  // stepped states of order 6, the interpolant 4
+    const EventSet compiled = angle_events(0, false);
+    EventSet affine = angle_events(0, false), henon = angle_events(0, false);
+    for (EventSet* set : {&affine, &henon}) {
+      set->events[0].affine = true;
+      set->events[0].terms = {{EventSlot::Kind::q, 0, 1.0}};
+    }
+    henon.events[0].henon = true;
+    RunSpec spec{0.1, 200, 0.1, 1};
+    spec.merge_steps = false;
+    spec.events = &compiled;
+    const RunResult a = integrate<StormerVerlet>(pendulum, tab, sixth, z0, spec);
+    spec.events = &affine;
+    const RunResult b = integrate<StormerVerlet>(pendulum, tab, sixth, z0, spec);
+    spec.events = &henon;
+    const RunResult c = integrate<StormerVerlet>(pendulum, tab, sixth, z0, spec);
+    CHECK(a.events.size() == 6 && b.events.size() == 6 && c.events.size() == 6);
+    double interpolated = 0.0, landed = 0.0;
+    for (long i = 0; i < a.events.size(); ++i) {
+      CHECK(a.events.t[i] == b.events.t[i] && a.events.q[i] == b.events.q[i] && a.events.p[i] == b.events.p[i]);
+      CHECK(std::abs(c.events.q[i]) <= 1e-15);
+      CHECK(c.events.direction[i] == a.events.direction[i]);
+      interpolated = std::max(interpolated, std::abs(a.events.t[i] - (2 * i + 1) * quarter));
+      landed = std::max(landed, std::abs(c.events.t[i] - (2 * i + 1) * quarter));
+    }
+    std::printf("crossing time errors at h = 0.1: interpolant %.3g, Henon %.3g\n", interpolated, landed);
+    CHECK(landed < interpolated);
+    CHECK(c.trajectory.q == a.trajectory.q);  // refining reads the steps, never changes them
+  }
+
   // Refusals, each naming the argument.
   {
     EventSet events = angle_events(2, false);

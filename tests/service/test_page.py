@@ -500,3 +500,21 @@ def test_a_displacement_plot_with_a_choice_of_coordinate(module_server) -> None:
                                " === 'displacement q1(t)'", timeout=30_000)
         assert _traces(page, "displacement")[0]["y"] == [row[1] for row in data["q"]]
         assert [trace["name"] for trace in _traces(page, "phase")] == ["(q3, p_q3)", "(q1, p_q1)"]
+
+
+def test_event_crossings_are_marked_on_the_displacement_plot(module_server) -> None:
+    """A pendulum job with events: each crossing the summary lists is a marker on q(t), at its own time and q."""
+    spec = {"model": "damped_pendulum", "parameters": {"eps": 0.1}, "method": "3s", "h": 0.01, "t_end": 12,
+            "save_every": 10, "initial_state": {"q": [1.0], "p": [0.0]},
+            "events": [{"g": "q[0]", "name": "vertical"}, {"g": "q[0] - 0.5", "direction": 1, "name": "half"}]}
+    job_id = module_server.submit(spec)
+    job = module_server.wait_finished(job_id)
+    assert job["status"] == "completed"
+    events = job["summary"]["events"]
+    assert events["count"] >= 4
+    with open_page(_base(module_server)) as page:
+        _ready(page)
+        _show(page, job_id)
+        drawn = _traces(page, "displacement")
+        assert [trace["name"] for trace in drawn][1:] == ["events"]
+        assert drawn[1]["x"] == events["t"] and drawn[1]["y"] == [row[0] for row in events["q"]]

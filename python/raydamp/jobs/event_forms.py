@@ -24,3 +24,6 @@ class EventInput(Input):
     terminal: bool = Field(False, description="the run ends at the first such crossing (status \"event\")")
     name: str | None = Field(None, min_length=1, max_length=100, description="its name in the events table "
                                                                              "(default event<i>)")
+    refine: Literal["henon"] | None = Field(None, description=(
+        "\"henon\": land each crossing on g = 0 by Hénon's step from a stepped state (a Poincaré section's "
+        "points; not with terminal)"))

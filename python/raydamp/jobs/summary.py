@@ -16,11 +16,12 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from .statuses import STATUSES
 
-__all__ = ["JobSummary", "EventsSummary", "EnvelopeSummary", "MAX_SUMMARY_EVENTS", "MAX_SUMMARY_PEAKS",
-           "summary_values", "envelope_summary"]
+__all__ = ["JobSummary", "EventsSummary", "EnvelopeSummary", "MAX_SUMMARY_EVENTS", "MAX_SUMMARY_EVENT_DIM",
+           "MAX_SUMMARY_PEAKS", "summary_values", "envelope_summary"]
 
 
 MAX_SUMMARY_EVENTS = 1000  # crossings a summary lists; count says how many there were
+MAX_SUMMARY_EVENT_DIM = 8  # coordinates up to which it lists q and p at each crossing too (at most 16,000 numbers)
 
 
 class EventsSummary(BaseModel):
@@ -31,6 +32,10 @@ class EventsSummary(BaseModel):
     name: list[str]
     t: list[float]
     direction: list[int] = Field(description="+1 rising through 0, -1 falling")
+    q: list[list[float]] | None = Field(None, description=(
+        f"positions at each listed crossing (every coordinate), for a model of at most {MAX_SUMMARY_EVENT_DIM} "
+        "coordinates; else null"))
+    p: list[list[float]] | None = Field(None, description="momenta likewise")
 
 
 MAX_SUMMARY_PEAKS = 1000  # coordinates or springs a summary lists per quantity; size says how many there are

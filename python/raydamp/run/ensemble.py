@@ -204,7 +204,7 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
                          f"{members * rows * row_bytes / 2**30:.1f} GiB (limit {MAX_SAVED_BYTES / 2**30:.0f} GiB); "
                          "raise save_every or split the ensemble")
 
-    watch = _events.prepare(system, events, False, temperature=kT)  # each member's events (run/events.py)
+    watch = _events.prepare(system, events, False, temperature=kT, callables=False)  # each member's (events.py)
     peaks = None if envelope is None and collapse is None else _envelope.prepare(
         system, envelope, collapse=_envelope.limits(system, collapse), given_collapse=collapse)
     models, index, core_names, core_values = system.member_models(params, members)

@@ -308,7 +308,7 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
     if peaks is not None and dofs is not None and set(peaks.names) & set(_envelope.RESIDUALS):
         raise ValueError("envelope: a residual is read from the final state of every coordinate, and save_dofs "
                          "keeps only some; leave save_dofs None, or drop the residual")
-    if dense and _events.dense_bytes(n_steps, dim) > MAX_SAVED_BYTES:
+    if watch is not None and watch.dense and _events.dense_bytes(n_steps, dim) > MAX_SAVED_BYTES:
         raise ValueError(f"dense: {_events.dense_bytes(n_steps, dim) / 2**30:.1f} GiB of dense output (limit "
                          f"{MAX_SAVED_BYTES / 2**30:.0f} GiB); take fewer steps")
 

@@ -33,6 +33,7 @@ from ..systems.system import System
 from .choose_method import choose_method
 from .cluster import local_cluster
 from .ensemble import integrate_ensemble
+from .events import event_list
 from .integrate import MAX_SAVED_BYTES, CancelToken, _catalogue, span
 from .save_grid import save_grid
 
@@ -40,7 +41,7 @@ __all__ = ["sweep", "check_sweep", "SweepPlan", "GridTooLarge", "parse_grid_item
 
 # The Python form of a sweep's spec: integrate's arguments and the model.
 SPEC_KEYS = ("model", "system", "parameters", "q0", "p0", "method", "tableau", "composition", "h", "t_end", "load",
-             "temperature", "seed", "stream", "n_steps", "save_every")
+             "temperature", "seed", "stream", "n_steps", "save_every", "events")
 # The integrate arguments a grid may vary; members differing in them run in different ensembles.
 RUN_ARGUMENTS = ("method", "tableau", "composition", "h")
 _STATE_COMPONENT = re.compile(r"^(q0|p0)\[(\d+)\]$")
@@ -79,9 +80,11 @@ def _base(spec: Mapping[str, Any]) -> tuple[Model, np.ndarray, np.ndarray, dict[
                 raise ValueError(f"spec.{key}: missing")
         q0, p0 = spec["q0"], spec["p0"]
         options = {k: spec[k] for k in ("method", "tableau", "composition", "h", "t_end", "n_steps", "save_every",
-                                        "load", "temperature", "seed", "stream") if spec.get(k) is not None}
+                                        "load", "temperature", "seed", "stream", "events") if spec.get(k) is not None}
         if "load" in options and not isinstance(options["load"], Load):
             raise ValueError(f"spec.load must be a raydamp.Load, got {type(options['load']).__name__}")
+    if options.get("events") is not None:  # plain data (the workers rebuild each Event), checked here
+        options["events"] = [e.to_dict() for e in event_list(options["events"])]
     if options.get("load") is not None:
         options["load"] = options["load"].to_dict()  # plain data: the workers rebuild it
     if options.get("temperature"):  # one seed for the whole grid: member k draws stream `stream + k`
@@ -370,7 +373,35 @@ def _run_chunk(task: dict[str, Any]) -> dict[str, Any]:
             "status": np.array([STATUSES.index(s) for s in ens.status], dtype=np.int8),
             "max_momentum_drift": ens.max_momentum_drift,
             "messages": {str(task["start"] + i): m for i, (s, m) in enumerate(zip(ens.status, ens.message))
-                         if s != "completed"}}
+                         if s != "completed"},
+            **(_member_events(ens.events, len(ens.status)) if ens.events is not None else {})}
+
+
+# Crossings a sweep keeps per member (event_t etc. have this many columns; event_count says how many there were).
+MAX_MEMBER_CROSSINGS = 64
+_EVENT_VARIABLES = {  # with events: variable: (dims after member, dtype, fill), as _PER_MEMBER
+    "event_count": ((), np.int64, 0), "event_t": (("crossing",), float, np.nan),
+    "event_index": (("crossing",), np.int8, -1), "event_direction": (("crossing",), np.int8, 0),
+}
+
+
+def _member_events(table, members: int) -> dict[str, np.ndarray]:
+    """An ensemble's events table as per-member arrays: each member's first MAX_MEMBER_CROSSINGS crossings'
+    times, event indices (into the spec's events) and directions, padded (NaN, -1, 0), and its count."""
+    out = {k: np.full((members, *((MAX_MEMBER_CROSSINGS,) if dims else ())), fill, dtype=dtype)
+           for k, (dims, dtype, fill) in _EVENT_VARIABLES.items()}
+    member = np.asarray(table.member, dtype=np.int64)
+    counts = np.bincount(member, minlength=members)
+    out["event_count"][:] = counts
+    first = np.concatenate([[0], np.cumsum(counts)[:-1]])  # the table is in member order, each in time order
+    order = np.argsort(member, kind="stable")
+    rank = np.arange(len(member)) - first[member[order]]
+    kept = rank < MAX_MEMBER_CROSSINGS
+    rows, columns = member[order][kept], rank[kept]
+    out["event_t"][rows, columns] = np.asarray(table.t)[order][kept]
+    out["event_index"][rows, columns] = np.asarray(table.event)[order][kept]
+    out["event_direction"][rows, columns] = np.asarray(table.direction)[order][kept]
+    return out
 
 
 def _renumbered(error: ValueError, start: int) -> ValueError:
@@ -390,7 +421,7 @@ def _run_ensemble(model, task: dict[str, Any], run: dict[str, Any], cancel: Canc
                              load=Load.from_dict(run["load"]) if run.get("load") is not None else None,
                              temperature=run.get("temperature"), seed=run.get("seed"),
                              first_stream=run.get("stream", 0) + task["start"] if run.get("temperature") else 0,
-                             cancel=cancel)
+                             cancel=cancel, events=run.get("events"))
 
 
 def _stop_chunks(client, futures, stop: str) -> None:
@@ -760,7 +791,9 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
         task["stop"] = stop_event
 
     n, m = model.dim, len(model.momentum_names)
-    sizes = {"time": R, "dof": n, "momentum_map": m}
+    sizes = {"time": R, "dof": n, "momentum_map": m, "crossing": MAX_MEMBER_CROSSINGS}
+    events = options.get("events")
+    per_member = _PER_MEMBER | (_EVENT_VARIABLES if events is not None else {})
     coords: dict[str, Any] = {"member": np.arange(members), "dof": list(model.coordinates),
                               "momentum_map": list(model.momentum_names)}
     if shared_times:
@@ -778,19 +811,21 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
     provenance["raydamp_version"] = __version__
     attrs = {"kind": "sweep", "provenance": json.dumps(provenance), "grid": json.dumps(list(columns)),
              "raydamp_version": __version__}
+    if events is not None:  # event_index i is events[i]
+        attrs["event_names"] = json.dumps([e.get("name") or f"event{i}" for i, e in enumerate(events)])
     statics = {"q0": (("member", "dof"), Q0), "p0": (("member", "dof"), P0)}
 
     def shape(dims):
         return (members, *(sizes[d] for d in dims))
 
     if store is None:
-        arrays = {k: np.full(shape(dims), fill, dtype=dtype) for k, (dims, dtype, fill) in _PER_MEMBER.items()}
+        arrays = {k: np.full(shape(dims), fill, dtype=dtype) for k, (dims, dtype, fill) in per_member.items()}
     else:
         import dask.array as da
 
         template = xr.Dataset({k: (("member", *dims), da.full(shape(dims), fill, dtype=dtype,
                                                               chunks=(chunk_size, *shape(dims)[1:])))
-                               for k, (dims, dtype, fill) in _PER_MEMBER.items()} | statics,
+                               for k, (dims, dtype, fill) in per_member.items()} | statics,
                               coords=coords, attrs=attrs)
         template.to_zarr(store, mode="w", compute=False, zarr_format=2)  # see results.save_ensemble
         # q0, p0 and the coordinates now; the per-member results as their chunks arrive. Until its chunk is
@@ -825,15 +860,15 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
             rows = out["q"].shape[1]
             messages.update(out["messages"])
             if store is None:
-                for k in _PER_MEMBER:
+                for k in per_member:
                     target = arrays[k]
-                    if target.ndim >= 2 and _PER_MEMBER[k][0][:1] == ("time",):
+                    if target.ndim >= 2 and per_member[k][0][:1] == ("time",):
                         target[a:b, :rows] = out[k]
                     else:
                         target[a:b] = out[k]
             else:
                 part = {}
-                for k, (dims, dtype, fill) in _PER_MEMBER.items():
+                for k, (dims, dtype, fill) in per_member.items():
                     value = np.full((b - a, *shape(dims)[1:]), fill, dtype=dtype)
                     if dims[:1] == ("time",):
                         value[:, :rows] = out[k]
@@ -875,7 +910,7 @@ def sweep(spec: Mapping[str, Any], grid: Mapping[str, Any], *, client=None, chun
         group.attrs["cancelled"] = attrs["cancelled"]
         zarr.consolidate_metadata(str(store))  # open_zarr reads the consolidated copy of the attributes
         return xr.open_zarr(store)
-    data = {k: (("member", *dims), arrays[k]) for k, (dims, _, _) in _PER_MEMBER.items()}
+    data = {k: (("member", *dims), arrays[k]) for k, (dims, _, _) in per_member.items()}
     data["status"] = (("member",), arrays["status"], {"flag_values": list(range(len(STATUSES))),
                                                       "flag_meanings": " ".join(STATUSES)})
     return xr.Dataset(data | statics, coords=coords, attrs=attrs)

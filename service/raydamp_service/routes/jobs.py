@@ -30,7 +30,7 @@ from ..kinds.jobs import JobRecord, JobStore
 from ..schemas import JobCreated, JobList, JobListItem, JobSpec, JobStatus, JobView, Trajectory
 from ..tasks.runner import Runner
 from ..tasks.store import FINAL_STATUSES
-from ..trajectories.downloads import draw_plot, write_file
+from ..trajectories.downloads import draw_plot, events_file, write_file
 from ..trajectories.stream import FetchLease, Selection, read_arrays, trajectory_chunks
 from .tasks import RunnerDep, SettingsDep, StoreDep, Tasks, check_limit, checks_busy, invalid
 
@@ -198,6 +198,31 @@ def _trajectory_file(record: JobRecord, store: JobStore, request: Request, setti
         connection.close()
     return TimedFileResponse(path, media_type=media_type, background=BackgroundTask(download.release),
                              headers={"Content-Disposition": f'attachment; filename="{record.id}-{path.name}"'},
+                             send_seconds=settings.send_timeout_seconds, min_rate=settings.min_send_bytes_per_second)
+
+
+@router.get("/{job_id}/events.csv", response_class=Response,
+            responses={**_NOT_FOUND, 200: {"content": {"text/csv": {}}, "description": "the events table as CSV"},
+                       409: {"description": "the job has no trajectory (yet), or watched no events"}})
+def get_events(job_id: str, store: StoreDep, settings: SettingsDep) -> Response:
+    """The job's events table: one line per crossing (name, t, direction, and q, p at the saved coordinates for
+    a model of at most 8 coordinates), the first 1000 crossings as the summary lists them."""
+    record = JOBS.existing(store, job_id)
+    spec = _spec(record)
+    if spec.events is None:
+        raise HTTPException(409, detail=f"job {record.id} watched no events (its spec has no \"events\")")
+    connection, stored = _opened(record, store)
+    directory = Path(tempfile.mkdtemp(prefix="raydamp-download-"))
+    download = FetchLease(None, directory)
+    try:
+        path = events_file(record, spec, connection, stored, directory)
+    except BaseException:
+        download.release()
+        raise
+    finally:
+        connection.close()
+    return TimedFileResponse(path, media_type="text/csv", background=BackgroundTask(download.release),
+                             headers={"Content-Disposition": f'attachment; filename="{record.id}-events.csv"'},
                              send_seconds=settings.send_timeout_seconds, min_rate=settings.min_send_bytes_per_second)
 
 

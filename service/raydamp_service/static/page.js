@@ -512,8 +512,27 @@ function drawDisplacement(job, trajectory, names) {
   const select = $("displacement-dof");
   const k = Number(select.value);
   Plotly.newPlot("plot-displacement", [{ x: trajectory.t, y: column(trajectory.q, k), mode: "lines",
-    name: `${plotlyText(names[k])}(t), ${label(job)}` }],
+    name: `${plotlyText(names[k])}(t), ${label(job)}` }, ...eventMarkers(job, trajectory, k)],
   layout(`displacement ${plotlyText(names[k])}(t)`, "t", plotlyText(names[k]), { showlegend: false }), config);
+}
+
+// The job's event crossings (the summary's first 1000) as markers on q_k(t): at the crossing's own q where
+// the summary lists it (a model of at most 8 coordinates), else on the line between the saved points.
+function eventMarkers(job, trajectory, k) {
+  const events = job.summary && job.summary.events;
+  if (!events || !events.t.length) return [];
+  const saved = Array.isArray(job.spec.save_dofs) ? job.spec.save_dofs[k] : k;
+  const onLine = (t) => {
+    const times = trajectory.t;
+    const i = times.findIndex((s) => s >= t);
+    if (i === -1) return trajectory.q[times.length - 1][k];
+    if (i === 0) return trajectory.q[0][k];
+    const s = (t - times[i - 1]) / (times[i] - times[i - 1]);
+    return (1 - s) * trajectory.q[i - 1][k] + s * trajectory.q[i][k];
+  };
+  const y = events.q ? events.q.map((row) => row[saved]) : events.t.map(onLine);
+  return [{ x: events.t, y, mode: "markers", name: "events", text: events.name.map(plotlyText),
+    hovertemplate: "%{text}: t = %{x}<extra></extra>", marker: { symbol: "x", size: 9, color: "#d62728" } }];
 }
 
 function showDisplacement(job, trajectory, names) {

@@ -12,12 +12,14 @@ import numpy as np
 
 import raydamp
 from raydamp.jobs import JobSpec
+from raydamp.results.event_table import EventTable
 from raydamp.results.io import write_solution
+from raydamp.results.io.dataset import events_csv
 
 from .arrays import SAVED, StoredTrajectory, TrajectoryArrays
 from .stream import Selection, read_arrays, read_column
 
-__all__ = ["draw_plot", "stored_solution", "write_file"]
+__all__ = ["draw_plot", "events_file", "stored_solution", "write_file"]
 
 MEDIA_TYPES = {"csv": "text/csv", "npz": "application/octet-stream", "netcdf": "application/x-netcdf"}
 SUFFIXES = {"csv": ".csv", "npz": ".npz", "netcdf": ".nc"}
@@ -37,7 +39,22 @@ def stored_solution(record, arrays: TrajectoryArrays, spec: JobSpec) -> raydamp.
         method=summary.get("method") or record.spec.get("method") or "3s", tableau=summary.get("tableau"),
         composition=summary.get("composition"), h=spec.h, max_momentum_drift=float(drift) if drift is not None else 0.0,
         wall_time=float(summary.get("wall_time", 0.0)), origin=provenance,
-        dofs=None if spec.save_dofs is None else np.asarray(spec.save_dofs, dtype=np.int64))
+        dofs=None if spec.save_dofs is None else np.asarray(spec.save_dofs, dtype=np.int64),
+        events=stored_events(summary, spec, arrays.q.shape[1]))
+
+
+def stored_events(summary: dict, spec: JobSpec, saved_width: int) -> EventTable | None:
+    """The job's events table as its summary lists it (the first MAX_SUMMARY_EVENTS crossings; q and p for a
+    small model, else NaN), or None for a job without events."""
+    if spec.events is None or summary.get("events") is None:
+        return None
+    listed = summary["events"]
+    names = [e.name or f"event{i}" for i, e in enumerate(spec.events)]
+    if listed.get("q"):
+        dim = len(listed["q"][0])
+    else:  # NaN columns wide enough for the saved coordinates' indices
+        dim = max(spec.save_dofs) + 1 if spec.save_dofs else saved_width
+    return EventTable.from_summary(names, listed, dim)
 
 
 def write_file(record, spec: JobSpec, connection: sqlite3.Connection, stored: StoredTrajectory,
@@ -55,6 +72,17 @@ def write_file(record, spec: JobSpec, connection: sqlite3.Connection, stored: St
     path = directory / f"trajectory{SUFFIXES[fmt]}"
     write_solution(path, fmt, head, read, len(selection))
     return path, MEDIA_TYPES[fmt]
+
+
+def events_file(record, spec: JobSpec, connection: sqlite3.Connection, stored: StoredTrajectory,
+                directory: Path) -> Path:
+    """The job's events table as CSV (name, t, direction, q_<name>..., p_<name>... at the saved coordinates),
+    written in directory. spec: the record's, validated."""
+    head = stored_solution(record, read_arrays(connection, stored, Selection(0, 1, 1)), spec)
+    names, rows = events_csv(head)
+    path = directory / "events.csv"
+    path.write_text("\n".join([",".join(names), *(",".join(row) for row in rows)]) + "\n")
+    return path
 
 
 def draw_plot(record, arrays: TrajectoryArrays, spec: JobSpec, kind: str,

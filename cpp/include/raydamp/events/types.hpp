@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "raydamp/system/compiled_function.hpp"
@@ -19,9 +20,26 @@ struct EventSlot {
 
 // One event: which zeros of its g count, and what they do.
 struct EventFunction {
+  // {direction, terminal, name}: what every event has; the optional parts below are set by name.
+  EventFunction(int direction_ = 0, bool terminal_ = false, std::string name_ = {})
+      : direction(direction_), terminal(terminal_), name(std::move(name_)) {}
   int direction = 0;     // +1: g rising through 0, -1: falling, 0: both
   bool terminal = false;  // the run ends at the first such crossing
   std::string name;
+  // Where g is affine in t, q and p: g = constant + sum of coefficient * input over terms (each input t,
+  // q_i or p_i), and dg/dt = the sum over the inputs' rates (1, v_i, f_i). The loop then evaluates it
+  // without the compiled call, and on the step's interpolant g is the cubic Hermite of its values and
+  // rates at the step's ends, which bounds it without evaluating it inside the step.
+  struct Term {
+    EventSlot::Kind kind = EventSlot::Kind::t;
+    int index = 0;
+    double coefficient = 0.0;
+  };
+  bool affine = false;
+  double constant = 0.0;
+  std::vector<Term> terms;
+  // Each crossing landed on g = 0 by Hénon's step (events/henon.hpp), not read off the interpolant.
+  bool henon = false;
 };
 
 // Every event's g(t, q, p) in one function compiled from their expressions (one call per step end,
@@ -32,6 +50,11 @@ struct EventSet {
   std::vector<EventSlot> slots;
   std::vector<EventFunction> events;
   bool empty() const { return events.empty(); }
+  bool all_affine() const {
+    for (const EventFunction& e : events)
+      if (!e.affine) return false;
+    return !events.empty();
+  }
   // Whether any g reads p (then the force at every step end is computed, for p's interpolant).
   bool reads_momenta() const {
     for (const EventSlot& s : slots)

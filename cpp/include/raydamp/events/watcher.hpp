@@ -20,14 +20,19 @@
 #include <utility>
 #include <vector>
 
+#include "raydamp/events/henon.hpp"
 #include "raydamp/events/hermite.hpp"
 #include "raydamp/events/types.hpp"
 #include "raydamp/run_types.hpp"
 
 #if defined(__GNUC__) || defined(__clang__)
 #define RAYDAMP_NOINLINE __attribute__((noinline))
+// Out of line, with everything it calls inlined except what is marked RAYDAMP_NOINLINE: the per-step
+// path is one call, and calls through the module's PLT stay on the rare paths.
+#define RAYDAMP_NOINLINE_FLAT __attribute__((noinline, flatten))
 #else
 #define RAYDAMP_NOINLINE
+#define RAYDAMP_NOINLINE_FLAT
 #endif
 
 namespace raydamp {
@@ -44,7 +49,9 @@ class EventWatcher {
         dense_(spec.dense ? &result.dense : nullptr), log_(result.events), on_(set_ != nullptr || spec.dense) {
     if (!on_) return;
     n_ = model.size();
-    for (Vec* v : {&q0_, &p0_, &v0_, &f0_, &q1_, &p1_, &v1_, &f1_, &grad_, &rate_, &fa_, &fb_}) v->setZero(n_);
+    for (Vec* v : {&q0_, &p0_, &v0_, &f0_, &q1_, &p1_, &v1_, &f1_, &grad_, &rate_, &fa_, &fb_, &land_q_,
+                   &land_p_})
+      v->setZero(n_);
     log_.n = n_;
     forces_ = spec.dense;
     if (set_) {
@@ -59,6 +66,18 @@ class EventWatcher {
         if (s.kind != Kind::t && (s.index < 0 || s.index >= n_))
           throw std::invalid_argument("events: g reads coordinate " + std::to_string(s.index) +
                                       ", not one of the model's 0.." + std::to_string(n_ - 1));
+      for (const EventFunction& f : events)
+        for (const EventFunction::Term& term : f.terms)
+          if (term.kind != Kind::t && (term.index < 0 || term.index >= n_))
+            throw std::invalid_argument("events: g reads coordinate " + std::to_string(term.index) +
+                                        ", not one of the model's 0.." + std::to_string(n_ - 1));
+      affine_ = set_->all_affine();
+      for (const EventFunction& f : events)
+        if (f.henon) {
+          if (f.terminal)
+            throw std::invalid_argument("events: Hénon's step refines a section's points, not a terminal event");
+          henon_.resize(n_);
+        }
       forces_ = forces_ || set_->reads_momenta();
       in_.assign(set_->slots.size(), 0.0);
       out_.assign(2 * events.size(), 0.0);
@@ -122,7 +141,7 @@ class EventWatcher {
   }
 
   template <class Rec>
-  RAYDAMP_NOINLINE void observe(const State<Dim>& x, long i, double t, const Rec& rec) {
+  RAYDAMP_NOINLINE_FLAT void observe(const State<Dim>& x, long i, double t, const Rec& rec) {
     // A state that is not finite ends the run (dense output ends at the last finite one); a block replayed
     // to find that step (integrate.hpp) runs steps already observed again, which add nothing.
     if (i <= step_ || !x.all_finite()) return;
@@ -151,6 +170,22 @@ class EventWatcher {
     model_.mass.velocity(x.p, v1_);
     if (forces_) force(q1_, p1_, t, f1_);
     if (!set_) return;
+    if (affine_) {  // no compiled call: g and dg/dt from their coefficients
+      const std::vector<EventFunction>& events = set_->events;
+      for (std::size_t e = 0; e < events.size(); ++e) {
+        double g = events[e].constant, rate = 0.0;
+        for (const EventFunction::Term& term : events[e].terms) {
+          switch (term.kind) {
+            case Kind::q: g += term.coefficient * q1_[term.index], rate += term.coefficient * v1_[term.index]; break;
+            case Kind::p: g += term.coefficient * p1_[term.index], rate += term.coefficient * f1_[term.index]; break;
+            default: g += term.coefficient * t, rate += term.coefficient; break;
+          }
+        }
+        g1_[e] = g;
+        dg1_[e] = rate;
+      }
+      return;
+    }
     const std::vector<EventSlot>& slots = set_->slots;
     for (std::size_t k = 0; k < slots.size(); ++k) in_[k] = end_value(slots[k], f1_);
     set_->fn(out_.data(), in_.data());
@@ -184,6 +219,27 @@ class EventWatcher {
     const std::vector<EventSlot>& slots = set_->slots;
     const double h = t1_ - t0_;
     const hermite::Weights w = hermite::value(s), d = hermite::slope(s);
+    if (affine_) {
+      const EventFunction& f = set_->events[e];
+      double g = which == 0 ? f.constant : 0.0;
+      for (const EventFunction::Term& term : f.terms) {
+        const int j = term.index;
+        double x;
+        switch (term.kind) {
+          case Kind::q:
+            x = which == 0 ? hermite::at(w, q0_[j], v0_[j], q1_[j], v1_[j], h)
+                           : hermite::rate_at(d, q0_[j], v0_[j], q1_[j], v1_[j], h);
+            break;
+          case Kind::p:
+            x = which == 0 ? hermite::at(w, p0_[j], f0_[j], p1_[j], f1_[j], h)
+                           : hermite::rate_at(d, p0_[j], f0_[j], p1_[j], f1_[j], h);
+            break;
+          default: x = which == 0 ? (s == 1.0 ? t1_ : t0_ + s * h) : 1.0; break;
+        }
+        g += term.coefficient * x;
+      }
+      return g;
+    }
     for (std::size_t k = 0; k < slots.size(); ++k) {
       const int j = slots[k].index;
       switch (slots[k].kind) {
@@ -230,18 +286,33 @@ class EventWatcher {
     double s;
     std::size_t e;
     int direction;
+    int from;  // the step's end (0: start, 1: end) between which and the crossing g is monotone
   };
 
   // The crossings of step [t0, t1], in time order, into the log; a terminal one stops the run there.
   void detect() {
     // The common step, scanned without a branch per event: every g and its rate keep their signs and
-    // no g is zero. (A NaN may pass either way: the loop below skips it.)
+    // no g is zero. (A NaN may pass either way: locate() skips it.)
     const std::size_t m = g1_.size();
     bool maybe = false;
     for (std::size_t e = 0; e < m; ++e)
       maybe |= (std::signbit(g0_[e]) != std::signbit(g1_[e])) | (std::signbit(dg0_[e]) != std::signbit(dg1_[e])) |
                (g0_[e] == 0.0) | (g1_[e] == 0.0);
-    if (!maybe) return;
+    if (maybe) locate();
+  }
+
+  // On an affine g the interpolant is the cubic Hermite c(s) of g and h dg/dt at the step's ends, and
+  // c(s) - chord(s) = s (1 - s) ((1 - s) a - s b), a = h g0' - (g1 - g0), b = h g1' - (g1 - g0): within
+  // max(|a|, |b|) / 4 of the chord. With g0 and g1 of one sign and both further from 0 than that (with
+  // a margin for rounding), c has no zero in the step, and the extremum need not be found.
+  static bool keeps_sign(double g0, double g1, double dg0, double dg1, double h) {
+    const double chord = g1 - g0, a = std::abs(h * dg0 - chord), b = std::abs(h * dg1 - chord);
+    const double scale = std::abs(g0) + std::abs(g1) + std::abs(h * dg0) + std::abs(h * dg1);
+    return std::min(std::abs(g0), std::abs(g1)) > 0.25 * std::max(a, b) + 64.0 * DBL_EPSILON * scale;
+  }
+
+  RAYDAMP_NOINLINE void locate() {
+    const std::size_t m = g1_.size();
     found_.clear();
     for (std::size_t e = 0; e < m; ++e) {
       const double ga = g0_[e], gb = g1_[e];
@@ -253,6 +324,7 @@ class EventWatcher {
       int points = 2;
       if (ga != 0.0 && ga_negative == (gb < 0.0) && dg0_[e] != 0.0 && dg1_[e] != 0.0 &&
           rate_negative != (dg1_[e] < 0.0)) {
+        if (set_->events[e].affine && keeps_sign(ga, gb, dg0_[e], dg1_[e], t1_ - t0_)) continue;
         s[1] = root(e, 0.0, 1.0, dg0_[e], dg1_[e], 1);
         g[1] = on_step(e, s[1], 0);
         points = std::isfinite(g[1]) ? 3 : 2;
@@ -263,7 +335,8 @@ class EventWatcher {
         const int direction = g[k] < 0.0 ? 1 : -1;
         const int wanted = set_->events[e].direction;
         if (wanted != 0 && wanted != direction) continue;
-        found_.push_back({root(e, s[k], s[k + 1], g[k], g[k + 1], 0), e, direction});
+        const int from = points == 3 ? k : (std::abs(ga) <= std::abs(gb) ? 0 : 1);
+        found_.push_back({root(e, s[k], s[k + 1], g[k], g[k + 1], 0), e, direction, from});
       }
     }
     if (found_.empty()) return;
@@ -296,6 +369,62 @@ class EventWatcher {
     log_.t.push_back(t);
     for (int j = 0; j < n_; ++j) log_.q.push_back(hermite::at(w, q0_[j], v0_[j], q1_[j], v1_[j], h));
     for (int j = 0; j < n_; ++j) log_.p.push_back(hermite::at(w, p0_[j], (*fa)[j], p1_[j], (*fb)[j], h));
+    if (set_->events[f.e].henon) land(f);
+  }
+
+  // The last row of the log becomes Hénon's landing on g = 0 from the stepped state at the crossing
+  // step's end f.from, where it lands (a finite point with its time inside the step, give or take a
+  // rounding); else it stays the interpolant's.
+  RAYDAMP_NOINLINE void land(const Found& f) {
+    henon::Work<Vec>& w = henon_;
+    double t = f.from == 0 ? t0_ : t1_;
+    Vec& q = land_q_;
+    Vec& p = land_p_;
+    q = f.from == 0 ? q0_ : q1_;
+    p = f.from == 0 ? p0_ : p1_;
+    auto rates = [&](double ts, const Vec& qs, const Vec& ps, Vec& v, Vec& force_out) {
+      model_.mass.velocity(ps, v);
+      force(qs, ps, ts, force_out);
+      return value_at(f.e, ts, qs, ps, v, force_out);
+    };
+    const double h = t1_ - t0_, slack = 4.0 * DBL_EPSILON * std::max(std::abs(t1_), h);
+    if (!henon::land(t, q, p, w, rates, 4) || !(t >= t0_ - slack && t <= t1_ + slack) || !q.allFinite() ||
+        !p.allFinite())
+      return;
+    const std::size_t row = log_.t.size() - 1;
+    log_.t[row] = t;
+    std::copy(q.data(), q.data() + n_, log_.q.begin() + static_cast<std::ptrdiff_t>(row * n_));
+    std::copy(p.data(), p.data() + n_, log_.p.begin() + static_cast<std::ptrdiff_t>(row * n_));
+  }
+
+  // g and dg/dt of event e at the state (t, q, p) with v = M^{-1} p and f = pdot there.
+  std::pair<double, double> value_at(std::size_t e, double t, const Vec& q, const Vec& p, const Vec& v,
+                                     const Vec& f) {
+    if (affine_) {
+      const EventFunction& fn = set_->events[e];
+      double g = fn.constant, rate = 0.0;
+      for (const EventFunction::Term& term : fn.terms) {
+        switch (term.kind) {
+          case Kind::q: g += term.coefficient * q[term.index], rate += term.coefficient * v[term.index]; break;
+          case Kind::p: g += term.coefficient * p[term.index], rate += term.coefficient * f[term.index]; break;
+          default: g += term.coefficient * t, rate += term.coefficient; break;
+        }
+      }
+      return {g, rate};
+    }
+    const std::vector<EventSlot>& slots = set_->slots;
+    for (std::size_t k = 0; k < slots.size(); ++k) {
+      const int j = slots[k].index;
+      switch (slots[k].kind) {
+        case Kind::t: in_[k] = t; break;
+        case Kind::q: in_[k] = q[j]; break;
+        case Kind::p: in_[k] = p[j]; break;
+        case Kind::v: in_[k] = v[j]; break;
+        case Kind::f: in_[k] = f[j]; break;
+      }
+    }
+    set_->fn(out_.data(), in_.data());
+    return {out_[2 * e], out_[2 * e + 1]};
   }
 
   void push_dense() {
@@ -318,12 +447,13 @@ class EventWatcher {
   DenseRecord* dense_;
   EventLog& log_;
   const bool on_;
-  bool forces_ = false, terminal_ = false, stopped_ = false;
+  bool forces_ = false, terminal_ = false, stopped_ = false, affine_ = false;
   int n_ = 0;
   long step_ = -1;
   std::size_t stop_event_ = 0;
   double t0_ = 0.0, t1_ = 0.0, t_stop_ = 0.0;
-  Vec q0_, p0_, v0_, f0_, q1_, p1_, v1_, f1_, grad_, rate_, fa_, fb_;
+  Vec q0_, p0_, v0_, f0_, q1_, p1_, v1_, f1_, grad_, rate_, fa_, fb_, land_q_, land_p_;
+  henon::Work<Vec> henon_;
   std::vector<double> in_, g0_, g1_, dg0_, dg1_;
   std::vector<double> out_;
   std::vector<Found> found_;

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["to_xarray", "FORMATS"]
+__all__ = ["to_xarray", "event_columns", "events_csv", "FORMATS"]
 
 FORMATS = (".nc", ".npz", ".csv")
 _FORMAT_OF_SUFFIX = dict(zip(FORMATS, ("netcdf", "npz", "csv")))
@@ -34,6 +34,8 @@ def _attributes(sol: Any) -> dict[str, Any]:
             value = -1 if key == "failed_step" else ""
         attrs[key] = value
     attrs["raydamp_version"] = provenance.get("raydamp_version", "")
+    if getattr(sol, "events", None) is not None:
+        attrs["event_names"] = json.dumps(list(sol.events.names))
     return attrs
 
 
@@ -54,7 +56,51 @@ def to_xarray(sol: Any):
     if sol.load_work is not None:
         data["load_work"] = (("time",), sol.load_work, {"long_name": "load work W_f(t)"})
     coords = {"t": (("time",), sol.t), "dof": list(sol.coordinates), "momentum_map": list(sol.momentum_names)}
+    for name, (dims, values, attrs) in event_columns(sol).items():
+        data[name] = (dims, values, attrs)
     return xr.Dataset(data, coords=coords, attrs=_attributes(sol))
+
+
+def event_columns(sol: Any) -> dict[str, tuple[tuple[str, ...], np.ndarray, dict[str, str]]]:
+    """The run's events table (``sol.events``, when the run watched events) as variables along a
+    ``crossing`` dimension: event_name, event_t, event_direction, and event_q, event_p at the saved
+    coordinates (dims crossing, dof). The event names, crossed or not, are the attribute event_names."""
+    table = getattr(sol, "events", None)
+    if table is None or len(table) == 0:  # no crossing: the attribute event_names alone
+        return {}
+    dofs = slice(None) if sol.dofs is None else np.asarray(sol.dofs)
+    width = len(sol.coordinates)
+    q = np.asarray(table.q, dtype=float).reshape(len(table), -1)[:, dofs].reshape(len(table), width)
+    p = np.asarray(table.p, dtype=float).reshape(len(table), -1)[:, dofs].reshape(len(table), width)
+    return {"event_name": (("crossing",), np.array([str(n) for n in table.name], dtype=str).astype(object),
+                           {"long_name": "the event crossed"}),
+            "event_t": (("crossing",), np.asarray(table.t, dtype=float), {"long_name": "crossing time"}),
+            "event_direction": (("crossing",), np.asarray(table.direction, dtype=np.int8),
+                                {"long_name": "+1 rising through 0, -1 falling"}),
+            "event_q": (("crossing", "dof"), q, {"long_name": "positions at the crossing"}),
+            "event_p": (("crossing", "dof"), p, {"long_name": "momenta at the crossing"})}
+
+
+def events_csv(sol: Any) -> tuple[list[str], list[list[str]]]:
+    """The events table as CSV lines: a header (name, t, direction, q_<name>..., p_<name>...) and one row per
+    crossing, every number as %.17g."""
+    columns = event_columns(sol)
+    names = ["name", "t", "direction", *(f"q_{c}" for c in sol.coordinates), *(f"p_{c}" for c in sol.coordinates)]
+    if not columns:
+        return names, []
+    rows = []
+    for i, name in enumerate(columns["event_name"][1]):
+        numbers = [columns["event_t"][1][i], *columns["event_q"][1][i], *columns["event_p"][1][i]]
+        text = [f"{x:.17g}" for x in numbers]
+        rows.append([_csv_text(str(name)), text[0], str(int(columns["event_direction"][1][i])), *text[1:]])
+    return names, rows
+
+
+def _csv_text(text: str) -> str:
+    """A CSV field: quoted where it holds a comma, a quote or a line break."""
+    if any(c in text for c in ',"\n\r'):
+        return '"' + text.replace('"', '""') + '"'
+    return text
 
 
 def _csv_table(sol: Any) -> tuple[list[str], np.ndarray]:

@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from ..event_table import EventTable
 from ..solution import Solution
 from .dataset import _SCALARS, FORMATS, to_xarray
 
@@ -21,7 +22,7 @@ def from_xarray(ds) -> Solution:
                     momentum=np.asarray(ds["momentum"].values, float).reshape(ds.sizes["time"], -1),
                     work=np.asarray(ds["work"].values, float) if "work" in ds else None, origin=provenance,
                     load_work=np.asarray(ds["load_work"].values, float) if "load_work" in ds else None,
-                    dofs=_dofs(provenance), **_scalars_from(dict(ds.attrs)))
+                    dofs=_dofs(provenance), events=_events(ds, ds.attrs), **_scalars_from(dict(ds.attrs)))
 
 
 def from_npz(path) -> Solution:
@@ -34,7 +35,22 @@ def from_npz(path) -> Solution:
                         momentum=data["momentum"].reshape(rows, -1),
                         work=data["work"] if "work" in data else None, origin=provenance,
                         load_work=data["load_work"] if "load_work" in data else None,
-                        dofs=_dofs(provenance), **_scalars_from(attrs))
+                        dofs=_dofs(provenance), events=_events(data, attrs), **_scalars_from(attrs))
+
+
+def _events(data, attrs: dict[str, Any]) -> EventTable | None:
+    """The events table written beside the trajectory (dataset.event_columns), or None: q and p are at the
+    saved coordinates."""
+    if "event_names" not in attrs:
+        return None
+    names = json.loads(attrs["event_names"])
+    if "event_t" not in data:
+        return EventTable(names, np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0), np.zeros((0, 0)),
+                          np.zeros((0, 0)))
+    crossed = [str(n) for n in np.asarray(data["event_name"]).tolist()]
+    return EventTable(names, np.array([names.index(n) for n in crossed], dtype=np.int64),
+                      np.asarray(data["event_direction"], np.int64), np.asarray(data["event_t"], float),
+                      np.asarray(data["event_q"], float), np.asarray(data["event_p"], float))
 
 
 def _dofs(provenance: dict[str, Any]) -> np.ndarray | None:

@@ -25,7 +25,7 @@ from typing import IO, Any
 
 import numpy as np
 
-from .dataset import _FORMAT_OF_SUFFIX, FORMATS, _attributes, _csv_table, to_xarray
+from .dataset import _FORMAT_OF_SUFFIX, FORMATS, _attributes, _csv_table, event_columns, to_xarray
 
 __all__ = ["write_solution", "save", "SLICE_BYTES", "WRITE_FORMATS", "ReadRows"]
 
@@ -119,6 +119,9 @@ def _write_npz(target: Target, head: Any, read: ReadRows, bounds: list[tuple[int
                     "shape": (rows,) if width is None else (rows, width)})
                 for start, stop in bounds:
                     member.write(np.ascontiguousarray(read(column, start, stop), dtype="<f8").tobytes())
+        for name, (_, values, _) in event_columns(head).items():  # the events table, in memory already
+            with out.open(f"{name}.npy", "w", force_zip64=True) as member:
+                np.lib.format.write_array(member, values.astype(str) if name == "event_name" else values)
         with out.open("attrs.npy", "w", force_zip64=True) as member:
             np.lib.format.write_array(member, np.array(json.dumps(_attributes(head), allow_nan=True)))
 
