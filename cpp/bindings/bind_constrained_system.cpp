@@ -64,13 +64,13 @@ void bind_constrained_kind(py::module_& m, const char* name) {
          const Eigen::VectorXd& q0, const Eigen::VectorXd& p0, double h, long n_steps, double h_last, long save_every,
          bool track_work, py::object progress, CancelToken* cancel, const std::vector<int>& save_dofs,
          const BoundLoad* load, double temperature, std::uint64_t seed, std::uint64_t stream, double divergence,
-         const EventSet* events, bool dense) {
+         const EventSet* events, bool dense, const EnvelopeSpec* envelope) {
         ConstraintWork& w = constraint_work();
         w.prepare(model.constraints);
         w.track = true;
         py::dict out = run<Model>(model, method, tableau, composition, q0, p0, h, n_steps, h_last, save_every,
                                   track_work, progress, cancel, save_dofs, load, temperature, seed, stream,
-                                  divergence, events, dense);
+                                  divergence, events, dense, envelope);
         w.track = false;
         if (w.failure.constraint >= 0) {
           if (out["status"].cast<std::string>() == status_name(Status::non_finite)) {
@@ -88,7 +88,7 @@ void bind_constrained_kind(py::module_& m, const char* name) {
       py::arg("cancel").none(true), py::arg("save_dofs") = std::vector<int>{},
       py::arg("load").none(true) = py::none(), py::arg("temperature") = 0.0, py::arg("seed") = 0,
       py::arg("stream") = 0, py::arg("divergence") = kDefaultDivergence, py::arg("events").none(true) = py::none(),
-      py::arg("dense") = false);
+      py::arg("dense") = false, py::arg("envelope").none(true) = py::none());
   // Every kind answers integrate_ensemble; this one refuses, naming why (its solve's scratch is per run).
   cls.def_static("integrate_ensemble", [](py::args, py::kwargs) -> py::dict {
     throw std::invalid_argument("system.constraints: a constrained System does not run as an ensemble yet; run its "
