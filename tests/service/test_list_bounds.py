@@ -53,7 +53,10 @@ EXAMPLES = [
                   "system": {"kind": "structure", "M": {"diagonal": [1.0, 1.0]}, "f": [1.0, 0.0],
                              "springs": [{"dofs": [0], "material": {"kind": "elastic_plastic", "k": 1.0, "fy": 1.0}},
                                          {"dofs": [0, 1], "material": {"kind": "elastic_plastic", "k": 1.0,
-                                                                      "fy": 1.0}}]}}),
+                                                                      "fy": 1.0}}]},
+                  "envelope": ["drift", "displacement"], "collapse": [1.0, 1.0]}),
+    ("/v1/jobs", {**_JOB, "initial_state": {"q": [1.0, 0.0], "p": [0.0, 0.0]},
+                  "system": {"coordinates": ["x", "y"], "potential": "y", "constraints": ["x^2 + y^2 - 1"]}}),
     ("/v1/sweeps", {"job": {**_JOB, "model": "damped_pendulum", "work": False}, "grid": {"eps": [0.1, 0.2]}}),
 ]
 

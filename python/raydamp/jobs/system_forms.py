@@ -146,8 +146,8 @@ class SystemInput(SystemKind):
     momenta: dict[Name, Expression] = Field(default_factory=dict, max_length=16,
                                             description="quantities tracked at every step; momenta are p_<coordinate>")
     name: str | None = Field(None, max_length=200)
-    constraints: list[Expression] = Field(
-        default_factory=list, max_length=128,
+    constraints: bounded(Expression, 128) = Field(
+        default_factory=list,
         description="holonomic constraints g_i(q), each held at 0 (rods, rigid links), run by RATTLE; fewer than n")
     constraint_tol: FiniteFloat = Field(
         1e-12, gt=0, lt=0.01, description="the constraint solve's tolerance, relative to each constraint's scale")
