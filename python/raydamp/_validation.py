@@ -153,6 +153,23 @@ def numeric_array(value) -> np.ndarray | None:
     return array if array.dtype.kind in "iuf" else None
 
 
+def values(name: str, value, *, minimum: float = 0.0, what: str | None = None) -> np.ndarray:
+    """A number or a vector of numbers as a float vector, each finite and > minimum (>= minimum when minimum is
+    not 0): periods, scales, target ductilities. `what` names one item in the empty-list message."""
+    array = numeric_array(value)
+    if array is None or array.ndim > 1:
+        raise ValueError(f"{name} must be a number or a vector of numbers, got {_short(value)}")
+    array = np.atleast_1d(array).astype(float)
+    if array.size == 0:
+        raise ValueError(f"{name}: empty; give at least one {what or name[:-1]}")
+    above = array > minimum if minimum == 0.0 else array >= minimum
+    bad = np.flatnonzero(~(np.isfinite(array) & above))
+    if bad.size:
+        bound = "> 0" if minimum == 0.0 else f">= {minimum:g}"
+        raise ValueError(f"{name} must be finite and {bound}, got {name}[{int(bad[0])}] = {float(array[bad[0]])!r}")
+    return array
+
+
 def real_array(name: str, value) -> np.ndarray:
     """An array of real numbers of any shape (a scipy.sparse matrix made dense), as floats. Only numbers:
     np.asarray(dtype=float) read "1" as 1.0, and failed on "x" or an object with a message naming nothing."""

@@ -14,7 +14,7 @@ import dataclasses
 import numpy as np
 
 from .. import _core
-from .._validation import _short, integer, numeric_array, real
+from .._validation import _short, integer, real, values
 from ..loads import Load
 from ..systems.materials import ElasticPlastic, Material
 from ..systems.yielding import Spring, Structure
@@ -232,16 +232,7 @@ def _largest_strength(search: _Search, period_of, target, elastic_sd, tolerance)
 
 
 def _ductility(ductility) -> np.ndarray:
-    array = numeric_array(ductility)
-    if array is None or array.ndim > 1:
-        raise ValueError(f"ductility must be a number or a vector of numbers, got {_short(ductility)}")
-    array = np.atleast_1d(array).astype(float)
-    if array.size == 0:
-        raise ValueError("ductility: empty; give at least one target ductility")
-    bad = np.flatnonzero(~(np.isfinite(array) & (array >= 1.0)))
-    if bad.size:
-        raise ValueError(f"ductility must be finite and >= 1, got ductility[{int(bad[0])}] = {float(array[bad[0]])!r}")
-    return array
+    return values("ductility", ductility, minimum=1.0, what="target ductility")
 
 
 def _material(material) -> Material:

@@ -6,7 +6,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from .._validation import _short, numeric_array, real
+from .._validation import _short, real, values
 from ..loads import GroundMotion, Load
 from .ensemble import integrate_ensemble
 from .envelope import limits
@@ -104,16 +104,7 @@ def _records(records) -> tuple[list, list[Load]]:
 
 
 def _scales(scales) -> np.ndarray:
-    array = numeric_array(scales)
-    if array is None or array.ndim > 1:
-        raise ValueError(f"scales must be a number or a vector of numbers, got {_short(scales)}")
-    array = np.atleast_1d(array).astype(float)
-    if array.size == 0:
-        raise ValueError("scales: empty; give at least one scale")
-    bad = np.flatnonzero(~(np.isfinite(array) & (array > 0)))
-    if bad.size:
-        raise ValueError(f"scales must be finite and > 0, got scales[{int(bad[0])}] = {float(array[bad[0]])!r}")
-    return array
+    return values("scales", scales)
 
 
 def _save_every(h, t_end) -> int:

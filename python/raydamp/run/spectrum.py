@@ -8,7 +8,7 @@ import os
 import numpy as np
 
 from .. import _core
-from .._validation import _short, numeric_array, real
+from .._validation import _short, real, values
 from ..loads import GroundMotion, Load
 from ..loads import terms as T
 
@@ -88,13 +88,4 @@ def _record(record) -> tuple[np.ndarray, np.ndarray, str]:
 
 
 def _periods(periods) -> np.ndarray:
-    array = numeric_array(periods)
-    if array is None or array.ndim > 1:
-        raise ValueError(f"periods must be a number or a vector of numbers, got {_short(periods)}")
-    array = np.atleast_1d(array).astype(float)
-    if array.size == 0:
-        raise ValueError("periods: empty; give at least one period")
-    bad = np.flatnonzero(~(np.isfinite(array) & (array > 0)))
-    if bad.size:
-        raise ValueError(f"periods must be finite and > 0, got periods[{int(bad[0])}] = {float(array[bad[0]])!r}")
-    return array
+    return values("periods", periods)
