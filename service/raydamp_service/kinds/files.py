@@ -5,14 +5,12 @@ from __future__ import annotations
 import functools
 import sqlite3
 import uuid
-from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
 from ..checks.uploads import ParsedFiles, RecordFileInfo
 from ..tasks.store import UNFINISHED_SQL, Database, now
 
-__all__ = ["FILES_TABLE", "FILE_COLUMNS_ADDED", "FileRecord", "FileStore", "file_resolver"]
+__all__ = ["FILES_TABLE", "FILE_COLUMNS_ADDED", "FileRecord", "FileStore"]
 
 # Columns a files table from before records lacks (JobStore._upgrade adds them): kind is matrix or record; format
 # mtx, at2, npy or columns (raydamp.loads.records.FORMATS); a record's time range and uniform sample interval.
@@ -62,6 +60,8 @@ class FileStore:
 
     @functools.cached_property
     def parsed_files(self) -> ParsedFiles:
+        """files(id) for raydamp.jobs.build_job: a stored upload, parsed once. An unknown id is a ValueError that
+        raydamp reports at the path that names it (system.K.file, load.file.id, ...)."""
         return ParsedFiles(self, self.PARSED_ENTRIES)
 
     def add_file(self, name: str, content: bytes, shape: tuple[int, int] = (0, 0), nnz: int = 0,
@@ -122,8 +122,3 @@ class FileStore:
             "ORDER BY seq LIMIT ?", (f'"{file_id}"', limit)).fetchall()
         return [row["id"] for row in rows]
 
-
-def file_resolver(store: FileStore) -> Callable[[str], Any]:
-    """files(id) for raydamp.jobs.build_job: a stored upload, parsed once. An unknown id is a ValueError that
-    raydamp reports at the path that names it (system.K.file, load.file.id, ...)."""
-    return store.parsed_files
