@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import functools
-import os
+import io
 import sqlite3
 import uuid
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import BinaryIO
 
 from ..checks.uploads import ParsedFiles, RecordFileInfo
@@ -71,14 +71,12 @@ class FileStore:
                  max_total_bytes: int = 0, *, record: RecordFileInfo | None = None) -> FileRecord | None:
         """Store an upload (its bytes, or a file of them): a matrix (its shape and nnz) or a record; None (nothing
         written) past max_total_bytes. It is written a piece at a time, never copied whole in memory."""
-        size = len(content) if isinstance(content, bytes) else os.fstat(content.fileno()).st_size
+        content = io.BytesIO(content) if isinstance(content, bytes) else content
+        size = content.seek(0, io.SEEK_END)
+        file = FileRecord(id=uuid.uuid4().hex, name=name, bytes=size, shape=tuple(shape), nnz=nnz, created_at=now())
         if record is not None:
-            file = FileRecord(id=uuid.uuid4().hex, name=name, bytes=size, nnz=0, created_at=now(),
-                              shape=(record.samples, record.columns), kind="record", format=record.format,
-                              t_start=record.t_start, t_end=record.t_end, dt=record.dt)
-        else:
-            file = FileRecord(id=uuid.uuid4().hex, name=name, bytes=size, shape=tuple(shape), nnz=nnz,
-                              created_at=now())
+            file = replace(file, shape=(record.samples, record.columns), nnz=0, kind="record", format=record.format,
+                           t_start=record.t_start, t_end=record.t_end, dt=record.dt)
         with self.db.transaction() as db:
             # Counted and inserted under the write lock. VALUES' zeroblob is written as zeros page by page (an INSERT
             # ... SELECT builds it whole in memory); the bytes then go into it a piece at a time.
@@ -91,13 +89,9 @@ class FileStore:
                 (file.id, name, size, *file.shape, file.nnz, file.created_at, size, file.kind, file.format,
                  file.t_start, file.t_end, file.dt))
             with db.blobopen("files", "content", row.lastrowid) as blob:
-                if isinstance(content, bytes):
-                    for start in range(0, size, _PIECE):
-                        blob.write(memoryview(content)[start:start + _PIECE])
-                else:
-                    content.seek(0)
-                    while piece := content.read(_PIECE):
-                        blob.write(piece)
+                content.seek(0)
+                while piece := content.read(_PIECE):
+                    blob.write(piece)
         return file
 
     def file(self, file_id: str) -> FileRecord | None:

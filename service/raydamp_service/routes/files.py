@@ -75,12 +75,9 @@ def upload_file(file: Annotated[UploadFile, File(description="a Matrix Market (.
                                            "input": _name(file.filename)}]) from None
         except ChecksBusy as busy:
             raise checks_busy(settings, busy) from None
-        if isinstance(info, RecordFileInfo):
-            record = store.add_file(_name(file.filename), spool, max_total_bytes=settings.max_stored_file_bytes,
-                                    record=info)
-        else:
-            record = store.add_file(_name(file.filename), spool, info.shape, info.nnz,
-                                    max_total_bytes=settings.max_stored_file_bytes)
+        matrix = not isinstance(info, RecordFileInfo)
+        record = store.add_file(_name(file.filename), spool, *((info.shape, info.nnz) if matrix else ()),
+                                max_total_bytes=settings.max_stored_file_bytes, record=None if matrix else info)
     if record is None:
         raise HTTPException(507, detail=f"the stored files would exceed max_stored_file_bytes = "
                             f"{settings.max_stored_file_bytes} bytes; delete files no longer needed")
