@@ -5,12 +5,15 @@ keep their memory?
 A job of 990,001 saved points is run; then `--concurrent` requests at once for its 3000 x 3000 phase plot (20,000
 points drawn, the most a plot draws), while a client polls /healthz every 20 ms. Prints, per checkout (give
 --root twice to compare two side by side in one run): the plots' wall time and statuses, the slowest /healthz
-answer while they were drawn, and the server process's resident memory before and after.
+answer while they were drawn, and the server process's resident memory before, at its peak (VmHWM, reset before
+the plots) and after. Issue 44's target for 40 at once: a refused plot (429) costs the server at most 10 MB, and
+/healthz answers within 0.5 s.
 
 It prints figures and exits 0 whatever they are (a benchmark, not a test).
 
     .venv/bin/python benchmarks/bench_service_plots.py
     .venv/bin/python benchmarks/bench_service_plots.py --root /tmp/old --root .   # before and after
+    .venv/bin/python benchmarks/bench_service_plots.py --concurrent 40            # issue 44's 40 at once
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ import concurrent.futures
 import re
 import tempfile
 import time
+from collections import Counter
 from pathlib import Path
 
 import httpx
@@ -29,8 +33,8 @@ JOB = {"model": "elastic_pendulum", "parameters": {"eps": 0.1}, "method": "3s", 
        "initial_state": {"q": [0.0, 1.55884573, -0.6], "p": [1.34164079, 0.0, 0.0]}}
 
 
-def rss_mb(pid: int) -> float:
-    return int(re.search(r"VmRSS:\s+(\d+)", Path(f"/proc/{pid}/status").read_text()).group(1)) / 1024
+def rss_mb(pid: int, field: str = "VmRSS") -> float:
+    return int(re.search(field + r":\s+(\d+)", Path(f"/proc/{pid}/status").read_text()).group(1)) / 1024
 
 
 def one(root: Path, concurrent_plots: int) -> None:
@@ -45,6 +49,7 @@ def one(root: Path, concurrent_plots: int) -> None:
                 client.get(f"/v1/jobs/{job_id}/plots/energy.png")  # matplotlib imported, wherever it draws
                 time.sleep(1.0)
                 before = rss_mb(process.pid)
+                Path(f"/proc/{process.pid}/clear_refs").write_text("5")  # the peak (VmHWM) from here
                 with HealthzPoller(base) as poller, concurrent.futures.ThreadPoolExecutor(concurrent_plots) as pool:
                     time.sleep(0.3)
                     poller.phase = "plots"
@@ -54,10 +59,13 @@ def one(root: Path, concurrent_plots: int) -> None:
                     took = time.perf_counter() - began
                     poller.phase = "after"
                 slowest, polls = poller.slowest("plots")
+                peak = rss_mb(process.pid, "VmHWM")
                 time.sleep(1.0)
-                print(f"  {concurrent_plots} plots at once: {took:5.2f} s, statuses {sorted(set(statuses))}; /healthz "
-                      f"slowest {1000 * slowest:7.1f} ms over {polls} polls; server RSS {before:6.0f} -> "
-                      f"{rss_mb(process.pid):6.0f} MB")
+                counts = Counter(statuses)
+                print(f"  {concurrent_plots} plots at once: {took:5.2f} s, statuses {dict(sorted(counts.items()))}; "
+                      f"/healthz slowest {1000 * slowest:7.1f} ms over {polls} polls; server RSS {before:6.0f} -> peak "
+                      f"{peak:6.0f} -> {rss_mb(process.pid):6.0f} MB (peak growth per refused plot: "
+                      f"{(peak - before) / max(1, concurrent_plots - counts[200]):.1f} MB)")
         finally:
             process.terminate()
             process.wait(timeout=30)

@@ -6,10 +6,13 @@ Location headers of the submissions (POST /v1/jobs -> GET/cancel/DELETE /v1/jobs
 and plots; the same for sweeps; POST /v1/files -> /v1/files/{file_id}).
 
 Before the run a few real jobs, a sweep and an uploaded file are created, so that the stateful phase and
-the fuzzed ids find finished results to read. Prints Schemathesis' summary, then the counts this issue asks
-for: requests answered, server errors (5xx), schema violations (answers whose status, content type,
-headers or body the schema does not declare), other check failures, and the tracebacks the server logged.
-Exits 1 if there was any server error or schema violation.
+the fuzzed ids find finished results to read. Alongside Schemathesis, for the same time, valid traffic
+(valid_jobs.py): random valid jobs of every system kind and load form, sweeps and uploads of every format,
+their results read back, which random generation from the schema rarely reaches. Prints Schemathesis'
+summary, the valid traffic's counts, then the counts issue 44 asks for: requests answered, server errors
+(5xx), schema violations (answers whose status, content type, headers or body the schema does not
+declare), other check failures, and the tracebacks the server logged. Exits 1 if there was any server
+error, schema violation, or valid job refused or failed.
 
     .venv/bin/python benchmarks/fuzz_service.py                # 10 minutes (make fuzz)
     .venv/bin/python benchmarks/fuzz_service.py --seconds 60   # FUZZ_SECONDS=60 make fuzz
@@ -24,6 +27,7 @@ import os
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from collections import Counter
 from pathlib import Path
@@ -31,6 +35,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import httpx  # noqa: E402
 from bench_service_load import start_server  # noqa: E402 - the benchmarks' own server starter
+from valid_jobs import ValidTraffic  # noqa: E402
 
 SMALL = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "h": 0.1, "n_steps": 200,
          "initial_state": {"q": [0.9 * math.pi], "p": [0.0]}}
@@ -96,8 +101,12 @@ def main() -> int:
                        "--no-color", "--suppress-health-check", "all", "--generation-database", ":memory:"]
             if args.seed is not None:
                 command += ["--seed", str(args.seed)]
+            valid = ValidTraffic(base, seed=args.seed or 0)
+            alongside = threading.Thread(target=valid.run, args=(args.seconds,))
             began = time.monotonic()
+            alongside.start()
             subprocess.run(command, check=False)
+            alongside.join()
             elapsed = time.monotonic() - began
         finally:
             process.terminate()
@@ -108,7 +117,8 @@ def main() -> int:
                            if '" ' in line and " HTTP/1.1" in line)
         server_errors = sum(n for status, n in answered.items() if status.startswith("5"))
         violations = sum(n for name, n in failures.items() if name in SCHEMA_CHECKS)
-        print(f"\nfuzz: {elapsed:.0f} s, {sum(answered.values())} requests answered, {cases} test cases")
+        print("\n" + valid.report())
+        print(f"fuzz: {elapsed:.0f} s, {sum(answered.values())} requests answered, {cases} test cases")
         print("answers by status: " + ", ".join(f"{status} x{n}" for status, n in sorted(answered.items())))
         print(f"server errors (5xx answers): {server_errors}; not_a_server_error failures: "
               f"{failures['not_a_server_error']}")
@@ -117,7 +127,7 @@ def main() -> int:
         others = {name: n for name, n in failures.items() if name not in SCHEMA_CHECKS | {"not_a_server_error"}}
         print("other check failures: " + (", ".join(f"{name} {n}" for name, n in sorted(others.items())) or "none"))
         print(f"tracebacks in the server's log: {server_log.count('Traceback (most recent call last)')}")
-        return 1 if server_errors or violations or failures["not_a_server_error"] else 0
+        return 1 if server_errors or violations or failures["not_a_server_error"] or valid.findings else 0
 
 
 if __name__ == "__main__":

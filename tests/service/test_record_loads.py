@@ -371,11 +371,11 @@ def test_a_temperature_without_a_seed_gets_one_stored_with_the_job(module_server
     assert isinstance(stored["seed"], int) and stored["temperature"] == 0.5
 
 
-def _rss_kib(pid: int) -> int:
+def _rss_kib(pid: int, field: str = "VmRSS") -> int:
     for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-        if line.startswith("VmRSS:"):
+        if line.startswith(field + ":"):
             return int(line.split()[1])
-    raise LookupError("VmRSS")
+    raise LookupError(field)
 
 
 def test_a_record_upload_is_parsed_outside_the_server(module_server):
@@ -406,3 +406,25 @@ def test_a_record_upload_is_parsed_outside_the_server(module_server):
     assert response.json()["samples"] == 2 * 2**20 // 5
     grown = (max(peak) - baseline) / 1024
     assert grown <= 3 * len(content) / 2**20 + 24, f"the server grew by {grown:.0f} MiB for a 2 MiB upload"
+
+
+def test_an_upload_is_never_held_whole_by_the_server(module_server):
+    """Issue 44, N1 measured (benchmarks/bench_upload_memory.py): a 64 MiB upload grew the server by 4 copies of it
+    (the bytes read, their pickle to the check process, SQLite's bound copy and its row). Now it is copied to a
+    file a piece at a time, read there by the check process, and stored from the file into a zeroblob: a refused
+    upload costs the server a few MiB, a stored one the row SQLite builds (the content is not its last column)."""
+    pid = module_server.process.pid
+    size = 16 * 2**20
+    stored = npy_bytes(np.full(size // 8 - 16, 0.01))  # 2.1e6 samples: within the 10^7 limit
+    refused = b"0\n" * 10_500_000  # 1.05e7 samples: past it
+    assert upload(module_server, "warm.npy", npy_bytes(np.ones(4))).status_code == 201
+    for name, content, status, bound in (("big.npy", stored, 201, 2.5 * len(stored) / 2**20 + 12),
+                                         ("big.csv", refused, 422, 12)):
+        before = _rss_kib(pid)
+        Path(f"/proc/{pid}/clear_refs").write_text("5")  # the peak (VmHWM) from here
+        response = upload(module_server, name, content)
+        assert response.status_code == status, response.text[:300]
+        grown = (_rss_kib(pid, "VmHWM") - before) / 1024
+        assert grown <= bound, f"{name}: the server grew by {grown:.0f} MiB for {len(content) / 2**20:.0f} MiB"
+    assert "10000000 samples" in response.json()["detail"][0]["msg"]
+

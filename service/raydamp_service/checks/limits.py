@@ -31,7 +31,7 @@ class RaydampCall:
 
 
 def build_call(spec: JobSpec, files=None) -> RaydampCall:
-    """The run of a job; files(id) opens an uploaded matrix (files.file_resolver)."""
+    """The run of a job; files(id) opens an uploaded matrix (FileStore.parsed_files)."""
     return RaydampCall(build_job(spec, files))
 
 

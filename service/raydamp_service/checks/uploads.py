@@ -7,13 +7,14 @@ import io
 import threading
 from collections import OrderedDict
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from raydamp.loads.records import describe_record, parse_record, record_format
 from raydamp.systems.matrix_market import read_header
 from raydamp.systems.structure import read_matrix
 
-__all__ = ["UploadError", "MatrixFileInfo", "RecordFileInfo", "check_upload", "ParsedFiles"]
+__all__ = ["UploadError", "MatrixFileInfo", "RecordFileInfo", "check_upload", "check_upload_file", "ParsedFiles"]
 
 
 class UploadError(ValueError):
@@ -60,6 +61,12 @@ def check_upload(content: bytes, name: str, *, max_dim: int) -> MatrixFileInfo |
     described = describe_record(record)
     return RecordFileInfo(format=fmt, samples=described["samples"], columns=1 if record.t is None else 2,
                           t_start=described["t_start"], t_end=described["t_end"], dt=described["dt"])
+
+
+def check_upload_file(path: str, name: str, *, max_dim: int) -> MatrixFileInfo | RecordFileInfo:
+    """check_upload of the bytes in a file the server wrote: an upload reaches a check process by its path, not
+    through the pool's pipe (a pickled copy of it in the server)."""
+    return check_upload(Path(path).read_bytes(), name, max_dim=max_dim)
 
 
 class ParsedFiles:

@@ -17,6 +17,7 @@ from fastapi.exception_handlers import http_exception_handler
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from fastapi.routing import APIRoute
+from starlette.concurrency import run_in_threadpool
 from starlette.exceptions import HTTPException
 from starlette.routing import compile_path
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
@@ -62,14 +63,22 @@ class HeadAsGet:
 class _UniqueKeysRequest(Request):
     async def json(self) -> Any:
         if not hasattr(self, "_json"):
+            body = await self.body()
             try:
-                self._json = json.loads(await self.body(), object_pairs_hook=unique_keys)
+                # A large body is parsed on a worker thread: its objects' hook gives the event loop the interpreter
+                # lock back every switch interval, where a parse on the loop held /healthz for all of it.
+                large = len(body) > self.app.state.settings.large_body_bytes
+                self._json = await run_in_threadpool(_parse, body) if large else _parse(body)
             except json.JSONDecodeError:
                 raise
             except ValueError as error:
                 # A key named twice, an integer of over 4300 digits: as a JSONDecodeError, FastAPI's 422.
                 raise json.JSONDecodeError(str(error), "", 0) from None
         return self._json
+
+
+def _parse(body: bytes) -> Any:
+    return json.loads(body, object_pairs_hook=unique_keys)
 
 
 class UniqueKeysRoute(APIRoute):

@@ -3,22 +3,23 @@
 from __future__ import annotations
 
 import functools
+import io
 import sqlite3
 import uuid
-from collections.abc import Callable
-from dataclasses import dataclass
-from typing import Any
+from dataclasses import dataclass, replace
+from typing import BinaryIO
 
 from ..checks.uploads import ParsedFiles, RecordFileInfo
 from ..tasks.store import UNFINISHED_SQL, Database, now
 
-__all__ = ["FILES_TABLE", "FILE_COLUMNS_ADDED", "FileRecord", "FileStore", "file_resolver"]
+__all__ = ["FILES_TABLE", "FILE_COLUMNS_ADDED", "FileRecord", "FileStore"]
 
 # Columns a files table from before records lacks (JobStore._upgrade adds them): kind is matrix or record; format
 # mtx, at2, npy or columns (raydamp.loads.records.FORMATS); a record's time range and uniform sample interval.
 FILE_COLUMNS_ADDED = {"kind": "TEXT NOT NULL DEFAULT 'matrix'", "format": "TEXT NOT NULL DEFAULT 'mtx'",
                       "t_start": "REAL", "t_end": "REAL", "dt": "REAL"}
 # Uploads as uploaded (content). rows, cols, nnz: a matrix's; a record's samples, columns and 0.
+_PIECE = 1 << 20  # bytes of an upload written at once
 FILES_TABLE = f"""
 CREATE TABLE IF NOT EXISTS files (seq INTEGER PRIMARY KEY AUTOINCREMENT, id TEXT NOT NULL UNIQUE, name TEXT NOT NULL,
     bytes INTEGER NOT NULL, rows INTEGER NOT NULL, cols INTEGER NOT NULL, nnz INTEGER NOT NULL,
@@ -62,27 +63,36 @@ class FileStore:
 
     @functools.cached_property
     def parsed_files(self) -> ParsedFiles:
+        """files(id) for raydamp.jobs.build_job: a stored upload, parsed once. An unknown id is a ValueError that
+        raydamp reports at the path that names it (system.K.file, load.file.id, ...)."""
         return ParsedFiles(self, self.PARSED_ENTRIES)
 
-    def add_file(self, name: str, content: bytes, shape: tuple[int, int] = (0, 0), nnz: int = 0,
+    def add_file(self, name: str, content: bytes | BinaryIO, shape: tuple[int, int] = (0, 0), nnz: int = 0,
                  max_total_bytes: int = 0, *, record: RecordFileInfo | None = None) -> FileRecord | None:
-        """Store an upload: a matrix (its shape and nnz) or a record; None (nothing written) past max_total_bytes."""
+        """Store an upload (its bytes, or a file of them): a matrix (its shape and nnz) or a record; None (nothing
+        written) past max_total_bytes. It is written a piece at a time, never copied whole in memory."""
+        content = io.BytesIO(content) if isinstance(content, bytes) else content
+        size = content.seek(0, io.SEEK_END)
+        file = FileRecord(id=uuid.uuid4().hex, name=name, bytes=size, shape=tuple(shape), nnz=nnz, created_at=now())
         if record is not None:
-            file = FileRecord(id=uuid.uuid4().hex, name=name, bytes=len(content), nnz=0, created_at=now(),
-                              shape=(record.samples, record.columns), kind="record", format=record.format,
-                              t_start=record.t_start, t_end=record.t_end, dt=record.dt)
-        else:
-            file = FileRecord(id=uuid.uuid4().hex, name=name, bytes=len(content), shape=tuple(shape), nnz=nnz,
-                              created_at=now())
+            file = replace(file, shape=(record.samples, record.columns), nnz=0, kind="record", format=record.format,
+                           t_start=record.t_start, t_end=record.t_end, dt=record.dt)
         with self.db.transaction() as db:
-            # Checked and inserted in one statement, under the write lock.
-            inserted = db.execute(
+            # Counted and inserted under the write lock. VALUES' zeroblob is written as zeros page by page (an INSERT
+            # ... SELECT builds it whole in memory); the bytes then go into it a piece at a time.
+            stored = db.execute("SELECT COALESCE(SUM(bytes), 0) FROM files").fetchone()[0]
+            if max_total_bytes and stored + size > max_total_bytes:
+                return None
+            row = db.execute(
                 "INSERT INTO files (id, name, bytes, rows, cols, nnz, created_at, content, kind, format, t_start, "
-                "t_end, dt) SELECT ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ? "
-                "WHERE ? = 0 OR (SELECT COALESCE(SUM(bytes), 0) FROM files) + ? <= ?",
-                (file.id, name, len(content), *file.shape, file.nnz, file.created_at, content, file.kind, file.format,
-                 file.t_start, file.t_end, file.dt, max_total_bytes, len(content), max_total_bytes)).rowcount
-        return file if inserted else None
+                "t_end, dt) VALUES (?, ?, ?, ?, ?, ?, ?, zeroblob(?), ?, ?, ?, ?, ?)",
+                (file.id, name, size, *file.shape, file.nnz, file.created_at, size, file.kind, file.format,
+                 file.t_start, file.t_end, file.dt))
+            with db.blobopen("files", "content", row.lastrowid) as blob:
+                content.seek(0)
+                while piece := content.read(_PIECE):
+                    blob.write(piece)
+        return file
 
     def file(self, file_id: str) -> FileRecord | None:
         row = self.db.connection().execute(f"SELECT {_FILE_COLUMNS} FROM files WHERE id = ?", (file_id,)).fetchone()
@@ -122,8 +132,3 @@ class FileStore:
             "ORDER BY seq LIMIT ?", (f'"{file_id}"', limit)).fetchall()
         return [row["id"] for row in rows]
 
-
-def file_resolver(store: FileStore) -> Callable[[str], Any]:
-    """files(id) for raydamp.jobs.build_job: a stored upload, parsed once. An unknown id is a ValueError that
-    raydamp reports at the path that names it (system.K.file, load.file.id, ...)."""
-    return store.parsed_files

@@ -19,7 +19,7 @@ from ..config import Settings
 from ..tasks.runner import Outcome, Run
 from ..tasks.store import TaskRecord, TaskStore, normalise_stored
 from ..trajectories.arrays import SAVED, StoredTrajectory, TrajectoryArrays
-from .files import FILE_COLUMNS_ADDED, FILES_TABLE, FileStore, file_resolver
+from .files import FILE_COLUMNS_ADDED, FILES_TABLE, FileStore
 
 __all__ = ["JobStore", "JobRecord", "JobWork", "TrajectoryArrays", "StoredTrajectory"]
 
@@ -156,7 +156,7 @@ class JobWork:
 
     def _call(self, spec: JobSpec, run: Run) -> RaydampCall | None:
         """The job's call, its system from the compiled functions loaded; None if the service is stopping."""
-        return build_for_run(self._checks, spec, run, files=file_resolver(self._store))
+        return build_for_run(self._checks, spec, run, files=self._store.parsed_files)
 
     def quick(self, record: JobRecord) -> bool:
         """A run of milliseconds: a built-in model without a load and fewer than _QUICK_WORK steps x coordinates.

@@ -5,6 +5,8 @@ a load's or ground motion's {"file": {"id": id}}). A file a queued or running jo
 
 from __future__ import annotations
 
+import shutil
+import tempfile
 from functools import partial
 from typing import Annotated
 
@@ -13,7 +15,7 @@ from fastapi.exceptions import RequestValidationError
 
 from ..checks.limits import JobError
 from ..checks.pool import ChecksBusy
-from ..checks.uploads import RecordFileInfo, check_upload
+from ..checks.uploads import RecordFileInfo, check_upload_file
 from ..edge.guard import file_too_large
 from ..kinds.files import FileRecord
 from ..schemas import FileInfo, FileList
@@ -23,6 +25,7 @@ router = APIRouter(prefix="/v1/files", tags=["files"])
 
 _NOT_FOUND = {404: {"description": "no file with this id"}}
 _MAX_NAME = 200
+_PIECE = 1 << 20  # bytes of an upload copied at once
 
 
 def _info(record: FileRecord) -> FileInfo:
@@ -57,23 +60,24 @@ def upload_file(file: Annotated[UploadFile, File(description="a Matrix Market (.
     limit = settings.max_file_bytes
     if file.size is not None and file.size > limit:
         raise HTTPException(413, detail=file_too_large(limit))
-    content = file.file.read(limit + 1)
-    if len(content) > limit:
-        raise HTTPException(413, detail=file_too_large(limit))
-    try:  # parsed in a check process, under its budgets: never a Python object per value in the server
-        info = request.app.state.checks.call(partial(check_upload, max_dim=settings.max_structure_dim), content,
-                                             _name(file.filename), where=("body", "file"))
-    except JobError as error:
-        raise RequestValidationError([{"type": "value_error", "loc": error.loc, "msg": error.message,
-                                       "input": _name(file.filename)}]) from None
-    except ChecksBusy as busy:
-        raise checks_busy(settings, busy) from None
-    if isinstance(info, RecordFileInfo):
-        record = store.add_file(_name(file.filename), content, max_total_bytes=settings.max_stored_file_bytes,
-                                record=info)
-    else:
-        record = store.add_file(_name(file.filename), content, info.shape, info.nnz,
-                                max_total_bytes=settings.max_stored_file_bytes)
+    # Copied to a file of its own a piece at a time, read there by a check process (under its budgets: never a
+    # Python object per value in the server), then stored from it: the server never holds the whole upload.
+    with tempfile.NamedTemporaryFile(prefix="raydamp-upload-") as spool:
+        shutil.copyfileobj(file.file, spool, _PIECE)
+        if spool.tell() > limit:
+            raise HTTPException(413, detail=file_too_large(limit))
+        spool.flush()
+        try:
+            info = request.app.state.checks.call(partial(check_upload_file, max_dim=settings.max_structure_dim),
+                                                 spool.name, _name(file.filename), where=("body", "file"))
+        except JobError as error:
+            raise RequestValidationError([{"type": "value_error", "loc": error.loc, "msg": error.message,
+                                           "input": _name(file.filename)}]) from None
+        except ChecksBusy as busy:
+            raise checks_busy(settings, busy) from None
+        matrix = not isinstance(info, RecordFileInfo)
+        record = store.add_file(_name(file.filename), spool, *((info.shape, info.nnz) if matrix else ()),
+                                max_total_bytes=settings.max_stored_file_bytes, record=None if matrix else info)
     if record is None:
         raise HTTPException(507, detail=f"the stored files would exceed max_stored_file_bytes = "
                             f"{settings.max_stored_file_bytes} bytes; delete files no longer needed")

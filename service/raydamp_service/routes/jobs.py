@@ -25,7 +25,6 @@ from ..checks.pool import CheckPool, ChecksBusy, PlotOverBudget, checked_inline
 from ..config import Settings
 from ..edge.deadlines import TimedFileResponse, TimedStreamingResponse
 from ..edge.http import HEAD, UniqueKeysRoute
-from ..kinds.files import file_resolver
 from ..kinds.jobs import JobRecord, JobStore
 from ..schemas import JobCreated, JobList, JobListItem, JobSpec, JobStatus, JobView, Trajectory
 from ..tasks.runner import Runner
@@ -83,7 +82,7 @@ async def submit_job(spec: JobSpec, request: Request, response: Response) -> Job
 
 def _check(spec: JobSpec, store: JobStore, settings: Settings, checks: CheckPool) -> RaydampCall | None:
     try:
-        return checks.job(spec, files=file_resolver(store))
+        return checks.job(spec, files=store.parsed_files)
     except JobError as error:
         raise invalid(error, spec.model_dump()) from None
     except ChecksBusy as busy:
@@ -181,16 +180,23 @@ def _trajectory_file(record: JobRecord, store: JobStore, request: Request, setti
     """The selected points written as a file, a slice at a time (downloads.write_file), and sent from disk."""
     spec = _spec(record)
     connection, stored = _opened(record, store)
+    selection = Selection(*points.indices(stored.points))
+    if len(selection) == 0:
+        connection.close()
+        raise RequestValidationError([{"type": "value_error", "loc": ("query", "start"), "input": points.start,
+                                       "msg": f"start, stop, every select none of the {stored.points} saved points"}])
+    return _file(record, request, settings, connection, len(selection) * stored.row_bytes,
+                 lambda directory: write_file(record, spec, connection, stored, selection, fmt, directory))
+
+
+def _file(record: JobRecord, request: Request, settings: Settings, connection, selected_bytes: int, write) -> Response:
+    """write(directory) -> (path, media type) in a directory of its own, sent from disk; the connection is closed,
+    and the directory and the large-fetch slot given back, whatever happens."""
     try:
-        selection = Selection(*points.indices(stored.points))
-        if len(selection) == 0:
-            raise RequestValidationError([{"type": "value_error", "loc": ("query", "start"), "input": points.start,
-                                           "msg": f"start, stop, every select none of the {stored.points} saved "
-                                                  "points"}])
-        slot = _large_slot(request, settings, len(selection) * stored.row_bytes)
-        download = FetchLease(slot, directory := Path(tempfile.mkdtemp(prefix="raydamp-download-")))
+        download = FetchLease(_large_slot(request, settings, selected_bytes),
+                              directory := Path(tempfile.mkdtemp(prefix="raydamp-download-")))
         try:
-            path, media_type = write_file(record, spec, connection, stored, selection, fmt, directory)
+            path, media_type = write(directory)
         except BaseException:
             download.release()
             raise
@@ -204,7 +210,7 @@ def _trajectory_file(record: JobRecord, store: JobStore, request: Request, setti
 @router.get("/{job_id}/events.csv", response_class=Response,
             responses={**_NOT_FOUND, 200: {"content": {"text/csv": {}}, "description": "the events table as CSV"},
                        409: {"description": "the job has no trajectory (yet), or watched no events"}})
-def get_events(job_id: str, store: StoreDep, settings: SettingsDep) -> Response:
+def get_events(job_id: str, request: Request, store: StoreDep, settings: SettingsDep) -> Response:
     """The job's events table: one line per crossing (name, t, direction, and q, p at the saved coordinates for
     a model of at most 8 coordinates), the first 1000 crossings as the summary lists them."""
     record = JOBS.existing(store, job_id)
@@ -212,18 +218,8 @@ def get_events(job_id: str, store: StoreDep, settings: SettingsDep) -> Response:
     if spec.events is None:
         raise HTTPException(409, detail=f"job {record.id} watched no events (its spec has no \"events\")")
     connection, stored = _opened(record, store)
-    directory = Path(tempfile.mkdtemp(prefix="raydamp-download-"))
-    download = FetchLease(None, directory)
-    try:
-        path = events_file(record, spec, connection, stored, directory)
-    except BaseException:
-        download.release()
-        raise
-    finally:
-        connection.close()
-    return TimedFileResponse(path, media_type="text/csv", background=BackgroundTask(download.release),
-                             headers={"Content-Disposition": f'attachment; filename="{record.id}-events.csv"'},
-                             send_seconds=settings.send_timeout_seconds, min_rate=settings.min_send_bytes_per_second)
+    return _file(record, request, settings, connection, 0, lambda directory: (
+        events_file(record, spec, connection, stored, directory), "text/csv"))
 
 
 _PLOT_POINTS = 20_000  # points drawn at most: a plot of more is decimated evenly

@@ -12,9 +12,9 @@ import numpy as np
 
 import raydamp
 from raydamp.jobs import JobSpec
-from raydamp.results.event_table import EventTable
 from raydamp.results.io import write_solution
 from raydamp.results.io.dataset import events_csv
+from raydamp.results.stored import stored_solution as solution_of
 
 from .arrays import SAVED, StoredTrajectory, TrajectoryArrays
 from .stream import Selection, read_arrays, read_column
@@ -27,34 +27,9 @@ SUFFIXES = {"csv": ".csv", "npz": ".npz", "netcdf": ".nc"}
 
 def stored_solution(record, arrays: TrajectoryArrays, spec: JobSpec) -> raydamp.Solution:
     """The stored run as a Solution; its provenance is the job spec as submitted (spec: it validated)."""
-    summary = record.summary or {}
-    coordinates, momentum_names = spec.names(arrays.q.shape[1], arrays.momentum.shape[1], spec.save_dofs)
-    provenance = {**record.spec, "raydamp_version": raydamp.__version__, "job_id": record.id,
-                  "coordinates": coordinates, "momentum_names": momentum_names}
-    drift = summary.get("momentum_drift")
-    return raydamp.Solution(
-        **{a.name: getattr(arrays, a.name) for a in SAVED},
-        status=summary.get("status", record.status), steps=int(summary.get("steps", 0)),
-        failed_step=record.failed_step, message=summary.get("message") or record.error or "",
-        method=summary.get("method") or record.spec.get("method") or "3s", tableau=summary.get("tableau"),
-        composition=summary.get("composition"), h=spec.h, max_momentum_drift=float(drift) if drift is not None else 0.0,
-        wall_time=float(summary.get("wall_time", 0.0)), origin=provenance,
-        dofs=None if spec.save_dofs is None else np.asarray(spec.save_dofs, dtype=np.int64),
-        events=stored_events(summary, spec, arrays.q.shape[1]))
-
-
-def stored_events(summary: dict, spec: JobSpec, saved_width: int) -> EventTable | None:
-    """The job's events table as its summary lists it (the first MAX_SUMMARY_EVENTS crossings; q and p for a
-    small model, else NaN), or None for a job without events."""
-    if spec.events is None or summary.get("events") is None:
-        return None
-    listed = summary["events"]
-    names = [e.name or f"event{i}" for i, e in enumerate(spec.events)]
-    if listed.get("q"):
-        dim = len(listed["q"][0])
-    else:  # NaN columns wide enough for the saved coordinates' indices
-        dim = max(spec.save_dofs) + 1 if spec.save_dofs else saved_width
-    return EventTable.from_summary(names, listed, dim)
+    return solution_of(spec, record.summary, {a.name: getattr(arrays, a.name) for a in SAVED},
+                       origin={**record.spec, "job_id": record.id}, status=record.status, message=record.error or "",
+                       failed_step=record.failed_step)
 
 
 def write_file(record, spec: JobSpec, connection: sqlite3.Connection, stored: StoredTrajectory,
