@@ -46,7 +46,7 @@ for comparison, midpoint (the same method as Newmark's average acceleration).
     .venv/bin/pip install mpmath                               # the beam's reference needs it
     .venv/bin/python benchmarks/bench_vs_opensees.py --models ground   # the ground-motion case alone (seconds)
     .venv/bin/python benchmarks/bench_vs_opensees.py --models plate    # the 10^5-DOF plate alone (minutes)
-    .venv/bin/python benchmarks/bench_vs_opensees.py --models ida      # 20 records x 10 scales (OpenSees' dt/64 reference: 51M steps, 15 min)
+    .venv/bin/python benchmarks/bench_vs_opensees.py --models ida      # 20 records x 10 scales (about 25 min)
     .venv/bin/python benchmarks/bench_vs_opensees.py --models ida --quick   # 2 records x 3 scales
 
 The plate: the clamped 2-D plate of tests/fe_plate.py (plane stress, linear triangles, consistent mass)
