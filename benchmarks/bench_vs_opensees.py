@@ -46,8 +46,8 @@ for comparison, midpoint (the same method as Newmark's average acceleration).
     .venv/bin/pip install mpmath                               # the beam's reference needs it
     .venv/bin/python benchmarks/bench_vs_opensees.py --models ground   # the ground-motion case alone (seconds)
     .venv/bin/python benchmarks/bench_vs_opensees.py --models plate    # the 10^5-DOF plate alone (minutes)
-    .venv/bin/python benchmarks/bench_vs_opensees.py --models ida      # 20 records x 10 scales, yielding frame
-    .venv/bin/python benchmarks/bench_vs_opensees.py --models ida --quick   # 4 records x 3 scales
+    .venv/bin/python benchmarks/bench_vs_opensees.py --models ida      # 20 records x 10 scales (about 25 min)
+    .venv/bin/python benchmarks/bench_vs_opensees.py --models ida --quick   # 2 records x 3 scales
 
 The plate: the clamped 2-D plate of tests/fe_plate.py (plane stress, linear triangles, consistent mass)
 at 100,488 DOF, raydamp alone (gauss4, its best method), 2% Rayleigh damping in modes 1 and 3, from
@@ -568,7 +568,7 @@ def main() -> None:
     parser.add_argument("--models", default="chain,beam,ground,plate",
                         help="any of chain, beam, ground (the 10-storey frame under a record), plate (about 10^5 "
                              "DOF, raydamp alone), ida (a yielding frame's incremental dynamic analysis; with "
-                             "--quick 4 records x 3 scales), comma-separated")
+                             "--quick 2 records x 3 scales), comma-separated")
     args = parser.parse_args()
     ops = opensees()
     print(f"raydamp {raydamp.__version__}; OpenSeesPy "

@@ -66,21 +66,30 @@ def raydamp_roof(M, K, alpha, beta, t, a_g, method: str, h_factor: int):
     return seconds, sol.q[:, 0]
 
 
-def opensees_roof(ops, alpha, beta, t, a_g, h_factor: int):
+def opensees_shear_frame(ops, materials, t, a_g, mass: float = MASS) -> None:
+    """The shear frame in OpenSees, up to its analysis options: nodes 0 (fixed base) .. n on one axis, each above
+    the base lumping ``mass``; storey i (1..n) a uniaxial material of tag i, materials[i - 1] = (kind, *its
+    parameters), in a zeroLength element from node i - 1 to i with Rayleigh damping; the record a_g (sampled at
+    t) as uniform base excitation (timeSeries and pattern tag 1). The caller's ops.rayleigh follows."""
     ops.wipe()
     ops.model("basic", "-ndm", 1, "-ndf", 1)
-    for i in range(STOREYS + 1):
+    storeys = len(materials)
+    for i in range(storeys + 1):
         ops.node(i, 0.0)
     ops.fix(0, 1)
-    for i in range(1, STOREYS + 1):
-        ops.mass(i, MASS)
-    ops.uniaxialMaterial("Elastic", 1, STIFFNESS)
-    for i in range(1, STOREYS + 1):
-        ops.element("zeroLength", i, i - 1, i, "-mat", 1, "-dir", 1, "-doRayleigh", 1)
+    for i in range(1, storeys + 1):
+        ops.mass(i, mass)
+    for i, (kind, *parameters) in enumerate(materials, start=1):
+        ops.uniaxialMaterial(kind, i, *(float(x) for x in parameters))
+        ops.element("zeroLength", i, i - 1, i, "-mat", i, "-dir", 1, "-doRayleigh", 1)
+    ops.timeSeries("Path", 1, "-dt", float(t[1] - t[0]), "-values", *np.asarray(a_g, float).tolist())
+    ops.pattern("UniformExcitation", 1, 1, "-accel", 1)
+
+
+def opensees_roof(ops, alpha, beta, t, a_g, h_factor: int):
+    opensees_shear_frame(ops, [("Elastic", STIFFNESS)] * STOREYS, t, a_g)
     ops.rayleigh(alpha, beta, 0.0, 0.0)
     dt = float(t[1] - t[0])
-    ops.timeSeries("Path", 1, "-dt", dt, "-values", *a_g.tolist())
-    ops.pattern("UniformExcitation", 1, 1, "-accel", 1)
     ops.constraints("Plain")
     ops.numberer("RCM")
     ops.system("BandSPD")

@@ -69,6 +69,17 @@ void bind_structure_kind(py::module_& m, const char* name) {
       .def_property(
           "locate_kinks", [](const Model& s) { return s.springs.phased(); },
           [](Model& s, bool on) { s.springs.set_phased(on); })
+      .def(
+          "gradient_with_spring_forces",
+          [](const Model& s, const Eigen::VectorXd& q, const std::vector<double>& forces) {
+            if (q.size() != s.size() || forces.size() != s.springs.size())
+              throw std::invalid_argument("gradient_with_spring_forces: q needs " + std::to_string(s.size()) +
+                                          " values and forces " + std::to_string(s.springs.size()));
+            Eigen::VectorXd g(s.size());
+            s.gradient_with_forces(q, forces.data(), g);
+            return g;
+          },
+          py::arg("q"), py::arg("forces"))
       .def("chebyshev_degrees", [](const Model& s, double t) {
         const auto series = s.damping.chebyshev(t);
         return py::make_tuple(series->exp.degree(), series->t_phi1.degree());

@@ -121,8 +121,13 @@ py::dict run(const Model& model, const std::string& method, const std::string& t
   out["momentum"] = to_numpy(std::move(tr.momentum), {rows, tr.n_momenta});
   out["work"] = track_work ? py::object(to_numpy(std::move(tr.work), {rows})) : py::none();
   out["load_work"] = track_work && spec.load ? py::object(to_numpy(std::move(tr.load_work), {rows})) : py::none();
-  out["spring_work"] = tr.n_springs > 0 ? py::object(to_numpy(std::move(tr.spring_work), {rows, tr.n_springs}))
-                                        : py::none();
+  out["spring_work"] = track_work && tr.n_springs > 0
+                           ? py::object(to_numpy(std::move(tr.spring_work), {rows, tr.n_springs}))
+                           : py::none();
+  out["spring_force"] = tr.n_springs > 0 ? py::object(to_numpy(std::move(tr.spring_force), {rows, tr.n_springs}))
+                                         : py::none();
+  out["spring_deformation"] =
+      tr.n_springs > 0 ? py::object(to_numpy(std::move(tr.spring_deformation), {rows, tr.n_springs})) : py::none();
   if (events) out["events"] = events_dict(std::move(r.events));
   if (dense) out["dense"] = dense_dict(std::move(r.dense));
   if (envelope) out["envelope"] = envelope_dict(std::move(r.envelope));

@@ -96,6 +96,15 @@ class Trajectory(BaseModel):
     q: list[list[float | None]]
     p: list[list[float | None]]
     energy: list[float | None]
+    spring_forces: list[list[float | None]] | None = Field(
+        None, description="each spring's force per point, from the material state of that point (a structure with "
+        "springs, in its springs' order); null for a job without springs")
+    spring_deformations: list[list[float | None]] | None = Field(
+        None, description="each spring's deformation d = q_j - q_i (q_j to the ground) per point: with "
+        "spring_forces, its force-deformation loop; null for a job without springs")
+    hysteretic_work: list[list[float | None]] | None = Field(
+        None, description="each spring's hysteretic (dissipated) work W_h per point (a job with springs and work), "
+        "so that H(t) - H(0) + W(t) + sum W_h(t) - W_f(t) is the energy budget's residual; else null")
     momentum: list[list[float | None]] = Field(description="momentum maps per point; [] rows if the model has none")
     work: list[float | None] | None = Field(None, description="the damping work W(t) per point, so that "
                                             "H(t) - H(0) + W(t) is the energy balance residual (zero for the exact "
@@ -104,6 +113,7 @@ class Trajectory(BaseModel):
     load_work: list[float | None] | None = Field(None, description="the load's work W_f(t) per point (a job with a "
                                                  "load or ground motion), so that H(t) - H(0) + W(t) - W_f(t) is the "
                                                  "energy budget's residual; null for a job without a load")
+
 
 
 class FileInfo(BaseModel):

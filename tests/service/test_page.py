@@ -500,6 +500,7 @@ def test_a_displacement_plot_with_a_choice_of_coordinate(module_server) -> None:
                                " === 'displacement q1(t)'", timeout=30_000)
         assert _traces(page, "displacement")[0]["y"] == [row[1] for row in data["q"]]
         assert [trace["name"] for trace in _traces(page, "phase")] == ["(q3, p_q3)", "(q1, p_q1)"]
+        assert data["spring_forces"] is None and page.is_hidden("#spring-loop")  # no springs: no loop
 
 
 def test_event_crossings_are_marked_on_the_displacement_plot(module_server) -> None:
@@ -518,3 +519,57 @@ def test_event_crossings_are_marked_on_the_displacement_plot(module_server) -> N
         drawn = _traces(page, "displacement")
         assert [trace["name"] for trace in drawn][1:] == ["events"]
         assert drawn[1]["x"] == events["t"] and drawn[1]["y"] == [row[0] for row in events["q"]]
+
+
+def test_a_structures_spring_has_its_force_deformation_loop(module_server) -> None:
+    """A 2-storey frame of elastic-perfectly-plastic storeys under a harmonic force on its roof: the page lists its
+    springs, draws the loop of the one that deforms most (the base storey) from the service's spring_forces and
+    spring_deformations, and another on choosing it. The loop is hysteretic: its force stops at fy, and it encloses
+    the work the storey dissipated; the energy budget counts the springs' hysteretic work. Screenshot:
+    build/page-loop.png."""
+    spring = {"kind": "elastic_plastic", "k": 40.0, "fy": 1.0}
+    spec = {"work": True, "system": {"kind": "structure", "M": {"diagonal": [1.0, 1.0]}, "alpha": 0.1,
+                       "springs": [{"dofs": [0, 1], "material": {**spring, "fy": 1.5}},
+                                   {"dofs": [0], "material": spring}]},
+            "load": {"harmonic": {"amplitude": [0.0, 1.2], "omega": 3.0}}, "method": "3s", "h": 0.01, "t_end": 20,
+            "save_every": 2, "initial_state": {"rest": True}}
+    job_id = module_server.submit(spec)
+    assert module_server.wait_finished(job_id)["status"] == "completed"
+    data = module_server.client.get(f"/v1/jobs/{job_id}/trajectory").json()
+    forces, drifts = data["spring_forces"], data["spring_deformations"]
+    assert len(forces) == len(drifts) == len(data["t"]) and len(forces[0]) == 2
+    assert drifts == [[q[1] - q[0], q[0]] for q in data["q"]]
+    base = [row[1] for row in forces]
+    assert max(map(abs, base)) == pytest.approx(1.0, rel=1e-14)  # the base storey yielded: its force stops at fy
+    with open_page(_base(module_server)) as page:
+        _ready(page)
+        _show(page, job_id)
+        assert page.eval_on_selector_all("#loop-spring option", "options => options.map(o => o.textContent)") \
+            == ["springs[0]: q0 to q1", "springs[1]: q0 to the ground"]
+        assert page.input_value("#loop-spring") == "1"  # the base storey: its largest |d| is the larger
+        drawn = _traces(page, "loop")
+        assert len(drawn) == 1 and drawn[0]["x"] == [row[1] for row in drifts] and drawn[0]["y"] == base
+        assert _drawn(page, "loop")
+        # the loop's area, the work it dissipated: positive, and a yielded storey's (an elastic one's is 0)
+        area = sum(0.5 * (f0 + f1) * (d1 - d0) for f0, f1, d0, d1 in
+                   zip(drawn[0]["y"], drawn[0]["y"][1:], drawn[0]["x"], drawn[0]["x"][1:]))
+        assert area > 0.1
+        # the budget counts the springs' hysteretic work: W_f = H - H0 + W + sum W_h, closed to O(h^2)
+        hysteretic = [sum(row) for row in data["hysteretic_work"]]
+        budget = _traces(page, "budget")
+        assert [trace["name"] for trace in budget] == ["W_f (load's work)", "W (damping's work)",
+                                                       "ΣW_h (springs' hysteretic work)", "H - H0"]
+        assert budget[2]["y"] == hysteretic and hysteretic[-1] > 0.1
+        residual = _traces(page, "balance")[0]
+        assert residual["name"].startswith("H - H0 + W + ΣW_h - W_f, structure 3s")
+        expected = [e - data["energy"][0] + w + wh - wf for e, w, wh, wf in
+                    zip(data["energy"], data["work"], hysteretic, data["load_work"])]
+        assert residual["y"] == pytest.approx(expected, abs=1e-12)
+        assert max(map(abs, expected)) < 1e-3 * max(data["load_work"])  # measured 8.4e-5 of it
+        shot = SCREENSHOT.parents[1] / "build" / "page-loop.png"
+        shot.parent.mkdir(exist_ok=True)
+        page.screenshot(path=str(shot), full_page=True)
+        page.select_option("#loop-spring", label="springs[0]: q0 to q1")
+        page.wait_for_function("() => document.getElementById('plot-loop').layout.title.text"
+                               " === 'force-deformation loop of springs[0]: q0 to q1'", timeout=30_000)
+        assert _traces(page, "loop")[0]["y"] == [row[0] for row in forces]

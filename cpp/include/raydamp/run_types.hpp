@@ -68,8 +68,11 @@ struct Trajectory {
   int n = 0, n_momenta = 0;
   std::vector<double> t, q, p, energy, momentum, work;  // work: empty unless tracked
   std::vector<double> load_work;  // W_f = int f . M^{-1} p dt; empty unless tracked with a load
-  int n_springs = 0;  // with work tracked on a structure with springs: spring_work[k*n_springs + s], each
-  std::vector<double> spring_work;  // spring's hysteretic work (record/spring_work.hpp), the core's order
+  // A structure's springs (the core's order), [k*n_springs + s] of row k: spring_force, sigma_s from the
+  // material state of that row; spring_deformation, d_s; with work tracked, spring_work, each spring's
+  // hysteretic work (record/spring_work.hpp). Empty for a model without springs.
+  int n_springs = 0;
+  std::vector<double> spring_force, spring_deformation, spring_work;
   long rows() const { return static_cast<long>(t.size()); }
 };
 

@@ -48,6 +48,11 @@ class Solution:
         stored_s(t), for a run of a :class:`raydamp.Structure` with springs and ``work=True`` (springs in the
         Structure's order), else None. ``kinetic_energy`` and ``stored_energy`` (H - T: the linear part's and
         the springs' recoverable energy) split H; ``energy_balance`` subtracts the springs' work too.
+    spring_forces, spring_deformations : (N, springs) each spring's force sigma_s, from the material state of
+        that row, and its deformation d_s = q_j - q_i (q_j to the ground) at the saved rows (springs in the
+        Structure's order), for a run of a :class:`raydamp.Structure` with springs, else None: each spring's
+        force-deformation loop. ``absolute_acceleration()`` reads the forces (a model rebuilt after the run
+        has only its virgin materials).
     load : the run's :class:`raydamp.Load` (or GroundMotion), or None; a loaded file's and an
         ensemble member's is rebuilt from the provenance by ``load_values()``, ``absolute_acceleration()`` and
         ``raydamp.analysis.energy_error``, which need it.
@@ -84,6 +89,8 @@ class Solution:
     dofs: np.ndarray | None = field(default=None)
     load_work: np.ndarray | None = field(default=None)
     hysteretic_work: np.ndarray | None = field(default=None)
+    spring_forces: np.ndarray | None = field(default=None)
+    spring_deformations: np.ndarray | None = field(default=None)
     load: Any = field(default=None, compare=False)
     events: Any = field(default=None, compare=False)  # run/events.py's EventTable, with events=
     dense: Any = field(default=None, compare=False)  # results/dense.py's DenseOutput, with dense=True
@@ -243,21 +250,38 @@ class Solution:
     def absolute_acceleration(self) -> np.ndarray:
         """Under a ground motion: the absolute acceleration q''(t) + r a_g(t) at the saved times,
         (N, n), with q'' = M^{-1} (f(t) - grad V(q) - eps D M^{-1} p) from the saved state (a run
-        saving every coordinate)."""
+        saving every coordinate). A Structure's springs add their forces at each row (``spring_forces``, from
+        the material state of that row), so a yielded storey's force is its hysteretic one."""
         model = self._model("absolute_acceleration")
         load = self._run_load("absolute_acceleration")
         if load is None or not getattr(load, "is_ground_motion", False):
             raise ValueError("absolute_acceleration: this run had no ground motion")
         if self.dofs is not None:
             raise ValueError("absolute_acceleration: needs every coordinate saved (save_dofs=None)")
-        f = load.values(model, self.t)
         core = model._core_model
+        gradient = self._gradient_at_rows(model, "absolute_acceleration")
+        f = load.values(model, self.t)
         out = np.empty_like(self.q)
         for k in range(self.t.size):
-            force = f[k] - np.asarray(core.gradient(self.q[k])).ravel() - np.asarray(
-                core.damping_rate(self.q[k], self.p[k])).ravel()
+            force = f[k] - gradient(k) - np.asarray(core.damping_rate(self.q[k], self.p[k])).ravel()
             out[k] = np.asarray(core.velocity(force)).ravel()
         return out + load.ground_part().values(model, self.t)
+
+    def _gradient_at_rows(self, model, what: str):
+        """grad V(q_k) of saved row k: the model's, or for springs the one with each spring's force of that row.
+        Refused (naming ``what``) where those forces were not kept: the materials' state after a yield is the
+        run's, and the model's virgin one would give an elastic force."""
+        core = model._core_model
+        springs = tuple(getattr(model, "springs", ()) or ())
+        if not springs:
+            return lambda k: np.asarray(core.gradient(self.q[k])).ravel()
+        if self.spring_forces is None:
+            raise ValueError(f"{what}: the springs' forces at the saved rows were not kept (an ensemble's member, "
+                             "or a file read back); run raydamp.integrate on the structure for them")
+        from ..systems.yielding import core_order
+
+        in_core = np.ascontiguousarray(self.spring_forces[:, core_order(springs)])
+        return lambda k: np.asarray(core.gradient_with_spring_forces(self.q[k], in_core[k])).ravel()
 
     def _model(self, what: str):
         """The run's model: its own, or rebuilt from the provenance (a loaded file, an ensemble's member)."""

@@ -15,7 +15,8 @@ __all__ = ["ida"]
 
 
 def ida(structure, records, scales, *, h: float, t_end: float, collapse_drift: float = 0.1, heights=1.0,
-        method: str | None = "3s", threads: int | None = None, progress=None, cancel=None):
+        method: str | None = "3s", composition: str | None = None, threads: int | None = None, progress=None,
+        cancel=None):
     """Incremental dynamic analysis of ``structure``: every record at every scale, as an xarray Dataset of the
     peak drift per record x scale x storey, and whether each run collapsed.
 
@@ -42,6 +43,8 @@ def ida(structure, records, scales, *, h: float, t_end: float, collapse_drift: f
     heights : each storey's height (one number, or one per spring in the Structure's order); the drift ratio
         is drift / height. Default 1: the drift itself.
     method : the splitting (default "3s"; any method integrate takes for a Structure with springs).
+    composition : a composition raising a symmetric method's order (e.g. "suzuki4"), as integrate takes it; on a
+        Structure with ``locate_kinks=True`` it keeps that order through yield and unloading.
     threads, progress, cancel : as :func:`raydamp.integrate_ensemble` (progress counts runs).
 
     Returns
@@ -63,7 +66,8 @@ def ida(structure, records, scales, *, h: float, t_end: float, collapse_drift: f
     amplitude = np.tile(scale_values, len(motions))
     n = structure.dim
     ens = integrate_ensemble(structure, np.zeros((len(listed), n)), np.zeros((len(listed), n)), load=listed,
-                             parameters={"load.amplitude": amplitude}, method=method, h=h, t_end=t_end,
+                             parameters={"load.amplitude": amplitude}, method=method, composition=composition,
+                             h=h, t_end=t_end,
                              save_every=_save_every(h, t_end), threads=threads, progress=progress, cancel=cancel,
                              envelope=["drift", "residual_drift"], collapse=drift_ratio * storey_heights)
     shape = (len(motions), scale_values.size)
@@ -84,7 +88,8 @@ def ida(structure, records, scales, *, h: float, t_end: float, collapse_drift: f
          "status": (cube[:2], status.astype(str))},
         coords={"record": names, "scale": scale_values, "storey": np.arange(len(springs)),
                 "height": ("storey", storey_heights)},
-        attrs={"method": ens.method, "h": ens.h, "t_end": float(t_end), "collapse_drift": drift_ratio,
+        attrs={"method": ens.method, "composition": ens.composition or "", "h": ens.h, "t_end": float(t_end),
+               "collapse_drift": drift_ratio,
                "threads": int(ens.threads), "wall_time": float(ens.wall_time)})
 
 

@@ -43,10 +43,12 @@ class CancelToken(_core.CancelToken):
 def row_bytes(model: Model, save_dofs=None, *, work: bool = False, load: Load | None = None) -> int:
     """Bytes of one saved point of ``integrate(model, ..., save_dofs=, work=, load=)``, all float64: t and the
     energy, q and p of the saved coordinates, the momentum maps, W with ``work``, and W_f with ``work`` and a
-    load that has terms. A run keeps ``raydamp.run.save_grid.save_rows(n_steps, save_every)`` points at most."""
+    load that has terms; a Structure's springs add each spring's force and deformation, and its hysteretic work
+    with ``work``. A run keeps ``raydamp.run.save_grid.save_rows(n_steps, save_every)`` points at most."""
     saved = model.dim if save_dofs is None else len(save_dofs)
     recorded = (1 + _loaded(load)) if work else 0
-    return 8 * (2 + 2 * saved + len(model.momentum_names) + recorded)
+    springs = len(getattr(model, "springs", ()) or ())
+    return 8 * (2 + 2 * saved + len(model.momentum_names) + recorded + springs * (2 + work))
 
 
 def _loaded(load: Load | None) -> bool:
@@ -349,6 +351,8 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
         "composition": composition, "h": h, "max_momentum_drift": out["max_momentum_drift"], "work": out["work"],
         "wall_time": wall, "load_work": out["load_work"], "load": loaded,
         "hysteretic_work": _envelope.users_springs(model, out.get("spring_work")),
+        "spring_forces": _envelope.users_springs(model, out.get("spring_force")),
+        "spring_deformations": _envelope.users_springs(model, out.get("spring_deformation")),
         "dofs": None if dofs is None else np.asarray(dofs, dtype=np.int64),
         "constraint_residual": out.get("constraint_residual"),
         "constraint_velocity_residual": out.get("constraint_velocity_residual"),

@@ -18,7 +18,7 @@ from ..checks.pool import CheckPool, build_for_run, checked_inline
 from ..config import Settings
 from ..tasks.runner import Outcome, Run
 from ..tasks.store import TaskRecord, TaskStore, normalise_stored
-from ..trajectories.arrays import SAVED, StoredTrajectory, TrajectoryArrays
+from ..trajectories.arrays import SAVED, SPRINGS_SQL, WIDTH_SQL, StoredTrajectory, TrajectoryArrays
 from .files import FILE_COLUMNS_ADDED, FILES_TABLE, FileStore
 
 __all__ = ["JobStore", "JobRecord", "JobWork", "TrajectoryArrays", "StoredTrajectory"]
@@ -84,8 +84,8 @@ class JobStore(TaskStore[JobRecord], FileStore):
     COLUMNS = "progress REAL NOT NULL DEFAULT 0, summary TEXT, failed_step INTEGER"  # summary: Solution.summary()
     COMPUTED = {"has_trajectory": "EXISTS (SELECT 1 FROM trajectories WHERE job_id = jobs.id)"}
     # Stored bytes of a job's trajectory (StoredTrajectory.row_bytes per point).
-    BYTES = ("(SELECT points * (" + " + ".join(f"({a.name} IS NOT NULL) * {a.width or 1}" if a.optional else
-                                               a.width or "1" for a in SAVED) +
+    BYTES = ("(SELECT points * (" + " + ".join(f"({a.name} IS NOT NULL) * {WIDTH_SQL.get(a.width, 1)}" if a.optional
+                                               else WIDTH_SQL.get(a.width, "1") for a in SAVED) +
              ") * 8 FROM trajectories WHERE job_id = jobs.id)")
 
     def _upgrade(self, db: sqlite3.Connection) -> None:
@@ -127,7 +127,9 @@ class JobStore(TaskStore[JobRecord], FileStore):
         row = self.db.connection().execute("SELECT * FROM trajectories WHERE job_id = ?", (job_id,)).fetchone()
         if row is None:
             return None
-        n, shape = row["points"], StoredTrajectory(0, row["points"], row["dim"], row["momenta"])
+        blob = row["spring_forces"]
+        springs = 0 if blob is None else len(blob) // (8 * row["points"])
+        n, shape = row["points"], StoredTrajectory(0, row["points"], row["dim"], row["momenta"], springs=springs)
         return TrajectoryArrays(**{a.name: _array(row[a.name], n, *([shape.width(a)] if a.width else []))
                                    for a in SAVED})
 
@@ -136,12 +138,13 @@ class JobStore(TaskStore[JobRecord], FileStore):
         The caller reads the blobs through it (incremental I/O) and closes it."""
         optional = [a.name for a in SAVED if a.optional]
         flags = "".join(f", {name} IS NOT NULL" for name in optional)
-        found = self.db.snapshot(f"SELECT rowid, points, dim, momenta{flags} FROM trajectories WHERE job_id = ?",
-                                 (job_id,))
+        found = self.db.snapshot(f"SELECT rowid, points, dim, momenta, {SPRINGS_SQL}{flags} FROM trajectories "
+                                 "WHERE job_id = ?", (job_id,))
         if found is None:
             return None
         connection, row = found
-        return connection, StoredTrajectory(*row[:4], frozenset(name for name, kept in zip(optional, row[4:]) if kept))
+        return connection, StoredTrajectory(*row[:4], frozenset(name for name, kept in zip(optional, row[5:]) if kept),
+                                            springs=row[4])
 
 
 class JobWork:

@@ -550,12 +550,57 @@ function showDisplacement(job, trajectory, names) {
   drawDisplacement(job, trajectory, names);
 }
 
+// A structure's springs by their coordinates: "springs[s]: q_i to q_j" ("q_j to the ground").
+function springNames(job, count) {
+  const system = job.spec.system || {};
+  const springs = system.springs || [];
+  const coordinate = (i) => (Array.isArray(system.coordinates) && system.coordinates[i] !== undefined
+    ? system.coordinates[i] : `q${i}`);
+  return Array.from({ length: count }, (_, s) => {
+    const dofs = springs[s] ? springs[s].dofs : null;
+    if (!dofs) return `springs[${s}]`;
+    return dofs.length === 2 ? `springs[${s}]: ${coordinate(dofs[0])} to ${coordinate(dofs[1])}`
+      : `springs[${s}]: ${coordinate(dofs[0])} to the ground`;
+  });
+}
+
+// The force-deformation loop sigma_s(d_s) of the spring chosen: the library's force (from the material state of
+// each saved point) against its deformation, both from the stored trajectory; at first the spring whose largest
+// |d| is largest.
+function drawLoop(job, trajectory, springs) {
+  const s = Number($("loop-spring").value);
+  Plotly.newPlot("plot-loop", [{ x: column(trajectory.spring_deformations, s), y: column(trajectory.spring_forces, s),
+    mode: "lines", name: `${plotlyText(springs[s])}, ${label(job)}` }],
+  layout(`force-deformation loop of ${plotlyText(springs[s])}`, "deformation d", "force σ(d)",
+    { showlegend: false }), config);
+}
+
+function showLoop(job, trajectory) {
+  const forces = trajectory.spring_forces;
+  const count = Array.isArray(forces) && forces.length && Array.isArray(trajectory.spring_deformations)
+    ? forces[0].length : 0;
+  $("spring-loop").hidden = count === 0;
+  const select = $("loop-spring");
+  select.replaceChildren();
+  if (!count) { Plotly.purge($("plot-loop")); return; }
+  const springs = springNames(job, count);
+  springs.forEach((name, s) => option(select, s, name));
+  const peaks = new Array(count).fill(0);
+  for (const row of trajectory.spring_deformations) {
+    row.forEach((d, s) => { if (d !== null && Math.abs(d) > peaks[s]) peaks[s] = Math.abs(d); });
+  }
+  select.value = String(peaks.indexOf(Math.max(...peaks)));
+  select.onchange = () => drawLoop(job, trajectory, springs);
+  drawLoop(job, trajectory, springs);
+}
+
 function draw(job, trajectory) {
   const dim = trajectory.q.length ? trajectory.q[0].length : 0;
   const names = coordinateNames(job.spec, dim);
   const overlays = $("overlay").checked ? state.overlays : [];
   if (!$("overlay").checked) state.overlays = [];
   showDisplacement(job, trajectory, names);
+  showLoop(job, trajectory);
 
   Plotly.newPlot("plot-energy", [...overlays,
     { x: trajectory.t, y: trajectory.energy, mode: "lines", name: label(job) }],
@@ -566,6 +611,11 @@ function draw(job, trajectory) {
   // of dissipating at the right rate). Without a load W_f is 0.
   const balance = $("plot-balance");
   const loaded = Array.isArray(trajectory.load_work);
+  // A structure's springs dissipate too: their hysteretic work, summed over the springs, enters the budget.
+  const hysteretic = Array.isArray(trajectory.hysteretic_work)
+    ? trajectory.hysteretic_work.map((row) => row.reduce((sum, w) => sum + w, 0)) : null;
+  const springWork = (i) => (hysteretic ? hysteretic[i] : 0);
+  const springTerm = hysteretic ? " + ΣW_h" : "";
   // At a temperature the noise brings energy that W does not count: there is no balance to show.
   balance.hidden = !Array.isArray(trajectory.work) || trajectory.energy.length === 0 || Boolean(job.spec.temperature);
   if (balance.hidden) {
@@ -573,12 +623,12 @@ function draw(job, trajectory) {
   } else {
     const h0 = trajectory.energy[0];
     const forced = (i) => (loaded ? trajectory.load_work[i] : 0);
-    const what = loaded ? "H - H0 + W - W_f" : "H - H0 + W";
+    const what = `H - H0 + W${springTerm}${loaded ? " - W_f" : ""}`;
     Plotly.newPlot(balance, [{ x: trajectory.t,
-      y: trajectory.energy.map((e, i) => e - h0 + trajectory.work[i] - forced(i)), mode: "lines",
+      y: trajectory.energy.map((e, i) => e - h0 + trajectory.work[i] + springWork(i) - forced(i)), mode: "lines",
       name: `${what}, ${label(job)}` }],
-    layout(loaded ? "energy balance H(t) - H(0) + W(t) - W_f(t)" : "energy balance H(t) - H(0) + W(t)", "t",
-      "residual", { yaxis: { title: { text: "residual" }, exponentformat: "e" } }), config);
+    layout(`energy balance ${what}`, "t", "residual",
+      { yaxis: { title: { text: "residual" }, exponentformat: "e" } }), config);
   }
 
   // The budget itself, under a load: the energy the load put in (W_f), what the damping took out (W),
@@ -592,8 +642,10 @@ function draw(job, trajectory) {
     Plotly.newPlot(budget, [
       { x: trajectory.t, y: trajectory.load_work, mode: "lines", name: "W_f (load's work)" },
       { x: trajectory.t, y: trajectory.work, mode: "lines", name: "W (damping's work)" },
+      ...(hysteretic ? [{ x: trajectory.t, y: hysteretic, mode: "lines", name: "ΣW_h (springs' hysteretic work)" }]
+        : []),
       { x: trajectory.t, y: trajectory.energy.map((e) => e - h0), mode: "lines", name: "H - H0" }],
-    layout("energy budget: W_f = H - H0 + W", "t", "energy"), config);
+    layout(`energy budget: W_f = H - H0 + W${springTerm}`, "t", "energy"), config);
   }
 
   const phase = names.map((name, k) => ({

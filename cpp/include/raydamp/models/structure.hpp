@@ -81,6 +81,21 @@ struct Structure : LinearStructure<Mass> {
     springs.for_each([&](const auto& set) { set.add_tangent_correction(q, v, out); });
   }
 
+  // grad V(q) with each spring's force sigma_s given (in Springs' order: a saved row's, record/recorder.hpp)
+  // instead of read from its material's committed state: the gradient of a row after the run, whose
+  // material states are gone.
+  void gradient_with_forces(const Vec& q, const double* sigma, Vec& g) const {
+    Base::gradient(q, g);
+    springs.for_each([&](const auto& set) {
+      for (std::size_t s = 0; s < set.size(); ++s) {
+        const double f = sigma[s] - set.material[s].stiffness() * set.deformation(q, s);
+        g[set.j[s]] += f;
+        if (set.i[s] >= 0) g[set.i[s]] -= f;
+      }
+      sigma += set.size();
+    });
+  }
+
   // Each spring's elastic range [lower, upper] of its deformation from the committed state, in Springs'
   // order (infinite for Bouc-Wen): where a kink locator looks for the next yield.
   void elastic_ranges(double* lower, double* upper) const {

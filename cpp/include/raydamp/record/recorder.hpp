@@ -44,7 +44,7 @@ class Recorder {
       if (i < 0 || i >= n) throw std::invalid_argument("save_dofs: " + std::to_string(i) + " is not a coordinate");
     out.n = dofs_.empty() ? n : static_cast<int>(dofs_.size());
     out.n_momenta = static_cast<int>(j_.size());
-    out.n_springs = static_cast<int>(springs_.size());
+    out.n_springs = static_cast<int>(spring_count(model));
     // Reserved up to kReserveRows rows; past that the buffers grow at save points (never inside a
     // block of steps), so a run asking for more rows than memory holds saves what fits and stops
     // with out_of_memory instead of failing before its first step.
@@ -56,6 +56,8 @@ class Recorder {
     out.momentum.reserve(rows * j_.size());
     if (spec.track_work) out.work.reserve(rows);
     if (spec.track_work && ws.load) out.load_work.reserve(rows);
+    out.spring_force.reserve(rows * out.n_springs);
+    out.spring_deformation.reserve(rows * out.n_springs);
     out.spring_work.reserve(rows * springs_.size());
   }
 
@@ -88,7 +90,8 @@ class Recorder {
   bool save(const State<Dim>& z, double t) {
     const std::size_t sizes[] = {out_.t.size(), out_.q.size(), out_.p.size(), out_.energy.size(),
                                  out_.momentum.size(), out_.work.size(), out_.load_work.size(),
-                                 out_.spring_work.size()};
+                                 out_.spring_work.size(), out_.spring_force.size(),
+                                 out_.spring_deformation.size()};
     try {
       save_row(z, t);
       return true;
@@ -101,6 +104,8 @@ class Recorder {
       out_.work.resize(sizes[5]);
       out_.load_work.resize(sizes[6]);
       out_.spring_work.resize(sizes[7]);
+      out_.spring_force.resize(sizes[8]);
+      out_.spring_deformation.resize(sizes[9]);
       return false;
     }
   }
@@ -125,6 +130,7 @@ class Recorder {
     if (ws_.track_work) out_.work.push_back(ws_.work);
     if (ws_.track_work && ws_.load) out_.load_work.push_back(ws_.load_work);
     springs_.append(out_.spring_work);
+    append_springs(z.q);
     if (dofs_.empty()) {
       out_.q.insert(out_.q.end(), z.q.data(), z.q.data() + z.q.size());
       out_.p.insert(out_.p.end(), z.p.data(), z.p.data() + z.p.size());
@@ -136,6 +142,33 @@ class Recorder {
     if (j_.empty()) return;
     model_.momenta(z.q, z.p, j_.data());
     out_.momentum.insert(out_.momentum.end(), j_.begin(), j_.end());
+  }
+
+  static std::size_t spring_count(const Model& model) {
+    if constexpr (has_materials_v<Model>) return model.springs.size();
+    else return (static_cast<void>(model), 0);
+  }
+
+  // d_s and sigma_s at the row's q, sigma_s from the committed states. A row is saved after its step's commit,
+  // so these are the forces of the material state of that row, which a model rebuilt afterwards (in its virgin
+  // state) cannot give: Solution.absolute_acceleration and the force-deformation loops read them.
+  template <class Vec>
+  void append_springs(const Vec& q) {
+    if constexpr (has_materials_v<Model>) {
+      const std::size_t at = out_.spring_force.size(), n = model_.springs.size();
+      out_.spring_force.resize(at + n);
+      out_.spring_deformation.resize(at + n);
+      double* f = out_.spring_force.data() + at;
+      double* d = out_.spring_deformation.data() + at;
+      model_.springs.for_each([&](const auto& set) {
+        set.forces(q, f);
+        for (std::size_t s = 0; s < set.size(); ++s) d[s] = set.deformation(q, s);
+        f += set.size();
+        d += set.size();
+      });
+    } else {
+      static_cast<void>(q);
+    }
   }
 
   const Model& model_;
