@@ -11,8 +11,12 @@
 // flow of the frozen-q operator eps D M^{-1} followed by the projection: consistent, order 2 in the
 // symmetric tables, not the exact projected flow.
 //
-// The drift's Newton is SHAKE's simplified one: its matrix is S = G(q0) M^{-1} G(q0)^T, factored once at
-// q0 (where the previous sub-flows left it, so usually already factored) and used for every iteration.
+// The drift's Newton starts as SHAKE's chord iteration, with S = G(q0) M^{-1} G(q0)^T factored at q0
+// (where the previous sub-flows left it, so usually already factored). Its contraction per iteration is
+// about cond(S) |q - q0| / l, small for a pendulum's step but not for a long chain's (a 100-link cable at
+// h = 1e-3 diverged): when an iteration reduces the residual less than kSlowContraction, the matrix is
+// refreshed to Newton's own, G(q) M^{-1} G(q0)^T at the current iterate, so that the iteration converges
+// as Newton's. Every matrix is G M^{-1} G^T of a band found once from the pattern (band_lu.hpp).
 #pragma once
 
 #include <algorithm>
@@ -24,6 +28,7 @@
 
 #include "raydamp/constraints/constraint_set.hpp"
 #include "raydamp/constraints/hook.hpp"
+#include "raydamp/damping/isotropic_damping.hpp"
 #include "raydamp/flows/exact.hpp"
 #include "raydamp/flows/runge_kutta.hpp"
 #include "raydamp/methods/splitting.hpp"
@@ -32,7 +37,10 @@ namespace raydamp {
 
 namespace constraints {
 
-// out = G x (k), from the non-zeros in work.G.
+// When an iteration reduces the residual by less than this factor, the Newton matrix is refreshed.
+inline constexpr double kSlowContraction = 1.0 / 16;
+
+// out = G x (k), from the non-zeros in G.
 template <class X>
 inline void times_G(const ConstraintSet& set, const Eigen::VectorXd& G, const X& x, Eigen::VectorXd& out) {
   for (int a = 0; a < set.k; ++a) {
@@ -51,29 +59,31 @@ inline void minus_Gt(const ConstraintSet& set, const Eigen::VectorXd& G, const E
   }
 }
 
-// G(q), W = M^{-1} G^T and the factor of S = G W, at q. False if S is not positive definite (G has lost
-// rank: two constraints became dependent) or anything is not finite.
+// x <- matrix^{-1} x, x in the constraints' order (the band's order inside).
+inline void solve(const ConstraintSet& set, const Eigen::VectorXd& matrix, Eigen::VectorXd& x, ConstraintWork& w) {
+  if (set.normal.given_order) return set.normal.solve(matrix.data(), x.data());
+  const std::vector<int>& position = set.normal.position;
+  for (int a = 0; a < set.k; ++a) w.x[position[a]] = x[a];
+  set.normal.solve(matrix.data(), w.x.data());
+  for (int a = 0; a < set.k; ++a) x[a] = w.x[position[a]];
+}
+
+// G(q) and the factor of S = G M^{-1} G^T, at q. False if S is not positive definite (G has lost rank: two
+// constraints became dependent) or anything is not finite.
 template <class Model, class Q>
 bool factor_at(const Model& model, const Q& q, ConstraintWork& w) {
   const ConstraintSet& set = model.constraints;
   set.jacobian(w.G.data(), q.data());
-  for (int a = 0; a < set.k; ++a) {
-    w.u.setZero();
-    for (int e = set.row_start[a]; e < set.row_start[a + 1]; ++e) w.u[set.cols[e]] = w.G[e];
-    model.mass.velocity(w.u, w.v);
-    w.W.col(a) = w.v;
-  }
-  w.S.setZero();
-  for (int e = 0; e < set.nonzeros(); ++e) w.S.row(set.rows[e]) += w.G[e] * w.W.row(set.cols[e]);
-  w.llt.compute(w.S);
+  set.normal.form(w.G.data(), w.G.data(), w.S.data(), true);
+  ++w.factorisations;
   w.at_q = q;
-  w.valid = w.llt.info() == Eigen::Success && w.S.allFinite();
+  w.valid = set.normal.factor(w.S.data());
   return w.valid;
 }
 
 template <class Model, class Q>
 bool factored_at(const Model& model, const Q& q, ConstraintWork& w) {
-  if (w.valid && w.owner == &model.constraints && w.at_q == q) return true;
+  if (w.valid && w.at_q == q) return true;
   return factor_at(model, q, w);
 }
 
@@ -92,38 +102,42 @@ void fail(State<Dim>& z, ConstraintWork& w, int constraint, double residual, dou
 // |(G M^{-1} p)_i| / (|G_i| |M^{-1} p|) left after it, into the run's summary.
 template <class Model, int Dim>
 void project(const Model& model, State<Dim>& z, ConstraintWork& w, bool measure = false) {
-  if (!z.all_finite()) return;  // blown up elsewhere: the step loop reports it as it is
   if (!factored_at(model, z.q, w)) {
-    fail(z, w, 0, 0.0, 0.0, 0, true);
+    if (z.all_finite()) fail(z, w, 0, 0.0, 0.0, 0, true);  // else blown up elsewhere: the step loop reports it
     return;
   }
   const ConstraintSet& set = model.constraints;
   model.mass.velocity(z.p, w.v);
   times_G(set, w.G, w.v, w.mu);
-  w.llt.solveInPlace(w.mu);
+  solve(set, w.S, w.mu, w);
   minus_Gt(set, w.G, w.mu, 1.0, z.p);
-  if (measure && w.track) {
+  if (measure && w.track) {  // in squares: one square root per flow
     model.mass.velocity(z.p, w.v);
     times_G(set, w.G, w.v, w.mu);
-    const double speed = w.v.norm();
+    const double speed2 = w.v.squaredNorm();
+    double worst = 0.0;
     for (int a = 0; a < set.k; ++a) {
-      const double row = Eigen::Map<const Eigen::VectorXd>(w.G.data() + set.row_start[a],
-                                                           set.row_start[a + 1] - set.row_start[a]).norm();
-      if (speed > 0.0 && row > 0.0) w.max_velocity_residual = std::max(w.max_velocity_residual, std::abs(w.mu[a]) / (row * speed));
+      double row2 = 0.0;
+      for (int e = set.row_start[a]; e < set.row_start[a + 1]; ++e) row2 += w.G[e] * w.G[e];
+      if (speed2 > 0.0 && row2 > 0.0) worst = std::max(worst, w.mu[a] * w.mu[a] / (row2 * speed2));
     }
+    w.max_velocity_residual = std::max(w.max_velocity_residual, std::sqrt(worst));
   }
 }
 
 // SHAKE then RATTLE's projection over time t (see the file's comment).
 template <class Model, int Dim, class WS>
 void drift(const Model& model, State<Dim>& z, double t, WS& ws) {
-  ConstraintWork& w = constraint_work();
   const ConstraintSet& set = model.constraints;
+  ConstraintWork& w = constraint_work(set);
   if (!z.all_finite()) return;  // blown up elsewhere: the step loop reports it as it is
   if (!factored_at(model, z.q, w)) return fail(z, w, 0, 0.0, 0.0, 0, true);
+  ++w.drifts;
   flows::drift(model, z, t, ws);
   w.lambda.setZero();
   const double q_size = z.q.template lpNorm<Eigen::Infinity>();
+  const Eigen::VectorXd* matrix = &w.S;  // SHAKE's chord at q0 until an iteration is slow
+  double previous_ratio = std::numeric_limits<double>::infinity();
   int it = 0;
   bool evaluated_here = true;  // w.g holds g at the current q (else q moved by a last, rounding-sized step)
   for (;; ++it) {
@@ -141,11 +155,23 @@ void drift(const Model& model, State<Dim>& z, double t, WS& ws) {
     if (finite && worst_ratio <= 1.0) break;
     if (!finite || it == set.max_iterations)
       return fail(z, w, worst, std::abs(w.g[worst]), set.tol * w.g[set.k + worst], it);
-    // L += S^{-1} g(q); q -= M^{-1} G(q0)^T (that increment).
+    if (worst_ratio > kSlowContraction * previous_ratio) {
+      // Newton's matrix at this iterate (the increment moves q along M^{-1} G(q0)^T).
+      set.jacobian(w.G1.data(), z.q.data());
+      set.normal.form(w.G1.data(), w.G.data(), w.A.data(), false);
+      ++w.refreshes;
+      if (set.normal.factor(w.A.data())) matrix = &w.A;
+      else if (matrix == &w.A) return fail(z, w, worst, std::abs(w.g[worst]), set.tol * w.g[set.k + worst], it);
+    }
+    previous_ratio = worst_ratio;
+    ++w.iterations;
+    // L += matrix^{-1} g(q); q -= M^{-1} G(q0)^T (that increment).
     w.mu = w.g.head(set.k);
-    w.llt.solveInPlace(w.mu);
+    solve(set, *matrix, w.mu, w);
     w.lambda += w.mu;
-    w.v.noalias() = w.W * w.mu;
+    w.u.setZero();
+    minus_Gt(set, w.G, w.mu, -1.0, w.u);
+    model.mass.velocity(w.u, w.v);
     z.q -= w.v;
     // A correction at the rounding of q cannot reduce g further: g is then as small as doubles allow.
     if (w.v.template lpNorm<Eigen::Infinity>() <= 8 * std::numeric_limits<double>::epsilon() * q_size) {
@@ -162,6 +188,34 @@ void drift(const Model& model, State<Dim>& z, double t, WS& ws) {
   project(model, z, w, true);
 }
 
+// The multipliers lambda of the continuous equations p' = F - G^T lambda at a state (q, p) on the
+// constraints, F = -grad V(q) + f(t) - eps D M^{-1} p: differentiating G M^{-1} p = 0 along the flow gives
+//   (G M^{-1} G^T) lambda = G M^{-1} F + (v^T Hess g_i(q) v)_i,  v = M^{-1} p.
+// After a run, per saved row (the bindings): as accurate as the saved state. Allocates (not in a step).
+// False where G M^{-1} G^T is singular.
+template <class Model>
+bool multipliers(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& p, double time,
+                 const Load* load, double* out) {
+  const ConstraintSet& set = model.constraints;
+  ConstraintWork& w = constraint_work(set);
+  if (!factor_at(model, q, w)) return false;
+  const int n = set.n;
+  Eigen::VectorXd force(n), rate(n), velocity(n), both(2 * n), curvature(set.k);
+  model.gradient(q, force);
+  if (load) load->add(time, -1.0, force.data());
+  model.damping.rate(q, p, rate);
+  force = -(force + rate);
+  model.mass.velocity(force, w.v);
+  times_G(set, w.G, w.v, w.mu);
+  model.mass.velocity(p, velocity);
+  both << q, velocity;
+  set.curvature(curvature.data(), both.data());
+  w.mu += curvature;
+  solve(set, w.S, w.mu, w);
+  for (int a = 0; a < set.k; ++a) out[a] = w.mu[a];
+  return true;
+}
+
 // Sub-flow F of a constrained model: the constrained drift, or the free sub-flow then the projection.
 // The Runge-Kutta sub-flows that move q (rksb's drift+damp, rk's whole field) are refused before a run
 // (the model has no free drift: catalogue.hpp, require_applicable) and never reach here.
@@ -174,6 +228,9 @@ void flow(const Model& model, const Tab& tab, State<Dim>& z, double t, WS& ws) {
     flows::kick(model, z, t, ws);
   } else if constexpr (F == Flow::damp) {
     flows::damp(model, z, t, ws);
+    // D = c M: the flow scales p, and a tangent p stays tangent; only its noise needs the projection.
+    if constexpr (std::is_same_v<std::decay_t<decltype(model.damping)>, IsotropicDamping>)
+      if (!noisy(ws)) return;
   } else if constexpr (F == Flow::kick_damp) {
     flows::kick_damp(model, z, t, ws);
   } else if constexpr (F == Flow::kick_damp_rk) {
@@ -181,7 +238,7 @@ void flow(const Model& model, const Tab& tab, State<Dim>& z, double t, WS& ws) {
   } else {
     throw std::logic_error("constraints: a Runge-Kutta sub-flow that moves q has no constrained form");
   }
-  project(model, z, constraint_work());
+  project(model, z, constraint_work(model.constraints));
 }
 
 }  // namespace constraints
