@@ -98,12 +98,12 @@ struct NormalPattern {
   }
 
   // LU in place, no pivoting, each pivot stored as its reciprocal (the solves multiply): false if a pivot
-  // is not > 0 and finite (for G M^{-1} G^T: it lost rank).
-  bool factor(double* a) const {
+  // is zero or not finite, or (positive: for G M^{-1} G^T, which has lost rank then) not > 0.
+  bool factor(double* a, bool positive = true) const {
     for (int i = 0; i < k; ++i) {
       double* row_i = a + i * width + band;  // row_i[c - i] = A(i, c)
       const double pivot = row_i[0];
-      if (!(pivot > 0.0) || !std::isfinite(pivot)) return false;
+      if (!(positive ? pivot > 0.0 : pivot != 0.0) || !std::isfinite(pivot)) return false;
       const double inverse = 1.0 / pivot;
       row_i[0] = inverse;
       const int last = std::min(i + band, k - 1);

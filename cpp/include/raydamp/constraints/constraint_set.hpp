@@ -64,8 +64,22 @@ struct ConstraintSet {
     id = ++sets;
   }
 
-  void analyse(const std::vector<constraints::InverseMassEntry>& inverse_mass) {
-    normal = constraints::NormalPattern(k, rows, cols, n, inverse_mass);
+  // M^{-1} for the solve's own products, by its non-zeros: a diagonal one (a scalar mass, or masses per
+  // coordinate given as a dense M) as a vector, so that a product costs O(n), not a dense n x n one.
+  Eigen::VectorXd inverse_diagonal;  // empty unless M^{-1} is diagonal
+  std::vector<constraints::InverseMassEntry> inverse_mass;
+
+  void analyse(const std::vector<constraints::InverseMassEntry>& entries) {
+    normal = constraints::NormalPattern(k, rows, cols, n, entries);
+    inverse_mass.clear();
+    bool diagonal = true;
+    for (const auto& e : entries)
+      if (e.value != 0.0) inverse_mass.push_back(e), diagonal = diagonal && e.i == e.j;
+    inverse_diagonal.resize(0);
+    if (diagonal) {
+      inverse_diagonal = Eigen::VectorXd::Zero(n);
+      for (const auto& e : inverse_mass) inverse_diagonal[e.i] = e.value;
+    }
   }
 
   int nonzeros() const { return static_cast<int>(rows.size()); }

@@ -59,6 +59,17 @@ inline void minus_Gt(const ConstraintSet& set, const Eigen::VectorXd& G, const E
   }
 }
 
+// v = M^{-1} x by M^{-1}'s non-zeros (ConstraintSet::analyse).
+template <class X>
+inline void inverse_mass_times(const ConstraintSet& set, const X& x, Eigen::VectorXd& v) {
+  if (set.inverse_diagonal.size() != 0) {
+    v = set.inverse_diagonal.cwiseProduct(x);
+    return;
+  }
+  v.setZero();
+  for (const InverseMassEntry& m : set.inverse_mass) v[m.i] += m.value * x[m.j];
+}
+
 // x <- matrix^{-1} x, x in the constraints' order (the band's order inside).
 inline void solve(const ConstraintSet& set, const Eigen::VectorXd& matrix, Eigen::VectorXd& x, ConstraintWork& w) {
   if (set.normal.given_order) return set.normal.solve(matrix.data(), x.data());
@@ -107,12 +118,12 @@ void project(const Model& model, State<Dim>& z, ConstraintWork& w, bool measure 
     return;
   }
   const ConstraintSet& set = model.constraints;
-  model.mass.velocity(z.p, w.v);
+  inverse_mass_times(set, z.p, w.v);
   times_G(set, w.G, w.v, w.mu);
   solve(set, w.S, w.mu, w);
   minus_Gt(set, w.G, w.mu, 1.0, z.p);
   if (measure && w.track) {  // in squares: one square root per flow
-    model.mass.velocity(z.p, w.v);
+    inverse_mass_times(set, z.p, w.v);
     times_G(set, w.G, w.v, w.mu);
     const double speed2 = w.v.squaredNorm();
     double worst = 0.0;
@@ -160,8 +171,8 @@ void drift(const Model& model, State<Dim>& z, double t, WS& ws) {
       set.jacobian(w.G1.data(), z.q.data());
       set.normal.form(w.G1.data(), w.G.data(), w.A.data(), false);
       ++w.refreshes;
-      if (set.normal.factor(w.A.data())) matrix = &w.A;
-      else if (matrix == &w.A) return fail(z, w, worst, std::abs(w.g[worst]), set.tol * w.g[set.k + worst], it);
+      // Not symmetric: a negative pivot is a pivot. Where it cannot be factored, SHAKE's chord goes on.
+      matrix = set.normal.factor(w.A.data(), false) ? &w.A : &w.S;
     }
     previous_ratio = worst_ratio;
     ++w.iterations;
@@ -171,7 +182,7 @@ void drift(const Model& model, State<Dim>& z, double t, WS& ws) {
     w.lambda += w.mu;
     w.u.setZero();
     minus_Gt(set, w.G, w.mu, -1.0, w.u);
-    model.mass.velocity(w.u, w.v);
+    inverse_mass_times(set, w.u, w.v);
     z.q -= w.v;
     // A correction at the rounding of q cannot reduce g further: g is then as small as doubles allow.
     if (w.v.template lpNorm<Eigen::Infinity>() <= 8 * std::numeric_limits<double>::epsilon() * q_size) {
