@@ -108,6 +108,8 @@ struct ConstraintWork {
   Eigen::VectorXd g;              // 2k: constraints then scales
   Eigen::VectorXd lambda, mu, x;  // k; x in band order
   Eigen::VectorXd u, v;           // n
+  Eigen::VectorXd q_back, g_back, lambda_back;  // the Newton iterate before the last increment
+  bool newton_next = false;       // the last drift took Newton's matrix
   ConstraintFailure failure;
   double max_residual = 0.0;      // max_i |g_i| / s_i after the drifts of the run
   double max_velocity_residual = 0.0;  // max_i |(G M^{-1} p)_i| / (|G_i| |M^{-1} p|) after the drifts
@@ -120,6 +122,10 @@ struct ConstraintWork {
     at_q.resize(n);
     u.resize(n);
     v.resize(n);
+    q_back.resize(n);
+    g_back.resize(2 * k);
+    lambda_back.resize(k);
+    newton_next = false;
     G.resize(set.nonzeros());
     G1.resize(set.nonzeros());
     S.resize(set.normal.size());

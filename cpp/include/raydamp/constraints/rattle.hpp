@@ -15,8 +15,10 @@
 // (where the previous sub-flows left it, so usually already factored). Its contraction per iteration is
 // about cond(S) |q - q0| / l, small for a pendulum's step but not for a long chain's (a 100-link cable at
 // h = 1e-3 diverged): when an iteration reduces the residual less than kSlowContraction, the matrix is
-// refreshed to Newton's own, G(q) M^{-1} G(q0)^T at the current iterate, so that the iteration converges
-// as Newton's. Every matrix is G M^{-1} G^T of a band found once from the pattern (band_lu.hpp).
+// refreshed to Newton's own, G(q) M^{-1} G(q0)^T at the current iterate, and from then on at every iterate
+// (with cond(S) ~ k^2 on a chain, a matrix kept from an earlier iterate diverges again); an iteration that
+// raised the residual is taken back and redone half as long; and the next drift starts with Newton's matrix. Every matrix is G M^{-1} G^T of a band found once from the pattern
+// (band_lu.hpp).
 #pragma once
 
 #include <algorithm>
@@ -148,8 +150,10 @@ void drift(const Model& model, State<Dim>& z, double t, WS& ws) {
   w.lambda.setZero();
   const double q_size = z.q.template lpNorm<Eigen::Infinity>();
   const Eigen::VectorXd* matrix = &w.S;  // SHAKE's chord at q0 until an iteration is slow
-  double previous_ratio = std::numeric_limits<double>::infinity();
-  int it = 0;
+  const bool newton = w.newton_next;      // the last drift needed Newton's matrix: take it from the start
+  w.newton_next = false;
+  double previous_ratio = std::numeric_limits<double>::infinity(), step = 1.0;
+  int previous_worst = 0, it = 0;
   bool evaluated_here = true;  // w.g holds g at the current q (else q moved by a last, rounding-sized step)
   for (;; ++it) {
     set.values(w.g.data(), z.q.data());
@@ -164,20 +168,34 @@ void drift(const Model& model, State<Dim>& z, double t, WS& ws) {
       if (!(ratio <= worst_ratio)) worst_ratio = ratio, worst = a;
     }
     if (finite && worst_ratio <= 1.0) break;
+    const bool worse = !finite || worst_ratio > previous_ratio;
+    if (worse && it > 0) {  // the last increment overshot: back to the iterate before it, and half as far
+      z.q = w.q_back;
+      w.lambda = w.lambda_back;
+      w.g = w.g_back;
+      worst = previous_worst, worst_ratio = previous_ratio, finite = true;
+      step *= 0.5;
+    } else {
+      step = 1.0;
+    }
     if (!finite || it == set.max_iterations)
       return fail(z, w, worst, std::abs(w.g[worst]), set.tol * w.g[set.k + worst], it);
-    if (worst_ratio > kSlowContraction * previous_ratio) {
+    if (it == 0 ? newton : matrix == &w.A || worst_ratio > kSlowContraction * previous_ratio) {
       // Newton's matrix at this iterate (the increment moves q along M^{-1} G(q0)^T).
       set.jacobian(w.G1.data(), z.q.data());
       set.normal.form(w.G1.data(), w.G.data(), w.A.data(), false);
       ++w.refreshes;
+      if (it > 0) w.newton_next = true;
       // Not symmetric: a negative pivot is a pivot. Where it cannot be factored, SHAKE's chord goes on.
       matrix = set.normal.factor(w.A.data(), false) ? &w.A : &w.S;
     }
-    previous_ratio = worst_ratio;
+    w.q_back = z.q;
+    w.lambda_back = w.lambda;
+    w.g_back = w.g;
+    previous_ratio = worst_ratio, previous_worst = worst;
     ++w.iterations;
-    // L += matrix^{-1} g(q); q -= M^{-1} G(q0)^T (that increment).
-    w.mu = w.g.head(set.k);
+    // L += step matrix^{-1} g(q); q -= M^{-1} G(q0)^T (that increment).
+    w.mu = step * w.g.head(set.k);
     solve(set, *matrix, w.mu, w);
     w.lambda += w.mu;
     w.u.setZero();
