@@ -375,7 +375,7 @@ def test_multipliers_give_the_rods_tension_to_order_two(method):
         errors.append(float(np.max(np.abs(2 * length * sol.multipliers[:, 0] - exact))))
     slope = fitted_slope(hs, errors)
     assert 1.8 <= slope <= 2.4, (errors, slope)
-    assert errors[-1] <= 2e-3 * mass * G, errors  # order 2 with a constant of about 10 m g (the tension is ~ m g)
+    assert errors[-1] <= 2e-3 * mass * G, errors  # measured 2.8e-4 (3s, 2s) to 4.2e-4 (baoab) m g at h = 0.01
 
 
 def test_multipliers_are_saved_and_read_back(tmp_path):
