@@ -7,16 +7,26 @@ Two systems, each run twice in the same process, interleaved, best of several re
 - a damped chain of N links hanging under gravity (2 (N) coordinates, N rods, the first from the origin),
   with and without the rods.
 Target (issue 45): constrained <= 2x unconstrained at the default tolerance (1e-12). The figures are printed
-beside it; the script exits 0 whatever they are (a benchmark, not a test).
+beside it; the script exits 0 whatever they are (a benchmark, not a test). The free systems are a free fall
+(V's gradient is a constant): their step is a few vector operations, so the ratio is the constraint solve's
+whole cost over almost nothing.
 
     .venv/bin/python benchmarks/bench_constraints.py            # about a minute (the chain's compile)
     .venv/bin/python benchmarks/bench_constraints.py --quick    # a 20-link chain
+
+Old against new in one call: the same script under two installs (OLD: a directory holding the old
+raydamp package with its built _core), paired by farm-bench, each run's table kept in a file:
+
+    B=benchmarks/bench_constraints.py
+    farm-bench -n 3 --timeout 900 --vs "sh -c 'PYTHONPATH=$OLD exec .venv/bin/python $B --quick >>/tmp/old'" \
+        -- sh -c "exec .venv/bin/python $B --quick >>/tmp/new"
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import os
 
 import numpy as np
 
@@ -67,6 +77,7 @@ def main() -> int:
     links = 20 if args.quick else 100
     cases = [("double pendulum", double_pendulum, 1e-3, 200_000), (f"{links}-link chain", lambda c: chain(links, c),
                                                                    1e-3, 2_000)]
+    print(f"raydamp {raydamp.__file__}; load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
     print(f"{'system':<18} {'method':<6} {'free ns/step':>13} {'constrained':>12} {'ratio':>7}  target <= {TARGET}x")
     for label, build, h, steps in cases:
         free, q0, p0 = build(False)

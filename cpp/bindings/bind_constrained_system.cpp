@@ -1,7 +1,9 @@
 // Compiled systems with holonomic constraints (models/constrained_system.hpp): each (mass, damping) kind
 // bound once, as for the free kinds (bind_system.hpp); the constraints are data.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
 
 #include "bind_system.hpp"
@@ -26,6 +28,28 @@ std::string constraint_message(const ConstraintFailure& f, const py::dict& out) 
          "; the last state before it is saved (a smaller h, or a larger constraint_tol)";
 }
 
+// The multipliers at each saved row (constraints::multipliers), NaN where G M^{-1} G^T is singular.
+template <class Model>
+py::array_t<double> saved_multipliers(const Model& model, const py::dict& out, const Load* load) {
+  const auto t = out["t"].cast<py::array_t<double, py::array::c_style | py::array::forcecast>>();
+  const auto q = out["q"].cast<py::array_t<double, py::array::c_style | py::array::forcecast>>();
+  const auto p = out["p"].cast<py::array_t<double, py::array::c_style | py::array::forcecast>>();
+  const py::ssize_t rows = t.shape(0), n = model.constraints.n, k = model.constraints.k;
+  py::array_t<double> lambda({rows, k});
+  double* result = lambda.mutable_data();
+  {
+    py::gil_scoped_release released;
+    Eigen::VectorXd qi(n), pi(n);
+    for (py::ssize_t i = 0; i < rows; ++i) {
+      qi = Eigen::Map<const Eigen::VectorXd>(q.data() + i * n, n);
+      pi = Eigen::Map<const Eigen::VectorXd>(p.data() + i * n, n);
+      if (!constraints::multipliers(model, qi, pi, t.data()[i], load, result + i * k))
+        std::fill(result + i * k, result + (i + 1) * k, std::numeric_limits<double>::quiet_NaN());
+    }
+  }
+  return lambda;
+}
+
 template <class Mass, class Damping>
 void bind_constrained_kind(py::module_& m, const char* name) {
   using Model = ConstrainedSystem<Mass, Damping>;
@@ -36,8 +60,8 @@ void bind_constrained_kind(py::module_& m, const char* name) {
                       std::vector<int> rows, std::vector<int> cols, double tol, int max_iterations) {
             if (mass.rows() != n || mass.cols() != n) throw std::invalid_argument("mass: expected an n x n matrix");
             if (functions.size() != 14) throw std::invalid_argument("functions: expected 7 (function, data) pairs");
-            if (constraint_functions.size() != 4)
-              throw std::invalid_argument("constraint_functions: expected 2 (function, data) pairs");
+            if (constraint_functions.size() != 6)
+              throw std::invalid_argument("constraint_functions: expected 3 (function, data) pairs");
             const SystemFunctions f{compiled(functions, 0), compiled(functions, 1), compiled(functions, 2),
                                     compiled(functions, 4), CompiledFunction{}};
             CompiledSystem<Mass, Damping> base(
@@ -46,7 +70,8 @@ void bind_constrained_kind(py::module_& m, const char* name) {
                                       std::numeric_limits<double>::quiet_NaN(), CompiledFunction{}),
                 f, n_momenta);
             return Model(std::move(base), ConstraintSet(k, n, compiled(constraint_functions, 0),
-                                                        compiled(constraint_functions, 1), std::move(rows),
+                                                        compiled(constraint_functions, 1),
+                                                        compiled(constraint_functions, 2), std::move(rows),
                                                         std::move(cols), tol, max_iterations));
           }),
           py::arg("n"), py::arg("eps"), py::arg("mass"), py::arg("damping_scalar"), py::arg("damping_matrix"),
@@ -56,6 +81,9 @@ void bind_constrained_kind(py::module_& m, const char* name) {
           // The compiled code lives as long as the Python object that owns it.
           py::keep_alive<1, 9>());
   add_model_functions<Model>(cls);
+  // Members run as single runs (ensemble/driver.hpp); each worker thread's solve scratch is made ready for
+  // the model by its first constrained flow (constraint_work(set)).
+  def_integrate_ensemble<Model>(m);
   // run() with the constraint solve's scratch made ready first and read after: the residuals the run
   // reached, and the constraint that stopped it, if one did.
   cls.def(
@@ -81,6 +109,8 @@ void bind_constrained_kind(py::module_& m, const char* name) {
         }
         out["constraint_residual"] = w.max_residual;
         out["constraint_velocity_residual"] = w.max_velocity_residual;
+        out["constraint_solves"] = py::make_tuple(w.drifts, w.iterations, w.refreshes, w.factorisations);
+        if (save_dofs.empty()) out["multipliers"] = saved_multipliers(model, out, load_of(load));
         return out;
       },
       py::arg("method"), py::arg("tableau"), py::arg("composition"), py::arg("q0"), py::arg("p0"), py::arg("h"),
@@ -89,11 +119,6 @@ void bind_constrained_kind(py::module_& m, const char* name) {
       py::arg("load").none(true) = py::none(), py::arg("temperature") = 0.0, py::arg("seed") = 0,
       py::arg("stream") = 0, py::arg("divergence") = kDefaultDivergence, py::arg("events").none(true) = py::none(),
       py::arg("dense") = false, py::arg("envelope").none(true) = py::none());
-  // Every kind answers integrate_ensemble; this one refuses, naming why (its solve's scratch is per run).
-  cls.def_static("integrate_ensemble", [](py::args, py::kwargs) -> py::dict {
-    throw std::invalid_argument("system.constraints: a constrained System does not run as an ensemble yet; run its "
-                                "members one by one with raydamp.integrate");
-  });
   // One constrained sub-flow or projection at a time, for tests and the initial checks.
   cls.def("constrained_flow", [](const Model& model, const std::string& flow, const Eigen::VectorXd& q,
                                  const Eigen::VectorXd& p, double t) {

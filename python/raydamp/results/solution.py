@@ -53,6 +53,14 @@ class Solution:
         Structure's order), for a run of a :class:`raydamp.Structure` with springs, else None: each spring's
         force-deformation loop. ``absolute_acceleration()`` reads the forces (a model rebuilt after the run
         has only its virgin materials).
+    multipliers : (N, k) a constrained System's Lagrange multipliers lambda at each saved row (None for
+        other models, and for a run with ``save_dofs``). The constraint force on the coordinates is
+        -G(q)^T lambda, G = dg/dq, so lambda_i has the units of a force divided by those of dg_i/dq (a rod
+        written g = x^2 + y^2 - l^2 pulls with the tension 2 l lambda, lambda > 0 pulling inwards). It is
+        the multiplier of the continuous equations at the saved (q, p): (G M^-1 G^T) lambda = G M^-1 F +
+        (v^T Hess g_i v)_i, v = M^-1 p, F = -grad V + f(t) - eps D M^-1 p; so as accurate as the saved state
+        (the method's order), not the discrete impulse of a step. At a temperature, F is the deterministic
+        force (the noise has no value at an instant).
     load : the run's :class:`raydamp.Load` (or GroundMotion), or None; a loaded file's and an
         ensemble member's is rebuilt from the provenance by ``load_values()``, ``absolute_acceleration()`` and
         ``raydamp.analysis.energy_error``, which need it.
@@ -98,6 +106,7 @@ class Solution:
     # A constrained System's residuals over the run (raydamp.jobs.JobSummary describes both), else None.
     constraint_residual: float | None = field(default=None)
     constraint_velocity_residual: float | None = field(default=None)
+    multipliers: np.ndarray | None = field(default=None)
     # (model, q0, p0, options) of the run, turned into `provenance` when asked for (cheap
     # runs stay cheap); or the provenance dict itself, for a loaded solution.
     origin: Any = field(default=None, compare=False)

@@ -176,6 +176,9 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
     q0 = _states("q0", q0, members, n)
     members = q0.shape[0]
     p0 = _states("p0", p0, members, n)
+    if getattr(system, "constraints", ()):  # a constrained System: each member on g = 0 and its tangent space
+        q0 = np.array([system.check_configuration(f"q0[{i}]", q) for i, q in enumerate(q0)])
+        p0 = np.array([system.check_momenta(f"p0[{i}]", q, p) for i, (q, p) in enumerate(zip(q0, p0))])
     system.check_configurations("q0", q0)
     params = _parameter_arrays(system, parameters, members)
     if listed:

@@ -356,6 +356,7 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
         "dofs": None if dofs is None else np.asarray(dofs, dtype=np.int64),
         "constraint_residual": out.get("constraint_residual"),
         "constraint_velocity_residual": out.get("constraint_velocity_residual"),
+        "multipliers": out.get("multipliers"),
         # q0 and p0 are the run's own arrays (_state), so the provenance keeps them uncopied
         "origin": (model, q0, p0, options)}
     if watch:

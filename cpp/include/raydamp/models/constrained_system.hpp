@@ -4,7 +4,9 @@
 // the same loop as before, with no test and no call more.
 #pragma once
 
+#include <type_traits>
 #include <utility>
+#include <vector>
 
 #include "raydamp/constraints/constraint_set.hpp"
 #include "raydamp/models/compiled_system.hpp"
@@ -25,6 +27,21 @@ struct ConstrainedSystem : CompiledSystem<Mass, Damping> {
     if (constraints.n != this->n) throw std::invalid_argument("constraints: made for another number of coordinates");
     // 3s's fused body (a dashpot's) has no constraint hook.
     this->functions.damp_then_3s_body = CompiledFunction{};
+    constraints.analyse(inverse_mass_entries());
+  }
+
+  // M^{-1}'s non-zeros, from which G M^{-1} G^T's pattern follows.
+  std::vector<constraints::InverseMassEntry> inverse_mass_entries() const {
+    std::vector<constraints::InverseMassEntry> entries;
+    const Mass& mass = this->mass;
+    if constexpr (std::is_same_v<std::decay_t<decltype(mass.inverse)>, double>) {
+      for (int i = 0; i < this->n; ++i) entries.push_back({i, i, mass.inverse});
+    } else {
+      for (int j = 0; j < this->n; ++j)
+        for (int i = 0; i < this->n; ++i)
+          if (mass.inverse(i, j) != 0.0) entries.push_back({i, j, mass.inverse(i, j)});
+    }
+    return entries;
   }
 };
 

@@ -56,6 +56,10 @@ def to_xarray(sol: Any):
     if sol.load_work is not None:
         data["load_work"] = (("time",), sol.load_work, {"long_name": "load work W_f(t)"})
     coords = {"t": (("time",), sol.t), "dof": list(sol.coordinates), "momentum_map": list(sol.momentum_names)}
+    if getattr(sol, "multipliers", None) is not None:
+        data["multipliers"] = (("time", "constraint"), sol.multipliers, {
+            "long_name": "constraint multipliers lambda: the constraint force on the coordinates is -G(q)^T lambda"})
+        coords["constraint"] = np.arange(sol.multipliers.shape[1])
     for name, (dims, values, attrs) in event_columns(sol).items():
         data[name] = (dims, values, attrs)
     return xr.Dataset(data, coords=coords, attrs=_attributes(sol))
@@ -111,4 +115,7 @@ def _csv_table(sol: Any) -> tuple[list[str], np.ndarray]:
         if getattr(sol, name) is not None:
             names.append(name)
             columns.append(getattr(sol, name)[:, None])
+    if getattr(sol, "multipliers", None) is not None:
+        names.extend(f"multiplier_{i}" for i in range(sol.multipliers.shape[1]))
+        columns.append(sol.multipliers)
     return names, np.hstack(columns)

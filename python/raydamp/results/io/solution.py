@@ -22,6 +22,7 @@ def from_xarray(ds) -> Solution:
                     momentum=np.asarray(ds["momentum"].values, float).reshape(ds.sizes["time"], -1),
                     work=np.asarray(ds["work"].values, float) if "work" in ds else None, origin=provenance,
                     load_work=np.asarray(ds["load_work"].values, float) if "load_work" in ds else None,
+                    multipliers=np.asarray(ds["multipliers"].values, float) if "multipliers" in ds else None,
                     dofs=_dofs(provenance), events=_events(ds, ds.attrs), **_scalars_from(dict(ds.attrs)))
 
 
@@ -35,6 +36,7 @@ def from_npz(path) -> Solution:
                         momentum=data["momentum"].reshape(rows, -1),
                         work=data["work"] if "work" in data else None, origin=provenance,
                         load_work=data["load_work"] if "load_work" in data else None,
+                        multipliers=data["multipliers"] if "multipliers" in data else None,
                         dofs=_dofs(provenance), events=_events(data, attrs), **_scalars_from(attrs))
 
 

@@ -62,17 +62,20 @@ class CompiledSystemFunctions:
     damper_norm: float | None = None
     damper_projection: Any | None = None
     damp_then_3s_body: Any | None = None
-    # The constraints (constraints.py): q -> (g, scales), q -> G's non-zeros at (rows, cols).
+    # The constraints (constraints.py): q -> (g, scales), q -> G's non-zeros at (rows, cols),
+    # (q, v) -> v^T Hess g_i v.
     constraint_values: Any | None = None
     constraint_jacobian: Any | None = None
     constraint_pattern: tuple[tuple[int, ...], tuple[int, ...]] = ((), ())
+    constraint_curvature: Any | None = None
 
     @classmethod
     def of(cls, potential: Any, gradient: Any, hessian_product: Any, damper_gradients: Any | None = None,
            momenta: Any | None = None, damper_norm: float | None = None, damper_projection: Any | None = None,
            damp_then_3s_body: Any | None = None, constraint_values: Any | None = None,
            constraint_jacobian: Any | None = None,
-           constraint_pattern: tuple[tuple[int, ...], tuple[int, ...]] = ((), ())) -> CompiledSystemFunctions:
+           constraint_pattern: tuple[tuple[int, ...], tuple[int, ...]] = ((), ()),
+           constraint_curvature: Any | None = None) -> CompiledSystemFunctions:
         """The functions with their addresses, taken from the functions themselves: after a compile, and
         after loading them in another process (an address is of this process's copy of the code)."""
         functions = (potential, gradient, hessian_product, damper_gradients, momenta, damper_projection,
@@ -80,12 +83,14 @@ class CompiledSystemFunctions:
         addresses = tuple(a for fn in functions for a in _address(fn))
         return cls(addresses, potential, gradient, hessian_product, damper_gradients, momenta, damper_norm,
                    damper_projection, damp_then_3s_body, constraint_values, constraint_jacobian,
-                   (tuple(constraint_pattern[0]), tuple(constraint_pattern[1])))
+                   (tuple(constraint_pattern[0]), tuple(constraint_pattern[1])), constraint_curvature)
 
     @property
     def constraint_addresses(self) -> tuple[int, ...]:
-        """(function, data) of the constraints' values, then of their Jacobian, as the bindings take them."""
-        return (*_address(self.constraint_values), *_address(self.constraint_jacobian))
+        """(function, data) of the constraints' values, their Jacobian and their curvature, as the bindings
+        take them."""
+        return (*_address(self.constraint_values), *_address(self.constraint_jacobian),
+                *_address(self.constraint_curvature))
 
     def to_bytes(self) -> bytes:
         """The compiled functions as bytes (their object code, as SymEngine pickles an LLVM Lambdify: a few kB
@@ -110,13 +115,14 @@ class CompiledSystemFunctions:
                 and all(isinstance(i, int) for side in found[3] for i in side)):
             raise ValueError("compiled system functions: not what CompiledSystemFunctions.to_bytes writes")
         _, functions, damper_norm, pattern = found
-        return cls.of(*functions[:5], damper_norm, *functions[5:], constraint_pattern=(pattern[0], pattern[1]))
+        return cls.of(*functions[:5], damper_norm, *functions[5:9], constraint_pattern=(pattern[0], pattern[1]),
+                      constraint_curvature=functions[9])
 
 
 # The order of the functions in to_bytes, and that form's version.
 _FUNCTIONS = ("potential", "gradient", "hessian_product", "damper_gradients", "momenta", "damper_projection",
-              "damp_then_3s_body", "constraint_values", "constraint_jacobian")
-_FORMAT = "raydamp.compiled_system.2"
+              "damp_then_3s_body", "constraint_values", "constraint_jacobian", "constraint_curvature")
+_FORMAT = "raydamp.compiled_system.3"
 # What an LLVM Lambdify's pickle names (SymEngine's llvm_loading_func rebuilds it from its object code).
 _LOADABLE = {("symengine.lib.symengine_wrapper", "llvm_loading_func"), ("numpy", "float64"), ("numpy", "dtype")}
 
@@ -367,15 +373,16 @@ def _compile(spec: SystemSpec) -> CompiledSystemFunctions:
         with_p.update({f"p_{name}": pi for name, pi in zip(spec.coordinates, p)})
         outputs = [expr.to_symengine(with_p) for expr in spec.momenta.values()]
         momenta_fn = _jit(q + p, outputs, ("momenta",))[0]
-    values_fn = jacobian_fn = None
+    values_fn = jacobian_fn = curvature_fn = None
     pattern: tuple[tuple[int, ...], tuple[int, ...]] = ((), ())
     if spec.constraints:
         from .constraints import constraint_functions
-        values, nonzeros, pattern = constraint_functions(spec, symbols, q)
+        values, nonzeros, curvatures, pattern = constraint_functions(spec, symbols, q, v)
         values_fn = _jit(q, values, ("constraints",))[0]
         jacobian_fn = _jit(q, nonzeros, ("constraints",))[0]
+        curvature_fn = _jit(q + v, curvatures, ("constraints",))[0]
     return CompiledSystemFunctions.of(pot_fn, grad_fn, hv_fn, damper_fn, momenta_fn, damper_norm, projection_fn,
-                                      fused_fn, values_fn, jacobian_fn, pattern)
+                                      fused_fn, values_fn, jacobian_fn, pattern, curvature_fn)
 
 
 # The method whose merged steps a System with one constant-norm dashpot runs in one

@@ -4,7 +4,8 @@ state against them.
 Each constraint is an expression in the coordinates and parameters, parsed by raydamp's own parser
 (spec.py) and turned into SymEngine from our tree. The step loop (cpp/include/raydamp/constraints/) calls
 two compiled functions: q -> (g_1..g_k, s_1..s_k), each constraint and its scale, and q -> the
-structural non-zeros of the Jacobian G = dg/dq, row by row, whose pattern is fixed here once.
+structural non-zeros of the Jacobian G = dg/dq, row by row, whose pattern is fixed here once; a third,
+(q, v) -> (v^T Hess g_i(q) v)_i, gives the multipliers after a run (``Solution.multipliers``).
 
 The scale s_i is the sum of the absolute values of g_i's top-level terms: for a rod written
 ``x^2 + y^2 - l^2`` it is x^2 + y^2 + l^2, about 2 l^2, so the tolerance |g_i| <= tol s_i is
@@ -27,26 +28,30 @@ def _terms(expr: se.Basic) -> list[se.Basic]:
     return list(expr.args) if isinstance(expr, se.Add) else [expr]
 
 
-def constraint_functions(spec, symbols: dict[str, se.Basic], q: list[se.Symbol]):
-    """(values, nonzeros, (rows, cols)): the 2k expressions g then s, G's non-zero entries row by row, and
-    where each sits in the k x n matrix G."""
-    values, scales, nonzeros, rows, cols = [], [], [], [], []
+def constraint_functions(spec, symbols: dict[str, se.Basic], q: list[se.Symbol], v: list[se.Symbol]):
+    """(values, nonzeros, curvatures, (rows, cols)): the 2k expressions g then s, G's non-zero entries row by
+    row, each constraint's v^T Hess g_i v (in q and v), and where each non-zero sits in the k x n matrix G."""
+    values, scales, nonzeros, curvatures, rows, cols = [], [], [], [], [], []
     for i, constraint in enumerate(spec.constraints):
         g = constraint.to_symengine(symbols)
         values.append(g)
         scales.append(sum((se.Abs(t) for t in _terms(g)), se.Integer(0)))
         found = False
+        rate = se.Integer(0)  # dg/dt along v: G_i v
         for j, qj in enumerate(q):
             d = se.diff(g, qj)
             if d != 0:
                 nonzeros.append(d)
                 rows.append(i)
                 cols.append(j)
+                rate += d * v[j]
                 found = True
+        # v^T Hess g_i v = d(G_i v)/dq . v, over the coordinates g_i depends on.
+        curvatures.append(sum((se.diff(rate, q[j]) * v[j] for j, r in zip(cols, rows) if r == i), se.Integer(0)))
         if not found:
             raise SpecError(("constraints", i), f"{constraint.text!r} does not depend on the coordinates "
                                                 "(its gradient is zero)")
-    return values + scales, nonzeros, (tuple(rows), tuple(cols))
+    return values + scales, nonzeros, curvatures, (tuple(rows), tuple(cols))
 
 
 class ConstraintChecks:

@@ -71,8 +71,11 @@ class System(Model):
         multiple of I) the damping and noise flows are then exact on the tangent space, and the noise's
         stationary law is the constrained Boltzmann one; for another constant D the damping sub-flow is the
         exact flow of the frozen-q operator eps D M^{-1} followed by the projection (consistent, the method's
-        order, not the exact projected flow). Not with dashpot damping yet; ensembles of a constrained system
-        are not supported yet.
+        order, not the exact projected flow). Not with dashpot damping yet. The solve's matrices G M^-1 G^T
+        are band matrices in an order found once (a chain's rods: tridiagonal), so a step costs O(k) for a
+        chain of k links. ``Solution.multipliers`` holds the multipliers at each saved row. An ensemble runs
+        each member as its single run (member i equals raydamp.integrate of its state bit for bit); a member
+        whose constraint solve failed reports "non_finite" there.
     constraint_tol : the constraint solve's tolerance, relative to each constraint's scale (the sum of the
         absolute values of its top-level terms: |r - l| <= tol l for a rod written ``x^2 + y^2 - l^2``);
         default 1e-12.
@@ -225,9 +228,6 @@ class System(Model):
         if self._python is not None:
             raise ValueError("system: a System built from Python functions runs Python in its step loop and "
                              "cannot run as an ensemble; write its potential as an expression")
-        if self._spec.constraints:
-            raise ValueError("system.constraints: a constrained System does not run as an ensemble yet; run its "
-                             "members one by one with raydamp.integrate")
         if not parameters:
             return MemberModels.shared(self, members)
         names = list(parameters)
