@@ -5,6 +5,9 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 PIP := $(VENV)/bin/pip
+# uv installs what pip would, from the same index, in a tenth of the processor time (the dependencies: about
+# 6 s of CPU against pip's 52): time the module's compile no longer shares with unpacking wheels.
+UV := $(VENV)/bin/uv pip install --python $(PY)
 INSTALLED := $(VENV)/.raydamp-installed
 SOURCES := $(shell find cpp python service -type f \( -name '*.hpp' -o -name '*.cpp' -o -name '*.py' -o -name '*.pyi' \
              -o -name '*.html' -o -name '*.js' -o -name '*.css' -o -name '*.json' \) 2>/dev/null)
@@ -33,27 +36,28 @@ system-deps:
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
-	$(PIP) install --upgrade pip
+
+$(VENV)/bin/uv: | $(PY)
+	$(PIP) install uv
 
 # cmake and ninja come from PyPI into the venv: they build the C++ tests too. The build backend
 # lives in the venv as well (--no-build-isolation): an isolated build gets pybind11 from a new
 # temporary directory each time, so every file recompiles; from the venv, build/ stays incremental.
 TOOLS := $(VENV)/.build-tools
-$(TOOLS): $(PY)
-	$(PIP) install cmake ninja 'scikit-build-core>=0.10' 'pybind11>=3.1,<3.2'
+$(TOOLS): $(VENV)/bin/uv
+	$(UV) cmake ninja 'scikit-build-core>=0.10' 'pybind11>=3.1,<3.2'
 	@touch $@
 
 # The package's dependencies (with these extras, read from pyproject.toml) install while its module
-# compiles: the compiler keeps both cores busy for about four minutes, and pip's own order (resolve,
-# build, then install everything) left the 25 s of unpacking until after it. `pip check` then proves
-# the two halves agree.
+# compiles (pip's own order, resolve, build, then install everything, left the unpacking until after
+# the compile). `pip check` then proves the two halves agree.
 EXTRAS := service,analysis,io,structures,sweep,test
 REQUIREMENTS := import sys, tomllib; project = tomllib.load(open("pyproject.toml", "rb"))["project"]; \
   print(*project["dependencies"], *(r for e in sys.argv[1].split(",") for r in project["optional-dependencies"][e]), sep="\n")
 $(INSTALLED): $(TOOLS) pyproject.toml CMakeLists.txt $(SOURCES)
 	@mkdir -p build
 	$(PY) -c '$(REQUIREMENTS)' $(EXTRAS) >build/requirements.txt
-	@$(PIP) install -r build/requirements.txt >build/dependencies.log 2>&1 & deps=$$!; \
+	@$(UV) -r build/requirements.txt >build/dependencies.log 2>&1 & deps=$$!; \
 	  echo "installing the dependencies alongside (log: build/dependencies.log)"; \
 	  $(PIP) install --no-build-isolation --no-deps .; built=$$?; \
 	  if ! wait $$deps; then cat build/dependencies.log; echo "the dependencies did not install"; exit 1; fi; \

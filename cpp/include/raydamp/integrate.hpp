@@ -408,6 +408,30 @@ void step_for(const Model& model, const Tab& tab, const Composition& composition
   }
 }
 
+// Step i of x split at its springs' kinks (materials/kinks.hpp): the whole step where none falls inside
+// it, else pieces of it, each ending at a kink (step_for).
+template <class Method, class Kinks, class Model, class Tab, class Stepper, int Dim, class W, class WS, class Rec>
+void step_at_kinks(Kinks& kinks, const Model& model, const Tab& tab, const Composition& composition,
+                   const RunSpec& spec, const Stepper& stepper, State<Dim>& x, long i, W& w, WS& ws, Rec& rec) {
+  const double t = step_time(i, spec.h, spec.n_steps, spec.h_last);
+  kinks.step(x, t, i == spec.n_steps - 1 ? spec.h_last : spec.h, ws, rec, [&](State<Dim>& y, double tau, bool whole) {
+    if (whole) stepper.step(model, tab, y, i, w);
+    else step_for<Method>(model, tab, composition, y, tau, w);
+  });
+}
+
+// The end of a run at step k: its final state is the last row (saved or not by save_every), then its
+// step count, drift and message.
+template <class Rec, int Dim>
+void end_run(RunResult& result, Rec& rec, const State<Dim>& z, double t_last, long k, const RunSpec& spec,
+             double max_drift) {
+  if (result.trajectory.t.back() != t_last && result.status != Status::out_of_memory && !rec.save(z, t_last))
+    k = out_of_memory(result, spec.n_steps, spec.save_every, k);
+  result.steps = k;
+  result.max_momentum_drift = max_drift;
+  if (result.status == Status::completed) result.message = "completed " + std::to_string(spec.n_steps) + " steps";
+}
+
 // After a terminal event (watch.stopped()): z becomes the state at the event's time, the crossing step
 // run again from its start with its duration cut to that time; returns the steps taken.
 template <class Method, class Watch, class Model, class Tab, class WS, class Rec, int Dim>
@@ -481,10 +505,7 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
     if (ws.load) ws.time = time_at(i);
     if constexpr (has_materials_v<Model>) {
       if (kinks.on()) {
-        kinks.step(x, time_at(i), i == N - 1 ? spec.h_last : spec.h, ws, rec, [&](State<Dim>& y, double tau, bool whole) {
-          if (whole) stepper.step(model, tab, y, i, w);
-          else step_for<Method>(model, tab, composition, y, tau, w);
-        });
+        step_at_kinks<Method>(kinks, model, tab, composition, spec, stepper, x, i, w, ws, rec);
         return envelope.after_step(x, i), watch.after_step(x, i, time_at(i + 1), rec);
       }
     }
@@ -552,14 +573,8 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
       next_progress += progress_every;
     }
   }
-  // The final state is always the last row, saved or not by save_every.
-  const double t_last = watch.stopped() ? watch.stop_time() : time_at(k);
-  if (result.trajectory.t.back() != t_last && result.status != Status::out_of_memory && !rec.save(z, t_last))
-    k = out_of_memory(result, N, spec.save_every, k);
+  end_run(result, rec, z, watch.stopped() ? watch.stop_time() : time_at(k), k, spec, max_drift);
   if (control.progress && result.status == Status::completed && next_progress - progress_every != N) control.progress(N, N);
-  result.steps = k;
-  result.max_momentum_drift = max_drift;
-  if (result.status == Status::completed) result.message = "completed " + std::to_string(N) + " steps";
   return result;
 }
 
