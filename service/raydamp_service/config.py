@@ -90,7 +90,7 @@ class Settings(BaseSettings):
     # The heavy checks run in worker processes (checks/pool.py), each within a CPU and a memory budget.
     check_workers: int = Field(2, ge=1, le=16, description="processes that check submitted systems")
     check_seconds: float = Field(10.0, gt=0, description="CPU time budget of one check")
-    check_memory_bytes: int = Field(2**30, ge=2**26, description=(
+    check_memory_bytes: int = Field(2**30, ge=2**24, description=(
         "memory budget of one check: address space a check process may add to what it holds at start"))
     max_pending_checks: int = Field(8, ge=1, description="checks running or waiting for a process; more get 429")
 
