@@ -35,14 +35,20 @@ def record(seconds: float = 20.0, dt: float = 0.01, seed: int = 11) -> tuple[np.
     return t, 4.0 * smooth * envelope
 
 
+def shear_frame_stiffness(storeys: int = STOREYS, stiffness: float = STIFFNESS) -> np.ndarray:
+    """K of a shear frame of equal storeys: storey i joins floor i to the one below it, storey 0 to the ground."""
+    K = np.zeros((storeys, storeys))
+    for i in range(storeys):
+        K[i, i] += stiffness
+        if i + 1 < storeys:
+            K[i, i] += stiffness
+            K[i, i + 1] = K[i + 1, i] = -stiffness
+    return K
+
+
 def frame():
     M = np.eye(STOREYS) * MASS
-    K = np.zeros((STOREYS, STOREYS))
-    for i in range(STOREYS):
-        K[i, i] += STIFFNESS
-        if i + 1 < STOREYS:
-            K[i, i] += STIFFNESS
-            K[i, i + 1] = K[i + 1, i] = -STIFFNESS
+    K = shear_frame_stiffness()
     w = np.sqrt(np.sort(scipy.linalg.eigh(K, M, eigvals_only=True)))
     alpha, beta = raydamp.rayleigh_coefficients(w[0], w[2], ZETA, ZETA)
     return M, K, alpha, beta, w

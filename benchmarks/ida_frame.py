@@ -31,7 +31,7 @@ import time
 
 import numpy as np
 import scipy.linalg
-from ground_motion_frame import opensees_shear_frame
+from ground_motion_frame import opensees_shear_frame, shear_frame_stiffness
 
 import raydamp
 from raydamp.materials import Bilinear
@@ -61,12 +61,7 @@ def record(seed: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def rayleigh() -> tuple[float, float, np.ndarray]:
-    K0 = np.zeros((STOREYS, STOREYS))
-    for i in range(STOREYS):
-        K0[i, i] += STIFFNESS
-        if i + 1 < STOREYS:
-            K0[i, i] += STIFFNESS
-            K0[i, i + 1] = K0[i + 1, i] = -STIFFNESS
+    K0 = shear_frame_stiffness(STOREYS, STIFFNESS)
     w = np.sqrt(np.sort(scipy.linalg.eigh(K0, np.eye(STOREYS) * MASS, eigvals_only=True)))
     alpha, beta = raydamp.rayleigh_coefficients(w[0], w[2], ZETA, ZETA)
     return alpha, beta, w
