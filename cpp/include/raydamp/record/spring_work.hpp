@@ -58,25 +58,9 @@ class SpringWork {
   }
 
  private:
-  template <class Vec>
-  void read(const Vec& q) {
-    if constexpr (has_materials_v<Model>) {
-      std::size_t at = 0;
-      model_.springs.for_each([&](const auto& set) {
-        using St = typename std::decay_t<decltype(set)>::State;
-        for (std::size_t s = 0; s < set.size(); ++s, ++at) {
-          St trial;
-          const double d = set.deformation(q, s);
-          sigma_[at] = set.material[s].force(set.committed[s], d, trial);
-          stored_[at] = set.material[s].stored(trial, d);
-          d_[at] = d;
-        }
-      });
-    }
-  }
-
-  template <class Vec>
-  void add(const Vec& q) {
+  // f(at, d, sigma, stored) for every spring at q, in the core's order, from its committed state.
+  template <class Vec, class F>
+  void for_each_spring(const Vec& q, F&& f) const {
     if constexpr (has_materials_v<Model>) {
       std::size_t at = 0;
       model_.springs.for_each([&](const auto& set) {
@@ -85,15 +69,29 @@ class SpringWork {
           St trial;
           const double d = set.deformation(q, s);
           const double sigma = set.material[s].force(set.committed[s], d, trial);
-          const double increment = 0.5 * (sigma_[at] + sigma) * (d - d_[at]);
-          if (!std::isfinite(increment) || !std::isfinite(d)) continue;
-          done_[at] += increment;
-          sigma_[at] = sigma;
-          stored_[at] = set.material[s].stored(trial, d);
-          d_[at] = d;
+          f(at, d, sigma, set.material[s].stored(trial, d));
         }
       });
+    } else {
+      static_cast<void>(q), static_cast<void>(f);
     }
+  }
+
+  template <class Vec>
+  void read(const Vec& q) {
+    for_each_spring(q, [&](std::size_t at, double d, double sigma, double stored) {
+      sigma_[at] = sigma, stored_[at] = stored, d_[at] = d;
+    });
+  }
+
+  template <class Vec>
+  void add(const Vec& q) {
+    for_each_spring(q, [&](std::size_t at, double d, double sigma, double stored) {
+      const double increment = 0.5 * (sigma_[at] + sigma) * (d - d_[at]);
+      if (!std::isfinite(increment) || !std::isfinite(d)) return;
+      done_[at] += increment;
+      sigma_[at] = sigma, stored_[at] = stored, d_[at] = d;
+    });
   }
 
   const Model& model_;
