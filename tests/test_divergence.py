@@ -125,3 +125,18 @@ def test_the_save_grid_is_the_core_s():
         np.testing.assert_array_equal(sol.t, save_grid(0.1, n, 0.1, every))
     sol = raydamp.integrate(DampedPendulum(eps=0.1), [1.0], [0.0], h=0.3, t_end=1.0, save_every=2)
     np.testing.assert_array_equal(sol.t, save_grid(0.3, 4, 1.0 - 3 * 0.3, 2))
+
+
+def test_the_readme_names_every_status_a_run_ends_with():
+    # The README said a blow-up ends "non_finite" alone: `diverged` (and `out_of_memory`) were in no line of it.
+    import re
+    from pathlib import Path
+
+    from raydamp.jobs.statuses import MEANINGS, STATUSES
+    from raydamp.run.integrate import DEFAULT_DIVERGENCE
+
+    text = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    for status in STATUSES:
+        if not MEANINGS[status].startswith("reserved"):
+            assert re.search(rf"[`\"']{status}[`\"']", text), status
+    assert re.search(r"`divergence`\s+\(default 10\^6\)", text) and DEFAULT_DIVERGENCE == 1e6
