@@ -415,7 +415,7 @@ def _build_core(spec: SystemSpec, addresses, damper_coefficients, n_momenta: int
             return cls(spec.n, eps, spec.mass, spec.damping_scalar if spec.damping_form == "scalar" else 0.0,
                        spec.damping_matrix if spec.damping_matrix.size else np.zeros((spec.n, spec.n)),
                        list(addresses), n_momenta, owner, len(spec.constraints), list(owner.constraint_addresses),
-                       list(rows), list(cols), spec.constraint_tol, 50)
+                       list(rows), list(cols), spec.constraint_tol, 50, list(damper_coefficients))
         except ValueError as err:
             field, _, message = str(err).partition(": ")
             raise SpecError(tuple(field.split(".")), message or str(err)) from None
