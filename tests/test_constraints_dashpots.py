@@ -110,3 +110,24 @@ def test_the_damping_sub_flow_is_the_exact_flow_of_the_projected_operator():
     # not the free flow then the projection: that differs here by far more than rounding
     free = P @ expm(-t * EPS * D @ minv) @ p
     assert np.max(np.abs(free - exact)) > 1e-3 * np.linalg.norm(p)
+
+
+def test_a_pendulum_with_a_dashpot_at_a_temperature_samples_the_constrained_boltzmann_law():
+    # A planar pendulum, V = m g y with y up, and one dashpot on x (it damps the tangent velocity by cos^2 of the
+    # angle from the vertical, and its noise must have the same projected shape): <y / l> = -I1(a) / I0(a),
+    # a = m g l / kT, and the kinetic temperature <|p|^2 / m> = kT (one tangent direction).
+    from scipy.special import i0, i1
+
+    kT, a, members = 0.5, 2.0, 200
+    system = raydamp.System(["x", "y"], "y", mass=1.0, damping={"dampers": [{"on": "x", "c": 3.0}]}, eps=1.0,
+                            constraints=["x^2 + y^2 - 1"])
+    ens = raydamp.integrate_ensemble(system, np.tile([1.0, 0.0], (members, 1)), np.zeros((members, 2)),
+                                     method="baoab", h=0.1, t_end=230.0, save_every=5, temperature=kT, seed=7,
+                                     threads=1)
+    assert ens.status == ("completed",) * members
+    keep = ens.t > 30
+    for values, exact in ((ens.q[:, keep, 1], -i1(a) / i0(a)), ((ens.p[:, keep] ** 2).sum(axis=2), kT)):
+        means = values.mean(axis=1)
+        se = means.std(ddof=1) / np.sqrt(members)
+        assert abs(values.mean() - exact) <= 3 * se, (values.mean(), exact, se)
+        assert se <= 0.02 * abs(exact)
