@@ -73,7 +73,8 @@ class System(Model):
         exact flow of the frozen-q operator eps D M^{-1} followed by the projection (consistent, the method's
         order, not the exact projected flow). Dashpots take the exact flow of the projected operator
         P eps D(q) M^{-1} (P the M-orthogonal projector onto the tangent space), their noise in the same
-        space; rks's Runge-Kutta step stays the free one, then the projection. The solve's matrices G M^-1 G^T
+        space; rks's Runge-Kutta step stays the free one, then the projection, which makes rks first order
+        with dashpots (slope 1.1 on a double pendulum): use 3s, 2s or baoab there. The solve's matrices G M^-1 G^T
         are band matrices in an order found once (a chain's rods: tridiagonal), so a step costs O(k) for a
         chain of k links. ``Solution.multipliers`` holds the multipliers at each saved row. An ensemble runs
         each member as its single run (member i equals raydamp.integrate of its state bit for bit); a member
