@@ -185,3 +185,25 @@ def test_bad_tangent_choices_are_refused_naming_the_argument():
                           damping_stiffness="tangent")
     with pytest.raises(ValueError, match=r"^temperature: a Structure with damping_stiffness='tangent'"):
         raydamp.integrate(sdof(False), [0.0], [0.0], h=0.01, n_steps=10, temperature=1.0, seed=1)
+
+
+@pytest.mark.parametrize("locate_kinks", [False, True])
+def test_runs_and_ensemble_members_on_threads_each_follow_their_own_springs_branches(locate_kinks):
+    # The tangent reads the springs of the run's own copy of the model: a second run, and each member of an
+    # ensemble on two threads, equal a first run bit for bit; the frame's storeys yield, and the tangent's
+    # damping differs from the initial stiffness's
+    springs = [raydamp.Spring((0,), Bilinear(400.0, 6.0, 0.05)), raydamp.Spring((0, 1), ElasticPlastic(300.0, 4.0)),
+               raydamp.Spring((1, 2), Bilinear(200.0, 3.0, 0.1))]
+    frame = raydamp.Structure(np.eye(3), springs=springs, alpha=0.2, beta=0.004, damping_stiffness="tangent",
+                              locate_kinks=locate_kinks)
+    q0, p0 = np.zeros(3), np.array([3.0, -2.0, 4.0])
+    first = raydamp.integrate(frame, q0, p0, method="3s", h=0.005, n_steps=400)
+    again = raydamp.integrate(frame, q0, p0, method="3s", h=0.005, n_steps=400)
+    np.testing.assert_array_equal(again.q, first.q)
+    members = raydamp.integrate_ensemble(frame, np.zeros((4, 3)), np.tile(p0, (4, 1)), method="3s", h=0.005,
+                                         n_steps=400, threads=2)
+    for i in range(4):
+        np.testing.assert_array_equal(members.q[i], first.q)
+    assert (np.abs(first.spring_deformations).max(axis=0) > [6.0 / 400.0, 4.0 / 300.0, 3.0 / 200.0]).all()
+    initial = raydamp.integrate(frame.replace(damping_stiffness="initial"), q0, p0, method="3s", h=0.005, n_steps=400)
+    assert np.abs(initial.q - first.q).max() > 1e-3
