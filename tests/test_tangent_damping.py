@@ -161,6 +161,13 @@ def test_tangent_damping_round_trips_through_json():
     back = raydamp.Structure.from_dict(structure.to_dict())
     assert back.damping_stiffness == "tangent" and back._core_model.tangent_damping
     assert "damping_stiffness" not in sdof(damping_stiffness="initial").to_dict()
+    # the job JSON's door: the same schema builds the same model, and a bad value names its path
+    from raydamp.jobs import JobError, model_from_spec
+
+    built = model_from_spec({"system": structure.to_dict()})
+    assert built.damping_stiffness == "tangent" and built._core_model.tangent_damping
+    with pytest.raises(JobError, match=r"^system\.damping_stiffness: Input should be 'initial' or 'tangent'"):
+        model_from_spec({"system": {**structure.to_dict(), "damping_stiffness": "secant"}})
 
 
 @pytest.mark.parametrize("material,match", [
