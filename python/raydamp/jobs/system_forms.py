@@ -443,6 +443,9 @@ class StructureInput(LinearStructureInput):
                                           f'most {MAX_SPRINGS:,} in a job (raydamp.Structure has no such bound)')
     locate_kinks: bool = Field(False, description="split each step at the springs' and the load's kinks, so that "
                                                   "every method keeps its order (help(raydamp.Structure))")
+    damping_stiffness: Literal["initial", "tangent"] = Field(
+        "initial", description="Rayleigh's stiffness: the initial K0, or each spring's tangent on its branch "
+                               "(help(raydamp.Structure))")
 
     def files(self, at: tuple) -> Iterator[tuple[tuple, str, str]]:
         for key in ("M", "K"):
