@@ -193,14 +193,14 @@ class CheckPool:
         ChecksBusy. The call a check in this process built (None for a check process's)."""
         if not isolated(spec):
             return check_spec(spec, self._settings, files=files)
-        _load(self.call(_check_job, (spec, self._settings), ("system",)))
+        _load(self._run(_check_job, (spec, self._settings), ("system",)))
         return None
 
     def sweep(self, spec: SweepSpec) -> int:
         """Every check of a sweep (limits.check_sweep_spec); its number of members."""
         if not isolated(spec.job):
             return check_sweep_spec(spec, self._settings).members
-        members, compiled = self.call(_check_sweep, (spec, self._settings), ("job", "system"))
+        members, compiled = self._run(_check_sweep, (spec, self._settings), ("job", "system"))
         _load(compiled)
         return members
 
@@ -208,7 +208,7 @@ class CheckPool:
         """A plot's PNG, draw(record, read(), *args) in a check process, read() once a place is taken; ValueError
         (a plot this run cannot have), ChecksBusy, or PlotOverBudget."""
         try:
-            refused, png = self.call(draw, args, ("query", "width"), read=read)
+            refused, png = self._run(draw, args, ("query", "width"), read=read)
         except JobError:
             raise PlotOverBudget(f"drawing this plot took more than check_seconds = {self._settings.check_seconds:g}"
                                  f" s or check_memory_bytes = {self._settings.check_memory_bytes / 2**20:.0f} MiB; "
@@ -220,11 +220,14 @@ class CheckPool:
     def compile(self, spec: JobSpec) -> None:
         """Compile a job's functions in a check process, waiting for a place, and load them here; JobError past a
         budget, ChecksBusy if no place came free within check_seconds."""
-        _load(self.call(JobSpec.compiled_form, (spec,), ("system",), wait=True))
+        _load(self._run(JobSpec.compiled_form, (spec,), ("system",), wait=True))
 
-    def call(self, function, args: tuple, where: tuple[str, ...], wait: bool = False, read=None) -> Any:
-        """function(*args) in a check process, read() (once a place is taken) first among args if given; JobError
-        at `where` past a budget, ChecksBusy if no place (wait: none within check_seconds)."""
+    def call(self, function, *args: Any, where: tuple[str, ...] = ("body",)) -> Any:
+        """function(*args) in a check process (an upload's parse); JobError at `where` past a budget, ChecksBusy."""
+        return self._run(function, args, where)
+
+    def _run(self, function, args: tuple, where: tuple[str, ...], wait: bool = False, read=None) -> Any:
+        """read(), if given, is read once a place is taken and goes first among args."""
         budget = self._settings.check_seconds
         if self._pool is None or not self._pending.acquire(blocking=wait, timeout=budget if wait else None):
             raise ChecksBusy

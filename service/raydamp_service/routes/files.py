@@ -66,7 +66,7 @@ def upload_file(file: Annotated[UploadFile, File(description="a Matrix Market (.
         spool.flush()
         try:
             info = request.app.state.checks.call(partial(check_upload_file, max_dim=settings.max_structure_dim),
-                                                 (spool.name, _name(file.filename)), ("body", "file"))
+                                                 spool.name, _name(file.filename), where=("body", "file"))
         except JobError as error:
             raise RequestValidationError([{"type": "value_error", "loc": error.loc, "msg": error.message,
                                            "input": _name(file.filename)}]) from None
