@@ -101,6 +101,26 @@ def test_a_read_only_database_refuses_to_start_with_one_line(tmp_path, run_servi
     assert "readonly" in line.replace(" ", "") or "permission" in line.lower()
 
 
+def test_an_sqlite_before_3_35_refuses_to_start_with_one_line(tmp_path, monkeypatch, capsys):
+    # A task's claim is one UPDATE ... RETURNING (SQLite 3.35); an older library is named, not worked around.
+    import subprocess
+
+    from raydamp_service.__main__ import main
+    from raydamp_service.tasks import lock
+
+    db = tmp_path / "raydamp.sqlite3"
+    monkeypatch.setattr(sqlite3, "sqlite_version_info", (3, 34, 1))
+    monkeypatch.setattr(sqlite3, "sqlite_version", "3.34.1")
+    monkeypatch.setenv("RAYDAMP_DB", str(db))
+    try:
+        with pytest.raises(SystemExit) as stopped:
+            main(["--port", "0"])
+    finally:
+        lock.release(db)  # taken first, and kept by a service that starts
+    line = _one_line(subprocess.CompletedProcess([], stopped.value.code, "", capsys.readouterr().err))
+    assert str(db) in line and "SQLite 3.34.1 is too old" in line and "needs 3.35 or newer" in line
+
+
 @pytest.mark.parametrize("name", ["same", "hard link", "symlink"])
 def test_a_second_service_on_the_same_database_refuses_to_start(server, run_service, tmp_path, name):
     # It ran its recovery first: the first service's running job went back to "queued" (attempts 2) and both
