@@ -68,6 +68,8 @@ particles = 1000 beside one REBOUND simulation of 1,000 test particles (WHFast +
 operator), the same h: ns per particle per step, and how far apart the two tools' final states are.
 
     .venv/bin/pip install rebound reboundx            # optional: without them raydamp's rows alone
+    # a reboundx built from source finds librebound only on the library path:
+    export LD_LIBRARY_PATH=$(.venv/bin/python -c 'import rebound, os; print(os.path.dirname(rebound.__libpath__))')
     nice -n 5 .venv/bin/python benchmarks/bench_vs_rebound.py
     nice -n 5 .venv/bin/python benchmarks/bench_vs_rebound.py --quick   # first case only, 3 repeats
     nice -n 5 .venv/bin/python benchmarks/bench_vs_rebound.py --ensemble-only

@@ -128,6 +128,9 @@ class SystemKind(Input):
     def compiles(self) -> bool:
         return False
 
+    def compiled_form(self) -> tuple[str, bytes] | None:
+        return None
+
 
 class SystemInput(SystemKind):
     """A user-defined system: raydamp.System.to_dict()'s form. H = 1/2 p^T M^{-1} p + V(q) with
