@@ -187,3 +187,35 @@ def test_ensemble_members_equal_their_single_runs(system):
     for i in range(4):
         one = raydamp.integrate(system, q0[i], p0[i], method="2s", h=0.05, n_steps=200, save_every=50)
         assert np.array_equal(ens.member(i).q, one.q) and np.array_equal(ens.member(i).energy, one.energy), i
+
+
+def test_a_planets_job_runs_and_names_a_bad_field(system):
+    """raydamp run and the service read a job through job_arguments: the same model, and a bad field named by
+    its JSON path."""
+    from raydamp.jobs import job_arguments
+
+    q0, p0 = system.jacobi_state(START_X, START_V)
+    job = {"system": system.to_dict(), "method": "2s", "h": 0.1, "n_steps": 200, "save_every": 50,
+           "initial_state": {"q": q0.tolist(), "p": p0.tolist()}}
+    model, q, p, options = job_arguments(job)
+    direct = raydamp.integrate(system, q0, p0, method="2s", h=0.1, n_steps=200, save_every=50, work=True)
+    assert np.array_equal(raydamp.integrate(model, q, p, **options).q, direct.q)
+    with pytest.raises(ValueError, match=r"system\.masses\[1\]"):
+        job_arguments({**job, "system": {**job["system"], "masses": [1e-2, -1.0]}})
+
+
+@pytest.mark.slow  # two interpreters' start-up, seconds: the job path itself is tested above
+def test_raydamp_run_takes_a_planets_job(system, tmp_path):
+    import json
+    import subprocess
+    import sys
+
+    q0, p0 = system.jacobi_state(START_X, START_V)
+    job = {"system": system.to_dict(), "method": "2s", "h": 0.1, "n_steps": 200, "save_every": 50,
+           "initial_state": {"q": q0.tolist(), "p": p0.tolist()}}
+    (tmp_path / "planets.json").write_text(json.dumps(job))
+    done = subprocess.run([sys.executable, "-m", "raydamp", "run", "planets.json", "--out", "planets.nc"],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    direct = raydamp.integrate(system, q0, p0, method="2s", h=0.1, n_steps=200, save_every=50, work=True)
+    np.testing.assert_array_equal(raydamp.load(tmp_path / "planets.nc").q, direct.q)
