@@ -164,3 +164,14 @@ def test_a_state_off_the_constraints_is_refused_naming_the_row():
         tied.reduce_state([0.0, 0.01, 0.02], np.zeros(3))
     with pytest.raises(ValueError, match=r"^p0: its velocity M\^-1 p0 does not satisfy constraints\[0\]"):
         tied.reduce_state(np.zeros(3), [0.0, 1.0, 1.0])
+
+
+def test_a_structure_with_springs_is_refused_not_reduced_without_them():
+    # The reduced model is a LinearStructure: tying a yielding Structure would have dropped its springs silently.
+    from raydamp.materials import ElasticPlastic
+
+    frame = raydamp.Structure(np.eye(2), np.array([[2.0, -1.0], [-1.0, 1.0]]),
+                              springs=[raydamp.Spring((0,), ElasticPlastic(1.0, 0.1))])
+    with pytest.raises(ValueError, match=r"^constraints: tie eliminates constraints from a LinearStructure; a "
+                                         r"Structure's springs"):
+        frame.tie([[1.0, -1.0]])

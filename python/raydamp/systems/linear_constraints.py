@@ -37,8 +37,6 @@ class Tie:
     ``reduce_load`` / ``reduce_influence`` for loads; ``expand`` gives q and p of the structure."""
 
     def __init__(self, structure, constraints, T, kept: np.ndarray, slaves: np.ndarray):
-        from .structure import LinearStructure
-
         self.structure = structure
         self.C = constraints
         self.T = T
@@ -46,7 +44,7 @@ class Tie:
         self.slaves = slaves
         mass = _symmetric(T.T @ structure.M @ T)
         stiffness = _symmetric(T.T @ structure.K @ T)
-        self.reduced = LinearStructure(mass, stiffness, alpha=structure.alpha, beta=structure.beta,
+        self.reduced = type(structure)(mass, stiffness, alpha=structure.alpha, beta=structure.beta,
                                        f=self.reduce_load(structure.f) if structure.f.any() else None,
                                        allow_indefinite_stiffness=structure.allow_indefinite_stiffness)
 

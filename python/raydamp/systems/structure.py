@@ -365,6 +365,9 @@ class LinearStructure(SharedModel):
         q and p back."""
         from .linear_constraints import tie
 
+        if type(self) is not LinearStructure:  # the reduced model is a LinearStructure: springs would be dropped
+            raise ValueError(f"constraints: tie eliminates constraints from a LinearStructure; a "
+                             f"{type(self).__name__}'s springs are not reduced with it")
         return tie(self, constraints)
 
     # -- natural frequencies and modes -------------------------------------------
