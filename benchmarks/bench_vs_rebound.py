@@ -239,6 +239,17 @@ def rebound_sim(q0, p0, integrator: str):
     return sim
 
 
+def add_drag(rebx, drag, as_operator: str | None) -> None:
+    """The drag as a force WHFast sees each step, or as an operator integrating it (RK2, RK4, ...)."""
+    if as_operator is None:
+        rebx.add_force(drag)
+    else:
+        op = rebx.load_operator("integrate_force")
+        op.params["force"] = drag
+        op.params["integrator"] = reboundx.integrators[as_operator]
+        rebx.add_operator(op)
+
+
 def attach_drag(sim, *, as_operator: str | None):
     """REBOUNDx drag a = -eps v on every particle but the central one: modify_orbits_forces with
     tau_a = -1 / (2 eps), as a force, or (as_operator = "rk4", ...) integrated by integrate_force."""
@@ -249,13 +260,7 @@ def attach_drag(sim, *, as_operator: str | None):
     # zero here: O(N^2) per step with 1,000 test particles)
     drag.params["coordinates"] = reboundx.coordinates["PARTICLE"]
     sim.particles[0].params["primary"] = 1
-    if as_operator is None:
-        rebx.add_force(drag)
-    else:
-        op = rebx.load_operator("integrate_force")
-        op.params["force"] = drag
-        op.params["integrator"] = reboundx.integrators[as_operator]
-        rebx.add_operator(op)
+    add_drag(rebx, drag, as_operator)
     for p in sim.particles[1:]:
         p.params["tau_a"] = -1.0 / (2.0 * EPS)
     return rebx, drag
@@ -483,13 +488,7 @@ def rebound_planets(integrator: str):
 def attach_planet_drag(sim, *, as_operator: str | None):
     rebx = reboundx.Extras(sim)
     drag = rebx.load_force("modify_orbits_forces")  # Jacobi coordinates, REBOUNDx's default
-    if as_operator is None:
-        rebx.add_force(drag)
-    else:
-        op = rebx.load_operator("integrate_force")
-        op.params["force"] = drag
-        op.params["integrator"] = reboundx.integrators[as_operator]
-        rebx.add_operator(op)
+    add_drag(rebx, drag, as_operator)
     sim.particles[1].params["tau_a"] = -1.0 / (2.0 * PLANET_EPS)
     return rebx, drag
 

@@ -103,17 +103,8 @@ class Planets(SharedModel):
     @classmethod
     def from_dict(cls, spec: Mapping[str, Any]) -> Planets:
         """Build from ``to_dict()``'s form; errors name the key."""
-        if not isinstance(spec, Mapping):
-            raise ValueError("system: a Planets system must be an object with kind \"planets\"")
-        known = ("kind", "masses", "central_mass", "G", "dim", "eps")
-        for key in spec:
-            if key not in known:
-                raise ValueError(f"{key}: unknown key of a Planets system (known: {', '.join(known)})")
-        if spec.get("kind") != "planets":
-            raise ValueError(f"kind: expected \"planets\", got {_short(spec.get('kind'))}")
-        if "masses" not in spec:
-            raise ValueError("masses: required (the planets' masses)")
-        return cls(**{k: v for k, v in spec.items() if k != "kind"})
+        return cls._from_form(spec, "planets", "Planets system", ("masses", "central_mass", "G", "dim", "eps"),
+                              {"masses": "required (the planets' masses)"})
 
     @property
     def coordinates(self) -> tuple[str, ...]:
