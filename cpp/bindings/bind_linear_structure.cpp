@@ -17,7 +17,7 @@ namespace py = pybind11;
 namespace {
 
 template <class Mass, class MassArgument>
-void bind_structure_kind(py::module_& m, const char* name) {
+void bind_linear_structure_kind(py::module_& m, const char* name) {
   using Model = LinearStructure<Mass>;
   py::class_<Model> cls(m, name);
   cls.def(py::init([](const MassArgument& mass, const SparseColMajor& k, const Eigen::VectorXd& f, double alpha,
@@ -68,8 +68,8 @@ void bind_structure_kind(py::module_& m, const char* name) {
 
 void bind_linear_structure(py::module_& m) {
   m.attr("STRUCTURE_DENSE_LIMIT") = kMaxDenseDim;
-  bind_structure_kind<LumpedMass, Eigen::VectorXd>(m, "LinearStructure_lumped");
-  bind_structure_kind<ConsistentMass, SparseColMajor>(m, "LinearStructure_consistent");
+  bind_linear_structure_kind<LumpedMass, Eigen::VectorXd>(m, "LinearStructure_lumped");
+  bind_linear_structure_kind<ConsistentMass, SparseColMajor>(m, "LinearStructure_consistent");
 }
 
 }  // namespace raydamp::bindings
