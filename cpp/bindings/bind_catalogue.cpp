@@ -28,10 +28,11 @@ void bind_catalogue(py::module_& m) {
         row["tableau"] = tab ? py::cast(tab->name()) : py::none();
         row["default"] = !tab || tab->name() == e.default_tableau;
         row["order"] = tab ? method_order(e, *tab) : e.splitting_order;
-        row["explicit"] = tab ? tab->is_explicit() : !e.linear_implicit;
+        row["explicit"] = tab ? tab->is_explicit() : !e.linear_implicit && !e.springs_only;
         row["damped"] = !e.ignores_damping;
         row["symmetric"] = is_composable(e, tab ? *tab : builtin_tableau("euler"));
         row["linear_structure_only"] = e.linear_implicit;
+        row["structure_only"] = e.springs_only;
         rows.append(row);
       };
       if (e.tableau_use == TableauUse::none) {

@@ -6,6 +6,7 @@
 #include <pybind11/stl.h>
 
 #include "model_functions.hpp"
+#include "raydamp/implicit/newmark.hpp"
 #include "raydamp/models/structure.hpp"
 #include "run.hpp"
 #include "run_ensemble.hpp"

@@ -9,9 +9,11 @@
 #include <type_traits>
 #include <vector>
 
+#include "raydamp/materials/commit.hpp"
 #include "raydamp/methods/butcher_tableau.hpp"
 #include "raydamp/methods/composition.hpp"
 #include "raydamp/methods/linear_implicit.hpp"
+#include "raydamp/methods/newmark.hpp"
 #include "raydamp/methods/splitting.hpp"
 #include "raydamp/methods/user_tableaux.hpp"
 
@@ -29,6 +31,7 @@ struct MethodEntry {
   bool symmetric_table;         // its table can be composed (with a symmetric tableau, if it takes one)
   bool linear_implicit = false;  // an implicit step of a LinearStructure's whole system, for that kind only
   bool free_drift_in_rk = false;  // a Runge-Kutta stage steps the kinetic part as q' = M^{-1} p (rksb, rk)
+  bool springs_only = false;      // a nonlinear implicit step of a Structure with springs (newmark), that kind only
 };
 
 template <class Method>
@@ -85,6 +88,13 @@ inline const std::vector<MethodEntry>& method_entries() {
           "2-stage Gauss method on the whole linear system (LinearStructure only): order 4, A-stable, "
           "symplectic when undamped, exact energy balance (Gauss quadrature of the stage velocities); one "
           "complex sparse solve with M + c C + c^2 K (c = h / (3 + i sqrt 3)) per step"),
+      {"newmark",
+       "Newmark average acceleration (gamma = 1/2, beta = 1/4) on a Structure with springs (that kind only), as "
+       "OpenSees runs it: the trapezoidal rule on the spring forces, Newton's iteration on their consistent "
+       "tangent per step (one sparse solve with M + (h/2) C + (h^2/4) K0 per iteration, the yielded springs by a "
+       "low-rank correction); a step that does not converge ends the run, status not_converged",
+       Newmark::name, Newmark::tableau, Newmark::splitting_order, "", false, false, Newmark::composable, false,
+       false, true},
   };
   return entries;
 }
@@ -212,6 +222,15 @@ struct is_linear_system<Model, std::void_t<decltype(Model::linear_system)>>
 template <class Model, class F>
 decltype(auto) with_method_for(const std::string& name, F&& f) {
   const MethodEntry& entry = method_entry(name);
+  if (entry.springs_only) {
+    if constexpr (has_materials_v<Model>) {
+      return detail::with_table<F, Newmark>(entry.table, f);
+    } else {
+      throw std::invalid_argument("method: '" + name + "' is Newton's iteration on the springs of a raydamp.Structure "
+                                  "and runs only that kind; for this model use 3s, 2s or rks (or 'midpoint', the "
+                                  "same average acceleration, on a LinearStructure)");
+    }
+  }
   if (!entry.linear_implicit)
     return detail::with_table<F, StormerVerlet, ThreeTermSplitting, Baoab, TwoTermSplitting, RungeKuttaSplitting,
                               RungeKuttaSplittingB, RungeKutta>(entry.table, f);

@@ -7,7 +7,7 @@ from typing import NamedTuple
 from .. import _core
 
 __all__ = ["MethodInfo", "TableauInfo", "CompositionInfo", "methods", "tableaux", "compositions",
-           "linear_structure_methods"]
+           "linear_structure_methods", "structure_methods"]
 
 
 class MethodInfo(NamedTuple):
@@ -55,14 +55,27 @@ def methods() -> list[MethodInfo]:
     Orders are computed from the tableau's order conditions, not typed in.
     'midpoint' and 'gauss4' are implicit steps of a :class:`raydamp.LinearStructure`'s
     whole linear system and run that kind only (:func:`linear_structure_methods`).
+    'newmark', Newton's iteration on the springs of a :class:`raydamp.Structure` and that kind's
+    only, is listed apart (:func:`structure_methods`).
     """
-    return [MethodInfo(**{k: row[k] for k in MethodInfo._fields}) for row in _core.methods()]
+    return [MethodInfo(**{k: row[k] for k in MethodInfo._fields}) for row in _core.methods()
+            if not row["structure_only"]]
 
 
 def linear_structure_methods() -> frozenset[str]:
     """The methods that run only a :class:`raydamp.LinearStructure` (implicit steps of its whole
     system M q'' + C q' + K q = f; any other kind refuses them with a ValueError naming the method)."""
     return frozenset(row["name"] for row in _core.methods() if row["linear_structure_only"])
+
+
+def structure_methods() -> list[MethodInfo]:
+    """The methods that run only a :class:`raydamp.Structure` with springs: 'newmark', Newmark's average
+    acceleration (gamma = 1/2, beta = 1/4) with Newton's iteration on the springs' consistent tangent at
+    every step, as OpenSees runs it (``integrate(structure, ..., method="newmark")``; any other kind refuses
+    it with a ValueError naming the method). A step whose iteration does not converge ends the run with
+    status "not_converged", its message naming the step, and the rows before it kept."""
+    return [MethodInfo(**{k: row[k] for k in MethodInfo._fields}) for row in _core.methods()
+            if row["structure_only"]]
 
 
 def tableaux() -> list[TableauInfo]:

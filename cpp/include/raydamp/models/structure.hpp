@@ -14,6 +14,7 @@
 // copy with fresh material states (fresh_run), so one model serves concurrent runs.
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include "raydamp/materials/springs.hpp"
@@ -47,6 +48,12 @@ inline SparseColMajor initial_stiffness(const SparseColMajor& k, const materials
   return out;
 }
 
+// A step an implicit method could not solve (implicit/newmark.hpp): its index (-1: none) and why.
+struct ImplicitFailure {
+  long step = -1;
+  std::string message;
+};
+
 }  // namespace detail
 
 template <class Mass>
@@ -62,6 +69,8 @@ struct Structure : LinearStructure<Mass> {
   // Hides LinearStructure's damping from the step loop: the same initial damping, or the tangent one, which
   // reads the springs' branches (attached again on every copy, so each run's copy reads its own springs).
   StructureDamping<Mass> damping;
+  // What newmark's step reports of a step whose iteration failed: the run's copy's own, as its materials are.
+  mutable detail::ImplicitFailure implicit_failure;
 
   Structure(Mass mass_, const SparseColMajor& k, materials::Springs springs_, const Eigen::VectorXd& f, double alpha,
             double beta, int dense_limit = kMaxDenseDim, bool tangent_damping = false)
@@ -99,6 +108,7 @@ struct Structure : LinearStructure<Mass> {
   Structure fresh_run() const {
     Structure out = *this;
     out.springs.reset();
+    out.implicit_failure = {};
     return out;
   }
 

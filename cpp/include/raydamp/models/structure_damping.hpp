@@ -25,6 +25,7 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -33,6 +34,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
+#include "raydamp/attributes.hpp"
 #include "raydamp/damping/sparse_rayleigh_damping.hpp"
 #include "raydamp/materials/springs.hpp"
 #include "raydamp/phi.hpp"
@@ -40,43 +42,34 @@
 
 namespace raydamp {
 
-template <class Mass>
-class StructureDamping {
+// The tangent damping's flows on the branches met: one class for either mass kind (it reads dense copies
+// of M and K0), its flows compiled once and called, never inlined, from the sub-flows that take them. Those
+// sub-flows are instantiated for every method and both mass kinds, and inlined into each the branch's
+// mask, cache search, lock and products made bind_structure.cpp take 74 s of CPU instead of 58 s without
+// a tangent damping (61 s called out of line); a branch's flow is an n x n product that a call does not slow.
+class TangentDamping {
  public:
-  using Initial = SparseRayleighDamping<Mass>;
-  using Factors = typename Initial::Factors;
-  using Series = typename Initial::Series;
-  using Modes = typename Initial::Modes;
-  static constexpr const char* kNoNoise = Initial::kNoNoise;
   static constexpr int kMaxSprings = 64;  // a branch is a 64-bit mask
 
-  explicit StructureDamping(Initial initial) : initial_(std::move(initial)) {}
-
-  // The springs whose branches the tangent follows: the structure's own (re-attached on every copy).
-  void attach(const materials::Springs* springs) { springs_ = springs; }
-
-  // Damp with the tangent stiffness from now on. m, k0: M and the initial stiffness K0, dense; the springs'
-  // tangents are checked here (names in the messages are the Python layer's).
-  void use_tangent(const Eigen::MatrixXd& m, const Eigen::MatrixXd& k0) {
+  // Checks the springs' tangents and K (names in the messages are the Python layer's). m, k0: M and the
+  // initial stiffness K0, dense.
+  RAYDAMP_OUT_OF_LINE TangentDamping(const Eigen::MatrixXd& m, const Eigen::MatrixXd& k0,
+                                     const materials::Springs& springs, double alpha, double beta)
+      : alpha_(alpha), beta_(beta) {
     const std::string why = "damping_stiffness: 'tangent' ";
-    if (!initial_.dense())
-      throw std::invalid_argument(why + "is offered for structures of at most " + std::to_string(kMaxDenseDim) +
-                                  " coordinates, whose damping flows are made from their modes (one "
-                                  "eigendecomposition per branch of the springs); a larger one's Chebyshev flows "
-                                  "would need a spectral bound and series per branch");
-    if (springs_->size() > static_cast<std::size_t>(kMaxSprings))
+    if (springs.size() > static_cast<std::size_t>(kMaxSprings))
       throw std::invalid_argument(why + "takes at most " + std::to_string(kMaxSprings) + " springs");
-    if (springs_->bouc_wen.size())
+    if (springs.bouc_wen.size())
       throw std::invalid_argument(why + "needs springs whose tangent is constant between kinks (ElasticPlastic, "
                                         "Bilinear); a Bouc-Wen spring's changes at every step");
-    auto model = std::make_shared<TangentModel>();
+    auto model = std::make_shared<Model>();
     Eigen::LLT<Eigen::MatrixXd> llt(m);
     if (llt.info() != Eigen::Success) throw std::invalid_argument("M: must be positive definite");
     const Eigen::Index n = m.rows();
     model->lower = llt.matrixL();
     model->lower_inverse = llt.matrixL().solve(Eigen::MatrixXd::Identity(n, n));
     model->k0 = k0;
-    springs_->for_each([&](const auto& set) {
+    springs.for_each([&](const auto& set) {
       for (std::size_t s = 0; s < set.size(); ++s) {
         const double drop = set.material[s].stiffness() - yielded_tangent(set.material[s]);
         if (!(drop <= set.material[s].stiffness()))
@@ -96,83 +89,66 @@ class StructureDamping {
       throw std::invalid_argument(why + "needs K + sum_s b k_s r_s r_s^T positive semidefinite (every spring "
                                         "yielded); this K's geometric (P-Delta) softening makes it indefinite, "
                                         "and the damping beta K_t would then feed energy in");
-    tangent_ = std::move(model);
+    model_ = std::move(model);
     caches_ = std::make_shared<Caches>();
   }
 
-  bool tangent() const { return tangent_ != nullptr; }
-
-  // What the initial damping answers (the bound holds for every branch: K_t <= K0).
-  const Initial& initial() const { return initial_; }
-  double alpha() const { return initial_.alpha(); }
-  double beta() const { return initial_.beta(); }
-  double spectral_bound() const { return initial_.spectral_bound(); }
-  double rate_bound() const { return initial_.rate_bound(); }
-  bool dense() const { return initial_.dense(); }
-  const Modes* modes() const { return initial_.modes(); }
-  Factors factors(double t) const { return initial_.factors(t); }
-  std::shared_ptr<const Series> series(double t) const { return initial_.series(t); }
-  std::shared_ptr<const Series> chebyshev(double t) const { return initial_.chebyshev(t); }
+  // Each flow below acts where a spring of `springs` is on its yielding branch and returns true; on the
+  // elastic branch (every spring elastic: the initial stiffness's damping) it returns false, untouched.
 
   // p <- exp(-t A) p, A the branch's.
-  template <class Q, class P>
-  void decay(const Q& q, const Factors& f, P& p) const {
-    const std::uint64_t mask = branch();
-    if (mask == 0) return initial_.decay(q, f, p);
-    const Flow& flow = flow_of(mask, f.t);
+  RAYDAMP_OUT_OF_LINE bool decay(const materials::Springs& springs, double t, Eigen::Ref<Eigen::VectorXd> p) const {
+    const std::uint64_t mask = springs.yield_mask();
+    if (mask == 0) return false;
+    const Flow& flow = flow_of(mask, t);
     Eigen::VectorXd& y = thread_scratch(kScratchSum, p.size());
     y.noalias() = flow.exp.lazyProduct(p);
     p = y;
+    return true;
   }
 
   // p <- exp(-t A) p - t phi1(-t A) g.
-  template <class Q, class G, class P>
-  void decay_affine(const Q& q, const Factors& f, const G& g, P& p) const {
-    const std::uint64_t mask = branch();
-    if (mask == 0) return initial_.decay_affine(q, f, g, p);
-    const Flow& flow = flow_of(mask, f.t);
+  RAYDAMP_OUT_OF_LINE bool decay_affine(const materials::Springs& springs, double t,
+                                        const Eigen::Ref<const Eigen::VectorXd>& g, Eigen::Ref<Eigen::VectorXd> p) const {
+    const std::uint64_t mask = springs.yield_mask();
+    if (mask == 0) return false;
+    const Flow& flow = flow_of(mask, t);
     Eigen::VectorXd& y = thread_scratch(kScratchSum, p.size());
     y.noalias() = flow.exp.lazyProduct(p);
     y.noalias() -= flow.t_phi1.lazyProduct(g);
     p = y;
+    return true;
   }
 
-  // out = A p (the dissipated power p^T M^{-1} A p, an envelope's acceleration).
-  template <class Q, class P, class O>
-  void rate(const Q& q, const P& p, O& out) const {
-    const std::uint64_t mask = branch();
-    if (mask == 0) return initial_.rate(q, p, out);
+  // out = A p.
+  RAYDAMP_OUT_OF_LINE bool rate(const materials::Springs& springs, const Eigen::Ref<const Eigen::VectorXd>& p,
+                                Eigen::Ref<Eigen::VectorXd> out) const {
+    const std::uint64_t mask = springs.yield_mask();
+    if (mask == 0) return false;
     out.noalias() = branch_of(mask).a * p;
+    return true;
   }
 
-  // x <- (I + cA)^{-1} x (rks with a diagonally implicit tableau).
-  template <class Q, class X>
-  void solve_shifted(const Q& q, double c, X& x) const {
-    const std::uint64_t mask = branch();
-    if (mask == 0) return initial_.solve_shifted(q, c, x);
+  // x <- (I + cA)^{-1} x.
+  RAYDAMP_OUT_OF_LINE bool solve_shifted(const materials::Springs& springs, double c,
+                                         Eigen::Ref<Eigen::VectorXd> x) const {
+    const std::uint64_t mask = springs.yield_mask();
+    if (mask == 0) return false;
     const Modes& modes = branch_of(mask);
     Eigen::VectorXd& y = thread_scratch(kScratchProduct, x.size());
     y.noalias() = modes.to_modes * x;
     y.array() /= 1.0 + c * modes.rates.array();
     x.noalias() = modes.from_modes * y;
+    return true;
   }
-
-  // A tangent damping has no exact noise flow: its matrix changes with the springs' state.
-  bool has_noise() const {
-    if (tangent_)
-      throw std::invalid_argument("temperature: a Structure with damping_stiffness='tangent' has no exact thermal "
-                                  "noise (its damping changes with the springs' state); use 'initial'");
-    return initial_.has_noise();
-  }
-  template <class Q, class M, class X, class P>
-  void add_noise(const Q& q, const Factors& f, const M& mass, double sigma, const X& xi, P& p) const {
-    has_noise();
-    initial_.add_noise(q, f, mass, sigma, xi, p);
-  }
-  const ChebyshevSeries& noise_series(const Series& s) const { return initial_.noise_series(s); }
 
  private:
-  struct TangentModel {
+  // A branch's modes: M^{-1} K_t = from_modes diag(lambda) to_modes, A = from_modes diag(rates) to_modes.
+  struct Modes {
+    Eigen::MatrixXd from_modes, to_modes, a;
+    Eigen::VectorXd lambda, rates;
+  };
+  struct Model {
     Eigen::MatrixXd k0, lower, lower_inverse;
     std::vector<int> i, j;     // each spring's coordinates (i < 0: to the ground), Springs' order
     std::vector<double> drop;  // k_s - its yielded tangent
@@ -199,10 +175,8 @@ class StructureDamping {
   static double yielded_tangent(const materials::Bilinear& m) { return m.b * m.k; }
   static double yielded_tangent(const materials::BoucWen& m) { return m.k; }  // refused before
 
-  std::uint64_t branch() const { return tangent_ ? springs_->yield_mask() : 0; }
-
   // The modes of branch `mask`: M^{-1} K_t with K_t = K0 - the yielded springs' drops.
-  Modes modes_of(const TangentModel& model, std::uint64_t mask) const {
+  Modes modes_of(const Model& model, std::uint64_t mask) const {
     Eigen::MatrixXd k = model.k0;
     for (std::size_t s = 0; s < model.i.size(); ++s) {
       if (!(mask >> s & 1U)) continue;
@@ -222,7 +196,7 @@ class StructureDamping {
     out.from_modes = model.lower * eig.eigenvectors();
     out.to_modes = eig.eigenvectors().transpose() * model.lower_inverse;
     out.lambda = eig.eigenvalues();
-    out.rates = (alpha() + beta() * out.lambda.array()).matrix();
+    out.rates = (alpha_ + beta_ * out.lambda.array()).matrix();
     out.a = out.from_modes * out.rates.asDiagonal() * out.to_modes;
     return out;
   }
@@ -238,7 +212,7 @@ class StructureDamping {
   std::shared_ptr<const Branch> find_branch(std::uint64_t mask) const {
     for (const auto& b : caches_->branches)
       if (b->mask == mask) return b;
-    auto made = std::make_shared<const Branch>(Branch{mask, modes_of(*tangent_, mask)});
+    auto made = std::make_shared<const Branch>(Branch{mask, modes_of(*model_, mask)});
     if (caches_->branches.size() >= kCachedBranches) caches_->branches.erase(caches_->branches.begin());
     caches_->branches.push_back(made);
     return made;
@@ -270,14 +244,98 @@ class StructureDamping {
     return *found;
   }
 
-  Initial initial_;
-  const materials::Springs* springs_ = nullptr;
-  std::shared_ptr<const TangentModel> tangent_;  // null: the initial stiffness's damping
+  double alpha_, beta_;
+  std::shared_ptr<const Model> model_;
   std::shared_ptr<Caches> caches_;
   // A run's last flows and branch (each run steps its own copy): most sub-flows find theirs here, unlocked.
   mutable std::shared_ptr<const Flow> recent_[kRecent];
   mutable std::size_t next_recent_ = 0;
   mutable std::shared_ptr<const Branch> recent_branch_;
+};
+
+template <class Mass>
+class StructureDamping {
+ public:
+  using Initial = SparseRayleighDamping<Mass>;
+  using Factors = typename Initial::Factors;
+  using Series = typename Initial::Series;
+  using Modes = typename Initial::Modes;
+  static constexpr const char* kNoNoise = Initial::kNoNoise;
+
+  explicit StructureDamping(Initial initial) : initial_(std::move(initial)) {}
+
+  // The springs whose branches the tangent follows: the structure's own (re-attached on every copy).
+  void attach(const materials::Springs* springs) { springs_ = springs; }
+
+  // Damp with the tangent stiffness from now on. m, k0: M and the initial stiffness K0, dense.
+  void use_tangent(const Eigen::MatrixXd& m, const Eigen::MatrixXd& k0) {
+    if (!initial_.dense())
+      throw std::invalid_argument("damping_stiffness: 'tangent' is offered for structures of at most " +
+                                  std::to_string(kMaxDenseDim) +
+                                  " coordinates, whose damping flows are made from their modes (one "
+                                  "eigendecomposition per branch of the springs); a larger one's Chebyshev flows "
+                                  "would need a spectral bound and series per branch");
+    tangent_.emplace(m, k0, *springs_, alpha(), beta());
+  }
+
+  bool tangent() const { return tangent_.has_value(); }
+
+  // What the initial damping answers (the bound holds for every branch: K_t <= K0).
+  const Initial& initial() const { return initial_; }
+  double alpha() const { return initial_.alpha(); }
+  double beta() const { return initial_.beta(); }
+  double spectral_bound() const { return initial_.spectral_bound(); }
+  double rate_bound() const { return initial_.rate_bound(); }
+  bool dense() const { return initial_.dense(); }
+  const Modes* modes() const { return initial_.modes(); }
+  Factors factors(double t) const { return initial_.factors(t); }
+  std::shared_ptr<const Series> series(double t) const { return initial_.series(t); }
+  std::shared_ptr<const Series> chebyshev(double t) const { return initial_.chebyshev(t); }
+
+  // p <- exp(-t A) p, A the branch's.
+  template <class Q, class P>
+  void decay(const Q& q, const Factors& f, P& p) const {
+    if (!tangent_ || !tangent_->decay(*springs_, f.t, p)) initial_.decay(q, f, p);
+  }
+
+  // p <- exp(-t A) p - t phi1(-t A) g.
+  template <class Q, class G, class P>
+  void decay_affine(const Q& q, const Factors& f, const G& g, P& p) const {
+    if (!tangent_ || !tangent_->decay_affine(*springs_, f.t, g, p)) initial_.decay_affine(q, f, g, p);
+  }
+
+  // out = A p (the dissipated power p^T M^{-1} A p, an envelope's acceleration).
+  template <class Q, class P, class O>
+  void rate(const Q& q, const P& p, O& out) const {
+    if (!tangent_ || !tangent_->rate(*springs_, p, out)) initial_.rate(q, p, out);
+  }
+
+  // x <- (I + cA)^{-1} x (rks with a diagonally implicit tableau).
+  template <class Q, class X>
+  void solve_shifted(const Q& q, double c, X& x) const {
+    if (!tangent_ || !tangent_->solve_shifted(*springs_, c, x)) initial_.solve_shifted(q, c, x);
+  }
+
+  // A tangent damping has no exact noise flow: its matrix changes with the springs' state.
+  bool has_noise() const {
+    if (tangent_)
+      throw std::invalid_argument("temperature: a Structure with damping_stiffness='tangent' has no exact thermal "
+                                  "noise (its damping changes with the springs' state); use 'initial'");
+    return initial_.has_noise();
+  }
+  template <class Q, class M, class X, class P>
+  void add_noise(const Q& q, const Factors& f, const M& mass, double sigma, const X& xi, P& p) const {
+    has_noise();
+    initial_.add_noise(q, f, mass, sigma, xi, p);
+  }
+  const ChebyshevSeries& noise_series(const Series& s) const { return initial_.noise_series(s); }
+
+ private:
+  Initial initial_;
+  const materials::Springs* springs_ = nullptr;
+  // None: the initial stiffness's damping. A copy of the model (a run) copies it, and so keeps recent
+  // flows of its own; the caches behind them are shared.
+  std::optional<TangentDamping> tangent_;
 };
 
 }  // namespace raydamp
