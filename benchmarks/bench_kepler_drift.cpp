@@ -64,9 +64,9 @@ double ns_per_drift(const Orbits& start, double h, long steps, int rounds, Drift
 struct ExtendedKepler : raydamp::Kepler {
   using raydamp::Kepler::Kepler;
   void drift(Vec& q, Vec& p, double t) const {
-    for (int i = 0; i < particles; ++i) {
+    for (int i = 0; i < planets; ++i) {
       Eigen::Vector2d x(q[2 * i], q[2 * i + 1]), v(p[2 * i], p[2 * i + 1]);  // mass 1
-      raydamp::kepler::extended_drift(mu, t, x, v);
+      raydamp::kepler::extended_drift(mu[i], t, x, v);
       q[2 * i] = x[0], q[2 * i + 1] = x[1], p[2 * i] = v[0], p[2 * i + 1] = v[1];
     }
   }
