@@ -566,6 +566,13 @@ def two_planets(repeats: int) -> None:
 
 
 # ---------------------------------------------------------------------------------------------- ensemble
+# The rows before short drifts were formed in double (flows/kepler.hpp, kShortReach), for the side by side:
+# (method, one Kepler with the orbits as particles?) -> ns per member per step. benchmarks/bench_kepler_drift.cpp
+# times the two drifts themselves in one process.
+BEFORE_SHORT_STEPS = {("2s", True): "88 ns", ("2s", False): "101 ns", ("3s", True): "163 ns",
+                      ("3s", False): "not recorded"}
+
+
 def ensemble(members: int, h: float, t_end: float, repeats: int) -> None:
     print(f"\n== ensemble: {members} decaying orbits (pericentre radii 0.5-2, e 0-0.7), eps = {EPS}, h = {h}")
     rng = np.random.default_rng(46)
@@ -597,8 +604,9 @@ def ensemble(members: int, h: float, t_end: float, repeats: int) -> None:
                 call()
                 best, cpu = min(best, time.perf_counter() - w0), min(cpu, time.process_time() - c0)
             per, per_cpu = 1e9 * best / (members * steps), 1e9 * cpu / (members * steps)
+            before = BEFORE_SHORT_STEPS[method, door.startswith("one")]
             print(f"  raydamp {method}, {door}: {steps} steps in {best:.3e} s = {per:.1f} ns per member per step "
-                  f"(CPU {per_cpu:.1f} ns)")
+                  f"(CPU {per_cpu:.1f} ns; with every drift in long double: {before} on 2026-11-29, load 1.9)")
     if rebound is None:
         return
     for label, op in (("WHFast + REBOUNDx force", None), ("WHFast + REBOUNDx RK4 operator", "rk4")):

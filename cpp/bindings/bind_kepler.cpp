@@ -1,8 +1,7 @@
-// raydamp.Kepler's and raydamp.Planets' compiled models: test particles around a central body, and
+// raydamp.Kepler's and raydamp.Planets' compiled model: test particles around a central body, and
 // interacting planets in Jacobi coordinates, both split with the exact Kepler drift (models/kepler.hpp,
-// models/planets.hpp).
+// models/planets.hpp), one C++ kind.
 #include "model_functions.hpp"
-#include "raydamp/models/kepler.hpp"
 #include "raydamp/models/planets.hpp"
 #include "run.hpp"
 #include "run_ensemble.hpp"
@@ -12,17 +11,8 @@ namespace py = pybind11;
 namespace raydamp::bindings {
 
 void bind_kepler(py::module_& m) {
-  py::class_<Kepler> cls(m, "Kepler");
-  cls.def(py::init<double, double, int, int, double>(), py::arg("mu"), py::arg("mass"), py::arg("dim"),
-          py::arg("particles"), py::arg("eps"))
-      .def_readonly("mu", &Kepler::mu)
-      .def_readonly("particles", &Kepler::particles)
-      .def_property_readonly("mass", [](const Kepler& k) { return k.mass.m; })
-      .def_property_readonly("space_dim", [](const Kepler& k) { return k.d; });
-  add_model_functions<Kepler>(cls);
-  def_integrate<Kepler>(m);
-  def_integrate_ensemble<Kepler>(m);
-
+  // One compiled kind for test particles and planets (models/planets.hpp): raydamp.Kepler's model is a
+  // Planets whose bodies do not interact.
   py::class_<Planets> planets(m, "Planets");
   planets
       .def(py::init<double, double, std::vector<double>, int, std::vector<double>>(), py::arg("G"),
@@ -35,6 +25,12 @@ void bind_kepler(py::module_& m) {
         return out;
       })
       .def_property_readonly("space_dim", [](const Planets& p) { return p.d; });
+  m.def(
+      "Kepler",
+      [](double mu, double mass, int dim, int particles, double eps) {
+        return Planets(TestParticles{}, mu, mass, dim, particles, eps);
+      },
+      py::arg("mu"), py::arg("mass"), py::arg("dim"), py::arg("particles"), py::arg("eps"));
   add_model_functions<Planets>(planets);
   def_integrate<Planets>(m);
   def_integrate_ensemble<Planets>(m);

@@ -153,14 +153,17 @@ struct has_free_drift : std::true_type {};
 template <class Model>
 struct has_free_drift<Model, std::void_t<decltype(Model::free_drift)>> : std::bool_constant<Model::free_drift> {};
 
+inline std::invalid_argument free_drift_refusal(const std::string& method, const char* model) {
+  return std::invalid_argument("method: '" + method + "' steps the kinetic energy as a free drift (q' = M^{-1} p) "
+                               "inside a Runge-Kutta or implicit stage, and this model's drift is the exact flow of " +
+                               std::string(model) + "; use sv, 3s, 2s, baoab or rks");
+}
+
 template <class Model>
 void require_applicable(const MethodEntry& method, const Model& model) {
   require_applicable(method, model.eps);
   if constexpr (!has_free_drift<Model>::value) {
-    if (method.free_drift_in_rk || method.linear_implicit)
-      throw std::invalid_argument("method: '" + method.name + "' steps the kinetic energy as a free drift (q' = "
-                                  "M^{-1} p) inside a Runge-Kutta or implicit stage, and this model's drift is "
-                                  "the exact flow of " + std::string(Model::name) + "; use sv, 3s, 2s, baoab or rks");
+    if (method.free_drift_in_rk || method.linear_implicit) throw free_drift_refusal(method.name, Model::name);
   }
 }
 
@@ -231,15 +234,23 @@ decltype(auto) with_method_for(const std::string& name, F&& f) {
                                   "same average acceleration, on a LinearStructure)");
     }
   }
-  if (!entry.linear_implicit)
-    return detail::with_table<F, StormerVerlet, ThreeTermSplitting, Baoab, TwoTermSplitting, RungeKuttaSplitting,
-                              RungeKuttaSplittingB, RungeKutta>(entry.table, f);
-  if constexpr (is_linear_system<Model>::value) {
-    return detail::with_table<F, Gauss4, ImplicitMidpoint>(entry.table, f);
+  if constexpr (!has_free_drift<Model>::value) {
+    // rksb, rk and the implicit methods are refused for such a model (require_applicable, which every
+    // caller runs first): not instantiated for it either, which saves their compile time.
+    if (entry.free_drift_in_rk || entry.linear_implicit) throw free_drift_refusal(name, Model::name);
+    return detail::with_table<F, StormerVerlet, ThreeTermSplitting, Baoab, TwoTermSplitting, RungeKuttaSplitting>(
+        entry.table, f);
   } else {
-    throw std::invalid_argument("method: '" + name + "' is an implicit step of a linear structure's whole system "
-                                "M q'' + C q' + K q = f, and runs only a raydamp.LinearStructure; for this model "
-                                "use 3s, 2s or rks");
+    if (!entry.linear_implicit)
+      return detail::with_table<F, StormerVerlet, ThreeTermSplitting, Baoab, TwoTermSplitting, RungeKuttaSplitting,
+                                RungeKuttaSplittingB, RungeKutta>(entry.table, f);
+    if constexpr (is_linear_system<Model>::value) {
+      return detail::with_table<F, Gauss4, ImplicitMidpoint>(entry.table, f);
+    } else {
+      throw std::invalid_argument("method: '" + name + "' is an implicit step of a linear structure's whole system "
+                                  "M q'' + C q' + K q = f, and runs only a raydamp.LinearStructure; for this model "
+                                  "use 3s, 2s or rks");
+    }
   }
 }
 

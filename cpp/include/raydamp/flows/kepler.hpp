@@ -13,11 +13,13 @@
 
 namespace raydamp::kepler {
 
-// The orbit's invariants, the G functions and the update are formed in long double (x87's 64-bit
-// significand) and rounded to double once per coordinate at the end. In double, the rounding of r0,
-// beta and the G functions is the same at every step of an orbit and drifts the energy steadily
-// (4e-12 relative over 4e4 steps of e = 0.5, phase 7e-7 after 10^4 periods); in long double the final
-// rounding to nearest is all that is left, and the error grows as rounding does (Brouwer's law).
+// A step that is long beside the orbit forms the orbit's invariants, the G functions and the update in
+// long double (x87's 64-bit significand) and rounds to double once per coordinate at the end. In double,
+// the rounding of r0, beta and the G functions is the same at every step of an orbit and drifts the
+// energy steadily (4e-12 relative over 4e4 steps of e = 0.5, phase 7e-7 after 10^4 periods); in long
+// double the final rounding to nearest is all that is left, and the error grows as rounding does
+// (Brouwer's law). A step short beside the orbit (kShortReach) scales those roundings down by its
+// length and is formed in double, at 0.6 of the cost (benchmarks/bench_kepler_drift.cpp).
 
 
 // c0..c3 of x (Stumpff functions): c0 = cos sqrt x, c1 = sin sqrt x / sqrt x, c2 = (1 - c0) / x,
@@ -124,10 +126,23 @@ inline Anomaly<Real> solve_anomaly(const Orbit<Real>& o, Real t, Real v2) {
     // the mean anomaly's change n t by e (sin E - sin E0), at most 2: s = t beta / mu is that close.
     s = t * o.beta / o.mu;
   } else if (!short_step) {
+    // t / r0 and the cube root (t >= mu s^3 / 6 on the way out) overshoot an unbound orbit's s
     s = t * ir;
-    if (o.beta < 0.0) {
+    if (o.beta <= 0.0) {
       const Real cube = std::cbrt(6.0 * t / o.mu);
       if (std::abs(cube) < std::abs(s)) s = cube;
+    }
+    if (o.beta < 0.0) {
+      // ... by as much as they like: far out |t| grows like c e^{k |s|}, k = sqrt(-beta), with
+      // c = (mu / k^3 + sign(t) sigma0 / k^2 + r0 / k) / 2, so the log of |t| / c is within O(|s| c / |t|)
+      // of the root, where Laguerre-Conway took two steps of s per iteration down from the cube root
+      // (not converged in 100 at t = 1e7 on e = 1.5).
+      const Real k = std::sqrt(-o.beta);
+      const Real c = 0.5 * (o.mu / (k * k * k) + (t > 0 ? o.sigma0 : -o.sigma0) / (k * k) + o.r0 / k);
+      if (c > 0) {
+        const Real far = std::copysign(std::log1p(std::abs(t) / c) / k, t);
+        if (std::abs(far) < std::abs(s)) s = far;
+      }
     }
   }
   constexpr Real eps = std::numeric_limits<Real>::epsilon();
@@ -169,10 +184,59 @@ inline Anomaly<Real> solve_anomaly(const Orbit<Real>& o, Real t, Real v2) {
   return a;
 }
 
-// q, v <- the Kepler flow of (q, v) over time t (any sign), mu > 0; q and v are vectors of 2 or 3
-// doubles (operator[] and size()).
+// A step is short when |t| (|v0| + sqrt(mu / r0)) < kShortReach r0 (tested as 2 t^2 (v0^2 + mu / r0) <
+// kShortReach^2 r0^2, which implies it): the increments f - 1, g - t, fdot, gdot - 1 are then small
+// beside 1 and t, so a rounding of r0, beta or the G functions moves q by (at most) that rounding times
+// |v0| t / r0, and the energy by that times sigma0 / (r0 |v0|), whose sign follows the orbit in and out.
+// Formed in double there, the drift's own error stays a few hundredths of an ulp of q per step, under the
+// rounding of the state that every step makes anyway (benchmarks/kepler_rounding.py measures both).
+inline constexpr double kShortReach = 0.05;
+
+// The short step in double: the anomaly from s(t)'s Taylor series (within O((|v0| t / r0)^4) of the
+// root) and Halley's iteration; the G functions are carried from the last iterate s to s + ds by their
+// Taylor series (dG_k/ds = G_{k-1}, dG_0/ds = -beta G_1), exact to (ds / s)^3 < 1e-18 where
+// |ds| <= 1e-6 |s|, instead of forming them again. Returns false (q, v untouched) if Halley has not
+// converged in four iterations, which leaves the step to the general solver.
 template <class Q, class V>
-inline void drift(double mu_, double t_, Q& q, V& v) {
+inline bool short_drift(double mu, double t, double r0, double ir0, double sigma0, double v2, Q& q, V& v) {
+  const Orbit<double> o{r0, sigma0, 2.0 * mu * ir0 - v2, mu};
+  const double ir3 = ir0 * ir0 * ir0;
+  double s = t * ir0 * (1.0 + t * (-0.5 * sigma0 * ir3 * r0 +
+                                   t * (3.0 * sigma0 * sigma0 * ir3 * ir0 * ir0 - (v2 - mu * ir0) * ir3) * r0 / 6.0));
+  Anomaly<double> a;
+  for (int it = 0; it < 4; ++it) {
+    g_functions(o, s, a);
+    const double f = r0 * a.g1 + sigma0 * a.g2 + mu * a.g3 - t;
+    const double fp = a.r;                                      // dt/ds = r
+    const double fpp = sigma0 * a.g0 + (mu - o.beta * r0) * a.g1;  // dr/ds
+    const double ds = -f * fp / (fp * fp - 0.5 * f * fpp);     // Halley
+    if (!(std::abs(ds) <= 1e-6 * std::abs(s))) {
+      s += ds;
+      continue;
+    }
+    const double half = 0.5 * ds * ds;
+    const double g0 = a.g0 - o.beta * (a.g1 * ds + a.g0 * half);
+    const double g1 = a.g1 + a.g0 * ds - o.beta * a.g1 * half;
+    const double g2 = a.g2 + a.g1 * ds + a.g0 * half;
+    const double r = r0 * g0 + sigma0 * g1 + mu * g2;
+    const double ir = 1.0 / r;
+    const double f1 = -mu * g2 * ir0;  // f - 1
+    const double g = r0 * g1 + sigma0 * g2;
+    const double fdot = -mu * g1 * ir * ir0;
+    const double gdot1 = -mu * g2 * ir;  // gdot - 1
+    for (int i = 0; i < q.size(); ++i) {
+      const double qi = q[i], vi = v[i];
+      q[i] = qi + (f1 * qi + g * vi);
+      v[i] = vi + (fdot * qi + gdot1 * vi);
+    }
+    return true;
+  }
+  return false;
+}
+
+// The Kepler flow over any t, formed in long double (see the top of this file).
+template <class Q, class V>
+inline void extended_drift(double mu_, double t_, Q& q, V& v) {
   using Real = long double;
   const Real mu = mu_;
   Real t = t_;
@@ -199,15 +263,25 @@ inline void drift(double mu_, double t_, Q& q, V& v) {
     if (std::abs(t) > period / 2) t = std::remainder(t, period);
     if (t == 0) return;
   }
-  // The anomaly is found in double: an s off by a rounding is the flow over a time off by a rounding,
-  // which keeps the energy. The G functions at that s and the update are formed in long double.
+  // The anomaly is found in double, then taken one Newton step further in long double: an s off by a
+  // little is the flow over a time off by a little, which keeps the energy but not the phase, and the
+  // double solve leaves t(s) - t at the rounding of t(s)'s largest term in double (through the pericentre
+  // of e = 0.99, 1e-13 of q). The G functions at that s and the update are formed in long double.
   const Orbit<double> od{static_cast<double>(o.r0), static_cast<double>(o.sigma0), static_cast<double>(o.beta),
                          mu_};
   const Anomaly<double> guess = solve_anomaly(od, static_cast<double>(t), static_cast<double>(v2));
   Anomaly<Real> a;
   g_functions(o, static_cast<Real>(guess.s), a);
   if (!(std::isfinite(guess.r))) a.r = guess.r;  // not converged: NaN, which the step loop stops on
-  const Real ir = 1 / a.r;
+  Real ir = 1 / a.r;
+  {
+    // |ds| / |s| is at the double solve's rounding, so first order in ds is exact to long double's.
+    const Real ds = -(o.r0 * a.g1 + o.sigma0 * a.g2 + mu * a.g3 - t) * ir;
+    const Real g0 = a.g0 - o.beta * a.g1 * ds, g1 = a.g1 + a.g0 * ds, g2 = a.g2 + a.g1 * ds;
+    const Real r = o.r0 * g0 + o.sigma0 * g1 + mu * g2;
+    ir *= 1 - (r - a.r) * ir;
+    a.g0 = g0, a.g1 = g1, a.g2 = g2, a.r = r;
+  }
   const Real f1 = -mu * a.g2 * ir0;              // f - 1
   const Real g = o.r0 * a.g1 + o.sigma0 * a.g2;  // g
   const Real fdot = -mu * a.g1 * ir * ir0;
@@ -217,6 +291,23 @@ inline void drift(double mu_, double t_, Q& q, V& v) {
     q[i] = static_cast<double>(qi + (f1 * qi + g * vi));
     v[i] = static_cast<double>(vi + (fdot * qi + gdot1 * vi));
   }
+}
+
+// q, v <- the Kepler flow of (q, v) over time t (any sign), mu > 0; q and v are vectors of 2 or 3
+// doubles (operator[] and size()): a short step in double, any other in long double.
+template <class Q, class V>
+inline void drift(double mu, double t, Q& q, V& v) {
+  if (t == 0) return;
+  double r2 = 0, sigma = 0, v2 = 0;
+  for (int i = 0; i < q.size(); ++i) {
+    r2 += q[i] * q[i];
+    sigma += q[i] * v[i];
+    v2 += v[i] * v[i];
+  }
+  const double r0 = std::sqrt(r2), ir0 = 1.0 / r0;
+  if (2.0 * t * t * (v2 + mu * ir0) < kShortReach * kShortReach * r2 && short_drift(mu, t, r0, ir0, sigma, v2, q, v))
+    return;
+  extended_drift(mu, t, q, v);
 }
 
 }  // namespace raydamp::kepler

@@ -54,14 +54,25 @@ struct JacobiMass {
 struct PlanetDrag {
   std::vector<double> rates;  // per planet
   int d = 2;
+  bool same = false;          // every rate equal: one factor for all of p (1,000 test particles: one exp)
+
+  void set(std::vector<double> r, int d_) {
+    rates = std::move(r);
+    d = d_;
+    same = uniform();
+  }
 
   struct Factors {
     double t = std::numeric_limits<double>::quiet_NaN();
-    std::vector<DecayFactors> planet;  // one per planet
+    std::vector<DecayFactors> planet;  // one per planet, or one for all when `same`
   };
   Factors factors(double t) const {
     Factors f;
     f.t = t;
+    if (same) {
+      f.planet.assign(1, decay_factors(rates.front(), t));
+      return f;
+    }
     f.planet.reserve(rates.size());
     for (double a : rates) f.planet.push_back(decay_factors(a, t));
     return f;
@@ -75,10 +86,18 @@ struct PlanetDrag {
 
   template <class Q, class P>
   void decay(const Q&, const Factors& f, P& p) const {
+    if (same) {
+      p *= f.planet[0].exp;
+      return;
+    }
     for (std::size_t i = 0; i < rates.size(); ++i) p.segment(d * i, d) *= f.planet[i].exp;
   }
   template <class Q, class G, class P>
   void decay_affine(const Q&, const Factors& f, const G& g, P& p) const {
+    if (same) {
+      p = f.planet[0].exp * p - f.planet[0].t_phi1 * g;
+      return;
+    }
     for (std::size_t i = 0; i < rates.size(); ++i) {
       const DecayFactors& k = f.planet[i];
       p.segment(d * i, d) = k.exp * p.segment(d * i, d) - k.t_phi1 * g.segment(d * i, d);
@@ -90,7 +109,7 @@ struct PlanetDrag {
     for (std::size_t i = 0; i < rates.size(); ++i)
       for (int j = 0; j < d; ++j) {
         const int k = d * static_cast<int>(i) + j;
-        p[k] += sigma * f.planet[i].noise * std::sqrt(mass.m[k]) * xi[k];
+        p[k] += sigma * f.planet[same ? 0 : i].noise * std::sqrt(mass.m[k]) * xi[k];
       }
   }
   template <class Q, class P, class O>
@@ -103,8 +122,13 @@ struct PlanetDrag {
   }
 };
 
+// Test particles (models/kepler.hpp) are this kind too, with `interacting` false: each body its own
+// Kepler problem about mu, no kick, one drag rate. One C++ kind for both instantiates the step loop
+// (every method, single runs and ensembles) once: a second kind cost bind_kepler.cpp 10 s of compile.
+struct TestParticles {};
+
 struct Planets {
-  static constexpr const char* name = "planets";
+  static constexpr const char* name = "kepler";  // its drift is the Kepler flow (catalogue.hpp's refusals name it)
   static constexpr int dim = Eigen::Dynamic;
   static constexpr int n_momenta = -1;  // kDynamicMomenta: the angular momentum when the drag is uniform
   using Vec = Vector<dim>;
@@ -117,8 +141,25 @@ struct Planets {
   std::vector<double> eta;     // eta_i = m_0 + ... + m_i
   std::vector<double> mu;      // per planet, G eta_i
   double eps;                  // the largest drag rate (0: no drag; the methods that ignore damping check it)
+  bool interacting = true;     // false: test particles about a fixed central body (no kick)
   JacobiMass mass;
   PlanetDrag damping;
+
+  // `particles` test particles of mass m about a fixed central body of G M = mu, drag eps on each:
+  // H = sum_i |p_i|^2 / (2 m) - mu m / |q_i|.
+  Planets(TestParticles, double mu_, double m, int d_, int particles, double eps_)
+      : G(mu_), d(d_), planets(particles), eps(eps_), interacting(false) {
+    if (!(mu_ > 0.0) || !std::isfinite(mu_))
+      throw std::invalid_argument("mu: must be a finite number > 0 (G times the central mass)");
+    if (!(m > 0.0) || !std::isfinite(m)) throw std::invalid_argument("mass: must be a finite number > 0");
+    if (d != 2 && d != 3) throw std::invalid_argument("dim: must be 2 or 3");
+    if (planets < 1) throw std::invalid_argument("particles: must be >= 1");
+    if (!(eps >= 0.0) || !std::isfinite(eps)) throw std::invalid_argument("eps: must be finite and >= 0");
+    mu.assign(planets, mu_);
+    mass.m = Eigen::VectorXd::Constant(d * planets, m);
+    mass.inverse = Eigen::VectorXd::Constant(d * planets, 1.0 / m);
+    damping.set(std::vector<double>(planets, eps), d);
+  }
 
   Planets(double G_, double central, std::vector<double> planet_masses, int d_, std::vector<double> drag)
       : G(G_), d(d_), planets(static_cast<int>(planet_masses.size())) {
@@ -145,8 +186,7 @@ struct Planets {
       mass.m.segment(d * (i - 1), d).setConstant(masses[i] * eta[i - 1] / eta[i]);
     }
     mass.inverse = mass.m.cwiseInverse();
-    damping.rates = std::move(drag);
-    damping.d = d;
+    damping.set(std::move(drag), d);
     eps = damping.spectral_radius();
   }
 
@@ -170,6 +210,11 @@ struct Planets {
   }
 
   double potential(const Vec& q) const {
+    if (!interacting) {
+      double v = 0.0;
+      for (int i = 0; i < planets; ++i) v -= mu[i] * mass.m[d * i] / q.segment(d * i, d).norm();
+      return v;
+    }
     Eigen::VectorXd& x = thread_scratch(kScratchT0, d * (planets + 1));
     heliocentric(q, x);
     double v = 0.0;
@@ -183,6 +228,10 @@ struct Planets {
   // -mu_i Q_i / |Q_i|^3 they are the interaction's, and grad_{Q_i} H_interaction = -m'_i (A_i + mu_i Q_i / |Q_i|^3).
   // For one planet the two cancel: no kick.
   void gradient(const Vec& q, Vec& g) const {
+    if (!interacting) {
+      g.setZero();
+      return;
+    }
     Eigen::VectorXd& x = thread_scratch(kScratchT0, d * (planets + 1));
     Eigen::VectorXd& a = thread_scratch(kScratchT1, d * (planets + 1));
     heliocentric(q, x);
@@ -215,7 +264,18 @@ struct Planets {
       }
     }
   }
-  void hessian_product(const Vec&, const Vec&, Vec&) const {
+  // The kick: test particles have none (and skip forming a zero force).
+  void kick(const Vec& q, Vec& p, double t) const {
+    if (!interacting) return;
+    Eigen::VectorXd& g = thread_scratch(kScratchT2, size());
+    gradient(q, g);
+    p -= t * g;
+  }
+  void hessian_product(const Vec&, const Vec&, Vec& out) const {
+    if (!interacting) {
+      out.setZero();
+      return;
+    }
     throw std::invalid_argument("hessian_product: not provided for planets (the sv modified energy it serves is that "
                                 "of a kinetic + potential split, and this kind's split is Kepler + interaction)");
   }
