@@ -15,6 +15,8 @@ APT_PACKAGES := libeigen3-dev g++ make
 # The page test (tests/service/test_page.py) drives Debian's chromium and the proxy test (tests/service/test_proxy.py)
 # runs the README's nginx block; only the test targets need them.
 test pytest: APT_PACKAGES += chromium nginx
+# openseespy (the bench extra, bench_vs_opensees.py) loads Debian's BLAS and LAPACK.
+bench: APT_PACKAGES += libblas3 liblapack3
 SUDO := $(if $(filter 0,$(shell id -u)),,sudo)
 HOST ?= 127.0.0.1
 PORT ?= 8000
@@ -114,6 +116,7 @@ pytest: setup
 	$(PY) -m pytest -n $(PYTEST_WORKERS) --dist loadfile
 
 bench: setup
+	$(PY) -c '$(REQUIREMENTS)' bench >build/bench-requirements.txt && $(UV) -r build/bench-requirements.txt
 	$(PY) benchmarks/bench_steps.py
 	$(PY) benchmarks/bench_system.py
 	$(PY) benchmarks/bench_service_load.py
