@@ -17,12 +17,15 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
 #include "raydamp/events/henon.hpp"
 #include "raydamp/events/hermite.hpp"
 #include "raydamp/events/types.hpp"
+#include "raydamp/record/marks.hpp"
+#include "raydamp/record/model_view.hpp"
 #include "raydamp/run_types.hpp"
 
 #if defined(__GNUC__) || defined(__clang__)
@@ -37,18 +40,19 @@
 
 namespace raydamp {
 
-template <class Model, int Dim, class RecMarks>
+// One class for every model (record/model_view.hpp): the model is seen through a ModelView, the
+// state through its raw q and p.
 class EventWatcher {
-  using Vec = typename Model::Vec;
+  using Vec = Eigen::VectorXd;
   using Kind = EventSlot::Kind;
 
  public:
   // From the initial state z at t: each g must be finite there (a g that is not is refused, naming it).
-  EventWatcher(const Model& model, const RunSpec& spec, RunResult& result, const State<Dim>& z, double t)
+  EventWatcher(const ModelView& model, const RunSpec& spec, RunResult& result, StateView z, double t)
       : model_(model), set_(spec.events && !spec.events->empty() ? spec.events : nullptr), load_(spec.load),
         dense_(spec.dense ? &result.dense : nullptr), log_(result.events), on_(set_ != nullptr || spec.dense) {
     if (!on_) return;
-    n_ = model.size();
+    n_ = model.n;
     for (Vec* v : {&q0_, &p0_, &v0_, &f0_, &q1_, &p1_, &v1_, &f1_, &grad_, &rate_, &fa_, &fb_, &land_q_,
                    &land_p_})
       v->setZero(n_);
@@ -92,7 +96,7 @@ class EventWatcher {
       dense_->t.reserve(rows);
       for (auto* v : {&dense_->q, &dense_->p, &dense_->v, &dense_->f}) v->reserve(rows * n_);
     }
-    if (z.all_finite()) start(z, t);  // else the loop stops before its first step
+    if (finite(z)) start(z, t);  // else the loop stops before its first step
   }
 
   bool on() const { return on_; }
@@ -100,16 +104,16 @@ class EventWatcher {
   double stop_time() const { return t_stop_; }
   const std::string& stop_name() const { return set_->events[stop_event_].name; }
 
-  // After step i, ending at t, of a state that rec (the recorder) observed.
-  template <class Rec>
-  void after_step(const State<Dim>& x, long i, double t, const Rec& rec) {
-    if (on_) observe(x, i, t, rec);
+  // After step i of model, ending at t, of a state that rec (the recorder) observed.
+  template <class Model, int Dim, class Rec>
+  void after_step(const Model& model, const State<Dim>& x, long i, double t, const Rec& rec) {
+    if (on_) observe(model, x, i, t, rec.marks());
   }
 
   // After a terminal event: z becomes the state at the crossing time, stepped by restep(z, i, dt) from
   // the start of the crossing step (dt = the crossing time minus that start; the recorder's sums back
   // where they were); the dense record's last row is that state. Returns the steps taken.
-  template <class Rec, class Restep>
+  template <int Dim, class Rec, class Restep>
   long finish(State<Dim>& z, Rec& rec, const Restep& restep) {
     if (t_stop_ == t1_) {  // on the step's end: the stepped state itself
       z.q = q1_;
@@ -122,14 +126,18 @@ class EventWatcher {
     restep(z, step_, t_stop_ - t0_);
     if (dense_) {
       resize_dense(dense_->rows() - 1);
-      read_end(z, t_stop_);
+      read_end(view_of(z), t_stop_);
       push_dense();
     }
     return step_ + 1;
   }
 
  private:
-  void start(const State<Dim>& z, double t) {
+  bool finite(StateView x) const {
+    return Eigen::Map<const Vec>(x.q, n_).allFinite() && Eigen::Map<const Vec>(x.p, n_).allFinite();
+  }
+
+  void start(StateView z, double t) {
     if (!on_) return;
     read_end(z, t);
     if (set_)
@@ -140,11 +148,44 @@ class EventWatcher {
     push_dense();
   }
 
-  template <class Rec>
-  RAYDAMP_NOINLINE_FLAT void observe(const State<Dim>& x, long i, double t, const Rec& rec) {
+  // The one part made per model type: the step's end read with the model's own functions, inlined
+  // (v and, where needed, f: a call through the ModelView here would cost the floor a tenth of a
+  // pendulum's step); the rest is this class's, out of line (after_read).
+  template <class Model, int Dim>
+  RAYDAMP_NOINLINE_FLAT void observe(const Model& model, const State<Dim>& x, long i, double t,
+                                     const RecorderMarks& marks) {
     // A state that is not finite ends the run (dense output ends at the last finite one); a block replayed
     // to find that step (integrate.hpp) runs steps already observed again, which add nothing.
     if (i <= step_ || !x.all_finite()) return;
+    shift(i, marks);
+    t1_ = t;
+    q1_ = x.q;
+    p1_ = x.p;
+    using MVec = typename Model::Vec;
+    if constexpr (std::is_same_v<MVec, Vec>) {
+      model.mass.velocity(x.p, v1_);
+      if (forces_) {
+        model.gradient(x.q, grad_);
+        model.damping.rate(x.q, x.p, rate_);
+        f1_ = -(grad_ + rate_);
+      }
+    } else {
+      MVec v = MVec::Zero(x.p.size());
+      model.mass.velocity(x.p, v);
+      v1_ = v;
+      if (forces_) {
+        MVec grad = MVec::Zero(x.q.size()), rate = MVec::Zero(x.q.size());
+        model.gradient(x.q, grad);
+        model.damping.rate(x.q, x.p, rate);
+        f1_ = -(grad + rate);
+      }
+    }
+    if (forces_ && load_ && !load_->empty()) load_->add(t, 1.0, f1_.data());
+    after_read(t);
+  }
+
+  // The step's ends move back: the end just read becomes the start.
+  void shift(long i, const RecorderMarks& marks) {
     std::swap(q0_, q1_);
     std::swap(p0_, p1_);
     std::swap(v0_, v1_);
@@ -154,22 +195,30 @@ class EventWatcher {
     t0_ = t1_;
     if (terminal_) {
       marks0_ = marks1_;
-      marks1_ = rec.marks();
+      marks1_ = marks;
     }
     step_ = i;
-    read_end(x, t);
+  }
+
+  // After the end (q1, p1, v1, f1 at t) is read: g and dg/dt there, the dense row, the crossings.
+  RAYDAMP_NOINLINE_FLAT void after_read(double t) {
+    if (set_) evaluate(t);
     push_dense();
     if (set_) detect();
   }
 
   // q1, p1, v1 (and f1 where needed) from x at t, and g, dg/dt there.
-  void read_end(const State<Dim>& x, double t) {
+  void read_end(StateView x, double t) {
     t1_ = t;
-    q1_ = x.q;
-    p1_ = x.p;
-    model_.mass.velocity(x.p, v1_);
+    q1_ = Eigen::Map<const Vec>(x.q, n_);
+    p1_ = Eigen::Map<const Vec>(x.p, n_);
+    model_.velocity(model_.model, p1_, v1_);
     if (forces_) force(q1_, p1_, t, f1_);
-    if (!set_) return;
+    if (set_) evaluate(t);
+  }
+
+  // g and dg/dt at the end just read.
+  void evaluate(double t) {
     if (affine_) {  // no compiled call: g and dg/dt from their coefficients
       const std::vector<EventFunction>& events = set_->events;
       for (std::size_t e = 0; e < events.size(); ++e) {
@@ -208,9 +257,7 @@ class EventWatcher {
 
   // pdot at (q, p, t): -grad V(q) - eps D(q) M^{-1} p + f(t).
   void force(const Vec& q, const Vec& p, double t, Vec& out) {
-    model_.gradient(q, grad_);
-    model_.damping.rate(q, p, rate_);
-    out = -(grad_ + rate_);
+    model_.force(model_.model, q, p, grad_, rate_, out);
     if (load_ && !load_->empty()) load_->add(t, 1.0, out.data());
   }
 
@@ -383,7 +430,7 @@ class EventWatcher {
     q = f.from == 0 ? q0_ : q1_;
     p = f.from == 0 ? p0_ : p1_;
     auto rates = [&](double ts, const Vec& qs, const Vec& ps, Vec& v, Vec& force_out) {
-      model_.mass.velocity(ps, v);
+      model_.velocity(model_.model, ps, v);
       force(qs, ps, ts, force_out);
       return value_at(f.e, ts, qs, ps, v, force_out);
     };
@@ -441,7 +488,7 @@ class EventWatcher {
     for (auto* v : {&dense_->q, &dense_->p, &dense_->v, &dense_->f}) v->resize(rows * n_);
   }
 
-  const Model& model_;
+  const ModelView model_;
   const EventSet* set_;
   const Load* load_;
   DenseRecord* dense_;
@@ -457,7 +504,7 @@ class EventWatcher {
   std::vector<double> in_, g0_, g1_, dg0_, dg1_;
   std::vector<double> out_;
   std::vector<Found> found_;
-  RecMarks marks0_{}, marks1_{};
+  RecorderMarks marks0_{}, marks1_{};
 };
 
 }  // namespace raydamp
