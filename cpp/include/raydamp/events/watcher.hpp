@@ -107,7 +107,9 @@ class EventWatcher {
   // After step i of model, ending at t, of a state that rec (the recorder) observed.
   template <class Model, int Dim, class Rec>
   void after_step(const Model& model, const State<Dim>& x, long i, double t, const Rec& rec) {
-    if (on_) observe(model, x, i, t, rec.marks());
+    if (!on_) return;
+    if (terminal_ && i > step_) marks_ = rec.marks();  // what a terminal event's restep starts from
+    observe(model, x, i, t);
   }
 
   // After a terminal event: z becomes the state at the crossing time, stepped by restep(z, i, dt) from
@@ -149,18 +151,18 @@ class EventWatcher {
   }
 
   // The one part made per model type: the step's end read with the model's own functions, inlined
-  // (v and, where needed, f: a call through the ModelView here would cost the floor a tenth of a
-  // pendulum's step); the rest is this class's, out of line (after_read).
+  // (v and, where needed, f: a call through the ModelView here would cost the events floor a tenth
+  // of a pendulum's step), then g and the sign scan; the crossing search (locate), the log and
+  // Hénon's landing are this class's, out of line, the same for every model.
   template <class Model, int Dim>
-  RAYDAMP_NOINLINE_FLAT void observe(const Model& model, const State<Dim>& x, long i, double t,
-                                     const RecorderMarks& marks) {
+  RAYDAMP_NOINLINE_FLAT void observe(const Model& model, const State<Dim>& x, long i, double t) {
     // A state that is not finite ends the run (dense output ends at the last finite one); a block replayed
     // to find that step (integrate.hpp) runs steps already observed again, which add nothing.
     if (i <= step_ || !x.all_finite()) return;
-    shift(i, marks);
+    shift(i);
     t1_ = t;
-    q1_ = x.q;
-    p1_ = x.p;
+    put<Dim>(q1_, x.q);
+    put<Dim>(p1_, x.p);
     using MVec = typename Model::Vec;
     if constexpr (std::is_same_v<MVec, Vec>) {
       model.mass.velocity(x.p, v1_);
@@ -172,20 +174,27 @@ class EventWatcher {
     } else {
       MVec v = MVec::Zero(x.p.size());
       model.mass.velocity(x.p, v);
-      v1_ = v;
+      put<Dim>(v1_, v);
       if (forces_) {
         MVec grad = MVec::Zero(x.q.size()), rate = MVec::Zero(x.q.size());
         model.gradient(x.q, grad);
         model.damping.rate(x.q, x.p, rate);
-        f1_ = -(grad + rate);
+        put<Dim>(f1_, -(grad + rate));
       }
     }
     if (forces_ && load_ && !load_->empty()) load_->add(t, 1.0, f1_.data());
     after_read(t);
   }
 
+  // from into to (of size n): for a fixed n, a copy of that size, without a run-time size's checks.
+  template <int Dim, class E>
+  static void put(Vec& to, const E& from) {
+    if constexpr (Dim == Eigen::Dynamic) to = from;
+    else Eigen::Map<Eigen::Matrix<double, Dim, 1>>(to.data()) = from;
+  }
+
   // The step's ends move back: the end just read becomes the start.
-  void shift(long i, const RecorderMarks& marks) {
+  void shift(long i) {
     std::swap(q0_, q1_);
     std::swap(p0_, p1_);
     std::swap(v0_, v1_);
@@ -195,13 +204,14 @@ class EventWatcher {
     t0_ = t1_;
     if (terminal_) {
       marks0_ = marks1_;
-      marks1_ = marks;
+      marks1_ = marks_;
     }
     step_ = i;
   }
 
-  // After the end (q1, p1, v1, f1 at t) is read: g and dg/dt there, the dense row, the crossings.
-  RAYDAMP_NOINLINE_FLAT void after_read(double t) {
+  // After the end (q1, p1, v1, f1 at t) is read: g and dg/dt there, the dense row, the crossings
+  // (inlined in observe: one call per step fewer).
+  void after_read(double t) {
     if (set_) evaluate(t);
     push_dense();
     if (set_) detect();
@@ -504,7 +514,7 @@ class EventWatcher {
   std::vector<double> in_, g0_, g1_, dg0_, dg1_;
   std::vector<double> out_;
   std::vector<Found> found_;
-  RecorderMarks marks0_{}, marks1_{};
+  RecorderMarks marks0_{}, marks1_{}, marks_{};
 };
 
 }  // namespace raydamp
