@@ -2,8 +2,10 @@
 
 Cases: the 201-DOF cantilever (2% Rayleigh at modes 1 and 3) released from its static tip deflection over two
 periods, and a 12 x 12 membrane released from a static deflection, at tolerances 1e-4 and 1e-6. Each row: advise's
-wall time (measure=False, and measure=True which also times trial steps), the recommended method, its steps, its
-predicted time and the measured time of the run it recommends.
+wall time (measure=False, and measure=True which also times trial steps) and the processor time of the first (all
+threads: on a loaded machine it stands for a quiet machine's wall time, with OPENBLAS_NUM_THREADS=1 so that idle BLAS
+threads do not spin), the recommended method, its steps, its predicted time and the measured time of the run it
+recommends.
 
     python benchmarks/bench_advise.py
 """
@@ -53,7 +55,7 @@ def rayleigh(M, K):
 
 
 def main() -> None:
-    print(f"{'case':<20}{'tol':>8}{'advise s':>10}{'+measure s':>12}  {'recommended':<16}{'steps':>9}"
+    print(f"{'case':<20}{'tol':>8}{'advise s':>10}{'cpu s':>8}{'+measure s':>12}  {'recommended':<16}{'steps':>9}"
           f"{'predicted s':>13}{'run s':>9}{'advise/run':>12}")
     for name, (M, K), load_dof in (("cantilever static", cantilever(), -2), ("membrane static", membrane(), 66)):
         alpha, beta, w1 = rayleigh(M, K)
@@ -64,9 +66,9 @@ def main() -> None:
         q0 /= np.abs(q0).max()
         t_end = 2 * 2 * math.pi / w1
         for tol in (1e-4, 1e-6):
-            start = time.perf_counter()
+            start, cpu = time.perf_counter(), time.process_time()
             advice = raydamp.advise(structure, t_end, tol, q0=q0, p0=0 * q0, measure=False)
-            plain = time.perf_counter() - start
+            plain, cpu = time.perf_counter() - start, time.process_time() - cpu
             start = time.perf_counter()
             advice = raydamp.advise(structure, t_end, tol, q0=q0, p0=0 * q0, measure=True)
             measured = time.perf_counter() - start
@@ -75,7 +77,7 @@ def main() -> None:
             raydamp.integrate(structure, q0, 0 * q0, **best.options, n_steps=best.steps, save_every=best.steps)
             run = time.perf_counter() - start
             label = best.method + (f"/{best.tableau}" if best.tableau else "")
-            print(f"{name:<20}{tol:>8.0e}{plain:>10.2f}{measured:>12.2f}  {label:<16}{best.steps:>9d}"
+            print(f"{name:<20}{tol:>8.0e}{plain:>10.2f}{cpu:>8.2f}{measured:>12.2f}  {label:<16}{best.steps:>9d}"
                   f"{best.seconds:>13.3g}{run:>9.3g}{plain / run:>12.2f}")
 
 

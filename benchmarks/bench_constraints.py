@@ -11,6 +11,17 @@ beside it; the script exits 0 whatever they are (a benchmark, not a test). The f
 (V's gradient is a constant): their step is a few vector operations, so the ratio is the constraint solve's
 whole cost over almost nothing.
 
+The ratio is the issue's: the constrained step over the step of the same system without its constraints
+(same potential, mass, damping), not over a stiff-spring stand-in. What dominates it (perf record of the
+double pendulum's 3s, 3e6 steps, shares of the time inside the step loop): factored_at 21% (G and the band
+factor of G M^-1 G^T at each new q, with its cache test and copy of q), project 20% (three projections a
+step: after each kick and the drift) plus the M^-1, G and band-solve passes it calls (inverse_mass_times 8%,
+times_G 4%, NormalPattern::solve 4%), SHAKE's Newton loop in drift 13%; the compiled constraint, Jacobian and
+gradient functions together 3%. So the cost is a dozen small passes over dynamic-size vectors per step, not
+the constraints' arithmetic; the free fall it is compared with is a gradient call and two vector updates.
+The last column: per step, the drifts (3s has two), Newton iterations per drift, refreshes of Newton's
+matrix and factorisations of G M^-1 G^T.
+
     .venv/bin/python benchmarks/bench_constraints.py            # about a minute (the chain's compile)
     .venv/bin/python benchmarks/bench_constraints.py --quick    # a 20-link chain
 
@@ -70,6 +81,16 @@ def ns_per_step(system, q0, p0, method: str, h: float, steps: int, repeats: int)
     return best
 
 
+def solves_per_step(system, q0, p0, method: str, h: float, steps: int) -> str:
+    """What the constraint solve did per step (the core's counters): drifts, Newton iterations, refreshes
+    of Newton's matrix, factorisations of G M^-1 G^T."""
+    out = system._core_model.integrate(method, "", "", np.asarray(q0, float), np.asarray(p0, float), h, steps, h,
+                                       steps, False, None, None)
+    drifts, iterations, refreshes, factorisations = out["constraint_solves"]
+    return (f"{drifts / steps:.0f} drift, {iterations / max(drifts, 1):.2f} it/drift, "
+            f"{refreshes / steps:.2f} refresh, {factorisations / steps:.2f} factor")
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true")
@@ -78,14 +99,16 @@ def main() -> int:
     cases = [("double pendulum", double_pendulum, 1e-3, 200_000), (f"{links}-link chain", lambda c: chain(links, c),
                                                                    1e-3, 2_000)]
     print(f"raydamp {raydamp.__file__}; load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
-    print(f"{'system':<18} {'method':<6} {'free ns/step':>13} {'constrained':>12} {'ratio':>7}  target <= {TARGET}x")
+    print(f"{'system':<18} {'method':<6} {'free ns/step':>13} {'constrained':>12} {'ratio':>7}  target <= {TARGET}x"
+          "   per step")
     for label, build, h, steps in cases:
         free, q0, p0 = build(False)
         constrained, _, _ = build(True)
         for method in ("3s", "2s", "baoab"):
             a = ns_per_step(free, q0, p0, method, h, steps, 5)
             b = ns_per_step(constrained, q0, p0, method, h, steps, 5)
-            print(f"{label:<18} {method:<6} {a:>13.0f} {b:>12.0f} {b / a:>7.2f}")
+            print(f"{label:<18} {method:<6} {a:>13.0f} {b:>12.0f} {b / a:>7.2f}                 "
+                  f"{solves_per_step(constrained, q0, p0, method, h, steps)}")
     return 0
 
 

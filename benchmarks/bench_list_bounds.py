@@ -17,17 +17,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import socket
 import statistics
-import subprocess
-import sys
 import tempfile
-import threading
 import time
 from pathlib import Path
 
 import httpx
+from bench_service_systems import HealthzPoller, start_server
 
 JOB = {"model": "damped_pendulum", "method": "3s", "h": 0.1, "n_steps": 10, "initial_state": {"q": [0.1], "p": [0.0]}}
 STRUCTURE = {**JOB, "model": None, "initial_state": {"rest": True},
@@ -62,50 +58,23 @@ def bodies() -> dict[str, tuple[str, bytes]]:
     }
 
 
-def free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return sock.getsockname()[1]
-
-
 def measure(tree: Path, repeats: int) -> dict[str, tuple[float, float, float, int]]:
     """field -> (median 422 seconds, worst 422 seconds, worst /healthz seconds meanwhile, status)."""
-    port = free_port()
-    env = {**os.environ, "PYTHONPATH": f"{tree / 'python'}{os.pathsep}{tree / 'service'}"}
     with tempfile.TemporaryDirectory() as tmp:
-        env["RAYDAMP_DB"] = str(Path(tmp) / "db.sqlite3")
-        server = subprocess.Popen([sys.executable, "-m", "raydamp_service", "--port", str(port)], env=env,
-                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, cwd=tmp)
+        server, base = start_server(tree, Path(tmp) / "db.sqlite3", Path(tmp) / "server.log")
         try:
-            client = httpx.Client(base_url=f"http://127.0.0.1:{port}", timeout=120)
-            for _ in range(600):
-                try:
-                    if client.get("/healthz").status_code == 200:
-                        break
-                except httpx.TransportError:
-                    time.sleep(0.1)
             out = {}
-            for name, (route, body) in bodies().items():
-                answers, health, stop = [], [], threading.Event()
-
-                def poll(stop=stop, health=health) -> None:
-                    with httpx.Client(base_url=f"http://127.0.0.1:{port}", timeout=120) as probe:
-                        while not stop.is_set():
+            with httpx.Client(base_url=base, timeout=120) as client:
+                for name, (route, body) in bodies().items():
+                    answers, status = [], 0
+                    with HealthzPoller(base) as poller:
+                        poller.phase = "refuse"
+                        for _ in range(repeats):
                             start = time.perf_counter()
-                            probe.get("/healthz")
-                            health.append(time.perf_counter() - start)
-                            time.sleep(0.02)
-
-                poller = threading.Thread(target=poll)
-                poller.start()
-                status = 0
-                for _ in range(repeats):
-                    start = time.perf_counter()
-                    status = client.post(route, content=body, headers={"content-type": "application/json"}).status_code
-                    answers.append(time.perf_counter() - start)
-                stop.set()
-                poller.join()
-                out[name] = (statistics.median(answers), max(answers), max(health, default=0.0), status)
+                            status = client.post(route, content=body,
+                                                 headers={"content-type": "application/json"}).status_code
+                            answers.append(time.perf_counter() - start)
+                    out[name] = (statistics.median(answers), max(answers), poller.slowest("refuse")[0], status)
             return out
         finally:
             server.terminate()

@@ -80,7 +80,7 @@ def start_server(db: Path, log: Path) -> tuple[subprocess.Popen, str]:
         process = subprocess.Popen([sys.executable, "-m", "raydamp_service", "--port", str(port)], env=env,
                                    stdout=out, stderr=subprocess.STDOUT)
     base = f"http://127.0.0.1:{port}"
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + 180  # a loaded machine takes a minute to import and warm up
     while time.monotonic() < deadline:
         try:
             if httpx.get(base + "/healthz").status_code == 200:

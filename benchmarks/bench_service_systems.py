@@ -58,7 +58,7 @@ def start_server(root: Path, db: Path, log: Path, **settings: str) -> tuple[subp
         process = subprocess.Popen([sys.executable, "-m", "raydamp_service", "--port", str(port)], env=env,
                                    stdout=out, stderr=subprocess.STDOUT, cwd=root)
     base = f"http://127.0.0.1:{port}"
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + 180  # a loaded machine takes a minute to import and warm up
     while time.monotonic() < deadline:
         try:
             if httpx.get(base + "/healthz").status_code == 200:

@@ -7,7 +7,7 @@ throughout, and the answer is 201 (within RAYDAMP_MAX_RECORD_SAMPLES) or a 422/4
 one-column CSV, an .AT2 and a .npy. (benchmarks/bench_record_memory.py measures the library's parser alone.)
 
 For each case a fresh server is started and warmed up (a job, an upload, a plot), its peak resident size is reset
-(/proc/PID/clear_refs) before the upload and read after it (VmHWM), while another thread polls /healthz every 50 ms.
+(/proc/PID/clear_refs) before the upload and read after it (VmHWM), while another thread polls /healthz every 20 ms.
 The check processes that parse the upload are not the server: their memory is bounded by check_memory_bytes.
 
     .venv/bin/python benchmarks/bench_upload_memory.py
@@ -21,17 +21,15 @@ from __future__ import annotations
 import argparse
 import io
 import os
-import sys
 import tempfile
-import threading
 import time
 from pathlib import Path
 
+import httpx
 import numpy as np
+from bench_service_systems import HealthzPoller, start_server
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import httpx  # noqa: E402
-from bench_service_load import start_server  # noqa: E402 - the benchmarks' own server starter
+ROOT = Path(__file__).resolve().parents[1]
 
 MiB = 2**20
 WARM = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "h": 0.1, "n_steps": 200,
@@ -62,19 +60,14 @@ def contents(mib: int) -> dict[str, tuple[str, bytes, dict[str, str]]]:
 
 
 def one(label: str, name: str, content: bytes, env: dict[str, str]) -> None:
-    saved = dict(os.environ)
-    os.environ.update({"RAYDAMP_MAX_FILE_BYTES": str(max(len(content), 64 * MiB)), **env})
-    try:
-        with tempfile.TemporaryDirectory() as tmp:
-            process, base = start_server(Path(tmp) / "raydamp.sqlite3", Path(tmp) / "server.log")
-            try:
-                measure(label, name, content, process.pid, base)
-            finally:
-                process.terminate()
-                process.wait(timeout=60)
-    finally:
-        os.environ.clear()
-        os.environ.update(saved)
+    with tempfile.TemporaryDirectory() as tmp:
+        process, base = start_server(ROOT, Path(tmp) / "raydamp.sqlite3", Path(tmp) / "server.log",
+                                     RAYDAMP_MAX_FILE_BYTES=str(max(len(content), 64 * MiB)), **env)
+        try:
+            measure(label, name, content, process.pid, base)
+        finally:
+            process.terminate()
+            process.wait(timeout=60)
 
 
 def measure(label: str, name: str, content: bytes, pid: int, base: str) -> None:
@@ -87,26 +80,14 @@ def measure(label: str, name: str, content: bytes, pid: int, base: str) -> None:
         time.sleep(1.0)
         before = status_kib(pid, "VmRSS")
         Path(f"/proc/{pid}/clear_refs").write_text("5")  # VmHWM := VmRSS
-        stop = threading.Event()
-        probes: list[float] = []
-
-        def poll() -> None:
-            with httpx.Client(base_url=base, timeout=60) as probe:
-                while not stop.is_set():
-                    start = time.perf_counter()
-                    probe.get("/healthz")
-                    probes.append(time.perf_counter() - start)
-                    stop.wait(0.05)
-
-        poller = threading.Thread(target=poll)
-        poller.start()
-        began = time.perf_counter()
-        response = client.post("/v1/files", files={"file": (name, content)})
-        elapsed = time.perf_counter() - began
-        time.sleep(0.2)
-        stop.set()
-        poller.join()
+        with HealthzPoller(base) as poller:
+            poller.phase = "upload"
+            began = time.perf_counter()
+            response = client.post("/v1/files", files={"file": (name, content)})
+            elapsed = time.perf_counter() - began
+            time.sleep(0.2)
         peak, after = status_kib(pid, "VmHWM"), status_kib(pid, "VmRSS")
+        slowest, probes = poller.slowest("upload")
     body = response.json()
     if response.status_code == 201:
         outcome = f"201, {body['samples']} samples ({body['format']})"
@@ -116,7 +97,7 @@ def measure(label: str, name: str, content: bytes, pid: int, base: str) -> None:
     print(f"{label}: {len(content) / MiB:.1f} MiB received in {elapsed:.1f} s -> {outcome}")
     print(f"  server RSS {before / 1024:.0f} MiB before, peak +{grown:.0f} MiB (+{grown - len(content) / MiB:.0f} MiB "
           f"above the bytes received; target <= 95 MiB = 100 MB), {after / 1024:.0f} MiB after")
-    print(f"  /healthz meanwhile: {len(probes)} probes, max {1000 * max(probes):.0f} ms (target < 500)")
+    print(f"  /healthz meanwhile: {probes} probes, max {1000 * slowest:.0f} ms (target < 500)")
 
 
 def main() -> None:

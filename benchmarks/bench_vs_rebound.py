@@ -54,14 +54,26 @@ building of the simulation or system is not timed, the saving of the 110 states 
 step of a composition is all its stages (yoshida4: three 3s steps), so its ns/step is that of the whole.
 The machine's load average is printed first: on a shared machine the seconds move by 2x from run to run.
 
+The two-planet table: two planets of mass 1e-3 around the central body (heliocentric starts (1, 0) and
+(0, 2)), drag eps = 2e-4 on the inner one as REBOUNDx's modify_orbits_forces applies it in its default
+Jacobi coordinates (a = -eps u on the planet, u its velocity relative to the inner bodies' centre of mass, the
+reaction on those bodies). raydamp.Planets (Jacobi coordinates, each planet's exact Kepler drift, the
+interaction as the kick) with the drag rate that is on the inner planet's Jacobi momentum; REBOUND WHFast
+(Jacobi) with the force, and with the RK4 operator. Reference: DOP853 at rtol 1e-13 on the inertial
+three-body equations with those forces; the same two criteria, on the barycentric energy and on each planet's
+heliocentric position.
+
 The ensemble table: 1,000 decaying orbits (pericentre radii 0.5-2, e 0-0.7) as one raydamp.Kepler with
 particles = 1000 beside one REBOUND simulation of 1,000 test particles (WHFast + force, and + RK4
 operator), the same h: ns per particle per step, and how far apart the two tools' final states are.
 
     .venv/bin/pip install rebound reboundx            # optional: without them raydamp's rows alone
+    # a reboundx built from source finds librebound only on the library path:
+    export LD_LIBRARY_PATH=$(.venv/bin/python -c 'import rebound, os; print(os.path.dirname(rebound.__libpath__))')
     nice -n 5 .venv/bin/python benchmarks/bench_vs_rebound.py
     nice -n 5 .venv/bin/python benchmarks/bench_vs_rebound.py --quick   # first case only, 3 repeats
     nice -n 5 .venv/bin/python benchmarks/bench_vs_rebound.py --ensemble-only
+    nice -n 5 .venv/bin/python benchmarks/bench_vs_rebound.py --planets-only
 
 It prints figures and exits 0 whatever they are.
 """
@@ -164,17 +176,18 @@ def best_time(build: Callable[[], Callable], repeats: int) -> tuple[float, tuple
 
 
 def scan(name: str, runner: Runner, ref: Reference, repeats: int, grid=GRID, h_of=lambda n: T_SAVE / n,
-         note_of=lambda _n: "") -> Row | None:
+         note_of=lambda _n: "", error_of=None) -> Row | None:
     """The first grid point (the largest h) meeting both targets, timed there: every fourth point (h halved)
     until one passes, then the three before it. If none passes, says how far the smallest h got."""
     tried: list[tuple[int, float, float, float, int]] = []  # (index, |dE|, |dq|, seconds of one run, steps)
+    error_of = error_of or errors
 
     def passes(i: int) -> bool:
         run = runner(grid[i])
         t0 = time.perf_counter()
         x, v, steps = run()
         seconds = time.perf_counter() - t0
-        e, q = errors(ref, x, v)
+        e, q = error_of(ref, x, v)
         tried.append((i, e, q, seconds, steps))
         return e <= E_TOL and q <= Q_TOL
 
@@ -194,7 +207,7 @@ def scan(name: str, runner: Runner, ref: Reference, repeats: int, grid=GRID, h_o
         return None
     hit = next((i for i in range(max(0, hit - 3), hit) if passes(i)), hit)
     seconds, (x, v, steps) = best_time(lambda: runner(grid[hit]), repeats)
-    e, q = errors(ref, x, v)
+    e, q = error_of(ref, x, v)
     return Row(name, h_of(grid[hit]), steps, e, q, seconds, note_of(grid[hit]))
 
 
@@ -226,6 +239,17 @@ def rebound_sim(q0, p0, integrator: str):
     return sim
 
 
+def add_drag(rebx, drag, as_operator: str | None) -> None:
+    """The drag as a force WHFast sees each step, or as an operator integrating it (RK2, RK4, ...)."""
+    if as_operator is None:
+        rebx.add_force(drag)
+    else:
+        op = rebx.load_operator("integrate_force")
+        op.params["force"] = drag
+        op.params["integrator"] = reboundx.integrators[as_operator]
+        rebx.add_operator(op)
+
+
 def attach_drag(sim, *, as_operator: str | None):
     """REBOUNDx drag a = -eps v on every particle but the central one: modify_orbits_forces with
     tau_a = -1 / (2 eps), as a force, or (as_operator = "rk4", ...) integrated by integrate_force."""
@@ -236,13 +260,7 @@ def attach_drag(sim, *, as_operator: str | None):
     # zero here: O(N^2) per step with 1,000 test particles)
     drag.params["coordinates"] = reboundx.coordinates["PARTICLE"]
     sim.particles[0].params["primary"] = 1
-    if as_operator is None:
-        rebx.add_force(drag)
-    else:
-        op = rebx.load_operator("integrate_force")
-        op.params["force"] = drag
-        op.params["integrator"] = reboundx.integrators[as_operator]
-        rebx.add_operator(op)
+    add_drag(rebx, drag, as_operator)
     for p in sim.particles[1:]:
         p.params["tau_a"] = -1.0 / (2.0 * EPS)
     return rebx, drag
@@ -369,6 +387,184 @@ def single_orbit(label: str, q0, p0, repeats: int) -> None:
                                           for r in rows + theirs))
 
 
+# ---------------------------------------------------------------------------------------------- two planets
+# Two Jupiter-mass planets, drag on the inner one (issue 46's "two planets with drag on one"). REBOUNDx's
+# modify_orbits_forces in its default Jacobi coordinates gives a planet the force -eps m'_i u (u its velocity
+# relative to the inner bodies' centre of mass, here the central body's; m'_i = m_i eta_{i-1} / eta_i its
+# reduced mass, eta_i the mass of the central body and planets 0..i) and the inner bodies the reaction, spread
+# by mass, so that u decays at eps: raydamp.Planets' drag eps_i on that planet's Jacobi momentum. The script
+# checks the force's mapping at start.
+# The inner planet's orbit shrinks from a = 1 to about 0.64 (e^{-2 eps t}), away from the outer one's (a = 2):
+# drag on the outer one would bring it in through resonances with the inner one, or onto it.
+PLANET_MASSES = (1e-3, 1e-3)
+PLANET_EPS = 2e-4
+PLANET_X = np.array([[1.0, 0.0], [0.0, 2.0]])
+PLANET_V = np.array([[0.0, 1.0], [-0.72, 0.02]])
+
+
+def bodies_energy(x: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """The barycentric energy of the central body (mass MU) and the planets from heliocentric x, v
+    (..., planets, 2), computed the same way for every tool."""
+    m = np.array([MU, *PLANET_MASSES])
+    shape = x.shape[:-2] + (1, 2)
+    xb = np.concatenate([np.zeros(shape), x], axis=-2)
+    vb = np.concatenate([np.zeros(shape), v], axis=-2)
+    vb = vb - np.einsum("i,...ij->...j", m, vb)[..., None, :] / m.sum()
+    energy = 0.5 * np.einsum("i,...i->...", m, np.sum(vb * vb, axis=-1))
+    for a in range(len(m)):
+        for b in range(a + 1, len(m)):
+            energy = energy - m[a] * m[b] / np.linalg.norm(xb[..., b, :] - xb[..., a, :], axis=-1)
+    return energy
+
+
+def planets_reference(x0: np.ndarray, v0: np.ndarray) -> Reference:
+    m = np.array([MU, *PLANET_MASSES])
+    xb = np.vstack([np.zeros(2), x0])
+    vb = np.vstack([np.zeros(2), v0])
+    xb, vb = xb - m @ xb / m.sum(), vb - m @ vb / m.sum()
+
+    def rhs(_t, y):
+        x, v = y[:6].reshape(3, 2), y[6:].reshape(3, 2)
+        a = np.zeros((3, 2))
+        for i in range(3):
+            for j in range(i + 1, 3):
+                r = x[j] - x[i]
+                k = 1.0 / (r @ r) ** 1.5
+                a[i] += m[j] * k * r
+                a[j] -= m[i] * k * r
+        force = -PLANET_EPS * m[0] * m[1] / (m[0] + m[1]) * (v[1] - v[0])  # on the inner planet; its reaction
+        a[1] += force / m[1]
+        a[0] -= force / m[0]
+        return np.concatenate([v.reshape(-1), a.reshape(-1)])
+
+    sol = solve_ivp(rhs, (0.0, T_END), np.concatenate([xb.reshape(-1), vb.reshape(-1)]), method="DOP853",
+                    rtol=1e-13, atol=1e-16, t_eval=TIMES)
+    if not sol.success:
+        raise RuntimeError(f"planets reference: DOP853 failed: {sol.message}")
+    x = sol.y[:6].T.reshape(-1, 3, 2)
+    v = sol.y[6:].T.reshape(-1, 3, 2)
+    x, v = x[:, 1:] - x[:, :1], v[:, 1:] - v[:, :1]
+    return Reference(x, v, bodies_energy(x, v), float(bodies_energy(x0, v0)))
+
+
+def planet_errors(ref: Reference, x: np.ndarray, v: np.ndarray) -> tuple[float, float]:
+    if x.shape != ref.x.shape or not (np.all(np.isfinite(x)) and np.all(np.isfinite(v))):
+        return math.inf, math.inf
+    e = float(np.max(np.abs(bodies_energy(x, v) - ref.energy)) / abs(ref.e0))
+    q = float(np.max(np.linalg.norm(x - ref.x, axis=-1) / np.linalg.norm(ref.x, axis=-1)))
+    return e, q
+
+
+def raydamp_planets_runner(method: str, composition: str | None) -> Runner:
+    system = raydamp.Planets(list(PLANET_MASSES), central_mass=MU, eps=[PLANET_EPS, 0.0])
+    q0, p0 = system.jacobi_state(PLANET_X, PLANET_V)
+
+    def build(n: int):
+        h = T_SAVE / n
+
+        def run():
+            sol = raydamp.integrate(system, q0, p0, method=method, composition=composition, h=h, t_end=T_END,
+                                    save_every=n)
+            rows = np.flatnonzero(np.asarray(sol.t) > 0.5 * T_SAVE)
+            x, v = system.heliocentric(np.asarray(sol.q)[rows], np.asarray(sol.p)[rows])
+            return x, v, SAVES * n
+
+        return run
+
+    return build
+
+
+def rebound_planets(integrator: str):
+    sim = rebound.Simulation()
+    sim.G = 1.0
+    sim.integrator = integrator
+    sim.add(m=MU)
+    for m, x, v in zip(PLANET_MASSES, PLANET_X, PLANET_V, strict=True):
+        sim.add(m=m, x=x[0], y=x[1], vx=v[0], vy=v[1])
+    sim.move_to_com()
+    return sim
+
+
+def attach_planet_drag(sim, *, as_operator: str | None):
+    rebx = reboundx.Extras(sim)
+    drag = rebx.load_force("modify_orbits_forces")  # Jacobi coordinates, REBOUNDx's default
+    add_drag(rebx, drag, as_operator)
+    sim.particles[1].params["tau_a"] = -1.0 / (2.0 * PLANET_EPS)
+    return rebx, drag
+
+
+def check_planet_drag_mapping() -> float:
+    """|a - a_expected| / (eps |u|) for the inner planet, the central body's reaction and the outer planet
+    (none), from the force's own update_accelerations."""
+    sim = rebound_planets("whfast")
+    rebx, drag = attach_planet_drag(sim, as_operator=None)
+    for p in sim.particles:
+        p.ax = p.ay = p.az = 0.0
+    drag.update_accelerations(ctypes.byref(sim), ctypes.byref(drag), sim._particles, sim.N)
+    m = np.array([p.m for p in sim.particles])
+    v = np.array([[p.vx, p.vy] for p in sim.particles])
+    a = np.array([[p.ax, p.ay] for p in sim.particles])
+    u = v[1] - v[0]
+    expected = PLANET_EPS / (m[0] + m[1]) * np.vstack([m[1] * u, -m[0] * u, np.zeros(2)])
+    del rebx
+    return float(np.max(np.linalg.norm(a - expected, axis=1)) / (PLANET_EPS * np.linalg.norm(u)))
+
+
+def planets_whfast_runner(*, as_operator: str | None) -> Runner:
+    def build(n: int):
+        sim = rebound_planets("whfast")
+        sim.dt = T_SAVE / n
+        rebx, _ = attach_planet_drag(sim, as_operator=as_operator)
+        x = np.empty((SAVES, 2, 2))
+        v = np.empty((SAVES, 2, 2))
+
+        def run():
+            _keep = rebx
+            ps = sim.particles
+            for i in range(SAVES):
+                sim.steps(n)
+                star = ps[0]
+                for k in (1, 2):
+                    x[i, k - 1] = ps[k].x - star.x, ps[k].y - star.y
+                    v[i, k - 1] = ps[k].vx - star.vx, ps[k].vy - star.vy
+            return x, v, SAVES * n
+
+        return run
+
+    return build
+
+
+def two_planets(repeats: int) -> None:
+    print(f"\n== two planets (masses {PLANET_MASSES[0]:g}, {PLANET_MASSES[1]:g}; a = 1, 2), drag eps = {PLANET_EPS:g} "
+          f"on the inner one, t_end = {T_END:g}, {SAVES} saves")
+    t0 = time.perf_counter()
+    ref = planets_reference(PLANET_X, PLANET_V)
+    print(f"  reference: DOP853 rtol 1e-13 on the inertial equations ({time.perf_counter() - t0:.1f} s); "
+          f"E0 = {ref.e0:.8f}, E(t_end) = {ref.energy[-1]:.8f}")
+    if rebound is not None:
+        print(f"  drag mapping check: modify_orbits_forces (Jacobi) writes the expected accelerations to "
+              f"{check_planet_drag_mapping():.1e} relative")
+    rows: list[Row] = []
+    for method, comp in (("3s", None), ("2s", None), ("3s", "yoshida4")):
+        name = f"raydamp Planets {method}" + (f" + {comp}" if comp else "")
+        row = scan(name, raydamp_planets_runner(method, comp), ref, repeats, error_of=planet_errors)
+        if row:
+            rows.append(row)
+    theirs: list[Row] = []
+    if rebound is not None:
+        for name, runner in (("REBOUND WHFast + REBOUNDx force", planets_whfast_runner(as_operator=None)),
+                             ("REBOUND WHFast + REBOUNDx RK4 operator", planets_whfast_runner(as_operator="rk4"))):
+            row = scan(name, runner, ref, repeats, error_of=planet_errors)
+            if row:
+                theirs.append(row)
+    print_rows(rows + theirs)
+    if rows and theirs:
+        ours, best = min(rows, key=lambda r: r.seconds), min(theirs, key=lambda r: r.seconds)
+        print(f"  speed-up of raydamp's fastest ({ours.tool}, {ours.seconds:.3e} s) against the fastest WHFast "
+              f"variant ({best.tool.removeprefix('REBOUND ')}, {best.seconds:.3e} s): "
+              f"{best.seconds / ours.seconds:.1f}x")
+
+
 # ---------------------------------------------------------------------------------------------- ensemble
 def ensemble(members: int, h: float, t_end: float, repeats: int) -> None:
     print(f"\n== ensemble: {members} decaying orbits (pericentre radii 0.5-2, e 0-0.7), eps = {EPS}, h = {h}")
@@ -382,20 +578,27 @@ def ensemble(members: int, h: float, t_end: float, repeats: int) -> None:
     q0, p0 = q0.reshape(-1), p0.reshape(-1)
     steps = round(t_end / h)
 
+    # raydamp's two doors: one Kepler with the orbits as its particles, and integrate_ensemble over one-particle
+    # members on one thread. Wall seconds and the process's CPU seconds (on a loaded machine the second moves less).
+    single = raydamp.Kepler(mu=MU, mass=1.0, dim=2, particles=1, eps=EPS)
+    many = raydamp.Kepler(mu=MU, mass=1.0, dim=2, particles=members, eps=EPS)
     for method in ("3s", "2s"):
-        def build_ours(method=method):
-            k = raydamp.Kepler(mu=MU, mass=1.0, dim=2, particles=members, eps=EPS)
-
-            def run():
-                sol = raydamp.integrate(k, q0, p0, method=method, h=h, t_end=t_end, save_every=steps)
-                return np.asarray(sol.q)[-1], np.asarray(sol.p)[-1]
-
-            return run
-
-        seconds, _ = best_time(build_ours, repeats)
-        per = 1e9 * seconds / (members * steps)
-        print(f"  raydamp {method}, one Kepler(particles={members}): {steps} steps in {seconds:.3e} s = {per:.1f} ns "
-              "per member per step")
+        for door, call in (
+            (f"one Kepler(particles={members})",
+             lambda method=method: raydamp.integrate(many, q0, p0, method=method, h=h, t_end=t_end, save_every=steps)),
+            ("integrate_ensemble, threads=1",
+             lambda method=method: raydamp.integrate_ensemble(single, q0.reshape(members, 2), p0.reshape(members, 2),
+                                                              method=method, h=h, t_end=t_end, save_every=steps,
+                                                              threads=1)),
+        ):
+            best, cpu = math.inf, math.inf
+            for _ in range(repeats):
+                w0, c0 = time.perf_counter(), time.process_time()
+                call()
+                best, cpu = min(best, time.perf_counter() - w0), min(cpu, time.process_time() - c0)
+            per, per_cpu = 1e9 * best / (members * steps), 1e9 * cpu / (members * steps)
+            print(f"  raydamp {method}, {door}: {steps} steps in {best:.3e} s = {per:.1f} ns per member per step "
+                  f"(CPU {per_cpu:.1f} ns)")
     if rebound is None:
         return
     for label, op in (("WHFast + REBOUNDx force", None), ("WHFast + REBOUNDx RK4 operator", "rk4")):
@@ -437,6 +640,8 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--no-ensemble", action="store_true", help="the single orbits only")
     parser.add_argument("--ensemble-only", action="store_true", help="the 1,000-orbit table only")
+    parser.add_argument("--no-planets", action="store_true", help="without the two-planet table")
+    parser.add_argument("--planets-only", action="store_true", help="the two-planet table only")
     args = parser.parse_args()
     repeats = 3 if args.quick else args.repeats
     print(f"raydamp {raydamp.__version__}; "
@@ -445,10 +650,15 @@ def main() -> None:
     if rebound is not None:
         print(f"drag mapping check: modify_orbits_forces with tau_a = -1/(2 eps) writes a = -eps v to "
               f"{check_drag_mapping():.1e} relative (central body: a = 0)")
+    if args.planets_only:
+        two_planets(repeats)
+        return
     if not args.ensemble_only:
         single_orbit("e = 0.21 (issue 46's case)", np.array([1.0, 0.0]), np.array([0.0, 1.1]), repeats)
     if not (args.quick or args.ensemble_only):
         single_orbit("e = 0.5, at the pericentre", np.array([1.0, 0.0]), np.array([0.0, math.sqrt(1.5)]), repeats)
+    if not args.ensemble_only and not args.no_planets:
+        two_planets(repeats)
     if not args.no_ensemble:
         ensemble(1000, 0.01, 20.0, repeats)
 

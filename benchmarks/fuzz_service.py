@@ -12,7 +12,7 @@ their results read back, which random generation from the schema rarely reaches.
 summary, the valid traffic's counts, then the counts issue 44 asks for: requests answered, server errors
 (5xx), schema violations (answers whose status, content type, headers or body the schema does not
 declare), other check failures, and the tracebacks the server logged. Exits 1 if there was any server
-error, schema violation, or valid job refused or failed.
+error, schema violation, or valid job refused or failed, or if Schemathesis ran no test case.
 
     .venv/bin/python benchmarks/fuzz_service.py                # 10 minutes (make fuzz)
     .venv/bin/python benchmarks/fuzz_service.py --seconds 60   # FUZZ_SECONDS=60 make fuzz
@@ -58,6 +58,9 @@ def seed_resources(base: str) -> None:
         for job_id in jobs:
             while client.get(f"/v1/jobs/{job_id}").json()["status"] in ("queued", "running"):
                 time.sleep(0.1)
+        # Built once and cached by the app: Schemathesis' own fetch of it has a 10 s timeout, which building it
+        # on a loaded machine can pass (the run then had no test case at all).
+        client.get("/openapi.json", timeout=300).raise_for_status()
 
 
 def count(ndjson: Path) -> tuple[Counter, int]:
@@ -105,7 +108,7 @@ def main() -> int:
             alongside = threading.Thread(target=valid.run, args=(args.seconds,))
             began = time.monotonic()
             alongside.start()
-            subprocess.run(command, check=False)
+            fuzzed = subprocess.run(command, check=False)
             alongside.join()
             elapsed = time.monotonic() - began
         finally:
@@ -127,7 +130,9 @@ def main() -> int:
         others = {name: n for name, n in failures.items() if name not in SCHEMA_CHECKS | {"not_a_server_error"}}
         print("other check failures: " + (", ".join(f"{name} {n}" for name, n in sorted(others.items())) or "none"))
         print(f"tracebacks in the server's log: {server_log.count('Traceback (most recent call last)')}")
-        return 1 if server_errors or violations or failures["not_a_server_error"] or valid.findings else 0
+        if cases == 0:
+            print(f"Schemathesis ran no test case (its exit status {fuzzed.returncode}): the run fuzzed nothing")
+        return 1 if server_errors or violations or failures["not_a_server_error"] or valid.findings or not cases else 0
 
 
 if __name__ == "__main__":

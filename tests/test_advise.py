@@ -166,3 +166,12 @@ def test_cli_weights_the_jobs_start_and_load(building, tmp_path, capsys):
     out = capsys.readouterr().out
     expected = raydamp.advise(s, 50.0, 1e-5, load=raydamp.Load.from_dict(load), measure=False)
     assert expected.weighting != "mode" and str(expected) == out.rstrip("\n")
+
+
+def test_cli_help_says_what_omega_is(capsys):
+    # The help still gave the remedy issue 43 found wrong ("the highest circular frequency the answer must resolve":
+    # 16 to 7,400 times the steps needed); --omega is the one weighted mode of a file without a start or load.
+    with pytest.raises(SystemExit):
+        main(["advise", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "highest" not in text and "the one mode the error model weights" in text and "ignored when it does" in text

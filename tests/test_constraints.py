@@ -236,9 +236,6 @@ def test_bad_options_name_their_argument():
         raydamp.System(["x", "y"], "y", constraints=["x^2 + y^2 - 1"], constraint_tol=0.0)
     with pytest.raises(ValueError, match=r"^project_initial: must be true or false"):
         raydamp.System(["x", "y"], "y", constraints=["x^2 + y^2 - 1"], project_initial="yes")
-    with pytest.raises(ValueError, match=r"^constraints: constraints with dashpot damping"):
-        raydamp.System(["x", "y"], "y", constraints=["x^2 + y^2 - 1"], damping={"dampers": [{"on": "x", "c": 1}]},
-                       eps=0.1)
 
 
 @pytest.mark.parametrize("method", ["rksb", "rk4", "heun"])

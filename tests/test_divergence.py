@@ -38,6 +38,8 @@ def test_the_blown_up_frame_ends_diverged_keeping_its_rows():
     # 172 steps, fewer than the 256 between checks: the check at the run's end finds it, and every row is kept
     assert sol.failed_step == sol.steps == unchecked.steps == 172
     assert "diverged" in sol.message and "divergence = 0" in sol.message
+    # H overflowed to +inf here: the scale the message names is still the start's (T0 + |V0| = 200), not 0
+    assert "times 200, the most" in sol.message, sol.message
     np.testing.assert_array_equal(sol.t, unchecked.t)
     np.testing.assert_array_equal(sol.q, unchecked.q)
     assert np.isfinite(sol.q).all() and sol.energy[0] == pytest.approx(200.0, rel=0.01)
@@ -125,3 +127,18 @@ def test_the_save_grid_is_the_core_s():
         np.testing.assert_array_equal(sol.t, save_grid(0.1, n, 0.1, every))
     sol = raydamp.integrate(DampedPendulum(eps=0.1), [1.0], [0.0], h=0.3, t_end=1.0, save_every=2)
     np.testing.assert_array_equal(sol.t, save_grid(0.3, 4, 1.0 - 3 * 0.3, 2))
+
+
+def test_the_readme_names_every_status_a_run_ends_with():
+    # The README said a blow-up ends "non_finite" alone: `diverged` (and `out_of_memory`) were in no line of it.
+    import re
+    from pathlib import Path
+
+    from raydamp.jobs.statuses import MEANINGS, STATUSES
+    from raydamp.run.integrate import DEFAULT_DIVERGENCE
+
+    text = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    for status in STATUSES:
+        if not MEANINGS[status].startswith("reserved"):
+            assert re.search(rf"[`\"']{status}[`\"']", text), status
+    assert re.search(r"`divergence`\s+\(default 10\^6\)", text) and DEFAULT_DIVERGENCE == 1e6

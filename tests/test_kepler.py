@@ -226,3 +226,33 @@ def test_a_job_runs_a_kepler_system_and_names_a_bad_field():
     assert np.array_equal(raydamp.integrate(model, q0, p0, **options).q, direct.q)
     with pytest.raises(ValueError, match="system.mu"):
         job_arguments({**job, "system": {"kind": "kepler", "mu": -1.0}})
+
+
+def decaying_orbits(members, seed=46):
+    """Pericentre starts, radii 0.5-2 and e 0-0.7 (benchmarks/bench_vs_rebound.py's ensemble)."""
+    rng = np.random.default_rng(seed)
+    rp, e = rng.uniform(0.5, 2.0, members), rng.uniform(0.0, 0.7, members)
+    q0, p0 = np.zeros((members, 2)), np.zeros((members, 2))
+    q0[:, 0] = rp
+    p0[:, 1] = np.sqrt(MU * (1.0 + e) / rp)
+    return q0, p0
+
+
+@pytest.mark.parametrize(("method", "composition"), [("2s", None), ("3s", None), ("3s", "yoshida4")])
+def test_ensemble_members_equal_their_single_runs(method, composition):
+    k = raydamp.Kepler(MU, eps=1e-3)
+    q0, p0 = decaying_orbits(6)
+    ens = raydamp.integrate_ensemble(k, q0, p0, method=method, composition=composition, h=0.05, n_steps=300,
+                                     save_every=60, threads=2)
+    assert ens.status == ("completed",) * 6
+    for i in range(6):
+        one = raydamp.integrate(k, q0[i], p0[i], method=method, composition=composition, h=0.05, n_steps=300,
+                                save_every=60)
+        member = ens.member(i)
+        for name in ("t", "q", "p", "energy", "momentum"):
+            assert np.array_equal(getattr(member, name), getattr(one, name)), (i, name)
+    # and one Kepler with the six as particles steps each as its own orbit
+    many = raydamp.Kepler(MU, eps=1e-3, particles=6)
+    together = raydamp.integrate(many, q0.reshape(-1), p0.reshape(-1), method=method, composition=composition,
+                                 h=0.05, n_steps=300, save_every=60)
+    assert np.array_equal(together.q.reshape(-1, 6, 2).transpose(1, 0, 2), ens.q)

@@ -67,6 +67,10 @@ def test_from_dict_reads_the_typed_form_and_names_the_path():
     with pytest.raises(ValueError, match=r"^ground_motion\.acceleration\.series\.t\[1\] must be finite"):
         raydamp.GroundMotion.from_dict({"acceleration": {"series": {"t": [0, float("inf")], "values": [0, 1]}},
                                         "direction": [1.0]})
+    # found by the fuzz test: a harmonic whose amplitude is itself {"ground": r} was a TypeError (a 500)
+    with pytest.raises(ValueError, match=r"^ground_motion\.acceleration: a harmonic ground acceleration has a scalar"):
+        raydamp.GroundMotion.from_dict({"acceleration": {"harmonic": {"amplitude": {"ground": [1.0]}, "omega": 1.0}},
+                                        "direction": [1.0]})
 
 
 def test_a_jobs_load_is_checked_when_parsed_at_the_path_the_client_wrote():

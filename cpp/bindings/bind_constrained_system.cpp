@@ -5,8 +5,10 @@
 #include <cstdio>
 #include <limits>
 #include <string>
+#include <type_traits>
 
 #include "bind_system.hpp"
+#include "raydamp/constraints/projected_dampers.hpp"
 #include "raydamp/constraints/rattle.hpp"
 #include "raydamp/models/constrained_system.hpp"
 
@@ -57,7 +59,8 @@ void bind_constrained_kind(py::module_& m, const char* name) {
   cls.def(py::init([](int n, double eps, const Eigen::MatrixXd& mass, double damping_scalar,
                       const Eigen::MatrixXd& damping_matrix, const FunctionAddresses& functions, int n_momenta,
                       py::object /*keep_alive*/, int k, const FunctionAddresses& constraint_functions,
-                      std::vector<int> rows, std::vector<int> cols, double tol, int max_iterations) {
+                      std::vector<int> rows, std::vector<int> cols, double tol, int max_iterations,
+                      const std::vector<double>& damper_coefficients) {
             if (mass.rows() != n || mass.cols() != n) throw std::invalid_argument("mass: expected an n x n matrix");
             if (functions.size() != 14) throw std::invalid_argument("functions: expected 7 (function, data) pairs");
             if (constraint_functions.size() != 6)
@@ -66,18 +69,24 @@ void bind_constrained_kind(py::module_& m, const char* name) {
                                     compiled(functions, 4), CompiledFunction{}};
             CompiledSystem<Mass, Damping> base(
                 n, eps, make_mass<Mass>(mass),
-                make_damping<Damping>(mass, eps, damping_scalar, damping_matrix, {}, CompiledFunction{},
-                                      std::numeric_limits<double>::quiet_NaN(), CompiledFunction{}),
+                // Dashpots by their gradients (functions[3]): the projected flow needs them at every q.
+                make_damping<Damping>(mass, eps, damping_scalar, damping_matrix, damper_coefficients,
+                                      compiled(functions, 3), std::numeric_limits<double>::quiet_NaN(),
+                                      CompiledFunction{}),
                 f, n_momenta);
-            return Model(std::move(base), ConstraintSet(k, n, compiled(constraint_functions, 0),
-                                                        compiled(constraint_functions, 1),
-                                                        compiled(constraint_functions, 2), std::move(rows),
-                                                        std::move(cols), tol, max_iterations));
+            constraints::Dashpots dashpots;
+            if constexpr (std::is_same_v<Damping, DamperDamping>)
+              dashpots = constraints::Dashpots(mass, eps, damper_coefficients, compiled(functions, 3));
+            return Model(std::move(base),
+                         ConstraintSet(k, n, compiled(constraint_functions, 0), compiled(constraint_functions, 1),
+                                       compiled(constraint_functions, 2), std::move(rows), std::move(cols), tol,
+                                       max_iterations),
+                         std::move(dashpots));
           }),
           py::arg("n"), py::arg("eps"), py::arg("mass"), py::arg("damping_scalar"), py::arg("damping_matrix"),
           py::arg("functions"), py::arg("n_momenta"), py::arg("keep_alive"), py::arg("k"),
           py::arg("constraint_functions"), py::arg("rows"), py::arg("cols"), py::arg("tol"),
-          py::arg("max_iterations"),
+          py::arg("max_iterations"), py::arg("damper_coefficients") = std::vector<double>{},
           // The compiled code lives as long as the Python object that owns it.
           py::keep_alive<1, 9>());
   add_model_functions<Model>(cls);
@@ -144,6 +153,8 @@ void bind_constrained_system(py::module_& m) {
   bind_constrained_kind<ScalarMass, ConstantDamping>(m, "ConstrainedSystem_scalar_constant");
   bind_constrained_kind<DenseMass, IsotropicDamping>(m, "ConstrainedSystem_dense_isotropic");
   bind_constrained_kind<DenseMass, ConstantDamping>(m, "ConstrainedSystem_dense_constant");
+  bind_constrained_kind<ScalarMass, DamperDamping>(m, "ConstrainedSystem_scalar_dampers");
+  bind_constrained_kind<DenseMass, DamperDamping>(m, "ConstrainedSystem_dense_dampers");
 }
 
 }  // namespace raydamp::bindings

@@ -51,13 +51,14 @@ void bind_structure_kind(py::module_& m, const char* name) {
   cls.def(py::init([](const MassArgument& mass, const SparseColMajor& k, const std::vector<std::string>& kinds,
                       const std::vector<int>& i, const std::vector<int>& j,
                       const std::vector<std::vector<double>>& parameters, const Eigen::VectorXd& f, double alpha,
-                      double beta, int dense_limit) {
+                      double beta, int dense_limit, bool tangent_damping) {
             materials::Springs springs = make_springs(kinds, i, j, parameters);
             py::gil_scoped_release release;
-            return Model(Mass(mass, "M"), k, std::move(springs), f, alpha, beta, dense_limit);
+            return Model(Mass(mass, "M"), k, std::move(springs), f, alpha, beta, dense_limit, tangent_damping);
           }),
           py::arg("M"), py::arg("K"), py::arg("kinds"), py::arg("i"), py::arg("j"), py::arg("parameters"),
-          py::arg("f"), py::arg("alpha"), py::arg("beta"), py::arg("dense_limit") = kMaxDenseDim);
+          py::arg("f"), py::arg("alpha"), py::arg("beta"), py::arg("dense_limit") = kMaxDenseDim,
+          py::arg("tangent_damping") = false);
   cls.def_property_readonly("mass_kind", [](const Model&) { return Mass::kind; })
       .def_property_readonly("alpha", [](const Model& s) { return s.damping.alpha(); })
       .def_property_readonly("beta", [](const Model& s) { return s.damping.beta(); })
@@ -65,6 +66,7 @@ void bind_structure_kind(py::module_& m, const char* name) {
       .def_property_readonly("damping_rate_bound", [](const Model& s) { return s.damping.rate_bound(); })
       .def_property_readonly("dense", [](const Model& s) { return s.damping.dense(); })
       .def_property_readonly("n_springs", [](const Model& s) { return s.springs.size(); })
+      .def_property_readonly("tangent_damping", [](const Model& s) { return s.damping.tangent(); })
       // Whether runs split steps at the springs' kinks (materials/kinks.hpp); set once, before any run.
       .def_property(
           "locate_kinks", [](const Model& s) { return s.springs.phased(); },

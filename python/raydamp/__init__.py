@@ -27,6 +27,7 @@ from .run.spectrum import response_spectrum
 from .run.sweep import SweepPlan, check_sweep, parse_grid_item, sweep
 from .systems.chain import Chain, chain_mode_energies
 from .systems.kepler import Kepler
+from .systems.planets import Planets
 from .systems.rayleigh import modal_damping_ratio, rayleigh_coefficients
 from .systems.series import ChebyshevDegreeError
 from .systems.structure import LinearStructure
@@ -34,6 +35,7 @@ from .systems.system import SpecError, System
 from .systems.yielding import Spring, Structure
 
 __all__ = ["__version__", "models", "Load", "GroundMotion", "System", "Chain", "chain_mode_energies", "Kepler",
+           "Planets",
            "LinearStructure", "Structure", "Spring", "materials", "SpecError", "ChebyshevDegreeError", "integrate",
            "steps_for", "advise", "Advice",
            "MethodAdvice", "CancelToken", "Solution", "integrate_ensemble", "EnsembleSolution", "sweep",

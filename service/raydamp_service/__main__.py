@@ -32,8 +32,7 @@ def _arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
 
 
 def serve_command(argv: list[str]) -> int:
-    """`raydamp serve [--host H] [--port P] [--workers N]`: what follows `serve` on the library's command line,
-    checked under its own name (its --help says "raydamp serve"), then handed to main."""
+    """`raydamp serve [--host H] [--port P] [--workers N]`, checked under its own name, then handed to main."""
     parser = argparse.ArgumentParser(prog="raydamp serve",
                                      description="run the job service (same as python -m raydamp_service)")
     main([arg for name, value in vars(_arguments(parser).parse_args(argv)).items() if value is not None
@@ -67,8 +66,7 @@ def main(argv: list[str] | None = None) -> None:
     except StoreUnavailable as error:
         _refuse(str(error))
     store.close()
-    # Threads serialising trajectories hand the GIL back every millisecond, not every five: the event loop waits less.
-    sys.setswitchinterval(0.001)
+    sys.setswitchinterval(0.001)  # threads serialising trajectories hand the event loop the GIL back sooner
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     # One process only: the job queue and the cancel tokens live in it.
     uvicorn.run(create_app(settings), host=settings.host, port=settings.port, access_log=settings.access_log,

@@ -73,9 +73,7 @@ async def _serving(app: FastAPI, settings: Settings) -> AsyncIterator[None]:
     checks.start()
     runner.start()
     sweep_runner.start()
-    # What is built so far lives as long as the process: out of the collector's sight, a full collection
-    # walks only what requests allocate.
-    gc.freeze()
+    gc.freeze()  # what is built so far lives as long as the process: collections walk only what requests make
     try:
         yield
     finally:

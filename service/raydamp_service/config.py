@@ -65,8 +65,7 @@ class Settings(BaseSettings):
         "coordinates: save_dofs)"))
     max_list_limit: int = Field(1000, ge=1)
 
-    # Linear structures: matrices inline as COO triplets up to max_structure_nnz entries each (the schema
-    # caps them at raydamp's own limit); larger ones are uploaded Matrix Market files (POST /v1/files).
+    # Linear structures: inline COO matrices up to max_structure_nnz entries each; larger ones are uploaded files.
     max_structure_nnz: int = Field(100_000, ge=1, le=1_000_000,  # schemas.MAX_COO_ENTRIES
                                    description="stored entries of one COO matrix in a job at most")
     max_structure_dim: int = Field(100_000, ge=1, le=10**7, description=(  # schemas.MAX_STRUCTURE_DIM

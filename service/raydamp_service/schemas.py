@@ -12,12 +12,9 @@ from pydantic_core import core_schema
 from raydamp.jobs import JobSpec, SweepSpec
 from raydamp.jobs.summary import JobSummary  # the library's: Solution.summary()
 
-__all__ = [
-    "JobSpec", "SweepSpec", "FileInfo", "FileList",
-    "JobStatus", "JobCreated", "JobSummary", "JobView", "JobListItem", "JobList", "Trajectory",
-    "SweepCreated", "SweepView", "SweepListItem", "SweepList",
-    "ParameterInfo", "ModelInfo", "MethodInfo", "CompositionInfo", "Health",
-]
+__all__ = ["JobSpec", "SweepSpec", "FileInfo", "FileList", "JobStatus", "JobCreated", "JobSummary", "JobView",
+           "JobListItem", "JobList", "Trajectory", "SweepCreated", "SweepView", "SweepListItem", "SweepList",
+           "ParameterInfo", "ModelInfo", "MethodInfo", "CompositionInfo", "Health"]
 
 JobStatus = Literal["queued", "running", "completed", "failed", "cancelled"]
 
@@ -113,7 +110,6 @@ class Trajectory(BaseModel):
     load_work: list[float | None] | None = Field(None, description="the load's work W_f(t) per point (a job with a "
                                                  "load or ground motion), so that H(t) - H(0) + W(t) - W_f(t) is the "
                                                  "energy budget's residual; null for a job without a load")
-
 
 
 class FileInfo(BaseModel):

@@ -29,7 +29,7 @@ if str(SERVICE_DIR) not in sys.path:
 if str(SERVICE_DIR) not in os.environ.get("PYTHONPATH", "").split(os.pathsep):
     os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [str(SERVICE_DIR), os.environ.get("PYTHONPATH")]))
 
-START_TIMEOUT = 60.0   # seconds for a process to answer /healthz
+START_TIMEOUT = 180.0  # seconds for a process to answer /healthz (at load 16-25 a start took over 60 s)
 JOB_TIMEOUT = 120.0    # seconds for a job to reach the awaited state
 POLL = 0.05
 

@@ -101,12 +101,32 @@ def test_a_read_only_database_refuses_to_start_with_one_line(tmp_path, run_servi
     assert "readonly" in line.replace(" ", "") or "permission" in line.lower()
 
 
+def test_an_sqlite_before_3_35_refuses_to_start_with_one_line(tmp_path, monkeypatch, capsys):
+    # A task's claim is one UPDATE ... RETURNING (SQLite 3.35); an older library is named, not worked around.
+    import subprocess
+
+    from raydamp_service.__main__ import main
+    from raydamp_service.tasks import lock
+
+    db = tmp_path / "raydamp.sqlite3"
+    monkeypatch.setattr(sqlite3, "sqlite_version_info", (3, 34, 1))
+    monkeypatch.setattr(sqlite3, "sqlite_version", "3.34.1")
+    monkeypatch.setenv("RAYDAMP_DB", str(db))
+    try:
+        with pytest.raises(SystemExit) as stopped:
+            main(["--port", "0"])
+    finally:
+        lock.release(db)  # taken first, and kept by a service that starts
+    line = _one_line(subprocess.CompletedProcess([], stopped.value.code, "", capsys.readouterr().err))
+    assert str(db) in line and "SQLite 3.34.1 is too old" in line and "needs 3.35 or newer" in line
+
+
 @pytest.mark.parametrize("name", ["same", "hard link", "symlink"])
-def test_a_second_service_on_the_same_database_refuses_to_start(start_server, run_service, tmp_path, name):
+def test_a_second_service_on_the_same_database_refuses_to_start(server, run_service, tmp_path, name):
     # It ran its recovery first: the first service's running job went back to "queued" (attempts 2) and both
     # services ran it at once (a CLI and service audit). Now it refuses with one line, and the job is untouched.
     # Through another name of the same file (issue 44, N5) as well: a hard link beside it, a symlink elsewhere.
-    server = start_server(RAYDAMP_MAX_STEPS=str(10**10))
+    # The module's server (runs of up to 10^10 steps) serves the three names: each job is cancelled at the end.
     long_run = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "h": 0.001,
                 "n_steps": 4 * 10**9, "save_every": 10**6, "initial_state": {"q": [1.0], "p": [0.0]}}
     job_id = server.submit(long_run)
@@ -123,6 +143,7 @@ def test_a_second_service_on_the_same_database_refuses_to_start(start_server, ru
     job = server.job(job_id)
     assert job["status"] == "running" and job["attempts"] == 1
     assert server.client.post(f"/v1/jobs/{job_id}/cancel").status_code == 202
+    assert server.wait_finished(job_id)["status"] == "cancelled"  # its worker free for the next name
 
 
 def test_an_empty_trusted_hosts_refuses_to_start(tmp_path, run_service):

@@ -21,8 +21,8 @@ def cli(server, *args: str) -> subprocess.CompletedProcess:
                           capture_output=True, text=True, timeout=120)
 
 
-def test_jobs_list_show_fetch_delete(start_server, tmp_path):
-    server = start_server()
+def test_jobs_list_show_fetch_delete(module_server, tmp_path):
+    server = module_server
     job_id = server.submit(JOB)
     server.wait_finished(job_id)
     listed = cli(server, "jobs", "list")
@@ -47,8 +47,8 @@ def test_jobs_list_show_fetch_delete(start_server, tmp_path):
     assert gone.returncode == 1 and "answered 404" in gone.stderr and job_id in gone.stderr
 
 
-def test_sweeps_fetch_and_no_service(start_server, tmp_path):
-    server = start_server()
+def test_sweeps_fetch_and_no_service(module_server, tmp_path):
+    server = module_server  # the module's last test: it stops the server
     response = server.client.post("/v1/sweeps", json={"job": JOB, "grid": {"eps": [0.0, 0.1, 0.2]}})
     assert response.status_code == 202, response.text
     sweep_id = server.wait_for_sweep(response.json()["id"])["id"]

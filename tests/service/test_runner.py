@@ -76,8 +76,8 @@ def test_a_run_of_milliseconds_reports_only_its_end(store, tmp_path, monkeypatch
 
 
 def test_a_row_handed_over_by_its_submission_and_cancelled_since_records_nothing(store, tmp_path):
-    """A submission hands the runner the row it stored (no read back); cancelled before the run, the quick run's
-    write expects "queued" and changes nothing: still cancelled, never attempted, no result. The same row not
+    """A submission hands the runner the row it stored (no read back); cancelled before the run, its claim
+    expects "queued" and changes nothing: still cancelled, never attempted, no result. The same row not
     cancelled completes, attempted once."""
     small = {**LONG_RUN, "n_steps": 100, "save_every": 1}
     runner = Runner(store, Settings(db=tmp_path / "jobs.sqlite3", workers=1))
@@ -140,24 +140,3 @@ def test_a_submitted_builtin_job_is_built_once_for_its_check_and_its_run(tmp_pat
     assert job["attempts"] == 1 and job["summary"]["steps"] == 100
     np.testing.assert_allclose(np.array(trajectory["q"]).ravel(), expected.q.ravel(), rtol=1e-14, atol=1e-14)
     np.testing.assert_allclose(trajectory["energy"], expected.energy, rtol=1e-14, atol=1e-14)
-
-
-def test_a_quick_job_does_not_wait_behind_long_ones(store, tmp_path):
-    """With every worker on a long run, a job of milliseconds waited for one of them to end (an audit's small
-    job waited over 120 s behind two million-site chains). Quick runs have a lane of their own."""
-    runner = Runner(store, Settings(db=tmp_path / "jobs.sqlite3", workers=2))
-    runner.start()
-    try:
-        long_jobs = [store.create(LONG_RUN) for _ in range(2)]
-        for job in long_jobs:
-            runner.submit(job.id)
-        wait_until(lambda: all(store.get(job.id).status == "running" for job in long_jobs))
-        quick = store.create({**LONG_RUN, "n_steps": 100, "save_every": 10})
-        runner.submit(quick.id, quick)  # as a submission hands it over: its row, which says it is quick
-        assert wait_until(lambda: store.get(quick.id).status in ("completed", "failed"), timeout=30) is True
-        assert store.get(quick.id).status == "completed"
-        assert all(store.get(job.id).status == "running" for job in long_jobs)
-    finally:
-        for job in long_jobs:
-            runner.cancel(job.id)
-        runner.stop()

@@ -157,13 +157,7 @@ def test_create_returns_the_row_as_stored(store):
     assert created == store.get(created.id)
 
 
-@pytest.mark.parametrize("returning", [True, False], ids=["RETURNING", "before SQLite 3.35"])
-def test_claim_gives_the_row_it_changed(tmp_path, monkeypatch, returning):
-    # The claim is one UPDATE ... RETURNING where SQLite has it, an UPDATE and a read before 3.35: the same record.
-    if not returning:
-        monkeypatch.setattr(sqlite3, "sqlite_version_info", (3, 34, 1))
-    store = JobStore(tmp_path / "jobs.sqlite3")
-    store.open()
+def test_claim_gives_the_row_it_changed(store):
     job = store.create(SPEC)
     claimed = store.claim(job.id)
     assert (claimed.status, claimed.attempts, claimed.progress, claimed.spec, claimed.has_trajectory) == (
@@ -275,29 +269,3 @@ def test_the_queue_bound_counts_afresh_after_a_cancel_and_a_restart(store, tmp_p
         assert sum(status == "queued" for status in committed(again).values()) == 4
     finally:
         again.close()
-
-
-def test_a_quick_run_goes_from_queued_to_its_end_in_one_write_unless_cancelled_first(store):
-    """Runner._run_quick: a run of milliseconds is recorded without a claim, by one guarded write: queued ->
-    completed with attempts 1 and its start time; a cancel that came first wins."""
-    import numpy as np
-
-    from raydamp_service.kinds.jobs import TrajectoryArrays
-    from raydamp_service.tasks.store import now
-
-    arrays = TrajectoryArrays(t=np.arange(3.0), q=np.ones((3, 1)), p=np.zeros((3, 1)), energy=np.full(3, 2.0),
-                              momentum=np.empty((3, 0)), work=np.zeros(3))
-    ran, cancelled = store.create(SPEC), store.create(SPEC)
-    started = now()
-    assert store.finish(ran.id, "completed", summary={"steps": 2}, trajectory=arrays, unclaimed_since=started)
-    record = store.get(ran.id)
-    assert (record.status, record.attempts, record.started_at, record.progress, record.summary) == (
-        "completed", 1, started, 1.0, {"steps": 2})
-    assert record.started_at <= record.finished_at and committed(store)[ran.id] == "completed"
-    np.testing.assert_array_equal(store.trajectory(ran.id).q, arrays.q)
-
-    store.request_cancel(cancelled.id)  # while it ran: cancelled in the store at once
-    assert not store.finish(cancelled.id, "completed", summary={"steps": 2}, trajectory=arrays,
-                            unclaimed_since=now())
-    record = store.get(cancelled.id)
-    assert (record.status, record.attempts, record.summary, record.has_trajectory) == ("cancelled", 0, None, False)

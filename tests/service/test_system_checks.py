@@ -1,8 +1,11 @@
 """A system's check runs in a check process, within a time budget (issue 27, F1: a 790-byte potential,
 (q0^2+...+q127^2)^2, was compiled inside the request for 34 s while /healthz went unanswered for 26 s).
 
-The budget is scaled down (1 s) so the reproducers run in seconds; the responsiveness bound is generous
-(0.5 s for the slowest of many /healthz answers) but fails if the check blocks the server again."""
+The budget is scaled down (1 s) so the reproducers run in seconds. The responsiveness bound is 1 s for the
+slowest of many /healthz answers: on this shared 2-core machine a server that compiles nothing has answered in
+0.6 s under CI load, and a compile in the server blocks it for the whole compile (1.3 s for the 64-coordinate
+quartic, 3.2 s for the 80-coordinate one on a quiet machine, longer on a busy one), so the bound still fails if a
+check blocks the server again."""
 
 from __future__ import annotations
 
@@ -19,7 +22,7 @@ import raydamp.jobs
 
 BUDGET = 1.0
 SERVER_ENV = {"RAYDAMP_CHECK_SECONDS": str(BUDGET), "RAYDAMP_CHECK_WORKERS": "1", "RAYDAMP_MAX_PENDING_CHECKS": "2"}
-HEALTHZ_BOUND = 0.5
+HEALTHZ_BOUND = 1.0
 
 
 def quartic(n: int) -> dict:
@@ -129,8 +132,9 @@ def test_a_check_past_the_memory_budget_is_422_naming_it(start_server):
 
 # ---- the run: the server loads what the check compiled, and never compiles a system itself ----
 
+# Long enough to hold the worker past a busy machine's check and restart (10^10 steps: 100 s at 10 ns a step).
 LONG_RUN = {"model": "damped_pendulum", "parameters": {"eps": 0.01}, "method": "3s", "h": 0.001,
-            "n_steps": 4 * 10**9, "save_every": 10**6, "initial_state": {"q": [1.0], "p": [0.0]}}
+            "n_steps": 10**10, "save_every": 10**7, "initial_state": {"q": [1.0], "p": [0.0]}}
 
 
 def _in_process(spec: dict) -> dict[str, np.ndarray]:
@@ -169,14 +173,16 @@ def test_a_costly_system_is_submitted_and_run_while_the_service_answers(start_se
 
 def test_a_system_queued_across_a_restart_is_compiled_by_a_check_process(start_server):
     # What the check loaded went with the process: after the restart the run finds nothing loaded and asks
-    # a check process to compile the system (64 coordinates, 1.3 s of compile: long enough for /healthz to
-    # show it, were it compiled in the server).
+    # a check process to compile the system (64 coordinates, 1.3 s of compile on a quiet machine, longer on a
+    # busy one: long enough for /healthz to show it, were it compiled in the server).
     server = start_server(RAYDAMP_WORKERS="1", RAYDAMP_CHECK_SECONDS="120", RAYDAMP_CHECK_WORKERS="1",
                           RAYDAMP_MAX_STEPS=str(10**10))
     blocker = server.submit(LONG_RUN)  # holds the only worker, so the system's job stays queued
     server.wait_for(blocker, lambda job: job["status"] == "running")
     spec = {**quartic(64), "n_steps": 200}
-    job_id = server.submit(spec)
+    response = server.client.post("/v1/jobs", json=spec, timeout=120)  # the check process starts, then compiles
+    assert response.status_code == 202, response.text
+    job_id = response.json()["id"]
     server.kill()
 
     server.start()
@@ -189,9 +195,9 @@ def test_a_system_queued_across_a_restart_is_compiled_by_a_check_process(start_s
 
 def test_a_sweep_queued_across_a_restart_is_compiled_by_a_check_process(start_server):
     # The same for a sweep's base system: after the restart the sweep's run asks a check process to compile
-    # it (it compiled in the server before, holding the interpreter lock for the compile's 1.3 s).
+    # it (it compiled in the server before, holding the interpreter lock for the whole compile).
     server = start_server(RAYDAMP_CHECK_SECONDS="120", RAYDAMP_CHECK_WORKERS="1", RAYDAMP_MAX_STEPS=str(10**10))
-    blocker = {"job": {**LONG_RUN, "n_steps": 10**9}, "grid": {"eps": [0.01]}}
+    blocker = {"job": LONG_RUN, "grid": {"eps": [0.01]}}
     response = server.client.post("/v1/sweeps", json=blocker)
     assert response.status_code == 202, response.text
     blocker_id = response.json()["id"]
@@ -200,7 +206,7 @@ def test_a_sweep_queued_across_a_restart_is_compiled_by_a_check_process(start_se
         assert time.monotonic() < deadline
         time.sleep(0.05)
     job = {**quartic(64), "n_steps": 200}
-    response = server.client.post("/v1/sweeps", json={"job": job, "grid": {"q0[0]": [0.1, 0.2]}})
+    response = server.client.post("/v1/sweeps", json={"job": job, "grid": {"q0[0]": [0.1, 0.2]}}, timeout=120)
     assert response.status_code == 202, response.text
     sweep_id = response.json()["id"]
     server.kill()

@@ -42,8 +42,9 @@ def main(argv: list[str] | None = None) -> int:
     adv.add_argument("--t-end", type=float, help="the span of the run (default: the file's t_end)")
     adv.add_argument("--tolerance", type=float, required=True,
                      help="the error allowed, relative to the initial amplitude (e.g. 1e-6)")
-    adv.add_argument("--omega", type=float, help="the highest circular frequency the answer must resolve "
-                                                 "(default: the lowest natural frequency)")
+    adv.add_argument("--omega", type=float, help="the circular frequency of the one mode the error model weights "
+                                                 "when the file gives no start and no load (default: the lowest "
+                                                 "natural frequency); ignored when it does")
     adv.add_argument("--no-measure", action="store_true", help="no trial steps: compare by step counts only")
     from .service_client import add_client_commands
 

@@ -25,11 +25,20 @@ from .forms import InitialState, ModeState, RestState, TableauInput, VectorFile
 from .spec import STEP_SIZE_ALIAS, UNION_TAGS, JobSpec, ModelSpec, client_path
 from .summary import JobSummary
 from .sweep_spec import GridRange, SweepSpec
-from .system_forms import ChainInput, CooForm, DiagonalForm, FileForm, KeplerInput, LinearStructureInput, SystemInput
+from .system_forms import (
+                    ChainInput,
+                    CooForm,
+                    DiagonalForm,
+                    FileForm,
+                    KeplerInput,
+                    LinearStructureInput,
+                    PlanetsInput,
+                    SystemInput,
+)
 
 __all__ = ["JobSpec", "JobSummary", "ModelSpec", "SweepSpec", "GridRange", "JobError", "JobCall", "parse_job",
            "build_job", "planned_steps", "error_at", "job_arguments", "validation_error", "client_path",
            "describe_model", "model_from_spec", "PROVENANCE_KEYS", "STEP_SIZE_ALIAS", "UNION_TAGS", "InitialState",
-           "ModeState", "RestState", "TableauInput", "SystemInput", "ChainInput", "KeplerInput",
+           "ModeState", "RestState", "TableauInput", "SystemInput", "ChainInput", "KeplerInput", "PlanetsInput",
            "LinearStructureInput", "CooForm", "DiagonalForm", "FileForm", "VectorFile", "LoadInput",
            "GroundMotionInput"]

@@ -29,7 +29,8 @@ from .forms import (
     numbers,
 )
 
-__all__ = ["SystemInput", "ChainInput", "LinearStructureInput", "StructureInput", "CooForm", "DiagonalForm", "FileForm",
+__all__ = ["SystemInput", "ChainInput", "LinearStructureInput", "StructureInput", "PlanetsInput", "CooForm",
+           "DiagonalForm", "FileForm",
            "AnySystemInput", "FileResolver", "MAX_COO_ENTRIES", "MAX_STRUCTURE_DIM", "SYSTEM_TAGS", "MATRIX_TAGS",
            "FORM_TAGS", "VALUE_TAGS"]
 
@@ -126,6 +127,9 @@ class SystemKind(Input):
 
     def compiles(self) -> bool:
         return False
+
+    def compiled_form(self) -> tuple[str, bytes] | None:
+        return None
 
 
 class SystemInput(SystemKind):
@@ -287,6 +291,44 @@ class KeplerInput(SystemKind):
             raise path_error(error, type(self)) from None
 
 
+# ---- interacting planets: raydamp.Planets.to_dict()'s form ----------------------------------------
+
+MAX_PLANETS = 1000  # raydamp.systems.planets.MAX_PLANETS: the interaction is O(N^2) per kick
+_Drag = Annotated[FiniteFloat, Field(ge=0)]
+PlanetDrag = Annotated[Annotated[_Drag, Tag("number form")]
+                       | Annotated[bounded(_Drag, MAX_PLANETS, min_length=1), Tag("vector form")],
+                       Discriminator(lambda value: "vector form" if isinstance(value, list) else "number form")]
+
+
+class PlanetsInput(SystemKind):
+    """Interacting planets around a central body in Jacobi coordinates, drag on chosen planets, stepped with
+    the exact Kepler drift: raydamp.Planets.to_dict()'s form (raydamp.systems.planets documents it). The
+    initial state's q and p are Jacobi coordinates (Planets.jacobi_state makes them)."""
+
+    kind: Literal["planets"]
+    masses: bounded(Annotated[FiniteFloat, Field(gt=0)], MAX_PLANETS, min_length=1) = Field(
+        description="the planets' masses, inner to outer")
+    central_mass: FiniteFloat = Field(1.0, gt=0, description="the central body's mass")
+    G: FiniteFloat = Field(1.0, gt=0, description="the gravitational constant")
+    dim: Literal[2, 3] = Field(2, description="2 or 3 dimensions")
+    eps: PlanetDrag = Field(0.0, description="drag rate, one for every planet or one per planet: "
+                                             "P_i' = -grad_i H - eps_i P_i")
+
+    def names(self, dim: int, momenta: int, save_dofs: list[int] | None) -> tuple[list[str], list[str]]:
+        axes = "xyz"[: self.dim]
+        coordinates = [f"{a}{i}" for i in range(len(self.masses)) for a in axes]
+        chosen = [coordinates[i] for i in save_dofs] if save_dofs is not None else coordinates
+        return chosen, (["L"] if self.dim == 2 else ["Lx", "Ly", "Lz"])[:momenta]
+
+    def build(self, files: FileResolver | None = None):
+        from ..systems.planets import Planets
+
+        try:
+            return Planets.from_dict(self.model_dump(exclude_none=True))
+        except ValueError as error:
+            raise path_error(error, type(self)) from None
+
+
 # ---- linear structures: raydamp.LinearStructure.to_dict()'s form, with uploaded files -------------
 
 MAX_COO_ENTRIES = 1_000_000  # raydamp.structure.MAX_PLAIN_ENTRIES; a service's max_structure_nnz is at most this
@@ -443,6 +485,9 @@ class StructureInput(LinearStructureInput):
                                           f'most {MAX_SPRINGS:,} in a job (raydamp.Structure has no such bound)')
     locate_kinks: bool = Field(False, description="split each step at the springs' and the load's kinks, so that "
                                                   "every method keeps its order (help(raydamp.Structure))")
+    damping_stiffness: Literal["initial", "tangent"] = Field(
+        "initial", description="Rayleigh's stiffness: the initial K0, or each spring's tangent on its branch "
+                               "(help(raydamp.Structure))")
 
     def files(self, at: tuple) -> Iterator[tuple[tuple, str, str]]:
         for key in ("M", "K"):
@@ -475,19 +520,21 @@ def _local_files(ref: str) -> Any:
 
 def _system_form(value: object) -> str:
     kind = value.get("kind") if isinstance(value, dict) else getattr(value, "kind", None)
-    return kind if kind in ("chain", "linear_structure", "structure", "kepler") else "expressions"
+    return kind if kind in ("chain", "linear_structure", "structure", "kepler", "planets") else "expressions"
 
 
 MATRIX_TAGS = frozenset({"coo form", "diagonal form", "file form"})
-SYSTEM_TAGS = frozenset({"expressions", "chain", "linear_structure", "structure", "kepler"})
+SYSTEM_TAGS = frozenset({"expressions", "chain", "linear_structure", "structure", "kepler", "planets"})
 # Tags name forms, never keys: a path of ours ("damping", "dampers", 0, "on") keeps every part.
 FORM_TAGS = {"damping": frozenset({"scalar form", "diagonal form", "matrix form", "dampers form"}),
              "coordinates": frozenset({"names form", "count form"}),
              "mass": frozenset({"number form", "vector form", "matrix form"}),
              "c": frozenset({"number form", "vector form"}),
+             "eps": frozenset({"number form", "vector form"}),
              "material": frozenset({"elastic_plastic", "bilinear", "bouc_wen"})}
 VALUE_TAGS = frozenset({"number form", "expression form", "vector form"})  # after a parameter's name
 AnySystemInput = Annotated[Annotated[SystemInput, Tag("expressions")] | Annotated[ChainInput, Tag("chain")]
                            | Annotated[LinearStructureInput, Tag("linear_structure")]
                            | Annotated[StructureInput, Tag("structure")]
-                           | Annotated[KeplerInput, Tag("kepler")], Discriminator(_system_form)]
+                           | Annotated[KeplerInput, Tag("kepler")]
+                           | Annotated[PlanetsInput, Tag("planets")], Discriminator(_system_form)]

@@ -47,6 +47,8 @@ class GroundMotion(Load):
         terms = []
         for term in acceleration._scaled_terms():
             if isinstance(term, T.Harmonic):
+                if isinstance(term.direction, T.Ground):  # {"ground": ...} inside a ground motion: no number
+                    raise ValueError("acceleration: a harmonic ground acceleration has a scalar amplitude")
                 amplitude = np.asarray(term.direction, dtype=float)
                 if amplitude.size != 1:
                     raise ValueError("acceleration: a harmonic ground acceleration has a scalar amplitude")

@@ -52,7 +52,7 @@ class Solution:
         that row, and its deformation d_s = q_j - q_i (q_j to the ground) at the saved rows (springs in the
         Structure's order), for a run of a :class:`raydamp.Structure` with springs, else None: each spring's
         force-deformation loop. ``absolute_acceleration()`` reads the forces (a model rebuilt after the run
-        has only its virgin materials).
+        has only its virgin materials). Files keep them (and ``hysteretic_work``) with dims (time, spring).
     multipliers : (N, k) a constrained System's Lagrange multipliers lambda at each saved row (None for
         other models, and for a run with ``save_dofs``). The constraint force on the coordinates is
         -G(q)^T lambda, G = dg/dq, so lambda_i has the units of a force divided by those of dg_i/dq (a rod
@@ -286,7 +286,7 @@ class Solution:
             return lambda k: np.asarray(core.gradient(self.q[k])).ravel()
         if self.spring_forces is None:
             raise ValueError(f"{what}: the springs' forces at the saved rows were not kept (an ensemble's member, "
-                             "or a file read back); run raydamp.integrate on the structure for them")
+                             "or a file written without them); run raydamp.integrate on the structure for them")
         from ..systems.yielding import core_order
 
         in_core = np.ascontiguousarray(self.spring_forces[:, core_order(springs)])

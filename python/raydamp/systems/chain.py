@@ -147,17 +147,9 @@ class Chain(SharedModel):
     @classmethod
     def from_dict(cls, spec: Mapping[str, Any]) -> Chain:
         """Build from ``to_dict()``'s form; errors name the key (``n must be ...``, ``dampers.bonds[2]: ...``)."""
-        if not isinstance(spec, Mapping):
-            raise ValueError("system: a chain must be an object with kind \"chain\"")
-        known = ("kind", "n", "bond", "parameters", "mass", "boundary", "dampers", "eps", "on_site")
-        for key in spec:
-            if key not in known:
-                raise ValueError(f"{key}: unknown key of a chain (known: {', '.join(known)})")
-        if spec.get("kind") != "chain":
-            raise ValueError(f"kind: expected \"chain\", got {_short(spec.get('kind'))}")
-        if "n" not in spec:
-            raise ValueError("n: missing (the number of sites)")
-        return cls(**{k: v for k, v in spec.items() if k != "kind"})
+        return cls._from_form(spec, "chain", "chain",
+                              ("n", "bond", "parameters", "mass", "boundary", "dampers", "eps", "on_site"),
+                              {"n": "missing (the number of sites)"})
 
     def mass_product(self, r) -> np.ndarray:
         """M r: every site has mass ``mass``."""

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from .. import _core
-from .._validation import _short, integer, real, real_array, vector
+from .._validation import integer, real, real_array, vector
 from .models import SharedModel
 
 __all__ = ["Kepler"]
@@ -72,15 +72,7 @@ class Kepler(SharedModel):
     @classmethod
     def from_dict(cls, spec: Mapping[str, Any]) -> Kepler:
         """Build from ``to_dict()``'s form; errors name the key."""
-        if not isinstance(spec, Mapping):
-            raise ValueError("system: a Kepler system must be an object with kind \"kepler\"")
-        known = ("kind", "mu", "mass", "dim", "particles", "eps")
-        for key in spec:
-            if key not in known:
-                raise ValueError(f"{key}: unknown key of a Kepler system (known: {', '.join(known)})")
-        if spec.get("kind") != "kepler":
-            raise ValueError(f"kind: expected \"kepler\", got {_short(spec.get('kind'))}")
-        return cls(**{k: v for k, v in spec.items() if k != "kind"})
+        return cls._from_form(spec, "kepler", "Kepler system", ("mu", "mass", "dim", "particles", "eps"))
 
     @property
     def coordinates(self) -> tuple[str, ...]:

@@ -154,6 +154,24 @@ class SharedModel(Model):
         """The JSON form, ``{"kind": ..., ...}``."""
         raise NotImplementedError
 
+    @classmethod
+    def _from_form(cls, spec: Mapping[str, Any], kind: str, label: str, known: tuple[str, ...],
+                   required: Mapping[str, str] | None = None):
+        """cls(**spec) from ``to_dict()``'s form, checked key by key so that each error names its key:
+        ``known`` the keys besides "kind", ``required`` a message per key that must be present."""
+        if not isinstance(spec, Mapping):
+            raise ValueError(f"system: a {label} must be an object with kind \"{kind}\"")
+        known = ("kind", *known)
+        for key in spec:
+            if key not in known:
+                raise ValueError(f"{key}: unknown key of a {label} (known: {', '.join(known)})")
+        if spec.get("kind") != kind:
+            raise ValueError(f"kind: expected \"{kind}\", got {_short(spec.get('kind'))}")
+        for key, message in (required or {}).items():
+            if key not in spec:
+                raise ValueError(f"{key}: {message}")
+        return cls(**{k: v for k, v in spec.items() if k != "kind"})
+
     # -- the kind protocol (kinds.SystemKind) ---------------------------------------------------
     def describe(self) -> dict[str, Any]:
         return {"system": self.to_dict()}

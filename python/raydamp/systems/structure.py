@@ -357,6 +357,19 @@ class LinearStructure(SharedModel):
         return (f"LinearStructure(n={self.dim}, mass={self.mass_kind}, nnz(K)={self._stiffness.nnz}, "
                 f"alpha={self.alpha!r}, beta={self.beta!r})")
 
+    # -- linear constraints ------------------------------------------------------
+    def tie(self, constraints):
+        """Eliminate linear constraints C q = 0 (multi-point constraints, rigid links, a rigid diaphragm; C a
+        scipy.sparse matrix or an array, m x n): a :class:`raydamp.systems.linear_constraints.Tie` whose
+        ``reduced`` LinearStructure (q = T y, T sparse) every method runs exactly, and whose ``expand`` gives
+        q and p back."""
+        from .linear_constraints import tie
+
+        if type(self) is not LinearStructure:  # the reduced model is a LinearStructure: springs would be dropped
+            raise ValueError(f"constraints: tie eliminates constraints from a LinearStructure; a "
+                             f"{type(self).__name__}'s springs are not reduced with it")
+        return tie(self, constraints)
+
     # -- natural frequencies and modes -------------------------------------------
     def frequencies(self, k: int | None = None) -> np.ndarray:
         """The k lowest natural circular frequencies sqrt(eig(K, M)), ascending (rigid modes are 0); all of

@@ -1,6 +1,5 @@
-"""The service's checks of a job and a sweep before they are queued: its own limits (sizes, steps, bytes),
-then raydamp's (raydamp.jobs builds the call, names every error by its JSON path; one step runs it).
-"""
+"""The checks of a job and a sweep before they are queued: the service's limits (sizes, steps, bytes), then
+raydamp's (raydamp.jobs builds the call, naming every error by its JSON path; one step runs it)."""
 
 from __future__ import annotations
 
@@ -21,10 +20,6 @@ __all__ = ["JobError", "RaydampCall", "build_call", "check_spec", "check_sweep_s
 @dataclass(frozen=True)
 class RaydampCall:
     call: JobCall
-
-    @property
-    def model(self):
-        return self.call.model
 
     def run(self, **extra: Any) -> raydamp.Solution:
         return raydamp.integrate(self.call.model, self.call.q0, self.call.p0, **{**self.call.options, **extra})
@@ -76,9 +71,10 @@ def check_spec(spec: JobSpec, settings: Settings, files=None) -> RaydampCall:
         raise JobError(("save_every",), f"save_every: {saved_points} saved points exceed max_saved_points = "
                        f"{settings.max_saved_points}; raise save_every")
     call = build_call(spec, files)
-    stored = saved_points * row_bytes(call.model, spec.save_dofs, work=spec.work, load=call.call.options.get("load"))
+    model = call.call.model
+    stored = saved_points * row_bytes(model, spec.save_dofs, work=spec.work, load=call.call.options.get("load"))
     if stored > settings.max_trajectory_bytes:
-        saved = call.model.dim if spec.save_dofs is None else len(spec.save_dofs)
+        saved = model.dim if spec.save_dofs is None else len(spec.save_dofs)
         raise JobError(("save_every",), f"save_every: the stored trajectory would take {stored / 2**20:.0f} MiB "
                        f"({saved_points} saved points x {saved} saved coordinates); the limit is max_trajectory_bytes "
                        f"= {settings.max_trajectory_bytes / 2**20:.0f} MiB: raise save_every, or save fewer "
@@ -92,8 +88,8 @@ def check_spec(spec: JobSpec, settings: Settings, files=None) -> RaydampCall:
 
 
 def check_sweep_spec(spec: SweepSpec, settings: Settings) -> raydamp.SweepPlan:
-    """Every check a sweep must pass before it is queued: the job's, the grid's size (members, members x steps;
-    before raydamp builds a member), raydamp's (grid names and values), then the result's size."""
+    """Every check of a sweep: the job's, the grid's size (before raydamp builds a member), raydamp's, then the
+    result's size."""
     try:
         check_spec(spec.job, settings)
         job, grid = spec.job_form(), spec.grid_arguments()

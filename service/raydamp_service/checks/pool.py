@@ -1,12 +1,7 @@
-"""The heavy checks (a system's compile and trial step, an upload's parse, a plot) in a pebble ProcessPool of
-check_workers processes, forked warm from a forkserver with raydamp imported: never in the server's interpreter.
-A task's budgets: CPU (check_seconds, by a profiling timer that ends even a compile holding the interpreter lock:
-422), memory (check_memory_bytes above the warm worker, RLIMIT_AS: 422) and wall time (_WALL_FACTOR budgets: only
-a loaded machine meets it, 429). At most max_pending_checks run or wait, each at most _START_SECONDS: past it, 429.
-
-A check answers with the functions it compiled as bytes (System.compiled_form), which the server loads for the run
-(load_compiled, compiled_elsewhere). They are machine code: only this pool's processes send them, over its pipes.
-"""
+"""The heavy checks (a system's compile and trial step, an upload's parse, a plot) in a pebble ProcessPool forked
+warm from a forkserver. A task's budgets: CPU (check_seconds, a profiling timer that ends even a compile holding the
+GIL: 422), memory (check_memory_bytes, RLIMIT_AS: 422), wall time (_WALL_FACTOR budgets: a loaded machine, 429). A
+check answers with the machine code it compiled, which the server loads: only this pool's processes send it."""
 
 from __future__ import annotations
 
@@ -51,15 +46,14 @@ class PlotOverBudget(Exception):
 
 
 def isolated(spec: JobSpec) -> bool:
-    """Whether a job's check runs in a check process: every user-defined system, and every job whose load has an
-    expression (compiled like a system's)."""
+    """Whether a job's check runs in a check process: a user-defined system, or a load with an expression."""
     return spec.system is not None or spec.compiles()
 
 
 def checked_inline(spec: JobSpec) -> bool:
     """Whether a job's check is light enough for the event loop: a built-in model without a load, its initial
-    state given as numbers (its check is arithmetic on at most max_dim coordinates and reads no file)."""
-    state = spec.initial_state  # numbers, not files nor a rest or mode form (their sizes come from the model)
+    state given as numbers (not files, nor a rest or mode form whose sizes come from the model)."""
+    state = spec.initial_state
     return (spec.system is None and spec.load is None and spec.ground_motion is None
             and isinstance(getattr(state, "q", None), list) and isinstance(getattr(state, "p", None), list))
 
@@ -96,8 +90,7 @@ def _status_bytes(field: str) -> int:
     raise LookupError(field)
 
 
-# One small system of each kind, checked before the memory budget applies: what their checks load on first use
-# (SciPy's sparse solvers and their BLAS, LLVM, matplotlib's fonts) is then in place, not charged to a task.
+# Checked before the memory budget applies: what a check loads on first use (SciPy, LLVM, fonts) is not charged.
 _WARM_UP = (
     {"coordinates": 2, "potential": "q0^2 + q0*q1^3", "damping": {"dampers": [{"on": "q0 - q1"}]}, "eps": 0.1},
     {"kind": "chain", "n": 4, "bond": "expression", "parameters": {"potential": "r^2/2 + r^4/4"}},
@@ -134,8 +127,8 @@ def _start_worker(settings: Settings) -> None:
 
 
 def _task(function, args: tuple, cpu_seconds: float) -> tuple[str, Any]:
-    """Runs function(*args) within the CPU budget: ("ok", value), ("invalid", (loc, message)), ("refused", an
-    upload's reason), ("error", text) or ("cpu", seconds used); a MemoryError ends the process."""
+    """function(*args) within the CPU budget: ("ok" | "invalid" | "refused" | "error" | "cpu", value); a
+    MemoryError ends the process."""
     started = time.process_time()
     signal.setitimer(signal.ITIMER_PROF, cpu_seconds)  # SIGPROF, whose default action ends the process
     try:
@@ -211,14 +204,9 @@ class CheckPool:
         _load(compiled)
         return members
 
-    def call(self, function, *args: Any, where: tuple[str, ...] = ("body",)) -> Any:
-        """function(*args) in a check process (an upload's parse); JobError at `where` past a budget, ChecksBusy."""
-        return self._run(function, args, where)
-
     def plot(self, read, draw, *args: Any) -> bytes:
-        """A stored trajectory's plot as PNG, draw(record, read(), *args) in a check process (matplotlib holds the
-        interpreter lock, and keeps the memory it took); read() runs once a place is taken. Raises ValueError (a
-        plot this run cannot have), ChecksBusy, or PlotOverBudget."""
+        """A plot's PNG, draw(record, read(), *args) in a check process, read() once a place is taken; ValueError
+        (a plot this run cannot have), ChecksBusy, or PlotOverBudget."""
         try:
             refused, png = self._run(draw, args, ("query", "width"), read=read)
         except JobError:
@@ -230,11 +218,16 @@ class CheckPool:
         return png
 
     def compile(self, spec: JobSpec) -> None:
-        """Compile a job's functions in a check process (waiting for a place) and load them here, for a run that
-        did not find them; JobError past a budget, ChecksBusy if no place came free within check_seconds."""
+        """Compile a job's functions in a check process, waiting for a place, and load them here; JobError past a
+        budget, ChecksBusy if no place came free within check_seconds."""
         _load(self._run(JobSpec.compiled_form, (spec,), ("system",), wait=True))
 
+    def call(self, function, *args: Any, where: tuple[str, ...] = ("body",)) -> Any:
+        """function(*args) in a check process (an upload's parse); JobError at `where` past a budget, ChecksBusy."""
+        return self._run(function, args, where)
+
     def _run(self, function, args: tuple, where: tuple[str, ...], wait: bool = False, read=None) -> Any:
+        """read(), if given, is read once a place is taken and goes first among args."""
         budget = self._settings.check_seconds
         if self._pool is None or not self._pending.acquire(blocking=wait, timeout=budget if wait else None):
             raise ChecksBusy
@@ -277,8 +270,8 @@ class CheckPool:
 
 
 def build_for_run(checks: CheckPool | None, spec: JobSpec, run, files=None) -> RaydampCall | None:
-    """A run's call, its system built from functions a check process compiled (at submission, else now, waiting
-    for a free process); None if the service stops meanwhile. Without check processes (checks None), built here."""
+    """A run's call, its functions compiled by a check process (at submission, else now); None if the service
+    stops meanwhile. Without check processes (checks None), built here."""
     if checks is None:
         return build_call(spec, files=files)
     try:

@@ -14,7 +14,7 @@ from raydamp.loads.records import describe_record, parse_record, record_format
 from raydamp.systems.matrix_market import read_header
 from raydamp.systems.structure import read_matrix
 
-__all__ = ["UploadError", "MatrixFileInfo", "RecordFileInfo", "check_upload", "check_upload_file", "ParsedFiles"]
+__all__ = ["UploadError", "MatrixFileInfo", "RecordFileInfo", "check_upload_file", "ParsedFiles"]
 
 
 class UploadError(ValueError):
@@ -29,7 +29,7 @@ class MatrixFileInfo:
 
 @dataclass(frozen=True)
 class RecordFileInfo:
-    """A record's listing: its format, samples and columns (1: values only; 2: t, value), time range, dt."""
+    """A record's listing; columns 1: values only, 2: t, value."""
 
     format: str
     samples: int
@@ -39,9 +39,10 @@ class RecordFileInfo:
     dt: float | None
 
 
-def check_upload(content: bytes, name: str, *, max_dim: int) -> MatrixFileInfo | RecordFileInfo:
-    """Read the upload as raydamp will, told apart by the name's suffix (.mtx, .AT2, .npy) and the content: a
-    structure's M or K (once its header shows at most max_dim rows), or a load's record. UploadError says why not."""
+def check_upload_file(path: str, name: str, *, max_dim: int) -> MatrixFileInfo | RecordFileInfo:
+    """Read the upload the server spooled at path as raydamp will, by its name's suffix and content: a structure's
+    M or K (its header showing at most max_dim rows), or a record. UploadError says why not."""
+    content = Path(path).read_bytes()
     try:
         if record_format(content, name) == "mtx":
             rows, cols = read_header(content, name).shape
@@ -61,12 +62,6 @@ def check_upload(content: bytes, name: str, *, max_dim: int) -> MatrixFileInfo |
     described = describe_record(record)
     return RecordFileInfo(format=fmt, samples=described["samples"], columns=1 if record.t is None else 2,
                           t_start=described["t_start"], t_end=described["t_end"], dt=described["dt"])
-
-
-def check_upload_file(path: str, name: str, *, max_dim: int) -> MatrixFileInfo | RecordFileInfo:
-    """check_upload of the bytes in a file the server wrote: an upload reaches a check process by its path, not
-    through the pool's pipe (a pickled copy of it in the server)."""
-    return check_upload(Path(path).read_bytes(), name, max_dim=max_dim)
 
 
 class ParsedFiles:
@@ -89,8 +84,7 @@ class ParsedFiles:
         with lock:  # one parse per id; the others wait for it
             matrix = self._parsed.get(file_id, (None, None))[1]
             if matrix is not None and not self._store.file_exists(file_id):
-                # Deleted since it was parsed: a check process's cache is not told (the server's forgets), and a
-                # stale parse let a check pass that the job's insert then refused as deleted meanwhile (409).
+                # Deleted since it was parsed (a check process's cache is not told): a check must not pass on it.
                 self.forget(file_id)
                 matrix = None
             if matrix is None:

@@ -1,9 +1,6 @@
-"""Deadlines for slow clients, for a bare `make serve` (a reverse proxy in front does the same: README).
-- Headers: a connection's request headers must all arrive within header_seconds of its opening (or of its
-  previous response's end), or it is closed; uvicorn has no such deadline.
-- Sends: each piece of a response must leave within send_timeout_seconds and, past that, be read at
-  min_send_bytes_per_second on average; one that cannot ends the response and gives back what it held.
-"""
+"""Deadlines for slow clients, for a bare `make serve` (a reverse proxy in front does the same: README): request
+headers within header_seconds (uvicorn has no such deadline), and each piece of a response sent within
+send_timeout_seconds, then at min_send_bytes_per_second on average, or the response ends and gives back its slot."""
 
 from __future__ import annotations
 
@@ -19,56 +16,46 @@ __all__ = ["TimedFileResponse", "TimedStreamingResponse", "protocol"]
 log = logging.getLogger("raydamp_service.edge")
 
 
-class _Deadline:
-    """Mixed into uvicorn's protocol class: a timer from connection_made (and from each response's end) that
-    closes the connection unless a request's headers have arrived."""
-
-    header_seconds: float = 10.0
-    _header_timer: asyncio.TimerHandle | None = None
-
-    def connection_made(self, transport) -> None:
-        super().connection_made(transport)  # type: ignore[misc]
-        self._arm()
-
-    def connection_lost(self, exc) -> None:
-        self._disarm()
-        super().connection_lost(exc)  # type: ignore[misc]
-
-    def on_response_complete(self) -> None:
-        super().on_response_complete()  # type: ignore[misc]
-        if not self.transport.is_closing():  # type: ignore[attr-defined]
-            self._arm()  # the next request's headers have header_seconds too
-
-    def _serving(self) -> bool:
-        cycle = self.cycle  # type: ignore[attr-defined]
-        return cycle is not None and not cycle.response_complete
-
-    def _arm(self) -> None:
-        self._disarm()
-        self._header_timer = self.loop.call_later(self.header_seconds, self._late)  # type: ignore[attr-defined]
-
-    def _disarm(self) -> None:
-        if self._header_timer is not None:
-            self._header_timer.cancel()
-            self._header_timer = None
-
-    def _late(self) -> None:
-        self._header_timer = None
-        if not self._serving() and not self.transport.is_closing():  # type: ignore[attr-defined]
-            self.transport.close()  # type: ignore[attr-defined]
-
-
 def protocol(header_seconds: float) -> type:
-    """uvicorn's httptools protocol class (uvicorn[standard]; for uvicorn.run(http=...)) with the header
-    deadline."""
+    """uvicorn's httptools protocol class (for uvicorn.run(http=...)) whose timer, from connection_made and from
+    each response's end, closes the connection unless a request's headers have arrived."""
     from uvicorn.protocols.http.httptools_impl import HttpToolsProtocol
 
-    class Protocol(_Deadline, HttpToolsProtocol):
+    class Protocol(HttpToolsProtocol):
+        _header_timer: asyncio.TimerHandle | None = None
+
+        def connection_made(self, transport) -> None:
+            super().connection_made(transport)
+            self._arm()
+
+        def connection_lost(self, exc) -> None:
+            self._disarm()
+            super().connection_lost(exc)
+
         def on_headers_complete(self) -> None:
             self._disarm()
             super().on_headers_complete()
 
-    Protocol.header_seconds = header_seconds
+        def on_response_complete(self) -> None:
+            super().on_response_complete()
+            if not self.transport.is_closing():
+                self._arm()  # the next request's headers have header_seconds too
+
+        def _arm(self) -> None:
+            self._disarm()
+            self._header_timer = self.loop.call_later(header_seconds, self._late)
+
+        def _disarm(self) -> None:
+            if self._header_timer is not None:
+                self._header_timer.cancel()
+                self._header_timer = None
+
+        def _late(self) -> None:
+            self._header_timer = None
+            serving = self.cycle is not None and not self.cycle.response_complete
+            if not serving and not self.transport.is_closing():
+                self.transport.close()
+
     return Protocol
 
 

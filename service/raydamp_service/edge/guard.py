@@ -14,8 +14,7 @@ from ..config import Settings
 
 __all__ = ["RequestGuard", "UNGUARDED_PATHS", "file_too_large", "needs_token"]
 
-# Paths that answer without the token: the liveness probe, and what holds no job data and a browser fetches by
-# navigation, where it cannot add an Authorization header (the page, its scripts, the API description).
+# Open without the token: the probe, and what holds no job data and a browser navigates to (without a header).
 UNGUARDED_PATHS = frozenset({"/healthz", "/", "/docs", "/openapi.json"})
 UNGUARDED_PREFIXES = ("/static/", "/vendor/")
 UPLOAD_PATH = "/v1/files"  # POST: a Matrix Market upload, limited by max_file_bytes rather than max_body_bytes
@@ -48,8 +47,10 @@ class RequestGuard:
         self.app = app
         self.trusted = {name.strip("[]").lower() for name in settings.trusted_hosts}
         self.token = settings.token.get_secret_value().encode() if settings.token else None
-        self.max_body = settings.max_body_bytes
-        self.max_file = settings.max_file_bytes
+        # An upload's is its file's, with room for the multipart framing (the route checks the file part exactly).
+        self.upload_limit = (settings.max_file_bytes + MULTIPART_ALLOWANCE, file_too_large(settings.max_file_bytes))
+        self.body_limit = (settings.max_body_bytes, f"the request body is larger than max_body_bytes = "
+                           f"{settings.max_body_bytes} bytes (RAYDAMP_MAX_BODY_BYTES)")
         self.large_body, self.max_large = settings.large_body_bytes, settings.max_large_bodies
         self.retry_after = str(settings.retry_after_seconds)
         self.body_seconds, self.body_rate = settings.body_seconds, settings.min_body_bytes_per_second
@@ -67,7 +68,7 @@ class RequestGuard:
         if not self._large(headers):
             await self._with_body_limit(scope, receive, send)
             return
-        # Its parse and validation hold the event loop (70 ms for a 1.7 MB structure): max_large_bodies at once.
+        # Its parse and validation hold the event loop: max_large_bodies at once.
         if self.large_bodies >= self.max_large:
             await JSONResponse({"detail": f"{self.max_large} large request bodies are being handled "
                                           "(max_large_bodies); retry later"}, status_code=429,
@@ -97,29 +98,21 @@ class RequestGuard:
                 return JSONResponse({"detail": "this service needs Authorization: Bearer <RAYDAMP_TOKEN>"},
                                     status_code=401, headers={"WWW-Authenticate": "Bearer"})
         length = headers.get("content-length")
-        if length is not None and (not length.isdigit() or int(length) > self._limit(scope)):
-            return self._too_large(scope)
+        limit, too_large = self._limit(scope)
+        if length is not None and (not length.isdigit() or int(length) > limit):
+            return JSONResponse({"detail": too_large}, status_code=413)
         return None
 
-    def _is_upload(self, scope: Scope) -> bool:
-        return scope["path"] == UPLOAD_PATH and scope.get("method") == "POST"
-
-    def _limit(self, scope: Scope) -> int:
-        # An upload's is its file's, with room for the multipart framing (the route checks the file part exactly).
-        return self.max_file + MULTIPART_ALLOWANCE if self._is_upload(scope) else self.max_body
-
-    def _too_large(self, scope: Scope) -> JSONResponse:
-        if self._is_upload(scope):
-            return JSONResponse({"detail": file_too_large(self.max_file)}, status_code=413)
-        return JSONResponse({"detail": f"the request body is larger than max_body_bytes = {self.max_body} bytes "
-                                       "(RAYDAMP_MAX_BODY_BYTES)"}, status_code=413)
+    def _limit(self, scope: Scope) -> tuple[int, str]:
+        """(a body's limit, the 413's detail past it)."""
+        return self.upload_limit if scope["path"] == UPLOAD_PATH and scope.get("method") == "POST" else self.body_limit
 
     async def _with_body_limit(self, scope: Scope, receive: Receive, send: Send) -> None:
         """The body is counted as it arrives (chunked: no Content-Length), and must arrive within body_seconds,
         plus 1 / min_body_bytes_per_second for each byte received."""
         received = 0
         refused: JSONResponse | None = None
-        limit = self._limit(scope)
+        limit, too_large = self._limit(scope)
         deadline = asyncio.get_running_loop().time() + self.body_seconds
         body_done = False
 
@@ -142,7 +135,7 @@ class RequestGuard:
                     deadline += piece / self.body_rate
                 body_done = not message.get("more_body", False)
                 if received > limit:
-                    refused = self._too_large(scope)
+                    refused = JSONResponse({"detail": too_large}, status_code=413)
                     raise _BodyRefused
             return message
 

@@ -1,11 +1,11 @@
-"""What every answer needs beyond the routes (RFC 9110): HEAD runs as its GET, marked in its scope (HEAD), its body
-dropped and the route told once the headers are out that the client has gone; a JSON body naming a key twice is a
-422 (UniqueKeysRoute); a 422's echo of the input is made encodable and cut short; a 405's Allow names every method
-the path takes."""
+"""What every answer needs beyond the routes (RFC 9110): HEAD runs as its GET (marked in its scope; its body
+dropped, the route told the client has gone); a JSON body naming a key twice is a 422 (UniqueKeysRoute); a 422's
+echo of the input is encodable and short; a 405's Allow names every method the path takes."""
 
 from __future__ import annotations
 
 import asyncio
+import functools
 import json
 import math
 from collections.abc import Callable
@@ -65,10 +65,9 @@ class _UniqueKeysRequest(Request):
         if not hasattr(self, "_json"):
             body = await self.body()
             try:
-                # A large body is parsed on a worker thread: its objects' hook gives the event loop the interpreter
-                # lock back every switch interval, where a parse on the loop held /healthz for all of it.
+                # A large body is parsed on a worker thread, which hands the event loop the GIL back meanwhile.
                 large = len(body) > self.app.state.settings.large_body_bytes
-                self._json = await run_in_threadpool(_parse, body) if large else _parse(body)
+                self._json = await run_in_threadpool(_PARSE, body) if large else _PARSE(body)
             except json.JSONDecodeError:
                 raise
             except ValueError as error:
@@ -77,8 +76,7 @@ class _UniqueKeysRequest(Request):
         return self._json
 
 
-def _parse(body: bytes) -> Any:
-    return json.loads(body, object_pairs_hook=unique_keys)
+_PARSE = functools.partial(json.loads, object_pairs_hook=unique_keys)
 
 
 class UniqueKeysRoute(APIRoute):
@@ -131,8 +129,7 @@ async def validation_error_handler(request: Request, error: RequestValidationErr
 
 
 async def http_error_handler(request: Request, error: HTTPException) -> Response:
-    """FastAPI's own answer to an HTTPException, with a 405's Allow listing the methods /openapi.json documents for
-    the path (an undocumented path, as the page's, keeps Starlette's)."""
+    """FastAPI's answer, with a 405's Allow listing the methods /openapi.json documents for the path."""
     cause = error.__cause__
     if error.status_code == 400 and isinstance(cause, (RecursionError, UnicodeDecodeError)):
         # A body JSON's parser refused other than by a JSONDecodeError: the 422 of every other body not JSON.

@@ -14,11 +14,9 @@ from ..tasks.store import UNFINISHED_SQL, Database, now
 
 __all__ = ["FILES_TABLE", "FILE_COLUMNS_ADDED", "FileRecord", "FileStore"]
 
-# Columns a files table from before records lacks (JobStore._upgrade adds them): kind is matrix or record; format
-# mtx, at2, npy or columns (raydamp.loads.records.FORMATS); a record's time range and uniform sample interval.
+# Columns a files table from before records lacks (JobStore._upgrade adds them); format: records.FORMATS.
 FILE_COLUMNS_ADDED = {"kind": "TEXT NOT NULL DEFAULT 'matrix'", "format": "TEXT NOT NULL DEFAULT 'mtx'",
                       "t_start": "REAL", "t_end": "REAL", "dt": "REAL"}
-# Uploads as uploaded (content). rows, cols, nnz: a matrix's; a record's samples, columns and 0.
 _PIECE = 1 << 20  # bytes of an upload written at once
 FILES_TABLE = f"""
 CREATE TABLE IF NOT EXISTS files (seq INTEGER PRIMARY KEY AUTOINCREMENT, id TEXT NOT NULL UNIQUE, name TEXT NOT NULL,
@@ -54,8 +52,7 @@ def _file_record(row: sqlite3.Row) -> FileRecord:
 
 
 class FileStore:
-    """The uploads, in the database of the task store this is mixed into (jobs.JobStore): a file that one of
-    its tasks still to run names cannot be removed."""
+    """The uploads, in the database of the task store this is mixed into (jobs.JobStore)."""
 
     db: Database
     TABLE: str
@@ -63,14 +60,13 @@ class FileStore:
 
     @functools.cached_property
     def parsed_files(self) -> ParsedFiles:
-        """files(id) for raydamp.jobs.build_job: a stored upload, parsed once. An unknown id is a ValueError that
-        raydamp reports at the path that names it (system.K.file, load.file.id, ...)."""
+        """files(id) for raydamp.jobs.build_job: a stored upload, parsed once (an unknown id: ValueError)."""
         return ParsedFiles(self, self.PARSED_ENTRIES)
 
     def add_file(self, name: str, content: bytes | BinaryIO, shape: tuple[int, int] = (0, 0), nnz: int = 0,
                  max_total_bytes: int = 0, *, record: RecordFileInfo | None = None) -> FileRecord | None:
-        """Store an upload (its bytes, or a file of them): a matrix (its shape and nnz) or a record; None (nothing
-        written) past max_total_bytes. It is written a piece at a time, never copied whole in memory."""
+        """Store an upload (bytes, or a file of them, written a piece at a time), a matrix or a record; None
+        (nothing written) past max_total_bytes."""
         content = io.BytesIO(content) if isinstance(content, bytes) else content
         size = content.seek(0, io.SEEK_END)
         file = FileRecord(id=uuid.uuid4().hex, name=name, bytes=size, shape=tuple(shape), nnz=nnz, created_at=now())
@@ -78,8 +74,7 @@ class FileStore:
             file = replace(file, shape=(record.samples, record.columns), nnz=0, kind="record", format=record.format,
                            t_start=record.t_start, t_end=record.t_end, dt=record.dt)
         with self.db.transaction() as db:
-            # Counted and inserted under the write lock. VALUES' zeroblob is written as zeros page by page (an INSERT
-            # ... SELECT builds it whole in memory); the bytes then go into it a piece at a time.
+            # VALUES' zeroblob is written page by page (INSERT ... SELECT builds it in memory), then filled piecewise.
             stored = db.execute("SELECT COALESCE(SUM(bytes), 0) FROM files").fetchone()[0]
             if max_total_bytes and stored + size > max_total_bytes:
                 return None
@@ -112,8 +107,8 @@ class FileStore:
         return self.db.connection().execute("SELECT 1 FROM files WHERE id = ?", (file_id,)).fetchone() is not None
 
     def delete_file(self, file_id: str) -> str:
-        """"deleted", "missing", or "in_use" when a queued or running job names it (its id as the JSON string "<id>")
-        in the same statement: a run never loses its file."""
+        """"deleted", "missing", or "in_use" when a queued or running job names it (as the JSON string "<id>"),
+        checked in the DELETE itself: a run never loses its file."""
         with self.db.transaction() as db:
             deleted = db.execute(
                 f"DELETE FROM files WHERE id = ? AND NOT EXISTS (SELECT 1 FROM {self.TABLE} WHERE status IN "

@@ -1,5 +1,4 @@
-"""The job: one raydamp integration. Its table (its summary; its trajectory as float64 blobs in a table of their
-own), the uploaded files it may name, and its run."""
+"""The job: one raydamp integration, its table (summary; trajectory as float64 blobs), its files, its run."""
 
 from __future__ import annotations
 
@@ -24,8 +23,7 @@ from .files import FILE_COLUMNS_ADDED, FILES_TABLE, FileStore
 __all__ = ["JobStore", "JobRecord", "JobWork", "TrajectoryArrays", "StoredTrajectory"]
 
 _FLOAT = np.dtype("<f8")  # the blob format: little-endian float64, row-major
-# Steps x coordinates of a built-in model's run below which it is quick (JobWork.quick): milliseconds of work.
-_QUICK_WORK = 100_000
+_SHORT_WORK = 100_000  # steps x coordinates of a built-in model's run of milliseconds
 _TABLES = f"""
 CREATE TABLE IF NOT EXISTS trajectories (
     job_id TEXT PRIMARY KEY REFERENCES jobs(id) ON DELETE CASCADE,
@@ -46,21 +44,18 @@ class JobRecord(TaskRecord):
 
     @functools.cached_property
     def job_spec(self) -> JobSpec:
-        """The stored spec as a JobSpec, validated once per record."""
         return JobSpec.model_validate(self.spec)
 
     checked_call: ClassVar[RaydampCall | None] = None  # the run the submission's check built here (checked())
 
     def checked(self, spec: JobSpec, call: RaydampCall | None) -> JobRecord:
-        """This record as just stored, with the spec validated at submission and the run its check built, which
-        a quick run then does not make again."""
-        self.__dict__["job_spec"] = spec  # the cached properties' values (not fields: no columns)
+        """This record with the spec and run its submission's check built, which the runner then reuses."""
+        self.__dict__["job_spec"] = spec  # not fields: no columns
         self.__dict__["checked_call"] = call
         return self
 
 
-def _blob(array: np.ndarray | None) -> memoryview | None:
-    # The array's own buffer, not a copy of it.
+def _blob(array: np.ndarray | None) -> memoryview | None:  # the array's own buffer, not a copy
     return memoryview(np.ascontiguousarray(array, dtype=_FLOAT).reshape(-1)).cast("B") if array is not None else None
 
 
@@ -100,9 +95,8 @@ class JobStore(TaskStore[JobRecord], FileStore):
         normalise_stored(db, self.TABLE, JobSpec)
 
     def listing(self, limit: int, status: str | None = None) -> list[sqlite3.Row]:
-        """Newest first, what a list shows of each job: id, status, progress, label (a built-in model's name, else
-        its system's name or kind), method (the one run, else the one asked for), created_at, finished_at. SQLite
-        reads label and method from the stored JSON: no spec is parsed in Python for one line of a list."""
+        """Newest first, a list's line per job: label (model, system name or kind) and method (the one run, else
+        the one asked for) read by SQLite from the stored JSON, no spec parsed in Python."""
         where, args = ("WHERE status = ?", (status,)) if status else ("", ())
         return self.db.connection().execute(
             f"SELECT id, status, progress, created_at, finished_at, {_LABEL} AS label, {_METHOD} AS method "
@@ -113,15 +107,15 @@ class JobStore(TaskStore[JobRecord], FileStore):
 
     def finish(self, job_id: str, status: str, *, summary: dict[str, Any] | None = None, error: str | None = None,
                failed_step: int | None = None, trajectory: TrajectoryArrays | None = None,
-               progress: float | None = None, unclaimed_since: str | None = None) -> bool:
-        """Record the end of a run and its saved points in one transaction (TaskStore.finish)."""
+               progress: float | None = None) -> bool:
+        """TaskStore.finish with the saved points, in one transaction."""
         row = None if trajectory is None else (
             f"INSERT OR REPLACE INTO trajectories (job_id, points, dim, momenta, {', '.join(a.name for a in SAVED)}) "
             f"VALUES (?, ?, ?, ?{', ?' * len(SAVED)})",
             (job_id, *trajectory.q.shape, trajectory.momentum.shape[1],
              *(_blob(getattr(trajectory, a.name)) for a in SAVED)))
         return super().finish(job_id, status, error=error, progress=1.0 if status == "completed" else progress,
-                              also=row, unclaimed_since=unclaimed_since, summary=summary, failed_step=failed_step)
+                              also=row, summary=summary, failed_step=failed_step)
 
     def trajectory(self, job_id: str) -> TrajectoryArrays | None:
         row = self.db.connection().execute("SELECT * FROM trajectories WHERE job_id = ?", (job_id,)).fetchone()
@@ -134,8 +128,7 @@ class JobStore(TaskStore[JobRecord], FileStore):
                                    for a in SAVED})
 
     def open_trajectory(self, job_id: str) -> tuple[sqlite3.Connection, StoredTrajectory] | None:
-        """A read-only connection holding a snapshot in which the job's trajectory exists, and where it is.
-        The caller reads the blobs through it (incremental I/O) and closes it."""
+        """A snapshot connection in which the job's trajectory exists, and where it is; the caller closes it."""
         optional = [a.name for a in SAVED if a.optional]
         flags = "".join(f", {name} IS NOT NULL" for name in optional)
         found = self.db.snapshot(f"SELECT rowid, points, dim, momenta, {SPRINGS_SQL}{flags} FROM trajectories "
@@ -148,32 +141,26 @@ class JobStore(TaskStore[JobRecord], FileStore):
 
 
 class JobWork:
-    """A job's run: raydamp.integrate on a worker thread (the C++ loop releases the GIL), `workers` at once. A
-    system's functions are compiled by a check process (checks.build_for_run), never here."""
+    """A job's run: raydamp.integrate on a worker thread (the C++ loop releases the GIL), `workers` at once, with
+    the functions a check process compiled (checks.build_for_run)."""
 
     def __init__(self, store: JobStore, settings: Settings, checks: CheckPool | None = None):
         self._store = store
         self._checks = checks
         self.threads, self.fraction = settings.workers, True
-        self.quick_threads = settings.workers
 
-    def _call(self, spec: JobSpec, run: Run) -> RaydampCall | None:
-        """The job's call, its system from the compiled functions loaded; None if the service is stopping."""
-        return build_for_run(self._checks, spec, run, files=self._store.parsed_files)
-
-    def quick(self, record: JobRecord) -> bool:
-        """A run of milliseconds: a built-in model without a load and fewer than _QUICK_WORK steps x coordinates.
-        It reports no live progress (each report takes the interpreter lock from the C++ loop; a cancel still
-        stops it), and the runner records it without a claim."""
-        spec, state = record.job_spec, record.job_spec.initial_state  # numbers, if checked_inline
-        return checked_inline(spec) and planned_steps(spec) * max(len(state.q), len(state.p), 1) < _QUICK_WORK
+    @staticmethod
+    def _short(spec: JobSpec) -> bool:
+        """A run of milliseconds, which reports no progress (a report takes the interpreter lock from the loop)."""
+        state = spec.initial_state  # numbers, if checked_inline
+        return checked_inline(spec) and planned_steps(spec) * max(len(state.q), len(state.p), 1) < _SHORT_WORK
 
     def run(self, record: JobRecord, run: Run) -> Outcome:
         spec = record.job_spec
-        call = record.checked_call or self._call(spec, run)
+        call = record.checked_call or build_for_run(self._checks, spec, run, files=self._store.parsed_files)
         if call is None:
             return Outcome("cancelled", None, run.progress)
-        solution = call.run(progress=None if self.quick(record) else run.report, cancel=run.token)
+        solution = call.run(progress=None if self._short(spec) else run.report, cancel=run.token)
         result = {"summary": solution.summary(), "trajectory": TrajectoryArrays.of(solution)}
         if solution.status in FAILED:
             # A blow-up (or a trajectory that outgrew memory) fails, keeping everything computed up to it.

@@ -1,5 +1,4 @@
-"""The sweep: a job over a grid of members, run through raydamp.sweep on a Dask client. Its table (members,
-members done as its progress, outcomes, the NetCDF result as a blob) and its run."""
+"""The sweep: a job over a grid of members, run through raydamp.sweep on a Dask client; its table and its run."""
 
 from __future__ import annotations
 
@@ -57,10 +56,10 @@ class SweepStore(TaskStore[SweepRecord]):
 
 
 class SweepWork:
-    """A sweep's run, one at a time (a sweep spreads over every worker of the cluster), on a Dask client made at
-    the first sweep (dask_scheduler, or an in-process LocalCluster). A cancel keeps the finished chunks."""
+    """A sweep's run, one at a time (it spreads over the whole cluster), on a Dask client made at the first sweep.
+    A cancel keeps the finished chunks."""
 
-    threads, quick_threads, fraction = 1, 0, False  # members done; a sweep is never quick
+    threads, fraction = 1, False  # progress: members done
 
     def __init__(self, store: SweepStore, settings: Settings, checks: CheckPool | None = None):
         self._store, self._settings, self._checks = store, settings, checks
@@ -85,12 +84,8 @@ class SweepWork:
                 except Exception:  # a cluster already gone must not stop the shutdown
                     log.warning("closing the Dask client failed", exc_info=True)
 
-    def quick(self, record: SweepRecord) -> bool:
-        """A sweep is never quick."""
-        return False
-
     def _loaded(self, spec: SweepSpec, run: Run) -> bool:
-        """The base system's functions loaded by a check process; False if the service stops meanwhile."""
+        """The base system's functions compiled and loaded; False if the service stops meanwhile."""
         return self._checks is None or not isolated(spec.job) or build_for_run(self._checks, spec.job, run) is not None
 
     def run(self, record: SweepRecord, run: Run) -> Outcome:

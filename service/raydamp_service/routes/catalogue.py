@@ -26,6 +26,5 @@ def list_methods() -> list[MethodInfo]:
 
 @router.get("/compositions", response_model=list[CompositionInfo])
 def list_compositions() -> list[CompositionInfo]:
-    """Every composition a job's `composition` may name; it applies to the symmetric methods
-    (GET /v1/methods, symmetric = true)."""
+    """Every composition a job's `composition` may name, for the symmetric methods (GET /v1/methods)."""
     return [CompositionInfo.model_validate(composition._asdict()) for composition in raydamp.compositions()]

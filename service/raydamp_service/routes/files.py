@@ -1,7 +1,5 @@
-"""/v1/files: upload, list and remove files, multipart with one part named "file" (`curl -F file=@K.mtx`):
-Matrix Market matrices (a linear structure's M or K: {"file": id}) and records (PEER .AT2, text columns, .npy:
-a load's or ground motion's {"file": {"id": id}}). A file a queued or running job names cannot be removed (409).
-"""
+"""/v1/files: upload (multipart, one part named "file": `curl -F file=@K.mtx`), list and remove matrices and
+records. A file a queued or running job names cannot be removed (409)."""
 
 from __future__ import annotations
 
@@ -60,8 +58,7 @@ def upload_file(file: Annotated[UploadFile, File(description="a Matrix Market (.
     limit = settings.max_file_bytes
     if file.size is not None and file.size > limit:
         raise HTTPException(413, detail=file_too_large(limit))
-    # Copied to a file of its own a piece at a time, read there by a check process (under its budgets: never a
-    # Python object per value in the server), then stored from it: the server never holds the whole upload.
+    # Spooled piecewise, parsed by a check process, stored from the spool: the server never holds the whole upload.
     with tempfile.NamedTemporaryFile(prefix="raydamp-upload-") as spool:
         shutil.copyfileobj(file.file, spool, _PIECE)
         if spool.tell() > limit:

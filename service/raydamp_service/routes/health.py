@@ -14,7 +14,6 @@ router = APIRouter(tags=["health"])
 
 @router.get("/healthz", response_model=Health)
 async def healthz(store: StoreDep, settings: SettingsDep) -> Health:
-    # On the event loop, not the thread pool: a probe answers while every pool thread is busy
-    # streaming, and SELECT 1 on a WAL database never waits for a writer.
+    # On the event loop: it answers while every pool thread streams, and SELECT 1 never waits for a writer (WAL).
     store.ping()
     return Health(status="ok", version=raydamp.__version__, workers=settings.workers)

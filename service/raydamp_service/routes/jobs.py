@@ -1,8 +1,5 @@
-"""/v1/jobs: submit, list, inspect and cancel integration jobs, and fetch their trajectories.
-
-Handlers are plain functions (run in the thread pool: SQLite reads never hold up the event loop), but for the
-submission: a coroutine whose insert (one short write) and a built-in model's check run on the loop.
-"""
+"""/v1/jobs: submit, list, inspect and cancel integration jobs, and fetch their trajectories. Handlers run in the
+thread pool (SQLite reads never hold up the event loop) but the submission, whose insert is one short write."""
 
 from __future__ import annotations
 
@@ -31,7 +28,7 @@ from ..tasks.runner import Runner
 from ..tasks.store import FINAL_STATUSES
 from ..trajectories.downloads import draw_plot, events_file, write_file
 from ..trajectories.stream import FetchLease, Selection, read_arrays, trajectory_chunks
-from .tasks import RunnerDep, SettingsDep, StoreDep, Tasks, check_limit, checks_busy, invalid
+from .tasks import RunnerDep, SettingsDep, StoreDep, Tasks, check_limit, checks_busy, fields, invalid
 
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"], route_class=UniqueKeysRoute)
 
@@ -39,20 +36,15 @@ _NOT_FOUND = {404: {"description": "no job with this id"}}
 
 
 def _view(record: JobRecord, runner: Runner) -> JobView:
-    return JobView(
-        id=record.id, status=record.status, progress=runner.progress(record.id, record.status, record.progress),
-        attempts=record.attempts, cancel_requested=record.cancel_requested, error=record.error,
-        failed_step=record.failed_step, summary=record.summary,
-        trajectory=JOBS.url(record.id) + "/trajectory" if record.has_trajectory else None, spec=record.spec,
-        created_at=record.created_at, started_at=record.started_at, finished_at=record.finished_at)
+    return JobView(**{**fields(record), "progress": runner.progress(record.id, record.status, record.progress)},
+                   trajectory=JOBS.url(record.id) + "/trajectory" if record.has_trajectory else None)
 
 
 JOBS = Tasks("job", "/v1/jobs", _view)
 
 
 def with_seed(spec: JobSpec) -> JobSpec:
-    """A job at a temperature without a seed gets one now, stored with it: a rerun (after a restart) then
-    draws the same noise."""
+    """A job at a temperature gets a seed now, stored with it: a rerun after a restart draws the same noise."""
     if spec.temperature and spec.seed is None:
         return spec.model_copy(update={"seed": secrets.randbits(64)})
     return spec
@@ -67,7 +59,7 @@ def with_seed(spec: JobSpec) -> JobSpec:
 async def submit_job(spec: JobSpec, request: Request, response: Response) -> JobCreated:
     """Queue an integration; poll the Location for its status. A system is checked (compiled, one trial
     step) in a check process within check_seconds and check_memory_bytes: past either, 422 on system."""
-    # Read from app.state rather than through four Depends, whose solving was a sixth of the POST's CPU.
+    # app.state, not four Depends: solving them costs a sixth of the POST's CPU.
     state = request.app.state
     store, runner, settings, checks = state.store, state.runner, state.settings, state.checks
     spec = with_seed(spec)
@@ -120,8 +112,7 @@ def get_trajectory(job_id: str, request: Request, store: StoreDep, settings: Set
                    format: Annotated[Literal["json", "csv", "npz", "netcdf", "nc"], Query(  # noqa: A002 - the API's name
                        description="json (streamed), or a file: csv (the numbers), npz or netcdf (nc: the same; with "
                                    "the job spec as provenance; raydamp.load reads them)")] = "json") -> Response:
-    """The saved points start, start + every, ... before stop, one row per point, streamed as JSON or
-    written as a file."""
+    """The saved points start, start + every, ... before stop, streamed as JSON or written as a file."""
     record = JOBS.existing(store, job_id)
     if format != "json":
         return _trajectory_file(record, store, request, settings, slice(start, stop, every),
@@ -190,8 +181,7 @@ def _trajectory_file(record: JobRecord, store: JobStore, request: Request, setti
 
 
 def _file(record: JobRecord, request: Request, settings: Settings, connection, selected_bytes: int, write) -> Response:
-    """write(directory) -> (path, media type) in a directory of its own, sent from disk; the connection is closed,
-    and the directory and the large-fetch slot given back, whatever happens."""
+    """write(directory) -> (path, media type), sent from disk; the connection, directory and slot given back."""
     try:
         download = FetchLease(_large_slot(request, settings, selected_bytes),
                               directory := Path(tempfile.mkdtemp(prefix="raydamp-download-")))
@@ -211,8 +201,8 @@ def _file(record: JobRecord, request: Request, settings: Settings, connection, s
             responses={**_NOT_FOUND, 200: {"content": {"text/csv": {}}, "description": "the events table as CSV"},
                        409: {"description": "the job has no trajectory (yet), or watched no events"}})
 def get_events(job_id: str, request: Request, store: StoreDep, settings: SettingsDep) -> Response:
-    """The job's events table: one line per crossing (name, t, direction, and q, p at the saved coordinates for
-    a model of at most 8 coordinates), the first 1000 crossings as the summary lists them."""
+    """The job's events table: one line per crossing (name, t, direction, and q, p at the saved coordinates of a
+    model of at most 8), the first 1000 as the summary lists them."""
     record = JOBS.existing(store, job_id)
     spec = _spec(record)
     if spec.events is None:

@@ -20,8 +20,7 @@ router = APIRouter(include_in_schema=False)
 
 
 def _shipped(package: str, folder: str, name: str) -> Path:
-    """A file a package ships (plotly's plotly.min.js; fastapi-offline's Swagger UI 5), or why the service cannot
-    start."""
+    """A file a package ships, or why the service cannot start."""
     path = Path(str(files(package) / folder / name))
     if not path.is_file():
         raise RuntimeError(f"the {package} package has no {path}: reinstall raydamp[service]")
@@ -54,8 +53,7 @@ def docs() -> HTMLResponse:
 
 
 def mount_assets(app: FastAPI) -> None:
-    """The page's own files under /static and Swagger UI's under /vendor/swagger-ui, checked here: a missing
-    asset stops the service at start."""
+    """The page's files under /static, Swagger UI's under /vendor/swagger-ui; a missing asset stops the start."""
     _plotly_js()
     app.mount("/static", StaticFiles(directory=STATIC_DIR), name="static")
     swagger = _shipped("fastapi_offline", "static", "swagger-ui-bundle.js").parent

@@ -1,5 +1,4 @@
-"""/v1/sweeps: a job spec plus a grid, run through raydamp.sweep on Dask; progress per chunk, the result as
-NetCDF, cancel and delete like jobs."""
+"""/v1/sweeps: a job spec and a grid, run through raydamp.sweep on Dask; the result as NetCDF."""
 
 from __future__ import annotations
 
@@ -15,7 +14,7 @@ from ..kinds.sweeps import SweepRecord
 from ..schemas import JobStatus, SweepCreated, SweepList, SweepListItem, SweepSpec, SweepView
 from ..tasks.runner import Runner
 from .jobs import with_seed
-from .tasks import ChecksDep, SettingsDep, SweepRunnerDep, SweepsDep, Tasks, check_limit, checks_busy, invalid
+from .tasks import ChecksDep, SettingsDep, SweepRunnerDep, SweepsDep, Tasks, check_limit, checks_busy, fields, invalid
 
 router = APIRouter(prefix="/v1/sweeps", tags=["sweeps"], route_class=UniqueKeysRoute)
 
@@ -31,12 +30,8 @@ def _done(record: SweepRecord, runner: Runner) -> tuple[int, float]:
 
 def _view(record: SweepRecord, runner: Runner) -> SweepView:
     done, progress = _done(record, runner)
-    return SweepView(id=record.id, status=record.status, members=record.members, members_done=done, progress=progress,
-                     cancel_requested=record.cancel_requested, attempts=record.attempts, error=record.error,
-                     outcomes=record.outcomes,
-                     result=SWEEPS.url(record.id) + "/result" if record.result_bytes else None,
-                     result_bytes=record.result_bytes, spec=record.spec,
-                     created_at=record.created_at, started_at=record.started_at, finished_at=record.finished_at)
+    return SweepView(**{**fields(record), "members_done": done}, progress=progress,
+                     result=SWEEPS.url(record.id) + "/result" if record.result_bytes else None)
 
 
 SWEEPS = Tasks("sweep", "/v1/sweeps", _view)

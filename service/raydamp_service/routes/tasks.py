@@ -1,11 +1,9 @@
-"""What the routes share. Their dependencies: the objects the lifespan put on app.state, overridable in tests, as
-coroutines (FastAPI runs a plain function in its thread pool, a hop costing more than the work:
-tests/service/test_dependencies.py). And every kind of task's lifecycle (jobs, sweeps): submit (a 422 naming the
-field, a 429 when the queue is full, the Location), list's limit, 404, cancel (409 once finished) and delete (204
-once finished, else a cancel)."""
+"""What the routes share: their dependencies (app.state's objects, as coroutines: FastAPI runs a plain function
+in its thread pool, a hop costing more than the work), and a task's lifecycle routes (jobs, sweeps)."""
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from typing import Annotated, Any
 
@@ -20,8 +18,8 @@ from ..kinds.sweeps import SweepStore
 from ..tasks.runner import Runner
 from ..tasks.store import FINAL_STATUSES, FileGone, TaskStore
 
-__all__ = ["Tasks", "invalid", "check_limit", "checks_busy", "SettingsDep", "StoreDep", "RunnerDep", "ChecksDep",
-           "SweepsDep", "SweepRunnerDep"]
+__all__ = ["Tasks", "fields", "invalid", "check_limit", "checks_busy", "SettingsDep", "StoreDep", "RunnerDep",
+           "ChecksDep", "SweepsDep", "SweepRunnerDep"]
 
 
 def _state(name: str):
@@ -40,6 +38,11 @@ RunnerDep = Annotated[Runner, Depends(_state("runner"))]
 ChecksDep = Annotated[CheckPool, Depends(_state("checks"))]
 SweepsDep = Annotated[SweepStore, Depends(_state("sweeps"))]
 SweepRunnerDep = Annotated[Runner, Depends(_state("sweep_runner"))]
+
+
+def fields(record: Any) -> dict[str, Any]:
+    """A record's fields by name, not copied: a view takes those it shows."""
+    return {field.name: getattr(record, field.name) for field in dataclasses.fields(record)}
 
 
 def invalid(error: JobError, body: Any = None) -> RequestValidationError:
@@ -73,8 +76,8 @@ def check_limit(limit: int, settings: Settings) -> None:
 
 
 class Tasks:
-    """One kind's lifecycle routes: its noun, its URL prefix, and view(record, runner), the body a get, cancel or
-    delete answers with."""
+    """One kind's lifecycle: submit (422, 429 when the queue is full, the Location), 404, cancel (409 once
+    finished) and delete (204 once finished, else a cancel); view(record, runner) is the body answered."""
 
     def __init__(self, noun: str, prefix: str, view: Callable[[Any, Runner], Any]):
         self.noun, self.prefix, self.view = noun, prefix, view
@@ -90,8 +93,7 @@ class Tasks:
 
     def queue(self, request: Request, response: Response, store: TaskStore, runner: Runner, spec: Any, limit: int,
               setting: str, settings: Settings, prepare: Callable[[Any], Any] | None = None, **columns: Any) -> Any:
-        """Store the checked spec as queued and hand it to the runner (as prepare(record), if given); 429 when
-        limit are waiting."""
+        """Store the checked spec as queued, hand it to the runner (as prepare(record)); 429 when limit wait."""
         try:
             record = store.create(spec.model_dump(mode="json"), limit, files=spec.uploads(), **columns)
         except FileGone as error:

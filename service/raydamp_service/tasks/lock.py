@@ -1,8 +1,7 @@
 """One service per database: a second would re-queue the first's running jobs, and two writers through two names
-of one file (a hard link) corrupt it. The lock is an exclusive flock on a file named by the database's (device,
-inode), beside it, so every name of the file finds the same lock; never on the database itself, as closing any
-descriptor of that file drops the process's POSIX locks, SQLite's included. Holds within a process are counted.
-"""
+of one file corrupt it. The lock is a flock on a file named by the database's (device, inode), beside it, so every
+name finds the same lock; never on the database, as closing any descriptor of it drops the process's POSIX locks,
+SQLite's included. Holds within a process are counted."""
 
 from __future__ import annotations
 

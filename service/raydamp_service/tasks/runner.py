@@ -1,7 +1,5 @@
 """The runner of one kind of task: worker threads claim queued tasks, run the kind's work (kinds/) and record
-how it ended. A cancel stops a run through its token; at shutdown runs go back to the queue. A quick run is not
-claimed: made while its task is still queued, it is recorded by one write.
-"""
+how it ended. A cancel stops a run through its token; at shutdown runs go back to the queue."""
 
 from __future__ import annotations
 
@@ -12,15 +10,12 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import Any, Protocol
 
 import raydamp
 
 from ..config import Settings
-from .store import now
-
-if TYPE_CHECKING:
-    from .store import TaskRecord, TaskStore
+from .store import TaskRecord, TaskStore
 
 __all__ = ["Runner", "Run", "Outcome", "Work"]
 
@@ -29,8 +24,7 @@ log = logging.getLogger("raydamp_service.runner")
 
 @dataclass
 class Run:
-    """A task being run: its cancel token and live progress (done / total, or the count done when not
-    `fraction`), saved to the store at most every `every` seconds."""
+    """A task being run: its cancel token, and its live progress saved at most every `every` seconds."""
 
     save: Callable[[float], None]
     every: float
@@ -68,12 +62,7 @@ class Work(Protocol):
     """What a kind supplies: its threads, its progress measure, its run, and what to release at shutdown."""
 
     threads: int
-    quick_threads: int  # threads of their own for quick runs (0: none are quick)
     fraction: bool  # progress is done / total (a job's steps); else the count done (a sweep's members)
-
-    def quick(self, record: TaskRecord) -> bool:
-        """A run of milliseconds, recorded without a claim (Runner._run_quick)."""
-        ...
 
     def run(self, record: TaskRecord, run: Run) -> Outcome: ...
 
@@ -85,9 +74,8 @@ class Runner:
         self._store = store
         self._settings = settings
         self._work: Work = work if work is not None else store.work(settings)
-        # (id, the row as just stored, or None: read it), or None: stop. Quick runs have a lane of their own.
+        # (id, the row as its submission stored it, or None), or None: stop.
         self._queue: queue.SimpleQueue[tuple[str, TaskRecord | None] | None] = queue.SimpleQueue()
-        self._quick: queue.SimpleQueue[tuple[str, TaskRecord | None] | None] = queue.SimpleQueue()
         self._threads: list[threading.Thread] = []
         self._active: dict[str, Run] = {}
         self._lock = threading.Lock()
@@ -99,11 +87,8 @@ class Runner:
     def start(self) -> None:
         for i in range(self._work.threads):
             # daemon: a run that ignores cancellation must not keep a stopped service alive.
-            self._threads.append(threading.Thread(target=self._serve, args=(self._queue,),
-                                                  name=f"raydamp-{self._store.TABLE}-{i}", daemon=True))
-        for i in range(self._work.quick_threads):
-            self._threads.append(threading.Thread(target=self._serve, args=(self._quick,),
-                                                  name=f"raydamp-{self._store.TABLE}-quick-{i}", daemon=True))
+            self._threads.append(threading.Thread(target=self._serve, name=f"raydamp-{self._store.TABLE}-{i}",
+                                                  daemon=True))
         if self._store.RETAINED:
             self._threads.append(threading.Thread(target=self._retain, name="raydamp-retention", daemon=True))
         for thread in self._threads:
@@ -122,8 +107,6 @@ class Runner:
                 run.token.cancel()
         for _ in range(self._work.threads):
             self._queue.put(None)
-        for _ in range(self._work.quick_threads):
-            self._quick.put(None)
         self._retention_wake.set()
         deadline = time.monotonic() + self._settings.shutdown_seconds
         for thread in self._threads:
@@ -132,9 +115,8 @@ class Runner:
         self._work.close()
 
     def submit(self, task_id: str, record: TaskRecord | None = None) -> None:
-        """Queue a task; record, its row as just stored, spares a quick run reading it back."""
-        quick = record is not None and self._work.quick_threads > 0 and self._work.quick(record)
-        (self._quick if quick else self._queue).put((task_id, record))
+        """Queue a task; record, its row as just stored, carries what the submission's check built."""
+        self._queue.put((task_id, record))
 
     def cancel(self, task_id: str) -> None:
         with self._lock:
@@ -150,9 +132,9 @@ class Runner:
 
     # ---- worker threads ----
 
-    def _serve(self, tasks: queue.SimpleQueue) -> None:
+    def _serve(self) -> None:
         while True:
-            task = tasks.get()
+            task = self._queue.get()
             if task is None or self._stopping.is_set():
                 return  # a task still queued stays "queued" in the store and is recovered at the next start
             task_id, stored = task
@@ -189,19 +171,13 @@ class Runner:
             log.warning("%s %s: could not save progress", self._store.TABLE, task_id, exc_info=True)
 
     def _run(self, task_id: str, stored: TaskRecord | None) -> None:
-        """Run the task (stored: its row as submitted, else read here)."""
+        """Run the task (stored: its row as submitted, if this process submitted it)."""
         run = Run(save=lambda progress: self._save_progress(task_id, progress),
                   every=self._settings.progress_save_seconds, fraction=self._work.fraction, stopping=self._stopping)
         # Registered before the claim: a cancel arriving once the task is "running" finds the token.
         with self._lock:
             self._active[task_id] = run
         try:
-            record = stored if stored is not None else self._store.get(task_id)
-            if record is None or record.status != "queued":
-                return  # cancelled while queued (or removed)
-            if self._work.quick(record):
-                self._run_quick(record, run)
-                return
             record = self._store.claim(task_id)
             if record is None:
                 return  # cancelled while queued
@@ -211,7 +187,8 @@ class Runner:
             if self._stopping.is_set():
                 self._store.requeue(task_id)
                 return
-            outcome = self._outcome(record, run)
+            # The submitted row carries the spec validated and the run built by its check (the same spec).
+            outcome = self._outcome(record if stored is None else stored, run)
             if outcome.status == "cancelled" and run.interrupted:
                 self._store.requeue(task_id)
             else:
@@ -221,15 +198,6 @@ class Runner:
             with self._lock:
                 self._active.pop(task_id, None)
             self._retention_wake.set()
-
-    def _run_quick(self, record: TaskRecord, run: Run) -> None:
-        """A run of milliseconds, made while its task is still "queued" and recorded in one write as it ends
-        (a claim and a finish cost more than the run). A cancel meanwhile wins: the write then changes nothing."""
-        started = now()
-        outcome = self._outcome(record, run)
-        if not (outcome.status == "cancelled" and run.interrupted):  # else still queued: it runs at the next start
-            self._store.finish(record.id, outcome.status, error=outcome.error, progress=outcome.progress,
-                               unclaimed_since=started, **outcome.result)
 
     def _outcome(self, record: TaskRecord, run: Run) -> Outcome:
         try:

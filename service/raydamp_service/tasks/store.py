@@ -1,8 +1,6 @@
-"""The SQLite store: one database, one table per kind of task (kinds/), one lifecycle, written here once:
-queued -> running -> completed | failed | cancelled, with progress, attempts, cancel, delete, retention and
-recovery. One connection per thread, WAL so that readers never wait for the writer. Every state change is one
-UPDATE guarded by the state it expects, so a cancel and a worker's claim cannot both win.
-"""
+"""The SQLite store: one table per kind of task (kinds/), one lifecycle written once (queued -> running ->
+completed | failed | cancelled), WAL so that readers never wait for the writer. Every state change is one UPDATE
+guarded by the state it expects, so a cancel and a worker's claim cannot both win."""
 
 from __future__ import annotations
 
@@ -27,6 +25,7 @@ FINAL_STATUSES = frozenset({"completed", "failed", "cancelled"})
 _FINAL_SQL = "('completed', 'failed', 'cancelled')"
 UNFINISHED_SQL = "('queued', 'running')"
 _INCREMENTAL = 2  # PRAGMA auto_vacuum value
+MIN_SQLITE = (3, 35)
 # The lifecycle's columns in every kind's table. seq: submission order; spec: the validated spec as JSON.
 _LIFECYCLE = """seq INTEGER PRIMARY KEY AUTOINCREMENT, id TEXT NOT NULL UNIQUE, status TEXT NOT NULL,
     spec TEXT NOT NULL, attempts INTEGER NOT NULL DEFAULT 0, cancel_requested INTEGER NOT NULL DEFAULT 0,
@@ -38,7 +37,9 @@ class StoreUnavailable(RuntimeError):
 
     def __init__(self, path: Path, error: BaseException):
         reason = str(error) or type(error).__name__
-        if isinstance(error, sqlite3.DatabaseError) and "not a database" in reason:
+        if isinstance(error, sqlite3.NotSupportedError):
+            advice = "run it with a Python whose sqlite3 module links a newer SQLite"
+        elif isinstance(error, sqlite3.DatabaseError) and "not a database" in reason:
             advice = "the file is corrupt or not SQLite: move it aside, or set RAYDAMP_DB to another file"
         elif "readonly" in reason.replace("-", "").replace(" ", "") or isinstance(error, PermissionError):
             advice = "the service must be able to write it and its directory: fix the permissions or set RAYDAMP_DB"
@@ -63,9 +64,11 @@ class Database:
         self._space_pending = False  # freed pages not yet returned (a checkpoint met readers)
 
     def open(self, schema: str, upgrade: Callable[[sqlite3.Connection], None]) -> None:
-        """Create or open the database with these tables (upgrade brings older ones up to them) and prove it
-        writable; raises StoreUnavailable saying what to do."""
+        """Create or upgrade the tables and prove the file writable; StoreUnavailable saying what to do."""
         try:
+            if sqlite3.sqlite_version_info < MIN_SQLITE:  # claim() is one UPDATE ... RETURNING
+                raise sqlite3.NotSupportedError(f"SQLite {sqlite3.sqlite_version} is too old, the service needs "
+                                                f"{'.'.join(map(str, MIN_SQLITE))} or newer")
             self.path.parent.mkdir(parents=True, exist_ok=True)
             connection = self.connection()
             if connection.execute("PRAGMA auto_vacuum").fetchone()[0] != _INCREMENTAL:
@@ -106,14 +109,13 @@ class Database:
     @contextmanager
     def transaction(self) -> Iterator[sqlite3.Connection]:
         connection = self.connection()
-        # One writer at a time in this process: a lock wakes the next at once, where SQLITE_BUSY's handler
-        # sleeps 1, 2, 5 ... 100 ms between tries.
+        # One writer at a time: a lock wakes the next at once, where SQLITE_BUSY's handler sleeps up to 100 ms.
         with self._write_lock, connection:  # commits, or rolls back on an exception
             yield connection
 
     def snapshot(self, query: str, args: tuple) -> tuple[sqlite3.Connection, sqlite3.Row] | None:
-        """A read-only connection holding a snapshot, and the row the query finds in it (None: no row, nothing
-        held). The caller reads blobs through it (incremental I/O), one piece at a time, and closes it."""
+        """A read-only connection holding a snapshot and the row the query finds in it (None: no row); the caller
+        reads blobs through it and closes it."""
         connection = sqlite3.connect(f"{self.path.resolve().as_uri()}?mode=ro", uri=True, timeout=30.0,
                                      check_same_thread=False)  # used by one response, one piece at a time
         try:
@@ -134,8 +136,7 @@ class Database:
         connection = self.connection()
         with self._write_lock:
             connection.executescript("PRAGMA incremental_vacuum;")  # execute() would free one page per call
-        # TRUNCATE waits for readers of older snapshots (a stream may hold one for seconds, and writers would
-        # wait as long): wait briefly, and leave what remains to the next retention pass.
+        # TRUNCATE waits for older snapshots' readers (a stream's: seconds): briefly; the next retention pass retries.
         connection.execute("PRAGMA busy_timeout = 200")
         try:
             busy = connection.execute("PRAGMA wal_checkpoint(TRUNCATE)").fetchone()[0]
@@ -145,8 +146,8 @@ class Database:
 
 
 def normalise_stored(db: sqlite3.Connection, table: str, model: type[BaseModel]) -> None:
-    """Bring a table's specs to the model's JSON of today (views send them as stored), once per change of the
-    model's schema: an older spec then shows a new field's default. One that no longer validates is kept."""
+    """Rewrite a table's specs as the model's JSON of today (views send them as stored), once per schema change;
+    one that no longer validates is kept."""
     key = f"{table}.spec schema"
     schema = hashlib.sha256(json.dumps(model.model_json_schema(), sort_keys=True).encode()).hexdigest()
     if db.execute("SELECT 1 FROM service WHERE key = ? AND value = ?", (key, schema)).fetchone():
@@ -170,21 +171,9 @@ class FileGone(LookupError):
                          "upload it again")
 
 
-def _require_files(db: sqlite3.Connection, files: tuple[str, ...]) -> None:
-    """In the insert's transaction: a file the check read and a DELETE removed since is FileGone."""
-    if not files:
-        return
-    present = {row[0] for row in db.execute(f"SELECT id FROM files WHERE id IN ({', '.join('?' * len(files))})",
-                                            files)}
-    missing = next((file_id for file_id in files if file_id not in present), None)
-    if missing is not None:
-        raise FileGone(missing)
-
-
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class TaskRecord:
-    """A task's row: the lifecycle's columns, then the kind's with their values at creation as defaults.
-    Fields typed dict are JSON in the table, bool ones 0 or 1."""
+    """A task's row: the lifecycle's columns, then the kind's (defaults: values at creation; dict: JSON, bool: 0/1)."""
 
     id: str
     status: str
@@ -201,8 +190,8 @@ Record = TypeVar("Record", bound=TaskRecord)
 
 
 class TaskStore(Generic[Record]):
-    """The tasks of one kind: one table of the lifecycle's columns and the kind's own. Given a path rather
-    than a Database, the store has a database of its own."""
+    """The tasks of one kind: one table of the lifecycle's columns and the kind's own (given a path, in a
+    database of its own)."""
 
     TABLE: ClassVar[str]
     COLUMNS: ClassVar[str]  # the kind's columns in SQL: name type, ...
@@ -274,22 +263,27 @@ class TaskStore(Generic[Record]):
 
     def create(self, spec: dict[str, Any], max_queued: int | None = None, *, files: tuple[str, ...] = (),
                **columns: Any) -> Record | None:
-        """A new queued task with the kind's columns; None (nothing written) when max_queued are already queued.
-        files: the uploads the spec reads (JobSpec.uploads()), FileGone if one was deleted since its check."""
+        """A new queued task; None (nothing written) when max_queued are queued; FileGone if one of `files`, the
+        uploads the spec reads, was deleted since its check."""
         values = {"id": uuid.uuid4().hex, "status": "queued", "spec": json.dumps(spec), "created_at": now(), **columns}
         with self.db.transaction() as db:  # counted and inserted under the write lock: the bound is exact
             if max_queued is not None and db.execute(
                     f"SELECT COUNT(*) FROM {self.TABLE} WHERE status = 'queued'").fetchone()[0] >= max_queued:
                 return None
-            _require_files(db, files)
+            if files:  # the check read them; a DELETE may have removed one since
+                marks = ", ".join("?" * len(files))
+                present = {row[0] for row in db.execute(f"SELECT id FROM files WHERE id IN ({marks})", files)}
+                missing = next((file_id for file_id in files if file_id not in present), None)
+                if missing is not None:
+                    raise FileGone(missing)
             db.execute(f"INSERT INTO {self.TABLE} ({', '.join(values)}) VALUES ({', '.join('?' * len(values))})",
                        tuple(values.values()))
         return self.RECORD(**{**values, "spec": spec})  # the row as written, its JSON not parsed back
 
     def _change(self, task_id: str, expected: str, changes: str, *args: Any,
                 also: tuple[str, tuple] | None = None) -> bool:
-        """One UPDATE of the task guarded by the states it expects (SQL: "('queued')"); `also`, a statement of
-        the kind's, runs in the same transaction if it changed the task. True if it did."""
+        """One UPDATE guarded by the states expected (SQL: "('queued')"), and `also` in its transaction if it
+        changed the task. True if it did."""
         with self.db.transaction() as db:
             changed = db.execute(f"UPDATE {self.TABLE} SET {changes} WHERE id = ? AND status IN {expected}",
                                  (*args, task_id)).rowcount
@@ -299,10 +293,6 @@ class TaskStore(Generic[Record]):
 
     def claim(self, task_id: str) -> Record | None:
         """queued -> running, in one statement returning the row; None if no longer queued (cancelled)."""
-        if sqlite3.sqlite_version_info < (3, 35):  # before RETURNING: the UPDATE, then the row read back
-            claimed = self._change(task_id, "('queued')", f"status = 'running', started_at = ?, {self.PROGRESS} = 0, "
-                                   "attempts = attempts + 1", now())
-            return self.get(task_id) if claimed else None
         with self.db.transaction() as db:
             rows = db.execute(f"UPDATE {self.TABLE} SET status = 'running', started_at = ?, {self.PROGRESS} = 0, "
                               f"attempts = attempts + 1 WHERE id = ? AND status = 'queued' RETURNING {self._columns}",
@@ -313,18 +303,13 @@ class TaskStore(Generic[Record]):
         self._change(task_id, "('running')", f"{self.PROGRESS} = ?", progress)
 
     def finish(self, task_id: str, status: str, *, error: str | None = None, progress: float | None = None,
-               also: tuple[str, tuple] | None = None, unclaimed_since: str | None = None, **columns: Any) -> bool:
-        """Record the end of a run: its result in the kind's columns (a dict as JSON) and `also`; all or none.
-        True if the task changed. unclaimed_since: a quick run made without a claim, begun then: the task goes
-        from queued to its end in this one write, unless a cancel came first."""
+               also: tuple[str, tuple] | None = None, **columns: Any) -> bool:
+        """Record the end of a run, its result in the kind's columns and `also`, all or none; True if it changed."""
         assert status in FINAL_STATUSES
         values = tuple(json.dumps(value) if isinstance(value, dict) else value for value in columns.values())
         changes = (f"status = ?, error = ?, finished_at = ?, {self.PROGRESS} = COALESCE(?, {self.PROGRESS})"
                    f"{''.join(f', {name} = ?' for name in columns)}")
-        if unclaimed_since is None:
-            return self._change(task_id, UNFINISHED_SQL, changes, status, error, now(), progress, *values, also=also)
-        return self._change(task_id, "('queued')", changes + ", started_at = ?, attempts = attempts + 1", status,
-                            error, now(), progress, *values, unclaimed_since, also=also)
+        return self._change(task_id, UNFINISHED_SQL, changes, status, error, now(), progress, *values, also=also)
 
     def request_cancel(self, task_id: str) -> Record | None:
         """A queued task is cancelled at once; a running one is flagged (the runner stops it)."""

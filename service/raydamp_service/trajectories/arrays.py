@@ -13,9 +13,8 @@ __all__ = ["SAVED", "Saved", "StoredTrajectory", "TrajectoryArrays"]
 
 @dataclass(frozen=True)
 class Saved:
-    """An array a run saves per point: its name (blob column, Solution attribute, Trajectory field); width of a
-    row ("" one value, "dim" the saved coordinates, "momenta" the momentum maps, "springs" a structure's
-    springs); optional: NULL if not run."""
+    """An array a run saves per point: its name (blob column, Solution attribute, Trajectory field), its row's width
+    ("": one value, else a StoredTrajectory field: dim, momenta, springs), optional: NULL if not run."""
 
     name: str
     width: str = ""
@@ -24,8 +23,6 @@ class Saved:
 
 # In the order of the table and the JSON: adding one is a line here and a field of TrajectoryArrays and Trajectory.
 SAVED = (Saved("t"), Saved("q", "dim"), Saved("p", "dim"), Saved("energy"),
-         # each spring's force and deformation: a structure with springs (the page's force-deformation loop), and
-         # with work its hysteretic work W_h (the energy budget's)
          Saved("spring_forces", "springs", optional=True), Saved("spring_deformations", "springs", optional=True),
          Saved("hysteretic_work", "springs", optional=True),
          Saved("momentum", "momenta"),
@@ -51,10 +48,6 @@ class TrajectoryArrays:
     momentum: np.ndarray
     work: np.ndarray | None = None
     load_work: np.ndarray | None = None
-
-    @property
-    def springs(self) -> int:
-        return 0 if self.spring_forces is None else self.spring_forces.shape[1]
 
     @classmethod
     def of(cls, source: Any) -> TrajectoryArrays:

@@ -1,6 +1,5 @@
-"""A finished job's trajectory as a raydamp.Solution carrying the job's spec as its provenance, from which raydamp
-writes a file (CSV, NPZ, NetCDF: a slice of rows at a time, read from the blobs) or draws a plot.
-"""
+"""A finished job's trajectory as a raydamp.Solution with the job's spec as provenance, from which raydamp writes a
+file (CSV, NPZ, NetCDF: a slice of rows at a time, read from the blobs) or draws a plot."""
 
 from __future__ import annotations
 
@@ -21,8 +20,8 @@ from .stream import Selection, read_arrays, read_column
 
 __all__ = ["draw_plot", "events_file", "stored_solution", "write_file"]
 
-MEDIA_TYPES = {"csv": "text/csv", "npz": "application/octet-stream", "netcdf": "application/x-netcdf"}
-SUFFIXES = {"csv": ".csv", "npz": ".npz", "netcdf": ".nc"}
+FILES = {"csv": (".csv", "text/csv"), "npz": (".npz", "application/octet-stream"),
+         "netcdf": (".nc", "application/x-netcdf")}  # format -> (suffix, media type)
 
 
 def stored_solution(record, arrays: TrajectoryArrays, spec: JobSpec) -> raydamp.Solution:
@@ -34,8 +33,7 @@ def stored_solution(record, arrays: TrajectoryArrays, spec: JobSpec) -> raydamp.
 
 def write_file(record, spec: JobSpec, connection: sqlite3.Connection, stored: StoredTrajectory,
                selection: Selection, fmt: Literal["csv", "npz", "netcdf"], directory: Path) -> tuple[Path, str]:
-    """(path, media type) of the selected points written in directory by raydamp, which asks for them a slice
-    at a time, read from the blobs. spec: the record's, validated."""
+    """(path, media type) of the selected points written in directory, a slice at a time."""
     head = stored_solution(record, read_arrays(connection, stored, Selection(selection.start, selection.start + 1,
                                                                              selection.every)), spec)
 
@@ -44,15 +42,14 @@ def write_file(record, spec: JobSpec, connection: sqlite3.Connection, stored: St
         return read_column(connection, stored, column, Selection(first, selection.start + stop * selection.every,
                                                                  selection.every))
 
-    path = directory / f"trajectory{SUFFIXES[fmt]}"
-    write_solution(path, fmt, head, read, len(selection))
-    return path, MEDIA_TYPES[fmt]
+    suffix, media_type = FILES[fmt]
+    write_solution(path := directory / f"trajectory{suffix}", fmt, head, read, len(selection))
+    return path, media_type
 
 
 def events_file(record, spec: JobSpec, connection: sqlite3.Connection, stored: StoredTrajectory,
                 directory: Path) -> Path:
-    """The job's events table as CSV (name, t, direction, q_<name>..., p_<name>... at the saved coordinates),
-    written in directory. spec: the record's, validated."""
+    """The job's events table as CSV (name, t, direction, q_<name>..., p_<name>...), written in directory."""
     head = stored_solution(record, read_arrays(connection, stored, Selection(0, 1, 1)), spec)
     names, rows = events_csv(head)
     path = directory / "events.csv"
@@ -62,8 +59,7 @@ def events_file(record, spec: JobSpec, connection: sqlite3.Connection, stored: S
 
 def draw_plot(record, arrays: TrajectoryArrays, spec: JobSpec, kind: str,
               options: dict) -> tuple[str | None, bytes | None]:
-    """(None, the PNG) of a stored trajectory's plot, or (raydamp's refusal, None) for one this run cannot have.
-    Run in a check process (CheckPool.plot)."""
+    """(None, the PNG), or (raydamp's refusal, None) for a plot this run cannot have; in a check process."""
     try:
         return None, stored_solution(record, arrays, spec).plot.png(kind, **options)
     except ValueError as error:

@@ -17,8 +17,7 @@ from .arrays import SAVED, StoredTrajectory, TrajectoryArrays
 
 __all__ = ["FetchLease", "Selection", "read_arrays", "read_column", "trajectory_chunks"]
 
-# floats read per piece. Small: json.dumps holds the GIL (and so the event loop) for a whole piece
-CHUNK_BYTES = 1 << 16
+CHUNK_BYTES = 1 << 16  # read per piece; small: json.dumps holds the GIL (and the event loop) for a piece
 _ROW_READ_LIMIT = 1 << 16  # bytes of one read of a blob
 
 
@@ -38,8 +37,7 @@ class FetchLease:
         if directory is not None:
             shutil.rmtree(directory, ignore_errors=True)
 
-    def __del__(self) -> None:
-        # A client gone before the first byte: neither the body nor the background task runs.
+    def __del__(self) -> None:  # a client gone before the first byte: neither body nor background task runs
         self.release()
 
 
@@ -58,8 +56,7 @@ _BY_NAME = {array.name: array for array in SAVED}
 
 def read_column(connection: sqlite3.Connection, stored: StoredTrajectory, column: str,
                 selection: Selection) -> np.ndarray:
-    """One array's selected rows, (points,) for t, energy, work and load work, else (points, width); a part of the
-    blob is read, never the whole of it."""
+    """One array's selected rows, (points,) or (points, width), read from a part of its blob."""
     array = _BY_NAME[column]
     width, n = stored.width(array), len(selection)
     if width == 0 or n == 0:

@@ -9,7 +9,9 @@
 // project" is the exact flow of P eps D M^{-1} on the tangent space, and an OU flow's Gaussian, projected,
 // has the covariance kT P M: the constrained Boltzmann law of p. For a general constant D it is the exact
 // flow of the frozen-q operator eps D M^{-1} followed by the projection: consistent, order 2 in the
-// symmetric tables, not the exact projected flow.
+// symmetric tables, not the exact projected flow. Dashpots (D(q) = sum c_i grad g_i grad g_i^T) take the
+// exact flow of P eps D M^{-1} instead (projected_dampers.hpp); rks's Runge-Kutta step of kick+damp stays
+// the free one, then the projection.
 //
 // The drift's Newton starts as SHAKE's chord iteration, with S = G(q0) M^{-1} G(q0)^T factored at q0
 // (where the previous sub-flows left it, so usually already factored). Its contraction per iteration is
@@ -30,6 +32,7 @@
 
 #include "raydamp/constraints/constraint_set.hpp"
 #include "raydamp/constraints/hook.hpp"
+#include "raydamp/damping/damper_damping.hpp"
 #include "raydamp/damping/isotropic_damping.hpp"
 #include "raydamp/flows/exact.hpp"
 #include "raydamp/flows/runge_kutta.hpp"
@@ -245,13 +248,23 @@ bool multipliers(const Model& model, const Eigen::VectorXd& q, const Eigen::Vect
   return true;
 }
 
-// Sub-flow F of a constrained model: the constrained drift, or the free sub-flow then the projection.
+// Dashpots' damp and kick+damp: their exact flow on the tangent space (projected_dampers.hpp, which the
+// bindings of a constrained model include).
+template <class Model, int Dim, class WS>
+void projected_damper_flow(const Model& model, State<Dim>& z, double t, WS& ws, bool with_kick);
+
+// Sub-flow F of a constrained model: the constrained drift, or the free sub-flow then the projection
+// (for dashpots, the damp and kick+damp of the projected operator).
 // The Runge-Kutta sub-flows that move q (rksb's drift+damp, rk's whole field) are refused before a run
 // (the model has no free drift: catalogue.hpp, require_applicable) and never reach here.
 template <Flow F, class Model, class Tab, int Dim, class WS>
 void flow(const Model& model, const Tab& tab, State<Dim>& z, double t, WS& ws) {
+  constexpr bool dashpots = std::is_same_v<std::decay_t<decltype(model.damping)>, DamperDamping>;
   if constexpr (F == Flow::drift) {
     constraints::drift(model, z, t, ws);
+    return;
+  } else if constexpr (dashpots && (F == Flow::damp || F == Flow::kick_damp)) {
+    projected_damper_flow(model, z, t, ws, F == Flow::kick_damp);
     return;
   } else if constexpr (F == Flow::kick) {
     flows::kick(model, z, t, ws);

@@ -54,9 +54,13 @@ inline Stumpff<Real> stumpff(Real x) {
                          1.0L / 87178291200, 1.0L / 20922789888000};
   constexpr Real a3[] = {1.0L / 6, 1.0L / 120, 1.0L / 5040, 1.0L / 362880, 1.0L / 39916800, 1.0L / 6227020800,
                          1.0L / 1307674368000, 1.0L / 355687428096000};
+  // Terms up to j = top: the first left out, |x|^(top+1) / (2 top + 4)!, is below 3e-23 of the first
+  // in each range (a step short beside the orbit has a small x, and needs four).
+  const Real size = std::abs(x);
+  const int top = size < 1e-4 ? 3 : size < 1e-3 ? 4 : size < 1e-2 ? 5 : size < 0.03 ? 6 : 7;
   const Real y = -x;
-  Real c2 = a2[7], c3 = a3[7];
-  for (int j = 6; j >= 0; --j) {
+  Real c2 = a2[top], c3 = a3[top];
+  for (int j = top - 1; j >= 0; --j) {
     c2 = a2[j] + y * c2;
     c3 = a3[j] + y * c3;
   }
@@ -143,6 +147,12 @@ inline Anomaly<Real> solve_anomaly(const Orbit<Real>& o, Real t, Real v2) {
     }
     if (!std::isfinite(ds)) break;
     const Real size = std::abs(ds);
+    // Halley's error cubes each iteration: a correction below 1e-6 of s leaves one below 1e-18 of s, under
+    // the rounding of s, so the G functions need not be formed at s + ds to confirm it.
+    if (short_step && size <= 1e-6 * std::abs(s)) {
+      a.s = s + ds;
+      return a;
+    }
     // Converged: the correction is at the rounding of s, and a.* (at this s) are the G's to rounding.
     if (size <= 2.0 * eps * std::abs(s)) return a;
     s += ds;
@@ -177,12 +187,15 @@ inline void drift(double mu_, double t_, Q& q, V& v) {
     v2 += u * u;
   }
   o.r0 = std::sqrt(r2);
+  const Real ir0 = 1 / o.r0;  // x87 divisions are slow: one per radius, products after
   o.sigma0 = sigma;
-  o.beta = 2 * mu / o.r0 - v2;
+  o.beta = 2 * mu * ir0 - v2;
   // A bound orbit's flow has period 2 pi mu / beta^{3/2}: a step is the same step modulo the period,
-  // taken within half a period either way.
-  if (o.beta > 0) {
-    const Real period = 2 * 3.141592653589793238462643383279502884L * mu / (o.beta * std::sqrt(o.beta));
+  // taken within half a period either way. |t| > half the period is t^2 beta^3 > pi^2 mu^2, tested
+  // without a root (a step is almost always far shorter).
+  constexpr Real pi = 3.141592653589793238462643383279502884L;
+  if (o.beta > 0 && t * t * o.beta * o.beta * o.beta > pi * pi * mu * mu) {
+    const Real period = 2 * pi * mu / (o.beta * std::sqrt(o.beta));
     if (std::abs(t) > period / 2) t = std::remainder(t, period);
     if (t == 0) return;
   }
@@ -194,10 +207,11 @@ inline void drift(double mu_, double t_, Q& q, V& v) {
   Anomaly<Real> a;
   g_functions(o, static_cast<Real>(guess.s), a);
   if (!(std::isfinite(guess.r))) a.r = guess.r;  // not converged: NaN, which the step loop stops on
-  const Real f1 = -mu * a.g2 / o.r0;             // f - 1
+  const Real ir = 1 / a.r;
+  const Real f1 = -mu * a.g2 * ir0;              // f - 1
   const Real g = o.r0 * a.g1 + o.sigma0 * a.g2;  // g
-  const Real fdot = -mu * a.g1 / (a.r * o.r0);
-  const Real gdot1 = -mu * a.g2 / a.r;           // gdot - 1
+  const Real fdot = -mu * a.g1 * ir * ir0;
+  const Real gdot1 = -mu * a.g2 * ir;            // gdot - 1
   for (int i = 0; i < q.size(); ++i) {
     const Real qi = q[i], vi = v[i];
     q[i] = static_cast<double>(qi + (f1 * qi + g * vi));

@@ -192,7 +192,10 @@ class KinkLocator {
         if (s >= 1.0 - 1e-12) {  // none in the piece (or at its end): it stands
           commit_all(x);
           rec.on_step(x, T, a + T);
-          if (s != kinks::kNone) switch_phase(spring, upper);
+          if (s != kinks::kNone) {
+            switch_phase(spring, upper);
+            rec.restart_power(x);
+          }
           done += T;
           std::swap(d0_, d1_);
           std::swap(v0_, v1_);
@@ -211,6 +214,7 @@ class KinkLocator {
           read(x, d0_, v0_);
         }
         switch_phase(spring, upper);
+        rec.restart_power(x);
       }
     } else {
       static_cast<void>(x), static_cast<void>(t), static_cast<void>(h), static_cast<void>(ws), static_cast<void>(rec),

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -17,6 +18,12 @@
 
 namespace raydamp::materials {
 
+// Whether a return map from c to t flowed plastically: the spring was yielding at that deformation, so its
+// tangent is the post-yield one (b k; 0 for ElasticPlastic). Bouc-Wen has no elastic branch (never asked).
+inline bool flowed(const ElasticPlastic::State& c, const ElasticPlastic::State& t) { return t.plastic != c.plastic; }
+inline bool flowed(const Bilinear::State& c, const Bilinear::State& t) { return t.plastic != c.plastic; }
+inline bool flowed(const BoucWen::State&, const BoucWen::State&) { return false; }
+
 template <class Material>
 struct SpringSet {
   using State = typename Material::State;
@@ -25,6 +32,9 @@ struct SpringSet {
   mutable std::vector<State> committed, trial, saved;
   // Where kinks are located (materials/kinks.hpp): each spring's phase, and kicks that read its law.
   mutable std::vector<signed char> phase, saved_phase;
+  // Whether each spring yielded at the last kick of the last committed step (a run without kink location):
+  // the branch whose tangent a tangent-stiffness damping takes for the next step (models/structure_damping.hpp).
+  mutable std::vector<signed char> yielding, saved_yielding;
   bool phased = false;
 
   std::size_t size() const { return j.size(); }
@@ -38,7 +48,12 @@ struct SpringSet {
     saved.emplace_back();
     phase.push_back(static_cast<signed char>(initial_phase(m)));
     saved_phase.push_back(phase.back());
+    yielding.push_back(0);
+    saved_yielding.push_back(0);
   }
+
+  // Whether spring s is on a yielding branch: its phase where kinks are located, else its last step's flow.
+  bool on_yield_branch(std::size_t s) const { return phased ? phase[s] != 0 : yielding[s] != 0; }
 
   template <class Vec>
   double deformation(const Vec& q, std::size_t s) const {
@@ -115,19 +130,25 @@ struct SpringSet {
     }
   }
 
-  void commit() const { std::copy(trial.begin(), trial.end(), committed.begin()); }
+  void commit() const {
+    for (std::size_t s = 0; s < j.size(); ++s) yielding[s] = flowed(committed[s], trial[s]) ? 1 : 0;
+    std::copy(trial.begin(), trial.end(), committed.begin());
+  }
   void save() const {
     std::copy(committed.begin(), committed.end(), saved.begin());
     std::copy(phase.begin(), phase.end(), saved_phase.begin());
+    std::copy(yielding.begin(), yielding.end(), saved_yielding.begin());
   }
   void restore() const {
     std::copy(saved.begin(), saved.end(), committed.begin());
     std::copy(saved.begin(), saved.end(), trial.begin());
     std::copy(saved_phase.begin(), saved_phase.end(), phase.begin());
+    std::copy(saved_yielding.begin(), saved_yielding.end(), yielding.begin());
   }
   void reset() const {
     std::fill(committed.begin(), committed.end(), State{});
     std::fill(trial.begin(), trial.end(), State{});
+    std::fill(yielding.begin(), yielding.end(), 0);
     for (std::size_t s = 0; s < j.size(); ++s) phase[s] = static_cast<signed char>(initial_phase(material[s]));
   }
 };
@@ -186,6 +207,17 @@ struct Springs {
     for_each([on](auto& set) { set.phased = on; });
   }
   bool phased() const { return elastic_plastic.phased; }
+
+  // Bit s set where spring s (Springs' order) is on a yielding branch (at most 64 springs: the caller checks).
+  std::uint64_t yield_mask() const {
+    std::uint64_t mask = 0;
+    int bit = 0;
+    for_each([&](const auto& set) {
+      for (std::size_t s = 0; s < set.size(); ++s, ++bit)
+        if (set.on_yield_branch(s)) mask |= std::uint64_t{1} << bit;
+    });
+    return mask;
+  }
 };
 
 }  // namespace raydamp::materials

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "raydamp/constraints/constraint_set.hpp"
+#include "raydamp/constraints/dashpots.hpp"
 #include "raydamp/models/compiled_system.hpp"
 
 namespace raydamp {
@@ -22,8 +23,11 @@ struct ConstrainedSystem : CompiledSystem<Mass, Damping> {
   static constexpr const char* name = "the constrained system (SHAKE and RATTLE on g(q) = 0)";
 
   ConstraintSet constraints;
+  // With dashpot damping, what their flow on the tangent space needs (constraints/projected_dampers.hpp).
+  constraints::Dashpots dashpots;
 
-  ConstrainedSystem(Base base, ConstraintSet constraints_) : Base(std::move(base)), constraints(std::move(constraints_)) {
+  ConstrainedSystem(Base base, ConstraintSet constraints_, constraints::Dashpots dashpots_ = {})
+      : Base(std::move(base)), constraints(std::move(constraints_)), dashpots(std::move(dashpots_)) {
     if (constraints.n != this->n) throw std::invalid_argument("constraints: made for another number of coordinates");
     // 3s's fused body (a dashpot's) has no constraint hook.
     this->functions.damp_then_3s_body = CompiledFunction{};

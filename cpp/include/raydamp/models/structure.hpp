@@ -6,6 +6,9 @@
 // modal or sparse Chebyshev flows serve unchanged); its cost is a spurious damping force beta k_s r_s d_s'
 // in a spring that has yielded, which a tangent-stiffness damping would drop.
 //
+// damping_stiffness = "tangent" damps with alpha M + beta K_t instead, K_t the springs' tangent on their
+// branches, each branch's flows exact (models/structure_damping.hpp).
+//
 // The springs are read in the kick at the kick's q, each return map exact for the increment from the
 // committed state; the step loop commits once per full step (materials/commit.hpp). A run steps its own
 // copy with fresh material states (fresh_run), so one model serves concurrent runs.
@@ -15,6 +18,7 @@
 
 #include "raydamp/materials/springs.hpp"
 #include "raydamp/models/linear_structure.hpp"
+#include "raydamp/models/structure_damping.hpp"
 
 namespace raydamp {
 
@@ -55,12 +59,41 @@ struct Structure : LinearStructure<Mass> {
   static constexpr bool linear_system = false;
 
   materials::Springs springs;
+  // Hides LinearStructure's damping from the step loop: the same initial damping, or the tangent one, which
+  // reads the springs' branches (attached again on every copy, so each run's copy reads its own springs).
+  StructureDamping<Mass> damping;
 
   Structure(Mass mass_, const SparseColMajor& k, materials::Springs springs_, const Eigen::VectorXd& f, double alpha,
-            double beta, int dense_limit = kMaxDenseDim)
+            double beta, int dense_limit = kMaxDenseDim, bool tangent_damping = false)
       : Base(std::move(mass_), detail::initial_stiffness(k, springs_, static_cast<int>(k.rows())), f, alpha, beta,
              dense_limit),
-        springs(std::move(springs_)) {}
+        springs(std::move(springs_)),
+        damping(Base::damping) {
+    damping.attach(&springs);
+    if (tangent_damping) {
+      const Eigen::MatrixXd k0 = Base::dense_stiffness ? *Base::dense_stiffness
+                                                       : Eigen::MatrixXd(SparseColMajor(*Base::stiffness));
+      damping.use_tangent(Eigen::MatrixXd(Base::mass.matrix()), k0);
+    }
+  }
+  Structure(const Structure& o) : Base(o), springs(o.springs), damping(o.damping) { damping.attach(&springs); }
+  Structure(Structure&& o) noexcept : Base(std::move(o)), springs(std::move(o.springs)), damping(std::move(o.damping)) {
+    damping.attach(&springs);
+  }
+  Structure& operator=(const Structure& o) {
+    Base::operator=(o);
+    springs = o.springs;
+    damping = o.damping;
+    damping.attach(&springs);
+    return *this;
+  }
+  Structure& operator=(Structure&& o) noexcept {
+    Base::operator=(std::move(o));
+    springs = std::move(o.springs);
+    damping = std::move(o.damping);
+    damping.attach(&springs);
+    return *this;
+  }
 
   // A copy of this structure with every material in its virgin state: what a run steps.
   Structure fresh_run() const {

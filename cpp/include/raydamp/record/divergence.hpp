@@ -86,11 +86,11 @@ class DivergenceGuard {
     T_ = kinetic(p_);
     V_ = model_.potential(model_.model, q_);
     const double H = T_ + V_;
+    scale_ = base_ + (t * F_) * (t * F_);  // before the return below: message() reports it either way
     // +inf: T or V overflowed while the state did not. NaN: a user's function failed (that run stops
     // non_finite at its next step, with the function's message); -inf: a fall into a singular potential.
     if (!std::isfinite(H)) return H == std::numeric_limits<double>::infinity();
     const double excess = H - h0_;
-    scale_ = base_ + (t * F_) * (t * F_);
     return excess > factor_ * scale_ && excess > 0.5 * (T_ + std::abs(V_));
   }
 

@@ -109,6 +109,15 @@ class Recorder {
     }
   }
 
+  // Where the damping changes while the state does not (a spring changing phase under tangent-stiffness
+  // damping), the next trapezoid starts from the power on the new branch: from the old one, the work would
+  // be O(h) off at every yield and unloading.
+  void restart_power(const State<Dim>& x) {
+    if constexpr (Trapezoid) {
+      if (track_) power_ = dissipated_power(model_, x, ws_);
+    }
+  }
+
   Marks marks() const { return {ws_.work, power_, ws_.load_work, power_f_}; }
   void restore(const Marks& m) {
     ws_.work = m.work;

@@ -3,7 +3,10 @@ it back).
 
 The Dataset has dims (time, dof) and (time, momentum_map): variables q, p, energy, momentum and,
 when recorded, work; coordinates t (time), dof (the coordinate names) and momentum_map (the
-momentum maps' names). attrs hold the run's status and scalars, and ``provenance``: the job
+momentum maps' names). A Structure with springs adds dims (time, spring): spring_forces and
+spring_deformations, and with work hysteretic_work, springs in the Structure's order; the coordinates
+spring_i and spring_j give each spring's coordinates (d = q[spring_j] - q[spring_i], spring_i = -1 to
+the ground). attrs hold the run's status and scalars, and ``provenance``: the job
 JSON that produced it (model or system, initial state, method, step size, span) and the
 raydamp version, as a JSON string (NetCDF attributes are flat).
 """
@@ -15,10 +18,16 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["to_xarray", "event_columns", "events_csv", "FORMATS"]
+__all__ = ["to_xarray", "event_columns", "events_csv", "FORMATS", "SPRING_ARRAYS"]
 
 FORMATS = (".nc", ".npz", ".csv")
 _FORMAT_OF_SUFFIX = dict(zip(FORMATS, ("netcdf", "npz", "csv")))
+# A structure's per-spring arrays (time, spring), with each one's long name and its CSV columns' prefix.
+SPRING_ARRAYS = {
+    "spring_forces": ("spring force sigma_s (from that row's material state)", "spring_force"),
+    "spring_deformations": ("spring deformation d_s = q_j - q_i (q_j to the ground)", "spring_deformation"),
+    "hysteretic_work": ("hysteretic work W_h,s(t) = int sigma_s dd_s - stored_s(t)", "hysteretic_work"),
+}
 _SCALARS = ("status", "steps", "failed_step", "message", "method", "tableau", "composition", "h", "max_momentum_drift",
             "wall_time")
 
@@ -60,9 +69,43 @@ def to_xarray(sol: Any):
         data["multipliers"] = (("time", "constraint"), sol.multipliers, {
             "long_name": "constraint multipliers lambda: the constraint force on the coordinates is -G(q)^T lambda"})
         coords["constraint"] = np.arange(sol.multipliers.shape[1])
+    springs = _spring_width(sol)
+    if springs is not None:
+        for name, (long_name, _) in SPRING_ARRAYS.items():
+            if getattr(sol, name, None) is not None:
+                data[name] = (("time", "spring"), getattr(sol, name), {"long_name": long_name})
+        coords["spring"] = np.arange(springs)
+        ends = spring_coordinates(sol)
+        if ends is not None:
+            coords["spring_i"] = (("spring",), ends[0], {"long_name": "d = q[spring_j] - q[spring_i]; -1: the ground"})
+            coords["spring_j"] = (("spring",), ends[1])
     for name, (dims, values, attrs) in event_columns(sol).items():
         data[name] = (dims, values, attrs)
     return xr.Dataset(data, coords=coords, attrs=_attributes(sol))
+
+
+def _spring_width(sol: Any) -> int | None:
+    """The number of springs whose arrays the solution holds, or None (no springs, or not kept)."""
+    for name in SPRING_ARRAYS:
+        values = getattr(sol, name, None)
+        if values is not None:
+            return int(values.shape[1])
+    return None
+
+
+def spring_coordinates(sol: Any) -> tuple[np.ndarray, np.ndarray] | None:
+    """Each spring's coordinates (i, j), i = -1 for a spring to the ground, in the Structure's order: from the
+    run's model, or from the provenance's springs (a solution read back); None where neither names them."""
+    if isinstance(sol.origin, tuple):
+        springs = [s.dofs for s in getattr(sol.origin[0], "springs", ())]
+    else:
+        system = (sol.provenance or {}).get("system")
+        listed = system.get("springs") if isinstance(system, dict) else None
+        springs = [s.get("dofs") for s in listed or () if isinstance(s, dict)]
+    if not springs or len(springs) != _spring_width(sol) or not all(isinstance(d, (list, tuple)) for d in springs):
+        return None
+    first = np.array([int(d[0]) if len(d) == 2 else -1 for d in springs], dtype=np.int64)
+    return first, np.array([int(d[-1]) for d in springs], dtype=np.int64)
 
 
 def event_columns(sol: Any) -> dict[str, tuple[tuple[str, ...], np.ndarray, dict[str, str]]]:
@@ -118,4 +161,9 @@ def _csv_table(sol: Any) -> tuple[list[str], np.ndarray]:
     if getattr(sol, "multipliers", None) is not None:
         names.extend(f"multiplier_{i}" for i in range(sol.multipliers.shape[1]))
         columns.append(sol.multipliers)
+    for name, (_, prefix) in SPRING_ARRAYS.items():
+        values = getattr(sol, name, None)
+        if values is not None:
+            names.extend(f"{prefix}_{s}" for s in range(values.shape[1]))
+            columns.append(values)
     return names, np.hstack(columns)

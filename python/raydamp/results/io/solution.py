@@ -9,7 +9,7 @@ import numpy as np
 
 from ..event_table import EventTable
 from ..solution import Solution
-from .dataset import _SCALARS, FORMATS, to_xarray
+from .dataset import _SCALARS, FORMATS, SPRING_ARRAYS, to_xarray
 
 __all__ = ["from_xarray", "from_npz", "to_xarray", "FORMATS"]
 
@@ -23,6 +23,7 @@ def from_xarray(ds) -> Solution:
                     work=np.asarray(ds["work"].values, float) if "work" in ds else None, origin=provenance,
                     load_work=np.asarray(ds["load_work"].values, float) if "load_work" in ds else None,
                     multipliers=np.asarray(ds["multipliers"].values, float) if "multipliers" in ds else None,
+                    **{name: np.asarray(ds[name].values, float) for name in SPRING_ARRAYS if name in ds},
                     dofs=_dofs(provenance), events=_events(ds, ds.attrs), **_scalars_from(dict(ds.attrs)))
 
 
@@ -37,6 +38,7 @@ def from_npz(path) -> Solution:
                         work=data["work"] if "work" in data else None, origin=provenance,
                         load_work=data["load_work"] if "load_work" in data else None,
                         multipliers=data["multipliers"] if "multipliers" in data else None,
+                        **{name: data[name] for name in SPRING_ARRAYS if name in data},
                         dofs=_dofs(provenance), events=_events(data, attrs), **_scalars_from(attrs))
 
 

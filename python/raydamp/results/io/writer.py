@@ -5,10 +5,11 @@ from its database a slice at a time, so a 960 MB trajectory is written in bounde
 F3: four downloads read whole took the service past 6 GB). The formats:
 
 - CSV: a header line (t, q_<name>..., p_<name>..., energy, the momentum maps' names, work,
-  load_work, multiplier_<i>...), then one line per row, every number as ``%.17g`` (it reads back to
-  the same double).
+  load_work, multiplier_<i>..., spring_force_<s>..., spring_deformation_<s>..., hysteretic_work_<s>...),
+  then one line per row, every number as ``%.17g`` (it reads back to the same double).
 - NPZ: ``np.savez``'s layout (a zip of .npy members t, q, p, energy, momentum, [work], [load_work],
-  [multipliers] (a constrained System's, rows x constraints), and ``attrs``, the scalars and provenance
+  [multipliers] (a constrained System's, rows x constraints), [spring_forces], [spring_deformations],
+  [hysteretic_work] (a Structure's with springs, rows x springs), and ``attrs``, the scalars and provenance
   as JSON); each member's data is written a slice at a time after its header, which states the full shape.
 - NetCDF: ``Solution.to_xarray``'s Dataset; from a reader, the Dataset of the first slice with ``time``
   unlimited and each further slice appended along it (from arrays in memory, the whole Dataset at once).
@@ -26,30 +27,32 @@ from typing import IO, Any
 
 import numpy as np
 
-from .dataset import _FORMAT_OF_SUFFIX, FORMATS, _attributes, _csv_table, event_columns, to_xarray
+from .dataset import _FORMAT_OF_SUFFIX, FORMATS, SPRING_ARRAYS, _attributes, _csv_table, event_columns, to_xarray
 
 __all__ = ["write_solution", "save", "SLICE_BYTES", "WRITE_FORMATS", "ReadRows"]
 
 SLICE_BYTES = 4 << 20  # floats read and written at once
 WRITE_FORMATS = ("csv", "npz", "netcdf")
 # read(column, start, stop): rows [start, stop) of one column of the trajectory; column is one of
-# t, energy, work, load_work ((rows,) arrays) or q, p, momentum ((rows, width) arrays).
+# t, energy, work, load_work ((rows,) arrays) or q, p, momentum, multipliers, spring_forces,
+# spring_deformations, hysteretic_work ((rows, width) arrays).
 ReadRows = Callable[[str, int, int], np.ndarray]
 Target = str | os.PathLike | IO[bytes]
 
-_WIDE = ("q", "p", "momentum", "multipliers")
+_WIDE = ("q", "p", "momentum", "multipliers", *SPRING_ARRAYS)
 
 
 def _columns(head: Any) -> list[str]:
     """The stored columns in the order every format writes them (np.savez's member order)."""
     return (["t", "q", "p", "energy", "momentum"] + (["work"] if head.work is not None else [])
             + (["load_work"] if head.load_work is not None else [])
-            + (["multipliers"] if getattr(head, "multipliers", None) is not None else []))
+            + (["multipliers"] if getattr(head, "multipliers", None) is not None else [])
+            + [name for name in SPRING_ARRAYS if getattr(head, name, None) is not None])
 
 
 def _width(head: Any, column: str) -> int | None:
-    if column == "multipliers":
-        return head.multipliers.shape[1]
+    if column == "multipliers" or column in SPRING_ARRAYS:
+        return getattr(head, column).shape[1]
     return {"q": head.q.shape[1], "p": head.p.shape[1], "momentum": head.momentum.shape[1]}.get(column)
 
 

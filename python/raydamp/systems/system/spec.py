@@ -261,9 +261,6 @@ def _constraints(value, n: int, names, damping_form) -> tuple[Expression, ...]:
         raise SpecError(path, f"at most {MAX_CONSTRAINTS} constraints, got {len(value)}")
     if len(value) >= n:
         raise SpecError(path, f"{len(value)} constraints on {n} coordinates leave no motion; give fewer than {n}")
-    if damping_form == "dampers":
-        raise SpecError(path, "constraints with dashpot damping are not supported yet; give damping as scalar, "
-                              "diagonal or matrix")
     out = []
     for i, text in enumerate(value):
         expr = _expression(path + (i,), text, names)

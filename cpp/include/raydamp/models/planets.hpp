@@ -1,0 +1,260 @@
+// Interacting planets around a central body, in Jacobi coordinates, with drag on chosen planets.
+//
+// Bodies 0 (the central body, mass m_0) and 1..N (planets, m_i), gravitational constant G. With
+// eta_i = m_0 + ... + m_i, Jacobi coordinates put planet i relative to the centre of mass of the bodies
+// inside it: Q_i = x_i - X_{i-1}, X_{i-1} = (m_0 x_0 + ... + m_{i-1} x_{i-1}) / eta_{i-1}, and
+// P_i = m'_i dQ_i/dt with the reduced mass m'_i = m_i eta_{i-1} / eta_i. The transformation is linear and
+// point-wise, so (Q, P) are canonical, and with the centre of mass at rest (dropped from the state)
+//   H = sum_i |P_i|^2 / (2 m'_i) + V(x(Q)),   V = -sum_{j<k} G m_j m_k / |x_j - x_k|.
+// Wisdom & Holman (1991) split H = H_kepler + H_interaction with
+//   H_kepler = sum_i |P_i|^2 / (2 m'_i) - G m_i eta_{i-1} / |Q_i|   (a Kepler problem per planet,
+//              mu_i = G m_i eta_{i-1} / m'_i = G eta_i),
+//   H_interaction = V(x(Q)) + sum_i G m_i eta_{i-1} / |Q_i|         (a function of Q alone).
+// Jacobi rather than democratic heliocentric coordinates because this is a two-part split, a drift and
+// a kick, which is what 3s, 2s and their compositions step; democratic heliocentric coordinates add a
+// third part, |sum P|^2 / (2 m_0), a flow of Q by the momenta that is neither.
+//
+// Drag: planet i's Jacobi momentum decays at its own rate, P_i' = ... - eps_i P_i (D = M, A diagonal):
+// in the inertial frame that is the force -eps_i P_i on planet i and +eps_i P_i m_j / eta_{i-1} on each
+// inner body j (drag relative to the inner bodies' centre of mass, the total momentum kept). For the
+// innermost planet it is drag on the heliocentric velocity, its reaction on the central body.
+// The exact damping flow scales each planet's block of P by e^{-t eps_i}.
+//
+// `gradient` is the kick's force, grad H_interaction; `potential` the whole V, so the recorded energy is H.
+#pragma once
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "raydamp/damping/decay_factors.hpp"
+#include "raydamp/flows/kepler.hpp"
+#include "raydamp/state.hpp"
+#include "raydamp/thread_scratch.hpp"
+
+namespace raydamp {
+
+// M = diag(m'_i I_d): each planet's block has its reduced mass.
+struct JacobiMass {
+  Eigen::VectorXd m, inverse;  // per coordinate
+
+  template <class P, class V>
+  void velocity(const P& p, V& v) const { v.noalias() = inverse.cwiseProduct(p); }
+  template <class X, class P>
+  void add_root_product(double c, const X& x, P& p) const { p += c * m.cwiseSqrt().cwiseProduct(x); }
+  template <class P>
+  double kinetic(const P& p) const { return 0.5 * p.cwiseProduct(inverse).dot(p); }
+};
+
+// A = diag(eps_i I_d): planet i's momentum decays at eps_i.
+struct PlanetDrag {
+  std::vector<double> rates;  // per planet
+  int d = 2;
+
+  struct Factors {
+    double t = std::numeric_limits<double>::quiet_NaN();
+    std::vector<DecayFactors> planet;  // one per planet
+  };
+  Factors factors(double t) const {
+    Factors f;
+    f.t = t;
+    f.planet.reserve(rates.size());
+    for (double a : rates) f.planet.push_back(decay_factors(a, t));
+    return f;
+  }
+  double spectral_radius() const { return rates.empty() ? 0.0 : *std::max_element(rates.begin(), rates.end()); }
+  // With one rate for every planet, L = sum Q_i x P_i decays as e^{-eps t} under the exact flow.
+  double momentum_decay_rate() const { return rates.front(); }
+  bool uniform() const {
+    return std::all_of(rates.begin(), rates.end(), [this](double a) { return a == rates.front(); });
+  }
+
+  template <class Q, class P>
+  void decay(const Q&, const Factors& f, P& p) const {
+    for (std::size_t i = 0; i < rates.size(); ++i) p.segment(d * i, d) *= f.planet[i].exp;
+  }
+  template <class Q, class G, class P>
+  void decay_affine(const Q&, const Factors& f, const G& g, P& p) const {
+    for (std::size_t i = 0; i < rates.size(); ++i) {
+      const DecayFactors& k = f.planet[i];
+      p.segment(d * i, d) = k.exp * p.segment(d * i, d) - k.t_phi1 * g.segment(d * i, d);
+    }
+  }
+  // Noise of the exact OU flow per planet: covariance kT (1 - e^{-2 t eps_i}) m'_i per coordinate.
+  template <class Q, class Mass, class X, class P>
+  void add_noise(const Q&, const Factors& f, const Mass& mass, double sigma, const X& xi, P& p) const {
+    for (std::size_t i = 0; i < rates.size(); ++i)
+      for (int j = 0; j < d; ++j) {
+        const int k = d * static_cast<int>(i) + j;
+        p[k] += sigma * f.planet[i].noise * std::sqrt(mass.m[k]) * xi[k];
+      }
+  }
+  template <class Q, class P, class O>
+  void rate(const Q&, const P& p, O& out) const {
+    for (std::size_t i = 0; i < rates.size(); ++i) out.segment(d * i, d) = rates[i] * p.segment(d * i, d);
+  }
+  template <class Q, class X>
+  void solve_shifted(const Q&, double c, X& x) const {
+    for (std::size_t i = 0; i < rates.size(); ++i) x.segment(d * i, d) /= 1.0 + c * rates[i];
+  }
+};
+
+struct Planets {
+  static constexpr const char* name = "planets";
+  static constexpr int dim = Eigen::Dynamic;
+  static constexpr int n_momenta = -1;  // kDynamicMomenta: the angular momentum when the drag is uniform
+  using Vec = Vector<dim>;
+  static constexpr bool free_drift = false;  // the drift is the Kepler flow (catalogue.hpp)
+
+  double G;
+  int d;
+  int planets;
+  std::vector<double> masses;  // m_0 (the central body), m_1..m_N
+  std::vector<double> eta;     // eta_i = m_0 + ... + m_i
+  std::vector<double> mu;      // per planet, G eta_i
+  double eps;                  // the largest drag rate (0: no drag; the methods that ignore damping check it)
+  JacobiMass mass;
+  PlanetDrag damping;
+
+  Planets(double G_, double central, std::vector<double> planet_masses, int d_, std::vector<double> drag)
+      : G(G_), d(d_), planets(static_cast<int>(planet_masses.size())) {
+    if (!(G > 0.0) || !std::isfinite(G)) throw std::invalid_argument("G: must be a finite number > 0");
+    if (!(central > 0.0) || !std::isfinite(central))
+      throw std::invalid_argument("central_mass: must be a finite number > 0");
+    if (d != 2 && d != 3) throw std::invalid_argument("dim: must be 2 or 3");
+    if (planets < 1) throw std::invalid_argument("masses: at least one planet");
+    for (int i = 0; i < planets; ++i)
+      if (!(planet_masses[i] > 0.0) || !std::isfinite(planet_masses[i]))
+        throw std::invalid_argument("masses[" + std::to_string(i) + "]: must be a finite number > 0");
+    if (static_cast<int>(drag.size()) != planets)
+      throw std::invalid_argument("eps: expected one drag rate per planet (" + std::to_string(planets) + ")");
+    for (int i = 0; i < planets; ++i)
+      if (!(drag[i] >= 0.0) || !std::isfinite(drag[i]))
+        throw std::invalid_argument("eps[" + std::to_string(i) + "]: must be finite and >= 0");
+    masses.push_back(central);
+    masses.insert(masses.end(), planet_masses.begin(), planet_masses.end());
+    eta.push_back(central);
+    for (int i = 1; i <= planets; ++i) eta.push_back(eta.back() + masses[i]);
+    mass.m.resize(d * planets);
+    for (int i = 1; i <= planets; ++i) {
+      mu.push_back(G * eta[i]);
+      mass.m.segment(d * (i - 1), d).setConstant(masses[i] * eta[i - 1] / eta[i]);
+    }
+    mass.inverse = mass.m.cwiseInverse();
+    damping.rates = std::move(drag);
+    damping.d = d;
+    eps = damping.spectral_radius();
+  }
+
+  int size() const { return d * planets; }
+  int momentum_count() const { return damping.uniform() ? (d == 2 ? 1 : 3) : 0; }
+
+  // Positions relative to the central body, x_0 = 0, from Jacobi Q: x_i = X_{i-1} + Q_i with
+  // X_i = X_{i-1} + (m_i / eta_i) Q_i (the inner centre of mass, relative to body 0).
+  template <class Out>
+  void heliocentric(const Vec& q, Out& x) const {
+    double centre[3] = {0.0, 0.0, 0.0};
+    for (int j = 0; j < d; ++j) x[j] = 0.0;
+    for (int i = 1; i <= planets; ++i) {
+      const double w = masses[i] / eta[i];
+      for (int j = 0; j < d; ++j) {
+        const double qi = q[d * (i - 1) + j];
+        x[d * i + j] = centre[j] + qi;
+        centre[j] += w * qi;
+      }
+    }
+  }
+
+  double potential(const Vec& q) const {
+    Eigen::VectorXd& x = thread_scratch(kScratchT0, d * (planets + 1));
+    heliocentric(q, x);
+    double v = 0.0;
+    for (int a = 0; a <= planets; ++a)
+      for (int b = a + 1; b <= planets; ++b) v -= G * masses[a] * masses[b] / (x.segment(d * b, d) - x.segment(d * a, d)).norm();
+    return v;
+  }
+
+  // grad_Q H_interaction. The inertial accelerations a_j of every body, turned into Jacobi ones,
+  // A_i = a_i - (m_0 a_0 + ... + m_{i-1} a_{i-1}) / eta_{i-1}, are Q_i'' under V; less the Kepler part
+  // -mu_i Q_i / |Q_i|^3 they are the interaction's, and grad_{Q_i} H_interaction = -m'_i (A_i + mu_i Q_i / |Q_i|^3).
+  // For one planet the two cancel: no kick.
+  void gradient(const Vec& q, Vec& g) const {
+    Eigen::VectorXd& x = thread_scratch(kScratchT0, d * (planets + 1));
+    Eigen::VectorXd& a = thread_scratch(kScratchT1, d * (planets + 1));
+    heliocentric(q, x);
+    a.setZero();
+    for (int j = 0; j <= planets; ++j)
+      for (int k = j + 1; k <= planets; ++k) {
+        double r2 = 0.0;
+        for (int c = 0; c < d; ++c) {
+          const double dx = x[d * k + c] - x[d * j + c];
+          r2 += dx * dx;
+        }
+        const double inv3 = G / (r2 * std::sqrt(r2));
+        for (int c = 0; c < d; ++c) {
+          const double dx = (x[d * k + c] - x[d * j + c]) * inv3;
+          a[d * j + c] += masses[k] * dx;
+          a[d * k + c] -= masses[j] * dx;
+        }
+      }
+    double sum[3] = {0.0, 0.0, 0.0};  // m_0 a_0 + ... + m_{i-1} a_{i-1}
+    for (int c = 0; c < d; ++c) sum[c] = masses[0] * a[c];
+    for (int i = 1; i <= planets; ++i) {
+      const int k = d * (i - 1);
+      double r2 = 0.0;
+      for (int c = 0; c < d; ++c) r2 += q[k + c] * q[k + c];
+      const double kepler = mu[i - 1] / (r2 * std::sqrt(r2));
+      for (int c = 0; c < d; ++c) {
+        const double jacobi = a[d * i + c] - sum[c] / eta[i - 1];
+        g[k + c] = -mass.m[k] * (jacobi + kepler * q[k + c]);
+        sum[c] += masses[i] * a[d * i + c];
+      }
+    }
+  }
+  void hessian_product(const Vec&, const Vec&, Vec&) const {
+    throw std::invalid_argument("hessian_product: not provided for planets (the sv modified energy it serves is that "
+                                "of a kinetic + potential split, and this kind's split is Kepler + interaction)");
+  }
+
+  // The total angular momentum, sum_i Q_i x P_i (the Jacobi map is a point transformation, so this is
+  // the barycentric one), listed when every planet has the same drag (then L(t) = L(0) e^{-eps t}).
+  void momenta(const Vec& q, const Vec& p, double* out) const {
+    if (!damping.uniform()) return;
+    if (d == 2) {
+      double lz = 0.0;
+      for (int i = 0; i < planets; ++i) lz += q[2 * i] * p[2 * i + 1] - q[2 * i + 1] * p[2 * i];
+      out[0] = lz;
+      return;
+    }
+    out[0] = out[1] = out[2] = 0.0;
+    for (int i = 0; i < planets; ++i) {
+      const int k = 3 * i;
+      out[0] += q[k + 1] * p[k + 2] - q[k + 2] * p[k + 1];
+      out[1] += q[k + 2] * p[k] - q[k] * p[k + 2];
+      out[2] += q[k] * p[k + 1] - q[k + 1] * p[k];
+    }
+  }
+
+  // H_kepler's exact flow: each planet's Kepler flow with mu_i = G eta_i.
+  void drift(Vec& q, Vec& p, double t) const {
+    for (int i = 0; i < planets; ++i) {
+      const int k = d * i;
+      const double m = mass.m[k], inverse = mass.inverse[k];
+      if (d == 2) {
+        Eigen::Vector2d x(q[k], q[k + 1]), v(inverse * p[k], inverse * p[k + 1]);
+        kepler::drift(mu[i], t, x, v);
+        for (int j = 0; j < 2; ++j) q[k + j] = x[j], p[k + j] = m * v[j];
+      } else {
+        Eigen::Vector3d x(q[k], q[k + 1], q[k + 2]), v(inverse * p[k], inverse * p[k + 1], inverse * p[k + 2]);
+        kepler::drift(mu[i], t, x, v);
+        for (int j = 0; j < 3; ++j) q[k + j] = x[j], p[k + j] = m * v[j];
+      }
+    }
+  }
+};
+
+}  // namespace raydamp
