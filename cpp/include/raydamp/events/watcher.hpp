@@ -53,8 +53,8 @@ class EventWatcher {
         dense_(spec.dense ? &result.dense : nullptr), log_(result.events), on_(set_ != nullptr || spec.dense) {
     if (!on_) return;
     n_ = model.n;
-    for (Vec* v : {&q0_, &p0_, &v0_, &f0_, &q1_, &p1_, &v1_, &f1_, &grad_, &rate_, &fa_, &fb_, &land_q_,
-                   &land_p_})
+    for (Vec* v : {&q_[0], &p_[0], &v_[0], &f_[0], &q_[1], &p_[1], &v_[1], &f_[1], &grad_, &rate_, &fa_, &fb_,
+                   &land_q_, &land_p_})
       v->setZero(n_);
     log_.n = n_;
     forces_ = spec.dense;
@@ -118,12 +118,12 @@ class EventWatcher {
   template <int Dim, class Rec, class Restep>
   long finish(State<Dim>& z, Rec& rec, const Restep& restep) {
     if (t_stop_ == t1_) {  // on the step's end: the stepped state itself
-      z.q = q1_;
-      z.p = p1_;
+      z.q = q1();
+      z.p = p1();
       return step_ + 1;
     }
-    z.q = q0_;
-    z.p = p0_;
+    z.q = q0();
+    z.p = p0();
     rec.restore(marks0_);
     restep(z, step_, t_stop_ - t0_);
     if (dense_) {
@@ -161,30 +161,40 @@ class EventWatcher {
     if (i <= step_ || !x.all_finite()) return;
     shift(i);
     t1_ = t;
-    put<Dim>(q1_, x.q);
-    put<Dim>(p1_, x.p);
+    put<Dim>(q1(), x.q);
+    put<Dim>(p1(), x.p);
     using MVec = typename Model::Vec;
     if constexpr (std::is_same_v<MVec, Vec>) {
-      model.mass.velocity(x.p, v1_);
+      model.mass.velocity(x.p, v1());
       if (forces_) {
         model.gradient(x.q, grad_);
         model.damping.rate(x.q, x.p, rate_);
-        f1_ = -(grad_ + rate_);
+        f1() = -(grad_ + rate_);
+        if (load_ && !load_->empty()) load_->add(t, 1.0, f1().data());
       }
+      after_read(t, {q1().data(), p1().data(), v1().data(), f1().data()});
     } else {
-      MVec v = MVec::Zero(x.p.size());
+      // g is read from these locals (the model's fixed size, in registers), not back from the
+      // run-time-size vectors just written.
+      MVec v = MVec::Zero(x.p.size()), f = MVec::Zero(x.p.size());
       model.mass.velocity(x.p, v);
-      put<Dim>(v1_, v);
+      put<Dim>(v1(), v);
       if (forces_) {
         MVec grad = MVec::Zero(x.q.size()), rate = MVec::Zero(x.q.size());
         model.gradient(x.q, grad);
         model.damping.rate(x.q, x.p, rate);
-        put<Dim>(f1_, -(grad + rate));
+        f = -(grad + rate);
+        if (load_ && !load_->empty()) load_->add(t, 1.0, f.data());
+        put<Dim>(f1(), f);
       }
+      after_read(t, {x.q.data(), x.p.data(), v.data(), f.data()});
     }
-    if (forces_ && load_ && !load_->empty()) load_->add(t, 1.0, f1_.data());
-    after_read(t);
   }
+
+  // The step's end as raw values (q, p, v, f: the observer's vectors, or the model's own at a fixed size).
+  struct End {
+    const double *q, *p, *v, *f;
+  };
 
   // from into to (of size n): for a fixed n, a copy of that size, without a run-time size's checks.
   template <int Dim, class E>
@@ -193,12 +203,19 @@ class EventWatcher {
     else Eigen::Map<Eigen::Matrix<double, Dim, 1>>(to.data()) = from;
   }
 
+  // The step's start (0) and end (1).
+  Vec& q0() { return q_[end_ ^ 1]; }
+  Vec& p0() { return p_[end_ ^ 1]; }
+  Vec& v0() { return v_[end_ ^ 1]; }
+  Vec& f0() { return f_[end_ ^ 1]; }
+  Vec& q1() { return q_[end_]; }
+  Vec& p1() { return p_[end_]; }
+  Vec& v1() { return v_[end_]; }
+  Vec& f1() { return f_[end_]; }
+
   // The step's ends move back: the end just read becomes the start.
   void shift(long i) {
-    std::swap(q0_, q1_);
-    std::swap(p0_, p1_);
-    std::swap(v0_, v1_);
-    std::swap(f0_, f1_);
+    end_ ^= 1;
     std::swap(g0_, g1_);
     std::swap(dg0_, dg1_);
     t0_ = t1_;
@@ -211,8 +228,8 @@ class EventWatcher {
 
   // After the end (q1, p1, v1, f1 at t) is read: g and dg/dt there, the dense row, the crossings
   // (inlined in observe: one call per step fewer).
-  void after_read(double t) {
-    if (set_) evaluate(t);
+  void after_read(double t, End end) {
+    if (set_) evaluate(t, end);
     push_dense();
     if (set_) detect();
   }
@@ -220,23 +237,23 @@ class EventWatcher {
   // q1, p1, v1 (and f1 where needed) from x at t, and g, dg/dt there.
   void read_end(StateView x, double t) {
     t1_ = t;
-    q1_ = Eigen::Map<const Vec>(x.q, n_);
-    p1_ = Eigen::Map<const Vec>(x.p, n_);
-    model_.velocity(model_.model, p1_, v1_);
-    if (forces_) force(q1_, p1_, t, f1_);
-    if (set_) evaluate(t);
+    q1() = Eigen::Map<const Vec>(x.q, n_);
+    p1() = Eigen::Map<const Vec>(x.p, n_);
+    model_.velocity(model_.model, p1(), v1());
+    if (forces_) force(q1(), p1(), t, f1());
+    if (set_) evaluate(t, {q1().data(), p1().data(), v1().data(), f1().data()});
   }
 
-  // g and dg/dt at the end just read.
-  void evaluate(double t) {
+  // g and dg/dt at the end just read (end: its values).
+  void evaluate(double t, End end) {
     if (affine_) {  // no compiled call: g and dg/dt from their coefficients
       const std::vector<EventFunction>& events = set_->events;
       for (std::size_t e = 0; e < events.size(); ++e) {
         double g = events[e].constant, rate = 0.0;
         for (const EventFunction::Term& term : events[e].terms) {
           switch (term.kind) {
-            case Kind::q: g += term.coefficient * q1_[term.index], rate += term.coefficient * v1_[term.index]; break;
-            case Kind::p: g += term.coefficient * p1_[term.index], rate += term.coefficient * f1_[term.index]; break;
+            case Kind::q: g += term.coefficient * end.q[term.index], rate += term.coefficient * end.v[term.index]; break;
+            case Kind::p: g += term.coefficient * end.p[term.index], rate += term.coefficient * end.f[term.index]; break;
             default: g += term.coefficient * t, rate += term.coefficient; break;
           }
         }
@@ -246,7 +263,7 @@ class EventWatcher {
       return;
     }
     const std::vector<EventSlot>& slots = set_->slots;
-    for (std::size_t k = 0; k < slots.size(); ++k) in_[k] = end_value(slots[k], f1_);
+    for (std::size_t k = 0; k < slots.size(); ++k) in_[k] = end_value(slots[k], t, end);
     set_->fn(out_.data(), in_.data());
     for (std::size_t e = 0; e < g1_.size(); ++e) {
       g1_[e] = out_[2 * e];
@@ -254,13 +271,13 @@ class EventWatcher {
     }
   }
 
-  double end_value(const EventSlot& s, const Vec& f) const {
+  static double end_value(const EventSlot& s, double t, End end) {
     switch (s.kind) {
-      case Kind::t: return t1_;
-      case Kind::q: return q1_[s.index];
-      case Kind::p: return p1_[s.index];
-      case Kind::v: return v1_[s.index];
-      case Kind::f: return f[s.index];
+      case Kind::t: return t;
+      case Kind::q: return end.q[s.index];
+      case Kind::p: return end.p[s.index];
+      case Kind::v: return end.v[s.index];
+      case Kind::f: return end.f[s.index];
     }
     return 0.0;
   }
@@ -284,12 +301,12 @@ class EventWatcher {
         double x;
         switch (term.kind) {
           case Kind::q:
-            x = which == 0 ? hermite::at(w, q0_[j], v0_[j], q1_[j], v1_[j], h)
-                           : hermite::rate_at(d, q0_[j], v0_[j], q1_[j], v1_[j], h);
+            x = which == 0 ? hermite::at(w, q0()[j], v0()[j], q1()[j], v1()[j], h)
+                           : hermite::rate_at(d, q0()[j], v0()[j], q1()[j], v1()[j], h);
             break;
           case Kind::p:
-            x = which == 0 ? hermite::at(w, p0_[j], f0_[j], p1_[j], f1_[j], h)
-                           : hermite::rate_at(d, p0_[j], f0_[j], p1_[j], f1_[j], h);
+            x = which == 0 ? hermite::at(w, p0()[j], f0()[j], p1()[j], f1()[j], h)
+                           : hermite::rate_at(d, p0()[j], f0()[j], p1()[j], f1()[j], h);
             break;
           default: x = which == 0 ? (s == 1.0 ? t1_ : t0_ + s * h) : 1.0; break;
         }
@@ -301,10 +318,10 @@ class EventWatcher {
       const int j = slots[k].index;
       switch (slots[k].kind) {
         case Kind::t: in_[k] = s == 1.0 ? t1_ : t0_ + s * h; break;
-        case Kind::q: in_[k] = hermite::at(w, q0_[j], v0_[j], q1_[j], v1_[j], h); break;
-        case Kind::p: in_[k] = hermite::at(w, p0_[j], f0_[j], p1_[j], f1_[j], h); break;
-        case Kind::v: in_[k] = hermite::rate_at(d, q0_[j], v0_[j], q1_[j], v1_[j], h); break;
-        case Kind::f: in_[k] = hermite::rate_at(d, p0_[j], f0_[j], p1_[j], f1_[j], h); break;
+        case Kind::q: in_[k] = hermite::at(w, q0()[j], v0()[j], q1()[j], v1()[j], h); break;
+        case Kind::p: in_[k] = hermite::at(w, p0()[j], f0()[j], p1()[j], f1()[j], h); break;
+        case Kind::v: in_[k] = hermite::rate_at(d, q0()[j], v0()[j], q1()[j], v1()[j], h); break;
+        case Kind::f: in_[k] = hermite::rate_at(d, p0()[j], f0()[j], p1()[j], f1()[j], h); break;
       }
     }
     set_->fn(out_.data(), in_.data());
@@ -413,19 +430,19 @@ class EventWatcher {
   // The log's row: q and p of every coordinate on the interpolant at the crossing.
   void record(const Found& f, double t) {
     const double h = t1_ - t0_;
-    const Vec* fa = &f0_;
-    const Vec* fb = &f1_;
+    const Vec* fa = &f0();
+    const Vec* fb = &f1();
     if (!forces_) {  // p's interpolant needs the force at both ends; computed here, at a crossing only
-      force(q0_, p0_, t0_, fa_);
-      force(q1_, p1_, t1_, fb_);
+      force(q0(), p0(), t0_, fa_);
+      force(q1(), p1(), t1_, fb_);
       fa = &fa_, fb = &fb_;
     }
     const hermite::Weights w = hermite::value(f.s);
     log_.event.push_back(static_cast<int>(f.e));
     log_.direction.push_back(f.direction);
     log_.t.push_back(t);
-    for (int j = 0; j < n_; ++j) log_.q.push_back(hermite::at(w, q0_[j], v0_[j], q1_[j], v1_[j], h));
-    for (int j = 0; j < n_; ++j) log_.p.push_back(hermite::at(w, p0_[j], (*fa)[j], p1_[j], (*fb)[j], h));
+    for (int j = 0; j < n_; ++j) log_.q.push_back(hermite::at(w, q0()[j], v0()[j], q1()[j], v1()[j], h));
+    for (int j = 0; j < n_; ++j) log_.p.push_back(hermite::at(w, p0()[j], (*fa)[j], p1()[j], (*fb)[j], h));
     if (set_->events[f.e].henon) land(f);
   }
 
@@ -437,8 +454,8 @@ class EventWatcher {
     double t = f.from == 0 ? t0_ : t1_;
     Vec& q = land_q_;
     Vec& p = land_p_;
-    q = f.from == 0 ? q0_ : q1_;
-    p = f.from == 0 ? p0_ : p1_;
+    q = f.from == 0 ? q0() : q1();
+    p = f.from == 0 ? p0() : p1();
     auto rates = [&](double ts, const Vec& qs, const Vec& ps, Vec& v, Vec& force_out) {
       model_.velocity(model_.model, ps, v);
       force(qs, ps, ts, force_out);
@@ -487,10 +504,10 @@ class EventWatcher {
   void push_dense() {
     if (!dense_) return;
     dense_->t.push_back(t1_);
-    dense_->q.insert(dense_->q.end(), q1_.data(), q1_.data() + n_);
-    dense_->p.insert(dense_->p.end(), p1_.data(), p1_.data() + n_);
-    dense_->v.insert(dense_->v.end(), v1_.data(), v1_.data() + n_);
-    dense_->f.insert(dense_->f.end(), f1_.data(), f1_.data() + n_);
+    dense_->q.insert(dense_->q.end(), q1().data(), q1().data() + n_);
+    dense_->p.insert(dense_->p.end(), p1().data(), p1().data() + n_);
+    dense_->v.insert(dense_->v.end(), v1().data(), v1().data() + n_);
+    dense_->f.insert(dense_->f.end(), f1().data(), f1().data() + n_);
   }
 
   void resize_dense(long rows) {
@@ -509,7 +526,11 @@ class EventWatcher {
   long step_ = -1;
   std::size_t stop_event_ = 0;
   double t0_ = 0.0, t1_ = 0.0, t_stop_ = 0.0;
-  Vec q0_, p0_, v0_, f0_, q1_, p1_, v1_, f1_, grad_, rate_, fa_, fb_, land_q_, land_p_;
+  // The step's two ends, q_[end_] (its end) and q_[end_ ^ 1] (its start), and so p, v, f: a step moves
+  // them back by flipping end_ (swapping the vectors cost the pendulum's watcher a tenth of its step).
+  Vec q_[2], p_[2], v_[2], f_[2];
+  int end_ = 1;
+  Vec grad_, rate_, fa_, fb_, land_q_, land_p_;
   henon::Work<Vec> henon_;
   std::vector<double> in_, g0_, g1_, dg0_, dg1_;
   std::vector<double> out_;
