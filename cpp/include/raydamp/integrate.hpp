@@ -27,6 +27,7 @@
 #include "raydamp/materials/kinks.hpp"
 #include "raydamp/record/divergence.hpp"
 #include "raydamp/record/envelope.hpp"
+#include "raydamp/record/model_view.hpp"
 #include "raydamp/record/recorder.hpp"
 #include "raydamp/record/save_grid.hpp"
 #include "raydamp/run_types.hpp"
@@ -476,17 +477,18 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
   constexpr bool trapezoid = !integrates_work<Method>::value;
   hook_workspace(ws, spec, model.size());
   Recorder<Model, Dim, trapezoid> rec(model, spec, ws, result.trajectory);
-  EventWatcher<Model, Dim, typename decltype(rec)::Marks> watch(model, spec, result, z, 0.0);  // events
+  const ModelView view = model_view(model);  // what the observers below see of the model
+  EventWatcher watch(view, spec, result, view_of(z), 0.0);  // events
   auto time_at = [&](long k) { return step_time(k, spec.h, N, spec.h_last); };
   auto stop = [&](Status status, long failed_step, std::string message) {
     result.status = status, result.failed_step = failed_step, result.message = std::move(message);
   };
-  EnvelopeRecorder<Model, Dim> envelope(model, spec, result, z);  // peaks at every step's end
+  EnvelopeRecorder envelope(view, spec, result, view_of(z));  // peaks at every step's end
   if (!z.all_finite()) {
     stop(Status::non_finite, 0, "the initial state is not finite");
     return result;
   }
-  DivergenceGuard<Model, Dim> diverged(model, spec, z, time_at(N));
+  DivergenceGuard diverged(view, spec, view_of(z), time_at(N));
   MomentumBuffers mb(model, z);
   const bool track_momenta = mb.count() > 0;
   // Copies made now, so the loop never allocates. The block loop steps y, a local
@@ -506,7 +508,7 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
     if constexpr (has_materials_v<Model>) {
       if (kinks.on()) {
         step_at_kinks<Method>(kinks, model, tab, composition, spec, stepper, x, i, w, ws, rec);
-        return envelope.after_step(x, i), watch.after_step(x, i, time_at(i + 1), rec);
+        return envelope.after_step(x, i), watch.after_step(model, x, i, time_at(i + 1), rec);
       }
     }
     if constexpr (trapezoid && has_step_by_stage<std::decay_t<decltype(stepper)>>::value) {
@@ -514,13 +516,13 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
         double t = time_at(i);
         stepper.step_by_stage(model, tab, x, i, w, [&](double dt) { rec.on_step(x, dt, t += dt); });
         commit_materials(model);
-        return envelope.after_step(x, i), watch.after_step(x, i, time_at(i + 1), rec);
+        return envelope.after_step(x, i), watch.after_step(model, x, i, time_at(i + 1), rec);
       }
     }
     stepper.step(model, tab, x, i, w);
     commit_materials(model);
     rec.on_step(x, i == N - 1 ? spec.h_last : spec.h, time_at(i + 1));
-    envelope.after_step(x, i), watch.after_step(x, i, time_at(i + 1), rec);
+    envelope.after_step(x, i), watch.after_step(model, x, i, time_at(i + 1), rec);
   };
   const long progress_every = std::max(1L, N / std::max(1L, control.max_progress_calls));
   long next_save = spec.save_every, next_progress = progress_every, k = 0;

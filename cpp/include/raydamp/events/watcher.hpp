@@ -17,12 +17,15 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
 #include "raydamp/events/henon.hpp"
 #include "raydamp/events/hermite.hpp"
 #include "raydamp/events/types.hpp"
+#include "raydamp/record/marks.hpp"
+#include "raydamp/record/model_view.hpp"
 #include "raydamp/run_types.hpp"
 
 #if defined(__GNUC__) || defined(__clang__)
@@ -37,20 +40,21 @@
 
 namespace raydamp {
 
-template <class Model, int Dim, class RecMarks>
+// One class for every model (record/model_view.hpp): the model is seen through a ModelView, the
+// state through its raw q and p.
 class EventWatcher {
-  using Vec = typename Model::Vec;
+  using Vec = Eigen::VectorXd;
   using Kind = EventSlot::Kind;
 
  public:
   // From the initial state z at t: each g must be finite there (a g that is not is refused, naming it).
-  EventWatcher(const Model& model, const RunSpec& spec, RunResult& result, const State<Dim>& z, double t)
+  EventWatcher(const ModelView& model, const RunSpec& spec, RunResult& result, StateView z, double t)
       : model_(model), set_(spec.events && !spec.events->empty() ? spec.events : nullptr), load_(spec.load),
         dense_(spec.dense ? &result.dense : nullptr), log_(result.events), on_(set_ != nullptr || spec.dense) {
     if (!on_) return;
-    n_ = model.size();
-    for (Vec* v : {&q0_, &p0_, &v0_, &f0_, &q1_, &p1_, &v1_, &f1_, &grad_, &rate_, &fa_, &fb_, &land_q_,
-                   &land_p_})
+    n_ = model.n;
+    for (Vec* v : {&q_[0], &p_[0], &v_[0], &f_[0], &q_[1], &p_[1], &v_[1], &f_[1], &grad_, &rate_, &fa_, &fb_,
+                   &land_q_, &land_p_})
       v->setZero(n_);
     log_.n = n_;
     forces_ = spec.dense;
@@ -92,7 +96,7 @@ class EventWatcher {
       dense_->t.reserve(rows);
       for (auto* v : {&dense_->q, &dense_->p, &dense_->v, &dense_->f}) v->reserve(rows * n_);
     }
-    if (z.all_finite()) start(z, t);  // else the loop stops before its first step
+    if (finite(z)) start(z, t);  // else the loop stops before its first step
   }
 
   bool on() const { return on_; }
@@ -100,36 +104,42 @@ class EventWatcher {
   double stop_time() const { return t_stop_; }
   const std::string& stop_name() const { return set_->events[stop_event_].name; }
 
-  // After step i, ending at t, of a state that rec (the recorder) observed.
-  template <class Rec>
-  void after_step(const State<Dim>& x, long i, double t, const Rec& rec) {
-    if (on_) observe(x, i, t, rec);
+  // After step i of model, ending at t, of a state that rec (the recorder) observed.
+  template <class Model, int Dim, class Rec>
+  void after_step(const Model& model, const State<Dim>& x, long i, double t, const Rec& rec) {
+    if (!on_) return;
+    if (terminal_ && i > step_) marks_ = rec.marks();  // what a terminal event's restep starts from
+    observe(model, x, i, t);
   }
 
   // After a terminal event: z becomes the state at the crossing time, stepped by restep(z, i, dt) from
   // the start of the crossing step (dt = the crossing time minus that start; the recorder's sums back
   // where they were); the dense record's last row is that state. Returns the steps taken.
-  template <class Rec, class Restep>
+  template <int Dim, class Rec, class Restep>
   long finish(State<Dim>& z, Rec& rec, const Restep& restep) {
     if (t_stop_ == t1_) {  // on the step's end: the stepped state itself
-      z.q = q1_;
-      z.p = p1_;
+      z.q = q1();
+      z.p = p1();
       return step_ + 1;
     }
-    z.q = q0_;
-    z.p = p0_;
+    z.q = q0();
+    z.p = p0();
     rec.restore(marks0_);
     restep(z, step_, t_stop_ - t0_);
     if (dense_) {
       resize_dense(dense_->rows() - 1);
-      read_end(z, t_stop_);
+      read_end(view_of(z), t_stop_);
       push_dense();
     }
     return step_ + 1;
   }
 
  private:
-  void start(const State<Dim>& z, double t) {
+  bool finite(StateView x) const {
+    return Eigen::Map<const Vec>(x.q, n_).allFinite() && Eigen::Map<const Vec>(x.p, n_).allFinite();
+  }
+
+  void start(StateView z, double t) {
     if (!on_) return;
     read_end(z, t);
     if (set_)
@@ -140,44 +150,110 @@ class EventWatcher {
     push_dense();
   }
 
-  template <class Rec>
-  RAYDAMP_NOINLINE_FLAT void observe(const State<Dim>& x, long i, double t, const Rec& rec) {
+  // The one part made per model type: the step's end read with the model's own functions, inlined
+  // (v and, where needed, f: a call through the ModelView here would cost the events floor a tenth
+  // of a pendulum's step), then g and the sign scan; the crossing search (locate), the log and
+  // Hénon's landing are this class's, out of line, the same for every model.
+  template <class Model, int Dim>
+  RAYDAMP_NOINLINE_FLAT void observe(const Model& model, const State<Dim>& x, long i, double t) {
     // A state that is not finite ends the run (dense output ends at the last finite one); a block replayed
     // to find that step (integrate.hpp) runs steps already observed again, which add nothing.
     if (i <= step_ || !x.all_finite()) return;
-    std::swap(q0_, q1_);
-    std::swap(p0_, p1_);
-    std::swap(v0_, v1_);
-    std::swap(f0_, f1_);
+    shift(i);
+    t1_ = t;
+    put<Dim>(q1(), x.q);
+    put<Dim>(p1(), x.p);
+    using MVec = typename Model::Vec;
+    if constexpr (std::is_same_v<MVec, Vec>) {
+      model.mass.velocity(x.p, v1());
+      if (forces_) {
+        model.gradient(x.q, grad_);
+        model.damping.rate(x.q, x.p, rate_);
+        f1() = -(grad_ + rate_);
+        if (load_ && !load_->empty()) load_->add(t, 1.0, f1().data());
+      }
+      after_read(t, {q1().data(), p1().data(), v1().data(), f1().data()});
+    } else {
+      // g is read from these locals (the model's fixed size, in registers), not back from the
+      // run-time-size vectors just written.
+      MVec v = MVec::Zero(x.p.size()), f = MVec::Zero(x.p.size());
+      model.mass.velocity(x.p, v);
+      put<Dim>(v1(), v);
+      if (forces_) {
+        MVec grad = MVec::Zero(x.q.size()), rate = MVec::Zero(x.q.size());
+        model.gradient(x.q, grad);
+        model.damping.rate(x.q, x.p, rate);
+        f = -(grad + rate);
+        if (load_ && !load_->empty()) load_->add(t, 1.0, f.data());
+        put<Dim>(f1(), f);
+      }
+      after_read(t, {x.q.data(), x.p.data(), v.data(), f.data()});
+    }
+  }
+
+  // The step's end as raw values (q, p, v, f: the observer's vectors, or the model's own at a fixed size).
+  struct End {
+    const double *q, *p, *v, *f;
+  };
+
+  // from into to (of size n): for a fixed n, a copy of that size, without a run-time size's checks.
+  template <int Dim, class E>
+  static void put(Vec& to, const E& from) {
+    if constexpr (Dim == Eigen::Dynamic) to = from;
+    else Eigen::Map<Eigen::Matrix<double, Dim, 1>>(to.data()) = from;
+  }
+
+  // The step's start (0) and end (1).
+  Vec& q0() { return q_[end_ ^ 1]; }
+  Vec& p0() { return p_[end_ ^ 1]; }
+  Vec& v0() { return v_[end_ ^ 1]; }
+  Vec& f0() { return f_[end_ ^ 1]; }
+  Vec& q1() { return q_[end_]; }
+  Vec& p1() { return p_[end_]; }
+  Vec& v1() { return v_[end_]; }
+  Vec& f1() { return f_[end_]; }
+
+  // The step's ends move back: the end just read becomes the start.
+  void shift(long i) {
+    end_ ^= 1;
     std::swap(g0_, g1_);
     std::swap(dg0_, dg1_);
     t0_ = t1_;
     if (terminal_) {
       marks0_ = marks1_;
-      marks1_ = rec.marks();
+      marks1_ = marks_;
     }
     step_ = i;
-    read_end(x, t);
+  }
+
+  // After the end (q1, p1, v1, f1 at t) is read: g and dg/dt there, the dense row, the crossings
+  // (inlined in observe: one call per step fewer).
+  void after_read(double t, End end) {
+    if (set_) evaluate(t, end);
     push_dense();
     if (set_) detect();
   }
 
   // q1, p1, v1 (and f1 where needed) from x at t, and g, dg/dt there.
-  void read_end(const State<Dim>& x, double t) {
+  void read_end(StateView x, double t) {
     t1_ = t;
-    q1_ = x.q;
-    p1_ = x.p;
-    model_.mass.velocity(x.p, v1_);
-    if (forces_) force(q1_, p1_, t, f1_);
-    if (!set_) return;
+    q1() = Eigen::Map<const Vec>(x.q, n_);
+    p1() = Eigen::Map<const Vec>(x.p, n_);
+    model_.velocity(model_.model, p1(), v1());
+    if (forces_) force(q1(), p1(), t, f1());
+    if (set_) evaluate(t, {q1().data(), p1().data(), v1().data(), f1().data()});
+  }
+
+  // g and dg/dt at the end just read (end: its values).
+  void evaluate(double t, End end) {
     if (affine_) {  // no compiled call: g and dg/dt from their coefficients
       const std::vector<EventFunction>& events = set_->events;
       for (std::size_t e = 0; e < events.size(); ++e) {
         double g = events[e].constant, rate = 0.0;
         for (const EventFunction::Term& term : events[e].terms) {
           switch (term.kind) {
-            case Kind::q: g += term.coefficient * q1_[term.index], rate += term.coefficient * v1_[term.index]; break;
-            case Kind::p: g += term.coefficient * p1_[term.index], rate += term.coefficient * f1_[term.index]; break;
+            case Kind::q: g += term.coefficient * end.q[term.index], rate += term.coefficient * end.v[term.index]; break;
+            case Kind::p: g += term.coefficient * end.p[term.index], rate += term.coefficient * end.f[term.index]; break;
             default: g += term.coefficient * t, rate += term.coefficient; break;
           }
         }
@@ -187,7 +263,7 @@ class EventWatcher {
       return;
     }
     const std::vector<EventSlot>& slots = set_->slots;
-    for (std::size_t k = 0; k < slots.size(); ++k) in_[k] = end_value(slots[k], f1_);
+    for (std::size_t k = 0; k < slots.size(); ++k) in_[k] = end_value(slots[k], t, end);
     set_->fn(out_.data(), in_.data());
     for (std::size_t e = 0; e < g1_.size(); ++e) {
       g1_[e] = out_[2 * e];
@@ -195,22 +271,20 @@ class EventWatcher {
     }
   }
 
-  double end_value(const EventSlot& s, const Vec& f) const {
+  static double end_value(const EventSlot& s, double t, End end) {
     switch (s.kind) {
-      case Kind::t: return t1_;
-      case Kind::q: return q1_[s.index];
-      case Kind::p: return p1_[s.index];
-      case Kind::v: return v1_[s.index];
-      case Kind::f: return f[s.index];
+      case Kind::t: return t;
+      case Kind::q: return end.q[s.index];
+      case Kind::p: return end.p[s.index];
+      case Kind::v: return end.v[s.index];
+      case Kind::f: return end.f[s.index];
     }
     return 0.0;
   }
 
   // pdot at (q, p, t): -grad V(q) - eps D(q) M^{-1} p + f(t).
   void force(const Vec& q, const Vec& p, double t, Vec& out) {
-    model_.gradient(q, grad_);
-    model_.damping.rate(q, p, rate_);
-    out = -(grad_ + rate_);
+    model_.force(model_.model, q, p, grad_, rate_, out);
     if (load_ && !load_->empty()) load_->add(t, 1.0, out.data());
   }
 
@@ -227,12 +301,12 @@ class EventWatcher {
         double x;
         switch (term.kind) {
           case Kind::q:
-            x = which == 0 ? hermite::at(w, q0_[j], v0_[j], q1_[j], v1_[j], h)
-                           : hermite::rate_at(d, q0_[j], v0_[j], q1_[j], v1_[j], h);
+            x = which == 0 ? hermite::at(w, q0()[j], v0()[j], q1()[j], v1()[j], h)
+                           : hermite::rate_at(d, q0()[j], v0()[j], q1()[j], v1()[j], h);
             break;
           case Kind::p:
-            x = which == 0 ? hermite::at(w, p0_[j], f0_[j], p1_[j], f1_[j], h)
-                           : hermite::rate_at(d, p0_[j], f0_[j], p1_[j], f1_[j], h);
+            x = which == 0 ? hermite::at(w, p0()[j], f0()[j], p1()[j], f1()[j], h)
+                           : hermite::rate_at(d, p0()[j], f0()[j], p1()[j], f1()[j], h);
             break;
           default: x = which == 0 ? (s == 1.0 ? t1_ : t0_ + s * h) : 1.0; break;
         }
@@ -244,10 +318,10 @@ class EventWatcher {
       const int j = slots[k].index;
       switch (slots[k].kind) {
         case Kind::t: in_[k] = s == 1.0 ? t1_ : t0_ + s * h; break;
-        case Kind::q: in_[k] = hermite::at(w, q0_[j], v0_[j], q1_[j], v1_[j], h); break;
-        case Kind::p: in_[k] = hermite::at(w, p0_[j], f0_[j], p1_[j], f1_[j], h); break;
-        case Kind::v: in_[k] = hermite::rate_at(d, q0_[j], v0_[j], q1_[j], v1_[j], h); break;
-        case Kind::f: in_[k] = hermite::rate_at(d, p0_[j], f0_[j], p1_[j], f1_[j], h); break;
+        case Kind::q: in_[k] = hermite::at(w, q0()[j], v0()[j], q1()[j], v1()[j], h); break;
+        case Kind::p: in_[k] = hermite::at(w, p0()[j], f0()[j], p1()[j], f1()[j], h); break;
+        case Kind::v: in_[k] = hermite::rate_at(d, q0()[j], v0()[j], q1()[j], v1()[j], h); break;
+        case Kind::f: in_[k] = hermite::rate_at(d, p0()[j], f0()[j], p1()[j], f1()[j], h); break;
       }
     }
     set_->fn(out_.data(), in_.data());
@@ -356,19 +430,19 @@ class EventWatcher {
   // The log's row: q and p of every coordinate on the interpolant at the crossing.
   void record(const Found& f, double t) {
     const double h = t1_ - t0_;
-    const Vec* fa = &f0_;
-    const Vec* fb = &f1_;
+    const Vec* fa = &f0();
+    const Vec* fb = &f1();
     if (!forces_) {  // p's interpolant needs the force at both ends; computed here, at a crossing only
-      force(q0_, p0_, t0_, fa_);
-      force(q1_, p1_, t1_, fb_);
+      force(q0(), p0(), t0_, fa_);
+      force(q1(), p1(), t1_, fb_);
       fa = &fa_, fb = &fb_;
     }
     const hermite::Weights w = hermite::value(f.s);
     log_.event.push_back(static_cast<int>(f.e));
     log_.direction.push_back(f.direction);
     log_.t.push_back(t);
-    for (int j = 0; j < n_; ++j) log_.q.push_back(hermite::at(w, q0_[j], v0_[j], q1_[j], v1_[j], h));
-    for (int j = 0; j < n_; ++j) log_.p.push_back(hermite::at(w, p0_[j], (*fa)[j], p1_[j], (*fb)[j], h));
+    for (int j = 0; j < n_; ++j) log_.q.push_back(hermite::at(w, q0()[j], v0()[j], q1()[j], v1()[j], h));
+    for (int j = 0; j < n_; ++j) log_.p.push_back(hermite::at(w, p0()[j], (*fa)[j], p1()[j], (*fb)[j], h));
     if (set_->events[f.e].henon) land(f);
   }
 
@@ -380,10 +454,10 @@ class EventWatcher {
     double t = f.from == 0 ? t0_ : t1_;
     Vec& q = land_q_;
     Vec& p = land_p_;
-    q = f.from == 0 ? q0_ : q1_;
-    p = f.from == 0 ? p0_ : p1_;
+    q = f.from == 0 ? q0() : q1();
+    p = f.from == 0 ? p0() : p1();
     auto rates = [&](double ts, const Vec& qs, const Vec& ps, Vec& v, Vec& force_out) {
-      model_.mass.velocity(ps, v);
+      model_.velocity(model_.model, ps, v);
       force(qs, ps, ts, force_out);
       return value_at(f.e, ts, qs, ps, v, force_out);
     };
@@ -430,10 +504,10 @@ class EventWatcher {
   void push_dense() {
     if (!dense_) return;
     dense_->t.push_back(t1_);
-    dense_->q.insert(dense_->q.end(), q1_.data(), q1_.data() + n_);
-    dense_->p.insert(dense_->p.end(), p1_.data(), p1_.data() + n_);
-    dense_->v.insert(dense_->v.end(), v1_.data(), v1_.data() + n_);
-    dense_->f.insert(dense_->f.end(), f1_.data(), f1_.data() + n_);
+    dense_->q.insert(dense_->q.end(), q1().data(), q1().data() + n_);
+    dense_->p.insert(dense_->p.end(), p1().data(), p1().data() + n_);
+    dense_->v.insert(dense_->v.end(), v1().data(), v1().data() + n_);
+    dense_->f.insert(dense_->f.end(), f1().data(), f1().data() + n_);
   }
 
   void resize_dense(long rows) {
@@ -441,7 +515,7 @@ class EventWatcher {
     for (auto* v : {&dense_->q, &dense_->p, &dense_->v, &dense_->f}) v->resize(rows * n_);
   }
 
-  const Model& model_;
+  const ModelView model_;
   const EventSet* set_;
   const Load* load_;
   DenseRecord* dense_;
@@ -452,12 +526,16 @@ class EventWatcher {
   long step_ = -1;
   std::size_t stop_event_ = 0;
   double t0_ = 0.0, t1_ = 0.0, t_stop_ = 0.0;
-  Vec q0_, p0_, v0_, f0_, q1_, p1_, v1_, f1_, grad_, rate_, fa_, fb_, land_q_, land_p_;
+  // The step's two ends, q_[end_] (its end) and q_[end_ ^ 1] (its start), and so p, v, f: a step moves
+  // them back by flipping end_ (swapping the vectors cost the pendulum's watcher a tenth of its step).
+  Vec q_[2], p_[2], v_[2], f_[2];
+  int end_ = 1;
+  Vec grad_, rate_, fa_, fb_, land_q_, land_p_;
   henon::Work<Vec> henon_;
   std::vector<double> in_, g0_, g1_, dg0_, dg1_;
   std::vector<double> out_;
   std::vector<Found> found_;
-  RecMarks marks0_{}, marks1_{};
+  RecorderMarks marks0_{}, marks1_{}, marks_{};
 };
 
 }  // namespace raydamp

@@ -33,6 +33,7 @@
 #include <vector>
 
 #include "raydamp/load.hpp"
+#include "raydamp/record/model_view.hpp"
 #include "raydamp/run_types.hpp"
 #include "raydamp/state.hpp"
 
@@ -41,35 +42,30 @@ namespace raydamp {
 inline constexpr long kCheckEvery = 256;          // steps between divergence checks
 inline constexpr long kExpressionSamples = 4096;  // samples of an expression load before the first step
 
-template <class Model, int Dim>
+// One class for every model: the model is seen through a ModelView (record/model_view.hpp).
 class DivergenceGuard {
+  using Vec = Eigen::VectorXd;
+
  public:
-  DivergenceGuard(const Model& model, const RunSpec& spec, const State<Dim>& z0, double t_end)
+  DivergenceGuard(const ModelView& model, const RunSpec& spec, StateView z0, double t_end)
       : model_(model), factor_(spec.divergence) {
     if (!(factor_ >= 0.0) || !std::isfinite(factor_))
       throw std::invalid_argument("divergence must be a finite number >= 0 (0: no divergence test)");
     if (factor_ == 0.0) return;
-    const double T0 = model.mass.kinetic(z0.p), V0 = model.potential(z0.q);
+    q_ = Eigen::Map<const Vec>(z0.q, model.n);
+    p_ = Eigen::Map<const Vec>(z0.p, model.n);
+    const double T0 = kinetic(p_), V0 = model.potential(model.model, q_);
     h0_ = T0 + V0;
-    base_ = T0 + std::abs(V0) + model.size() * spec.temperature;
+    base_ = T0 + std::abs(V0) + model.n * spec.temperature;
     if (spec.load && !spec.load->empty()) bound_load(*spec.load, t_end);
   }
 
   // Whether z, after step k of N at time t, has diverged: checked every kCheckEvery steps and at the
   // run's end (false between checks); the figures then go into message().
+  template <int Dim>
   bool check(const State<Dim>& z, long k, long N, double t) {
     if (factor_ == 0.0 || (k < next_check_ && k != N)) return false;
-    next_check_ = k + kCheckEvery;
-    if (sampled_) F_ = std::max(F_, F_fixed_ + norm_of(*sampled_, t));
-    T_ = model_.mass.kinetic(z.p);
-    V_ = model_.potential(z.q);
-    const double H = T_ + V_;
-    scale_ = base_ + (t * F_) * (t * F_);  // before the return below: message() reports it either way
-    // +inf: T or V overflowed while the state did not. NaN: a user's function failed (that run stops
-    // non_finite at its next step, with the function's message); -inf: a fall into a singular potential.
-    if (!std::isfinite(H)) return H == std::numeric_limits<double>::infinity();
-    const double excess = H - h0_;
-    return excess > factor_ * scale_ && excess > 0.5 * (T_ + std::abs(V_));
+    return check_at(view_of(z), k, t);
   }
 
   std::string message(long step, double t) const {
@@ -80,6 +76,24 @@ class DivergenceGuard {
   }
 
  private:
+  double kinetic(const Vec& p) const { return model_.kinetic(model_.model, p); }
+
+  bool check_at(StateView z, long k, double t) {
+    next_check_ = k + kCheckEvery;
+    if (sampled_) F_ = std::max(F_, F_fixed_ + norm_of(*sampled_, t));
+    q_ = Eigen::Map<const Vec>(z.q, model_.n);
+    p_ = Eigen::Map<const Vec>(z.p, model_.n);
+    T_ = kinetic(p_);
+    V_ = model_.potential(model_.model, q_);
+    const double H = T_ + V_;
+    scale_ = base_ + (t * F_) * (t * F_);  // before the return below: message() reports it either way
+    // +inf: T or V overflowed while the state did not. NaN: a user's function failed (that run stops
+    // non_finite at its next step, with the function's message); -inf: a fall into a singular potential.
+    if (!std::isfinite(H)) return H == std::numeric_limits<double>::infinity();
+    const double excess = H - h0_;
+    return excess > factor_ * scale_ && excess > 0.5 * (T_ + std::abs(V_));
+  }
+
   static std::string figure(double x) {
     char buf[32];
     std::snprintf(buf, sizeof buf, "%.3g", x);
@@ -90,11 +104,11 @@ class DivergenceGuard {
   double norm_of(const Load& load, double t) {
     buf_.setZero();
     load.add(t, 1.0, buf_.data());
-    return std::sqrt(2.0 * std::max(0.0, model_.mass.kinetic(buf_)));
+    return std::sqrt(2.0 * std::max(0.0, kinetic(buf_)));
   }
 
   void bound_load(const Load& load, double t_end) {
-    buf_ = Vector<Dim>::Zero(model_.size());
+    buf_ = Vec::Zero(model_.n);
     std::vector<LoadTerm> expressions;
     for (const LoadTerm& term : load.terms()) {
       if (term.shape == LoadTerm::Shape::expression) {
@@ -106,7 +120,7 @@ class DivergenceGuard {
         double most = 0.0;
         for (std::size_t k = 0; k < s->times.size(); ++k) {
           for (int i = 0; i < s->width; ++i) buf_[i] = s->values[k * s->width + i];
-          most = std::max(most, model_.mass.kinetic(buf_));
+          most = std::max(most, kinetic(buf_));
         }
         F_fixed_ += std::abs(term.scale) * std::sqrt(2.0 * most);
         continue;
@@ -119,22 +133,22 @@ class DivergenceGuard {
       buf_.setZero();
       const LoadDirection& d = *term.direction;
       for (std::size_t j = 0; j < d.index.size(); ++j) buf_[d.index[j]] += d.value[j];
-      F_fixed_ += std::abs(term.scale) * peak * std::sqrt(2.0 * std::max(0.0, model_.mass.kinetic(buf_)));
+      F_fixed_ += std::abs(term.scale) * peak * std::sqrt(2.0 * std::max(0.0, kinetic(buf_)));
     }
     F_ = F_fixed_;
     if (expressions.empty()) return;
-    sampled_ = std::make_unique<Load>(std::move(expressions), model_.size());
+    sampled_ = std::make_unique<Load>(std::move(expressions), model_.n);
     for (long k = 0; k <= kExpressionSamples; ++k)
       F_ = std::max(F_, F_fixed_ + norm_of(*sampled_, t_end * static_cast<double>(k) / kExpressionSamples));
   }
 
-  const Model& model_;
+  const ModelView model_;
   double factor_;
   long next_check_ = kCheckEvery;
   double h0_ = 0.0, base_ = 0.0, F_fixed_ = 0.0, F_ = 0.0;
   double T_ = 0.0, V_ = 0.0, scale_ = 0.0;  // at the last check
   std::unique_ptr<Load> sampled_;  // the load's expression terms
-  Vector<Dim> buf_;
+  Vec buf_, q_, p_;  // scratch: a load's value; the state at a check
 };
 
 }  // namespace raydamp

@@ -13,30 +13,30 @@
 #include <string>
 #include <vector>
 
-#include "raydamp/materials/commit.hpp"
 #include "raydamp/record/envelope_types.hpp"
+#include "raydamp/record/model_view.hpp"
 #include "raydamp/run_types.hpp"
 #include "raydamp/record/save_grid.hpp"
 
 #if defined(__GNUC__) || defined(__clang__)
-#define RAYDAMP_ENVELOPE_NOINLINE __attribute__((noinline))
+#define RAYDAMP_ENVELOPE_FLAT __attribute__((noinline, flatten))
 #else
-#define RAYDAMP_ENVELOPE_NOINLINE
+#define RAYDAMP_ENVELOPE_FLAT
 #endif
 
 namespace raydamp {
 
-template <class Model, int Dim>
+// One class for every model: the model is seen through a ModelView (record/model_view.hpp).
 class EnvelopeRecorder {
-  using Vec = typename Model::Vec;
+  using Vec = Eigen::VectorXd;
 
  public:
-  EnvelopeRecorder(const Model& model, const RunSpec& spec, RunResult& result, const State<Dim>& z)
+  EnvelopeRecorder(const ModelView& model, const RunSpec& spec, RunResult& result, StateView z)
       : model_(model), spec_(spec.envelope && spec.envelope->any() ? spec.envelope : nullptr), load_(spec.load),
         out_(result.envelope), on_(spec_ != nullptr), h_(spec.h), h_last_(spec.h_last), n_steps_(spec.n_steps) {
     if (!on_) return;
-    const int n = model.size();
-    const std::size_t springs = spring_count();
+    const int n = model.n;
+    const std::size_t springs = model.springs;
     for (int k = 0; k < kPeaks; ++k) {
       if (!spec_->peaks[k]) continue;
       if (per_spring(static_cast<Peak>(k)) && springs == 0)
@@ -51,17 +51,19 @@ class EnvelopeRecorder {
     if (!spec_->collapse.empty() && spec_->collapse.size() != springs)
       throw std::invalid_argument("envelope: " + std::to_string(spec_->collapse.size()) + " collapse limits for " +
                                   std::to_string(springs) + " springs");
-    for (Vec* v : {&v_, &grad_, &rate_, &f_, &a_}) v->setZero(n);
+    for (Vec* v : {&q_, &p_, &v_, &grad_, &rate_, &f_, &a_}) v->setZero(n);
     d_.assign(springs, 0.0);
     s_.assign(springs, 0.0);
-    if (z.all_finite()) read(z, 0.0);
+    if (finite(z)) read(z, 0.0);
   }
 
   bool stopped() const { return out_.collapse_spring >= 0; }
 
-  // After step i (a block replayed after a blow-up runs steps already observed: skipped).
+  // After step i (a block replayed after a blow-up runs steps already observed: skipped; a state that is
+  // not finite ends the run, and adds no peak). The test is the model's, at its fixed size.
+  template <int Dim>
   void after_step(const State<Dim>& x, long i) {
-    if (on_) observe(x, i, step_time(i + 1, h_, n_steps_, h_last_));
+    if (on_ && i > step_ && x.all_finite()) observe(view_of(x), i, step_time(i + 1, h_, n_steps_, h_last_));
   }
 
   // Ends a collapsed run: its status and message; returns the steps taken (up to the collapse step's end).
@@ -77,13 +79,13 @@ class EnvelopeRecorder {
   }
 
  private:
-  std::size_t spring_count() const {
-    if constexpr (has_materials_v<Model>) return model_.springs.size();
-    else return 0;
+  bool finite(StateView x) const {
+    return Eigen::Map<const Vec>(x.q, model_.n).allFinite() && Eigen::Map<const Vec>(x.p, model_.n).allFinite();
   }
 
-  RAYDAMP_ENVELOPE_NOINLINE void observe(const State<Dim>& x, long i, double t) {
-    if (i <= step_ || !x.all_finite()) return;
+  // Out of line (one copy for every model and method), with read() and take() inlined into it: a
+  // call fewer per step, and no call through the module's PLT.
+  RAYDAMP_ENVELOPE_FLAT void observe(StateView x, long i, double t) {
     step_ = i;
     read(x, t);
   }
@@ -101,56 +103,44 @@ class EnvelopeRecorder {
   }
   bool wants(Peak which) const { return spec_->peaks[static_cast<int>(which)]; }
 
-  void read(const State<Dim>& x, double t) {
+  void read(StateView x, double t) {
     t_ = t;
-    const std::size_t n = static_cast<std::size_t>(model_.size());
-    if (wants(Peak::displacement)) take(Peak::displacement, x.q.data(), n, t);
+    const void* m = model_.model;
+    const std::size_t n = static_cast<std::size_t>(model_.n);
+    if (wants(Peak::displacement)) take(Peak::displacement, x.q, n, t);
+    // The view's functions take vectors: q and p copied into ours, only where a peak reads them.
+    const bool accelerations = wants(Peak::acceleration) || wants(Peak::abs_acceleration);
+    if (accelerations || !d_.empty()) q_ = Eigen::Map<const Vec>(x.q, model_.n);
+    if (accelerations || wants(Peak::velocity)) p_ = Eigen::Map<const Vec>(x.p, model_.n);
     if (wants(Peak::velocity)) {
-      model_.mass.velocity(x.p, v_);
+      model_.velocity(m, p_, v_);
       take(Peak::velocity, v_.data(), n, t);
     }
-    if (wants(Peak::acceleration) || wants(Peak::abs_acceleration)) {
+    if (accelerations) {
       // a = M^{-1} pdot, pdot = -grad V - eps D M^{-1} p + f(t). A spring's gradient writes its trial state from
       // the committed one; the next step's kick writes it again before any commit.
-      model_.gradient(x.q, grad_);
-      model_.damping.rate(x.q, x.p, rate_);
-      f_ = -(grad_ + rate_);
+      model_.force(m, q_, p_, grad_, rate_, f_);
       if (load_ && !load_->empty()) load_->add(t, 1.0, f_.data());
-      model_.mass.velocity(f_, a_);
+      model_.velocity(m, f_, a_);
       if (wants(Peak::acceleration)) take(Peak::acceleration, a_.data(), n, t);
       if (wants(Peak::abs_acceleration)) {
         if (load_ && !load_->empty()) load_->add_ground(t, a_.data());
         take(Peak::abs_acceleration, a_.data(), n, t);
       }
     }
-    if constexpr (has_materials_v<Model>) {
-      if (d_.empty()) return;
-      deformations(x.q);
-      if (wants(Peak::drift)) take(Peak::drift, d_.data(), d_.size(), t);
-      if (wants(Peak::force)) {
-        double* at = s_.data();
-        model_.springs.for_each([&](const auto& set) {
-          set.forces(x.q, at);
-          at += set.size();
-        });
-        take(Peak::force, s_.data(), s_.size(), t);
-      }
-      const std::vector<double>& limit = spec_->collapse;
-      for (std::size_t s = 0; s < limit.size() && out_.collapse_spring < 0; ++s)
-        if (std::abs(d_[s]) > limit[s]) out_.collapse_spring = static_cast<long>(s);
+    if (d_.empty()) return;
+    model_.deformations(m, q_, d_.data());
+    if (wants(Peak::drift)) take(Peak::drift, d_.data(), d_.size(), t);
+    if (wants(Peak::force)) {
+      model_.spring_forces(m, q_, s_.data());
+      take(Peak::force, s_.data(), s_.size(), t);
     }
+    const std::vector<double>& limit = spec_->collapse;
+    for (std::size_t s = 0; s < limit.size() && out_.collapse_spring < 0; ++s)
+      if (std::abs(d_[s]) > limit[s]) out_.collapse_spring = static_cast<long>(s);
   }
 
-  void deformations(const Vec& q) {
-    if constexpr (has_materials_v<Model>) {
-      double* at = d_.data();
-      model_.springs.for_each([&](const auto& set) {
-        for (std::size_t s = 0; s < set.size(); ++s) *at++ = set.deformation(q, s);
-      });
-    }
-  }
-
-  const Model& model_;
+  const ModelView model_;
   const EnvelopeSpec* spec_;
   const Load* load_;
   EnvelopeRecord& out_;
@@ -159,7 +149,7 @@ class EnvelopeRecorder {
   const long n_steps_;
   long step_ = -1;
   double t_ = 0.0;
-  Vec v_, grad_, rate_, f_, a_;
+  Vec q_, p_, v_, grad_, rate_, f_, a_;
   std::vector<double> d_, s_;  // the springs' deformations and forces at the last step's end
 };
 

@@ -19,6 +19,7 @@
 
 #include "raydamp/concepts.hpp"
 #include "raydamp/diagnostics.hpp"
+#include "raydamp/record/marks.hpp"
 #include "raydamp/record/save_grid.hpp"
 #include "raydamp/record/spring_work.hpp"
 #include "raydamp/run_types.hpp"
@@ -32,9 +33,7 @@ inline constexpr long kReserveRows = 1L << 16;  // saved rows reserved before th
 template <class Model, int Dim, bool Trapezoid>
 class Recorder {
  public:
-  struct Marks {
-    double work = 0.0, power = 0.0, load_work = 0.0, power_f = 0.0;
-  };
+  using Marks = RecorderMarks;
 
   Recorder(const Model& model, const RunSpec& spec, WorkspaceFor<Model>& ws, Trajectory& out)
       : model_(model), ws_(ws), out_(out), dofs_(spec.save_dofs), j_(momentum_count(model)),
