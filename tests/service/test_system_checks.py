@@ -306,3 +306,14 @@ def test_a_check_past_only_the_wall_clock_is_429_not_422(warm_pool):
     assert refused.status_code == 429 and refused.headers["Retry-After"] == "5"
     assert "wall-clock" in refused.detail
     assert _when_started(warm_pool, lambda: warm_pool.call(sum, range(10))) == 45
+
+
+def test_check_processes_fork_warm_from_the_forkserver_and_the_server_stays_cold(warm_pool):
+    """The warm-up (a plot, three systems' compiles) runs once, in the check processes' forkserver, before any
+    fork: every check process starts with it done and none failed; the server itself never runs it."""
+    import sys
+
+    from raydamp_service.checks import pool as checks
+
+    assert warm_pool.call(checks._warm_up_failures) == 0
+    assert "raydamp_service.checks.warm" not in sys.modules

@@ -12,6 +12,7 @@ import os
 import resource
 import signal
 import sqlite3
+import sys
 import threading
 import time
 from concurrent.futures import TimeoutError as FutureTimeout
@@ -90,35 +91,16 @@ def _status_bytes(field: str) -> int:
     raise LookupError(field)
 
 
-# Checked before the memory budget applies: what a check loads on first use (SciPy, LLVM, fonts) is not charged.
-_WARM_UP = (
-    {"coordinates": 2, "potential": "q0^2 + q0*q1^3", "damping": {"dampers": [{"on": "q0 - q1"}]}, "eps": 0.1},
-    {"kind": "chain", "n": 4, "bond": "expression", "parameters": {"potential": "r^2/2 + r^4/4"}},
-    {"kind": "linear_structure", "M": {"diagonal": [1.0, 1.0]}, "alpha": 0.1, "beta": 0.01,
-     "K": {"coo": {"shape": [2, 2], "rows": [0, 0, 1, 1], "cols": [0, 1, 0, 1], "values": [2.0, -1.0, -1.0, 2.0]}}},
-)
-
-
 def _start_worker(settings: Settings) -> None:
-    """A check process's start: dies with the forkserver, warms up, then takes its memory budget."""
+    """A check process's start: dies with the forkserver, then takes its memory budget (forked warm: warm.py)."""
     global _files
     try:  # a check busy compiling never reads the pipe that would tell it the service has gone
         ctypes.CDLL(None).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
     except (OSError, AttributeError):
         pass
-    try:
-        import raydamp
-        from raydamp.models import DampedPendulum
+    from . import warm  # forked with it done (the forkserver's preload); else its import warms up here
 
-        raydamp.integrate(DampedPendulum(), [1.0], [0.0], h=0.1, n_steps=2).plot.png("energy", width=200, height=150)
-    except Exception:  # noqa: BLE001 - a warm-up only; a real plot reports its own errors
-        log.warning("check warm-up: a plot", exc_info=True)
-    for system in _WARM_UP:
-        spec = {"system": system, "method": "3s", "h": 0.01, "n_steps": 2, "initial_state": {"rest": True}}
-        try:
-            check_spec(JobSpec.model_validate(spec), settings)
-        except Exception:  # noqa: BLE001 - a warm-up only; a real check reports its own errors
-            log.warning("check warm-up: %s", spec, exc_info=True)
+    warm.touch(settings)
     _, hard = resource.getrlimit(resource.RLIMIT_AS)
     limit = _status_bytes("VmSize") + settings.check_memory_bytes
     resource.setrlimit(resource.RLIMIT_AS, (limit if hard == resource.RLIM_INFINITY else min(limit, hard), hard))
@@ -147,6 +129,12 @@ def _task(function, args: tuple, cpu_seconds: float) -> tuple[str, Any]:
     return ("cpu", used) if used > cpu_seconds else answer
 
 
+def _warm_up_failures() -> int | None:
+    """In a check process: how many of its forkserver's warm-up steps failed (warm.py); None if none ran."""
+    warm = sys.modules.get(f"{__package__}.warm")
+    return None if warm is None else warm.FAILED
+
+
 def _check_job(spec: JobSpec, settings: Settings) -> tuple[str, bytes] | None:
     check_spec(spec, settings, files=_files)
     return spec.compiled_form()
@@ -172,21 +160,38 @@ class CheckPool:
         self._settings = settings
         self._pending = threading.BoundedSemaphore(settings.max_pending_checks)
         self._pool: ProcessPool | None = None
+        self._starting: threading.Thread | None = None
         self.closed = False  # stop() was called: the processes are ended
 
     def start(self) -> None:
-        """Start the processes; the service answers while they warm up."""
+        """Start the processes; the service answers while they warm up (a check waits for them)."""
+        # Built on a thread of its own: the pool's first fork waits for the forkserver's preload (raydamp's import
+        # and warm.py, about a second), which the service's start need not wait for.
+        self._starting = threading.Thread(target=self._start_pool, name="raydamp-check-pool", daemon=True)
+        self._starting.start()
+
+    def _start_pool(self) -> None:
         context = multiprocessing.get_context("forkserver")
-        context.set_forkserver_preload([__name__])  # each process forks with raydamp imported
-        self._pool = ProcessPool(self._settings.check_workers, initializer=_start_worker,
-                                 initargs=(self._settings,), context=context)
-        self._pool.schedule(int)  # the processes start now: the first check need not wait for the forks
+        # Each process forks with raydamp imported and warmed up once, in the forkserver (warm.py), instead of
+        # each warming up on its own: a service start did the same plot and compiles once per check process.
+        context.set_forkserver_preload([__name__, f"{__package__}.warm"])
+        pool = ProcessPool(self._settings.check_workers, initializer=_start_worker, initargs=(self._settings,),
+                           context=context)
+        pool.schedule(int)  # the processes start now: the first check need not wait for the forks
+        self._pool = pool
+
+    def _started(self) -> ProcessPool | None:
+        """The pool, once built (waiting up to _START_SECONDS for it); None if it was not."""
+        if self._starting is not None:
+            self._starting.join(timeout=_START_SECONDS)
+        return self._pool
 
     def stop(self) -> None:
         self.closed = True
-        if self._pool is not None:
-            self._pool.stop()
-            self._pool.join(timeout=10)
+        pool = self._started()
+        if pool is not None:
+            pool.stop()
+            pool.join(timeout=10)
 
     def job(self, spec: JobSpec, files=None) -> RaydampCall | None:
         """Every check of a job (limits.check_spec), loading what it compiled; JobError naming the field, or
@@ -229,12 +234,13 @@ class CheckPool:
     def _run(self, function, args: tuple, where: tuple[str, ...], wait: bool = False, read=None) -> Any:
         """read(), if given, is read once a place is taken and goes first among args."""
         budget = self._settings.check_seconds
-        if self._pool is None or not self._pending.acquire(blocking=wait, timeout=budget if wait else None):
+        pool = self._started()
+        if pool is None or not self._pending.acquire(blocking=wait, timeout=budget if wait else None):
             raise ChecksBusy
         try:
             if read is not None:  # what the task needs from the server, read only once it has its place
                 args = (args[0], read(), *args[1:])
-            future = self._pool.schedule(_task, (function, args, budget), timeout=_WALL_FACTOR * budget)
+            future = pool.schedule(_task, (function, args, budget), timeout=_WALL_FACTOR * budget)
             try:
                 status, value = future.result(timeout=max(budget, _START_SECONDS))  # waiting for a process
             except FutureTimeout:
