@@ -15,6 +15,8 @@
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -367,18 +369,29 @@ class EventWatcher {
   void detect() {
     // The common step, scanned without a branch per event: every g and its rate keep their signs and
     // no g is zero. (A NaN may pass either way: locate() skips it.)
+    // On the values' bits: a sign that differs is the top bit of their xor, a zero (either sign) is a
+    // value whose bits but the sign are all 0. Integer operations with no dependence on a comparison's
+    // flags, which the compiler vectorises: the compared form cost a pendulum about 3 ns per event a step.
     const std::size_t m = g1_.size();
-    bool maybe = false;
-    for (std::size_t e = 0; e < m; ++e)
-      maybe |= (std::signbit(g0_[e]) != std::signbit(g1_[e])) | (std::signbit(dg0_[e]) != std::signbit(dg1_[e])) |
-               (g0_[e] == 0.0) | (g1_[e] == 0.0);
-    if (maybe) locate();
+    std::uint64_t signs = 0, zero = 0;
+    for (std::size_t e = 0; e < m; ++e) {
+      const std::uint64_t a = bits(g0_[e]), b = bits(g1_[e]);
+      signs |= (a ^ b) | (bits(dg0_[e]) ^ bits(dg1_[e]));
+      zero |= static_cast<std::uint64_t>((a << 1) == 0) | static_cast<std::uint64_t>((b << 1) == 0);
+    }
+    if ((signs >> 63) | zero) locate();
   }
 
   // On an affine g the interpolant is the cubic Hermite c(s) of g and h dg/dt at the step's ends, and
   // c(s) - chord(s) = s (1 - s) ((1 - s) a - s b), a = h g0' - (g1 - g0), b = h g1' - (g1 - g0): within
   // max(|a|, |b|) / 4 of the chord. With g0 and g1 of one sign and both further from 0 than that (with
   // a margin for rounding), c has no zero in the step, and the extremum need not be found.
+  static std::uint64_t bits(double x) {
+    std::uint64_t u;
+    std::memcpy(&u, &x, sizeof u);
+    return u;
+  }
+
   static bool keeps_sign(double g0, double g1, double dg0, double dg1, double h) {
     const double chord = g1 - g0, a = std::abs(h * dg0 - chord), b = std::abs(h * dg1 - chord);
     const double scale = std::abs(g0) + std::abs(g1) + std::abs(h * dg0) + std::abs(h * dg1);
