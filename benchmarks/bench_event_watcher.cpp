@@ -5,7 +5,7 @@
 // `perf record` on it shows where a step's time goes without the interpreter's share.
 // Prints figures; never passes or fails on time. An argument 0-3 runs that case only (for perf).
 //
-//   g++ -O3 -DNDEBUG -std=c++17 -DEIGEN_UNALIGNED_VECTORIZE=0 -Wno-psabi -I cpp/include -isystem /usr/include/eigen3 \
+//   g++ -O3 -DNDEBUG -std=c++17 -DEIGEN_UNALIGNED_VECTORIZE=0 -Wno-psabi -I cpp/include -isystem /usr/include/eigen3
 //       benchmarks/bench_event_watcher.cpp -o build/bench_event_watcher && build/bench_event_watcher
 #include <chrono>
 #include <cstdio>
