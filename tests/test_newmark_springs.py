@@ -188,3 +188,31 @@ def test_newmark_on_a_yielding_frame_is_order_2_to_the_splittings_answer(consist
         errors.append(np.max(np.abs(sol.q - fine.q)) / np.max(np.abs(fine.q)))
     assert np.max(np.abs(fine.spring_deformations)) > 2.0 / 400.0 * 3  # the storeys yield
     assert errors[1] <= 1e-3 and 3.0 <= errors[0] / errors[1] <= 5.0, errors  # measured 3.87, 4.22 (ductility 9-11)
+
+
+def test_a_json_job_runs_newmark_on_springs_and_refuses_it_elsewhere():
+    from raydamp.jobs import JobError, JobSpec, job_arguments, parse_job
+
+    job = {"system": sdof().to_dict(), "method": "newmark", "h": 0.01, "t_end": 3.0,
+           "initial_state": {"q": [0.0], "p": [0.0]}, "load": PULSE.to_dict()}
+    model, q0, p0, options = job_arguments(job)
+    assert options["method"] == "newmark"
+    np.testing.assert_array_equal(raydamp.integrate(model, q0, p0, **options).q, newmark(0.01, work=True).q)
+    # the job's schema lists newmark apart from raydamp.methods(), with its description
+    enums = [option for option in JobSpec.model_json_schema()["properties"]["method"]["anyOf"] if "enum" in option]
+    assert enums[0]["enum"] == list(dict.fromkeys(m.name for m in raydamp.methods()))
+    assert enums[1]["enum"] == ["newmark"] and structure_methods()[0].description in enums[1]["description"]
+    with pytest.raises(JobError, match="method: unknown method 'newmarc'") as error:
+        parse_job({**job, "method": "newmarc"})
+    assert error.value.loc == ("method",)
+    # newmark on a LinearStructure or a built-in model: the run's ValueError, at the job's method
+    from raydamp.jobs import error_at
+
+    for other in ({"system": raydamp.LinearStructure([[M]], [[K]], alpha=C / M).to_dict()},
+                  {"model": "damped_pendulum", "initial_state": {"q": [0.1], "p": [0.0]}}):
+        data = {**{k: v for k, v in job.items() if k not in ("system", "load")}, **other}
+        spec = parse_job(data)
+        model, q0, p0, options = job_arguments(data)
+        with pytest.raises(ValueError, match="method") as raised:
+            raydamp.integrate(model, q0, p0, **options)
+        assert error_at(spec, raised.value).loc == ("method",)

@@ -121,3 +121,44 @@ def test_a_file_of_a_run_without_the_forces_still_refuses_the_absolute_accelerat
     assert back.spring_forces is None
     with pytest.raises(ValueError, match=r"^absolute_acceleration: the springs' forces at the saved rows"):
         back.absolute_acceleration()
+
+
+def test_ensemble_members_record_their_springs_as_single_runs_do(frame_run, tmp_path):
+    """Each member's spring forces and deformations equal its single run's, bit for bit: its rows on the save
+    grid and, for a member that collapsed, its last state off it (each member its own record), in the
+    Structure's order of the springs (not the core's); the .nc and .zarr files keep them, with spring_i/_j."""
+    frame, _ = frame_run
+    t = np.arange(201) * 0.01
+    records = [raydamp.GroundMotion((t[:n], 30.0 * np.sin(2 * np.pi * f * t[:n])), np.ones(3))
+               for n, f in ((201, 1.5), (151, 1.2), (201, 2.0))]
+    q0 = np.array([[0.0, 0.0, 0.0], [0.01, 0.0, -0.01], [0.0, 0.02, 0.0]])
+    options = {"h": 0.005, "t_end": 2.0, "save_every": 3}
+    # a collapse limit between the members' peak drifts: those past it stop early, their last state off the grid
+    peaks = sorted(np.abs(raydamp.integrate(frame, q0[i], np.zeros(3), load=records[i], **options)
+                          .spring_deformations).max() for i in range(3))
+    limit = 0.5 * (peaks[0] + peaks[1])
+    ens = raydamp.integrate_ensemble(frame, q0, np.zeros_like(q0), load=records, threads=2, collapse=limit,
+                                     **options)
+    assert ens.status.count("collapsed") == 2 and ens.spring_forces.shape == (3, ens.t.size, 3), ens.status
+    assert any(ens.t_final[i] not in ens.t for i in range(3))  # the premise: a last state off the grid
+    for i in range(3):
+        one = raydamp.integrate(frame, q0[i], np.zeros(3), load=records[i], collapse=limit, **options)
+        member = ens.member(i)
+        assert one.status == ens.status[i] and peaks[0] > 4.0 / 300.0  # the premise: every member yields
+        # a collapse limit given as one number is one number in the job JSON (it raised a TypeError)
+        assert member.provenance["collapse"] == one.provenance["collapse"] == limit
+        np.testing.assert_array_equal(member.t, one.t)
+        np.testing.assert_array_equal(member.spring_forces, one.spring_forces)
+        np.testing.assert_array_equal(member.spring_deformations, one.spring_deformations)
+    for suffix in (".nc", ".zarr"):
+        ens.save(tmp_path / f"ensemble{suffix}")
+        back = raydamp.load(tmp_path / f"ensemble{suffix}")
+        for name in ("spring_forces", "spring_deformations", "spring_forces_final", "spring_deformations_final"):
+            np.testing.assert_array_equal(getattr(back, name), getattr(ens, name), err_msg=name)
+        np.testing.assert_array_equal(back.member(1).spring_forces, ens.member(1).spring_forces)
+    ds = ens.to_xarray()
+    assert ds["spring_forces"].dims == ("member", "time", "spring")
+    assert ds["spring_i"].values.tolist() == [1, 0, -1] and ds["spring_j"].values.tolist() == [2, 1, 0]
+    springless = raydamp.integrate_ensemble(raydamp.Structure(np.eye(3), np.eye(3), alpha=0.3), q0,
+                                            np.zeros_like(q0), h=0.01, n_steps=10)
+    assert springless.spring_forces is None and "spring" not in springless.to_xarray().dims

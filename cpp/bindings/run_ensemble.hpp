@@ -175,6 +175,13 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
                       J = filled({members, R, m}), q_final = filled({members, n}), p_final = filled({members, n}),
                       t_final = filled({members}), e_final = filled({members}), J_final = filled({members, m}),
                       drift = filled({members});
+  // A structure's springs, as a single run records them: sigma_s and d_s per saved row, core order.
+  py::ssize_t S = 0;
+  if constexpr (has_materials_v<Model>) S = static_cast<py::ssize_t>(member_model.front()->springs.size());
+  py::array_t<double> sf = filled({members, R, S}), sdef = filled({members, R, S}), sf_final = filled({members, S}),
+                      sdef_final = filled({members, S});
+  double *sfd = sf.mutable_data(), *sdd = sdef.mutable_data(), *sffd = sf_final.mutable_data(),
+         *sdfd = sdef_final.mutable_data();
   py::array_t<long> rows(members), steps(members), failed(members);
   std::vector<std::string> status(members), message(members);
   double *qd = q.mutable_data(), *pd = p.mutable_data(), *ed = e.mutable_data(), *Jd = J.mutable_data(),
@@ -206,6 +213,14 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
     std::copy(tr.q.begin() + last * n, tr.q.begin() + (last + 1) * n, qf + i * n);
     std::copy(tr.p.begin() + last * n, tr.p.begin() + (last + 1) * n, pf + i * n);
     std::copy(tr.momentum.begin() + last * m, tr.momentum.begin() + (last + 1) * m, Jf + i * m);
+    if (S > 0 && tr.n_springs == S) {  // its rows and last row, as q's
+      auto copy = [&](const std::vector<double>& from, double* to, double* to_final) {
+        std::copy(from.begin(), from.begin() + on_grid * S, to + i * R * S);
+        std::copy(from.begin() + last * S, from.begin() + (last + 1) * S, to_final + i * S);
+      };
+      copy(tr.spring_force, sfd, sffd);
+      copy(tr.spring_deformation, sdd, sdfd);
+    }
     tf[i] = tr.t[last];
     ef[i] = tr.energy[last];
     rd[i] = on_grid;
@@ -247,6 +262,12 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
   out["message"] = message;
   out["threads"] = ensemble_threads(threads, members);
   out["factorisations"] = factorisations;
+  if (S > 0) {
+    out["spring_force"] = sf;
+    out["spring_deformation"] = sdef;
+    out["spring_force_final"] = sf_final;
+    out["spring_deformation_final"] = sdef_final;
+  }
   if (events) out["events"] = ensemble_events(std::move(member_events), n);
   if (envelope) out["envelope"] = ensemble_envelopes(member_envelopes);
   return out;

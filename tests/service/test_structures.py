@@ -397,3 +397,45 @@ def test_a_matrix_path_is_refused_saying_the_service_reads_no_paths(module_serve
         detail = response.json()["detail"][0]
         assert response.status_code == 422 and detail["loc"] == ["body", "system", "K", "file"], response.text
         assert "the service reads no paths" in detail["msg"], detail
+
+
+def _newmark_job(material, load, h: float, t_end: float) -> dict:
+    """Chopra's SDOF (m = 0.2533, c = 0.159154) with one spring to the ground, run by newmark."""
+    system = raydamp.Structure([[0.2533]], springs=[raydamp.Spring((0,), material)], alpha=0.159154 / 0.2533)
+    return {"system": system.to_dict(), "method": "newmark", "h": h, "t_end": t_end,
+            "initial_state": {"q": [0.0], "p": [0.0]}, "load": load.to_dict()}
+
+
+def test_newmark_runs_a_structure_with_springs_and_is_422_on_other_systems(module_server):
+    """Issue 42: a job may ask for newmark on a Structure with springs; its numbers are the Python call's, bit
+    for bit; a run that does not converge keeps its rows and names the step; another system is a 422 at
+    method; /v1/structure_methods lists it with its description."""
+    from raydamp.jobs import job_arguments
+    from raydamp.materials import Bilinear, ElasticPlastic
+    from raydamp.methods.catalogue import structure_methods
+
+    assert module_server.client.get("/v1/structure_methods").json() == [m._asdict() for m in structure_methods()]
+    pulse = raydamp.Load.harmonic([10.0], np.pi / 0.6, t_end=0.6)
+    # a softening storey (b = -0.9) pushed past its capacity at h = 0.5: Newton fails at step 21
+    push = raydamp.Load.harmonic([15.0], 0.05)
+    specs = [_newmark_job(ElasticPlastic(10.0, 7.5), pulse, 0.01, 3.0),
+             _newmark_job(Bilinear(10.0, 7.5, -0.9), push, 0.5, 20.0)]
+    ids = [module_server.submit(spec) for spec in specs]
+    for job_id, spec, finished in zip(ids, specs, ("completed", "failed")):
+        done = module_server.wait_finished(job_id)
+        model, q0, p0, options = job_arguments(spec)
+        here = raydamp.integrate(model, q0, p0, **options)
+        assert done["status"] == finished and done["summary"]["status"] == here.status, done
+        trajectory = module_server.client.get(f"/v1/jobs/{job_id}/trajectory").json()
+        np.testing.assert_array_equal(np.array(trajectory["q"]), here.q)
+        np.testing.assert_array_equal(np.array(trajectory["energy"]), here.energy)
+    assert here.status == "not_converged" and len(here.t) >= 2  # the premise: the second run stops early
+    assert done["failed_step"] == here.failed_step and f"step {here.failed_step} " in done["error"]
+    assert len(trajectory["t"]) == done["failed_step"] >= 20  # its rows, up to the step that failed
+    linear = raydamp.LinearStructure([[0.2533]], [[10.0]], alpha=0.159154 / 0.2533)
+    refused = module_server.client.post("/v1/jobs", json={**specs[0], "system": linear.to_dict()})
+    assert ["body", "method"] in locs(refused)
+    assert "newmark" in refused.json()["detail"][0]["msg"]
+    model_job = {"model": "damped_pendulum", "method": "newmark", "h": 0.01, "n_steps": 10,
+                 "initial_state": {"q": [0.1], "p": [0.0]}}
+    assert ["body", "method"] in locs(module_server.client.post("/v1/jobs", json=model_job))

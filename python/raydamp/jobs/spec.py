@@ -27,7 +27,7 @@ from pydantic import (
 
 from .. import _core
 from ..loads.forms import LOAD_TAGS, GroundMotionInput, LoadInput
-from ..methods.catalogue import compositions, methods
+from ..methods.catalogue import compositions, methods, structure_methods
 from ..systems.models import MODELS, make_model
 from .envelope_forms import COLLAPSE_TAGS, ENVELOPE_QUANTITIES, CollapseValue, EnvelopeName
 from .errors import JobError
@@ -67,8 +67,21 @@ def _one_of(what: str, names: list[str]) -> Any:
     return Annotated[str, AfterValidator(check), WithJsonSchema({"type": "string", "enum": names})]
 
 
+def _method_name() -> Any:
+    """A method's name: one of raydamp.methods(), or one of the methods that run a Structure with springs only
+    (structure_methods(): newmark). The schema lists the two as two enums, each with its description, so that
+    a client sees which names need that kind; running one on another kind is refused by the run's check."""
+    general = list(dict.fromkeys(m.name for m in methods()))
+    apart = [m for m in structure_methods() if m.name not in general]
+    checked = _one_of("method", general + [m.name for m in apart])
+    schema = {"anyOf": [{"type": "string", "enum": general, "description": "raydamp.methods() (GET /v1/methods)"},
+                        *({"type": "string", "enum": [m.name], "description": f"a raydamp.Structure with springs "
+                           f"only (GET /v1/structure_methods): {m.description}"} for m in apart)]}
+    return Annotated[checked, WithJsonSchema(schema)]
+
+
 ModelName = _one_of("model", list(MODELS))
-MethodName = _one_of("method", [m.name for m in methods()])
+MethodName = _method_name()
 TableauName = _one_of("tableau", [m.tableau for m in methods() if m.tableau is not None])
 CompositionName = _one_of("composition", [c.name for c in compositions()])
 ParameterValue = Annotated[Annotated[FiniteFloat, Tag("number form")] | Annotated[Vector, Tag("vector form")],
@@ -119,6 +132,11 @@ def _exactly_one(first: str, second: str, first_type: str, second_type: str) -> 
 def _flat(schema: dict) -> None:
     """A name or a table, or null, as one anyOf (the forms' oneOf spliced in): a client sees the names' enum."""
     schema["anyOf"] = [form for option in schema.get("anyOf", []) for form in option.get("oneOf", [option])]
+
+
+def _flat_names(schema: dict) -> None:
+    """The method's two enums, or null, as one anyOf: a client's tools see each enum at the top."""
+    schema["anyOf"] = [form for option in schema.get("anyOf", []) for form in option.get("anyOf", [option])]
 
 
 def _job_schema(schema: dict) -> None:
@@ -182,9 +200,11 @@ class JobSpec(ModelSpec):
                               json_schema_mode_override="validation")
 
     method: MethodName | None = Field(
-        None, description="a name from raydamp.methods() (GET /v1/methods); null or absent: raydamp chooses (3s, "
-                          "except for a linear structure on which 3s is a trap: see raydamp.run.choose_method), and "
-                          "the result's provenance names the method and why")
+        None, description="a name from raydamp.methods() (GET /v1/methods), or for a structure with springs "
+                          "\"newmark\" (GET /v1/structure_methods; any other system is refused); null or absent: "
+                          "raydamp chooses (3s, except for a linear structure on which 3s is a trap: see "
+                          "raydamp.run.choose_method), and the result's provenance names the method and why",
+        json_schema_extra=lambda schema: _flat_names(schema))
     tableau: TableauChoice | None = Field(
         None, description="Runge-Kutta tableau for rks, rksb and rk: a name, or your own {A, b, c}",
         json_schema_extra=lambda schema: _flat(schema))

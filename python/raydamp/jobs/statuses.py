@@ -24,7 +24,9 @@ MEANINGS: dict[str, str] = {
                 "stopped at failed_step, keeping its rows.",
     "event": "a terminal event (raydamp.Event(..., terminal=True)) ended the run at its crossing time, the last "
              "step shortened to land there; the message names the event.",
-    "not_converged": "reserved: an implicit step's iteration did not converge.",
+    "not_converged": "an implicit step's iteration did not converge (method=\"newmark\": Newton's iteration on a "
+                     "Structure's springs, step halving included) at failed_step; the message names the step, and "
+                     "the rows before it are kept.",
     "collapsed": "a spring's drift passed its collapse limit (integrate's collapse, raydamp.ida's collapse_drift): "
                  "the run stopped at that step's end, keeping its rows and its envelope; the message names the "
                  "spring.",

@@ -71,8 +71,9 @@ def linear_structure_methods() -> frozenset[str]:
 def structure_methods() -> list[MethodInfo]:
     """The methods that run only a :class:`raydamp.Structure` with springs: 'newmark', Newmark's average
     acceleration (gamma = 1/2, beta = 1/4) with Newton's iteration on the springs' consistent tangent at
-    every step, as OpenSees runs it (``integrate(structure, ..., method="newmark")``; any other kind refuses
-    it with a ValueError naming the method). A step whose iteration does not converge ends the run with
+    every step, as OpenSees runs it (``integrate(structure, ..., method="newmark")``, a job's ``"method":
+    "newmark"``; GET /v1/structure_methods lists it; any other kind refuses it with a ValueError naming the
+    method, a 422 at ``method`` in the service). A step whose iteration does not converge ends the run with
     status "not_converged", its message naming the step, and the rows before it kept."""
     return [MethodInfo(**{k: row[k] for k in MethodInfo._fields}) for row in _core.methods()
             if row["structure_only"]]

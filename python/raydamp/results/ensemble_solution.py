@@ -32,6 +32,9 @@ class EnsembleSolution:
     q, p : (members, R, n); energy : (members, R); momentum : (members, R, m).
     rows : (members,) rows of the grid each member reached.
     t_final, q_final, p_final, energy_final, momentum_final : each member's last state.
+    spring_forces, spring_deformations : (members, R, springs), a Structure's springs in its order (None
+        without springs): sigma_s (from the row's material state) and d_s, as ``Solution.spring_forces``;
+        spring_forces_final, spring_deformations_final : (members, springs) at each member's last state.
     status, message : per member (tuples of str); steps, failed_step (-1: none),
         max_momentum_drift : (members,) arrays.
     q0, p0 : (members, n) initial states; parameters : {name: per-member values}.
@@ -76,6 +79,10 @@ class EnsembleSolution:
     origin: Any = field(default=None, compare=False)
     events: Any = field(default=None, compare=False)  # run/events.py's EventTable (with member), with events=
     envelope: Any = field(default=None, compare=False)  # a Dataset (member, dof | spring) of peaks, with envelope=
+    spring_forces: np.ndarray | None = field(default=None)
+    spring_deformations: np.ndarray | None = field(default=None)
+    spring_forces_final: np.ndarray | None = field(default=None)
+    spring_deformations_final: np.ndarray | None = field(default=None)
 
     @property
     def members(self) -> int:
@@ -149,6 +156,8 @@ class EnsembleSolution:
         extra = g == 0 or self.t_final[i] != self.t[g - 1]
 
         def rows(grid, final):
+            if grid is None:
+                return None
             part = grid[i, :g]
             return np.concatenate([part, final[i][None]]) if extra else part.copy()
 
@@ -157,6 +166,8 @@ class EnsembleSolution:
         return Solution(t=t, q=rows(self.q, self.q_final), p=rows(self.p, self.p_final),
                         energy=rows(self.energy, self.energy_final),
                         momentum=rows(self.momentum, self.momentum_final), status=self.status[i],
+                        spring_forces=rows(self.spring_forces, self.spring_forces_final),
+                        spring_deformations=rows(self.spring_deformations, self.spring_deformations_final),
                         steps=int(self.steps[i]), failed_step=None if failed < 0 else failed,
                         message=self.message[i], method=self.method, tableau=self.tableau,
                         composition=self.composition, h=self.h,

@@ -41,7 +41,7 @@ def job_spec(model: Model, q0: np.ndarray, p0: np.ndarray, *, method: str, table
     if envelope:
         spec["envelope"] = list(envelope)
     if collapse is not None:
-        spec["collapse"] = list(collapse)
+        spec["collapse"] = collapse if isinstance(collapse, (int, float)) else list(collapse)  # one for all, or each
     if thermal is not None:
         kT, seed, stream = thermal
         spec.update({"temperature": kT, "seed": seed})

@@ -132,6 +132,9 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
     envelope, collapse : each member's peaks and collapse limits, as :func:`raydamp.integrate`'s;
         ``EnsembleSolution.envelope`` is a Dataset with dims (member, dof | spring), its
         ``collapsed_spring`` per member (-1: none). A collapsed member stops alone ("collapsed").
+        A Structure with springs records each member's spring forces and deformations at its saved rows
+        (``EnsembleSolution.spring_forces``, ``spring_deformations``: (members, R, springs)), as a single
+        run's ``Solution.spring_forces`` holds them.
 
     Member i's result equals ``raydamp.integrate`` of that member alone, bit for bit, whatever
     ``threads`` is: each member runs the same compiled step loop. A member that blows up stops
@@ -201,7 +204,8 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
         raise ValueError(f"cancel must be a raydamp.CancelToken or None, got {cancel!r}")
     vector_sine = flag("vector_sine", vector_sine)
     rows = save_rows(n_steps, save_every)
-    row_bytes = 8 * (1 + 2 * n + len(system.momentum_names))
+    springs = len(getattr(system, "springs", ()) or ())  # a Structure's springs add sigma_s and d_s per row
+    row_bytes = 8 * (1 + 2 * n + len(system.momentum_names) + 2 * springs)
     if members * rows * row_bytes > MAX_SAVED_BYTES:
         raise ValueError(f"save_every: {members} members x {rows} saved points would take "
                          f"{members * rows * row_bytes / 2**30:.1f} GiB (limit {MAX_SAVED_BYTES / 2**30:.0f} GiB); "
@@ -243,8 +247,14 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
         q0=q0, p0=p0, parameters={**params, **load_arrays}, method=method,
         tableau=resolved_tableau if method in with_tableau else None, composition=composition_name, h=h,
         wall_time=wall, threads=out["threads"], origin=(system, options),
+        **{name: _envelope.users_springs(system, out.get(key)) for name, key in _SPRING_KEYS.items()},
         **(_events.results(watch, out) if watch else {}),
         **({"envelope": _envelope.dataset(peaks, out, out["q_final"], ensemble=True)} if peaks else {}))
+
+
+# EnsembleSolution's per-spring arrays and the core's keys for them (core order; users_springs reorders).
+_SPRING_KEYS = {"spring_forces": "spring_force", "spring_deformations": "spring_deformation",
+                "spring_forces_final": "spring_force_final", "spring_deformations_final": "spring_deformation_final"}
 
 
 def _split_load_parameters(parameters, load: Load | None) -> tuple[Any, dict[str, Any]]:

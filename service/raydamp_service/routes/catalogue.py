@@ -1,10 +1,12 @@
-"""GET /v1/models, /v1/methods and /v1/compositions: what a job may ask for, read from raydamp's own catalogue."""
+"""GET /v1/models, /v1/methods, /v1/structure_methods and /v1/compositions: what a job may ask for, read from
+raydamp's own catalogue."""
 
 from __future__ import annotations
 
 from fastapi import APIRouter
 
 import raydamp
+from raydamp.methods.catalogue import structure_methods
 from raydamp.models import describe_models
 
 from ..schemas import CompositionInfo, MethodInfo, ModelInfo
@@ -22,6 +24,15 @@ def list_models() -> list[ModelInfo]:
 def list_methods() -> list[MethodInfo]:
     """Every usable (method, tableau) pair with its order."""
     return [MethodInfo.model_validate(method._asdict()) for method in raydamp.methods()]
+
+
+@router.get("/structure_methods", response_model=list[MethodInfo])
+def list_structure_methods() -> list[MethodInfo]:
+    """The methods that run only a structure with springs ({"kind": "structure", "springs": [...]}): newmark,
+    Newmark's average acceleration with Newton's iteration on the springs, as OpenSees runs it. A job naming one
+    on any other system is refused (422 at `method`); a step that does not converge ends the job's run with
+    status not_converged, naming the step, its rows kept."""
+    return [MethodInfo.model_validate(method._asdict()) for method in structure_methods()]
 
 
 @router.get("/compositions", response_model=list[CompositionInfo])

@@ -12,7 +12,7 @@ import numpy as np
 from ..._validation import replaceable_store
 from ...jobs.statuses import STATUSES
 
-__all__ = ["ensemble_to_xarray", "save_ensemble", "ENSEMBLE_FORMATS"]
+__all__ = ["ensemble_to_xarray", "save_ensemble", "ENSEMBLE_FORMATS", "ENSEMBLE_SPRING_ARRAYS"]
 
 ENSEMBLE_FORMATS = (".nc", ".zarr")
 
@@ -55,6 +55,8 @@ def ensemble_to_xarray(ens: Any):
     }
     coords = {"member": np.arange(ens.members), "t": (("time",), ens.t), "dof": list(ens.coordinates),
               "momentum_map": list(ens.momentum_names), **_member_coordinates(ens.parameters)}
+    if ens.spring_forces is not None:
+        _add_springs(ens, data, coords)
     provenance = ens.provenance or {}
     messages = {str(i): m for i, (s, m) in enumerate(zip(ens.status, ens.message)) if s != "completed"}
     attrs = {"kind": "ensemble", "provenance": json.dumps(provenance), "method": ens.method,
@@ -62,6 +64,34 @@ def ensemble_to_xarray(ens: Any):
              "wall_time": ens.wall_time, "threads": ens.threads, "parameters": json.dumps(list(ens.parameters)),
              "messages": json.dumps(messages), "raydamp_version": provenance.get("raydamp_version", "")}
     return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+# An ensemble's per-spring arrays: (member, time, spring) at the saved rows, (member, spring) at the last state.
+ENSEMBLE_SPRING_ARRAYS = {
+    "spring_forces": ("spring force sigma_s (from that row's material state; NaN past a member's rows)", "time"),
+    "spring_deformations": ("spring deformation d_s = q_j - q_i (q_j to the ground)", "time"),
+    "spring_forces_final": ("spring force at the member's last state", None),
+    "spring_deformations_final": ("spring deformation at the member's last state", None),
+}
+
+
+def _add_springs(ens: Any, data: dict[str, Any], coords: dict[str, Any]) -> None:
+    """A Structure's spring arrays, with each spring's coordinates (spring_i = -1: the ground) as a single run's
+    file gives them (io/dataset.py)."""
+    for name, (long_name, time) in ENSEMBLE_SPRING_ARRAYS.items():
+        dims = ("member", "time", "spring") if time else ("member", "spring")
+        data[name] = (dims, getattr(ens, name), {"long_name": long_name})
+    width = ens.spring_forces.shape[2]
+    coords["spring"] = np.arange(width)
+    if isinstance(ens.origin, tuple):
+        springs = [s.dofs for s in getattr(ens.origin[0], "springs", ())]
+    else:
+        system = (ens.provenance or {}).get("system")
+        springs = [s.get("dofs") for s in (system or {}).get("springs") or () if isinstance(s, dict)]
+    if len(springs) == width and all(isinstance(d, (list, tuple)) for d in springs):
+        coords["spring_i"] = (("spring",), np.array([int(d[0]) if len(d) == 2 else -1 for d in springs], np.int64),
+                              {"long_name": "d = q[spring_j] - q[spring_i]; -1: the ground"})
+        coords["spring_j"] = (("spring",), np.array([int(d[-1]) for d in springs], np.int64))
 
 
 def save_ensemble(ens: Any, path) -> None:

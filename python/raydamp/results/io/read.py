@@ -15,6 +15,7 @@ from ..._validation import _short
 from ...jobs.statuses import STATUSES
 from ..ensemble_solution import EnsembleSolution
 from ..solution import Solution
+from .ensemble import ENSEMBLE_SPRING_ARRAYS
 from .solution import from_npz, from_xarray
 
 __all__ = ["load", "ensemble_from_xarray"]
@@ -91,4 +92,5 @@ def ensemble_from_xarray(ds) -> EnsembleSolution:
         max_momentum_drift=values("max_momentum_drift"), q0=values("q0"), p0=values("p0"),
         parameters={name: values(name) for name in json.loads(attrs["parameters"])}, method=str(attrs["method"]),
         tableau=str(attrs["tableau"]) or None, composition=str(attrs["composition"]) or None, h=float(attrs["h"]),
-        wall_time=float(attrs["wall_time"]), threads=int(attrs["threads"]), origin=json.loads(attrs["provenance"]))
+        wall_time=float(attrs["wall_time"]), threads=int(attrs["threads"]), origin=json.loads(attrs["provenance"]),
+        **{name: values(name) for name in ENSEMBLE_SPRING_ARRAYS if name in ds})
