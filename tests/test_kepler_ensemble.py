@@ -141,8 +141,12 @@ def test_cancel_in_a_batch_keeps_each_members_rows():
     for i in partly[:3] + partly[-1:]:
         stop = raydamp.CancelToken()
         at = int(ens.steps[i])
+        def cancel_at(done, total, at=at, stop=stop):
+            if done >= at:
+                stop.cancel()
+
         single = raydamp.integrate(k, q0[i], p0[i], method="2s", h=0.01, n_steps=steps, save_every=2560,
-                                   cancel=stop, progress=lambda done, total, at=at, stop=stop: done >= at and stop.cancel())
+                                   cancel=stop, progress=cancel_at)
         assert single.steps == at
         assert_same_run(ens.member(i), single, i)
     for i in [i for i in range(members) if ens.status[i] == "completed"][:3]:
