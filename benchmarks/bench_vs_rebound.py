@@ -92,6 +92,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 import raydamp
+from raydamp import _core
 
 try:
     import rebound
@@ -566,11 +567,24 @@ def two_planets(repeats: int) -> None:
 
 
 # ---------------------------------------------------------------------------------------------- ensemble
-# The rows before short drifts were formed in double (flows/kepler.hpp, kShortReach), for the side by side:
-# (method, one Kepler with the orbits as particles?) -> ns per member per step. benchmarks/bench_kepler_drift.cpp
-# times the two drifts themselves in one process.
+# Earlier figures of the same rows, for the side by side: (method, one Kepler with the orbits as particles?) ->
+# ns per member per step. Before short drifts were formed in double (flows/kepler.hpp, kShortReach;
+# benchmarks/bench_kepler_drift.cpp times the two drifts themselves in one process), and before
+# integrate_ensemble ran members that share mu, mass and eps as one model's particles
+# (ensemble/lanes_kepler.hpp), when each member was a run of its own.
 BEFORE_SHORT_STEPS = {("2s", True): "88 ns", ("2s", False): "101 ns", ("3s", True): "163 ns",
                       ("3s", False): "not recorded"}
+BEFORE_LANES = {("2s", True): "35 ns", ("2s", False): "66 ns", ("3s", True): "not recorded",
+                ("3s", False): "not recorded"}  # the row "each member its own run" measures the second now
+
+
+def one_by_one(method: str, q0: np.ndarray, p0: np.ndarray, h: float, steps: int) -> dict:
+    """integrate_ensemble as it ran before members were batched, each member its own run: through the core's
+    door with two models of eps a rounding apart, alternating, so that no two neighbours share a batch."""
+    models = [raydamp.Kepler(mu=MU, eps=e) for e in (EPS, EPS * (1 + 2**-50))]
+    index = np.arange(len(q0)) % 2
+    return _core.Planets.integrate_ensemble([m._core_model for m in models], index, [], np.zeros((len(q0), 0)),
+                                            method, "", "", q0, p0, h, steps, h, steps, 1, None, None)
 
 
 def ensemble(members: int, h: float, t_end: float, repeats: int) -> None:
@@ -586,7 +600,8 @@ def ensemble(members: int, h: float, t_end: float, repeats: int) -> None:
     steps = round(t_end / h)
 
     # raydamp's two doors: one Kepler with the orbits as its particles, and integrate_ensemble over one-particle
-    # members on one thread. Wall seconds and the process's CPU seconds (on a loaded machine the second moves less).
+    # members on one thread (which runs them as the particles of one model, in batches, and splits them back).
+    # Wall seconds and the process's CPU seconds (on a loaded machine the second moves less).
     single = raydamp.Kepler(mu=MU, mass=1.0, dim=2, particles=1, eps=EPS)
     many = raydamp.Kepler(mu=MU, mass=1.0, dim=2, particles=members, eps=EPS)
     for method in ("3s", "2s"):
@@ -597,6 +612,8 @@ def ensemble(members: int, h: float, t_end: float, repeats: int) -> None:
              lambda method=method: raydamp.integrate_ensemble(single, q0.reshape(members, 2), p0.reshape(members, 2),
                                                               method=method, h=h, t_end=t_end, save_every=steps,
                                                               threads=1)),
+            ("integrate_ensemble, each member its own run",
+             lambda method=method: one_by_one(method, q0.reshape(members, 2), p0.reshape(members, 2), h, steps)),
         ):
             best, cpu = math.inf, math.inf
             for _ in range(repeats):
@@ -604,9 +621,12 @@ def ensemble(members: int, h: float, t_end: float, repeats: int) -> None:
                 call()
                 best, cpu = min(best, time.perf_counter() - w0), min(cpu, time.process_time() - c0)
             per, per_cpu = 1e9 * best / (members * steps), 1e9 * cpu / (members * steps)
-            before = BEFORE_SHORT_STEPS[method, door.startswith("one")]
+            particles = door.startswith("one")
+            earlier = "" if door.endswith("own run") else (
+                f"; before, {BEFORE_LANES[method, particles]} on 2026-11-29, load 3.5; with every drift in long "
+                f"double: {BEFORE_SHORT_STEPS[method, particles]}, load 1.9")
             print(f"  raydamp {method}, {door}: {steps} steps in {best:.3e} s = {per:.1f} ns per member per step "
-                  f"(CPU {per_cpu:.1f} ns; with every drift in long double: {before} on 2026-11-29, load 1.9)")
+                  f"(CPU {per_cpu:.1f} ns{earlier})")
     if rebound is None:
         return
     for label, op in (("WHFast + REBOUNDx force", None), ("WHFast + REBOUNDx RK4 operator", "rk4")):

@@ -137,8 +137,10 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
         run's ``Solution.spring_forces`` holds them.
 
     Member i's result equals ``raydamp.integrate`` of that member alone, bit for bit, whatever
-    ``threads`` is: each member runs the same compiled step loop. A member that blows up stops
-    alone, with its status and the rows it saved. The GIL is released during the run.
+    ``threads`` is: each member runs the same compiled step loop. (Kepler members that share mu, mass
+    and eps run by 3s, 2s or sv as the particles of one model, in batches: their rows and outcome are
+    still their single runs' bit for bit, but ``max_momentum_drift`` is the largest of their batch's.)
+    A member that blows up stops alone, with its status and the rows it saved. The GIL is released during the run.
     """
     if not isinstance(system, Model):
         raise ValueError(f"system must be a raydamp model or System, got {system!r}")

@@ -18,6 +18,10 @@ Methods: sv (eps = 0), 3s, 2s, baoab and rks, with compositions. A method that s
 energy as a free drift inside a Runge-Kutta or implicit stage (rksb, heun, rk4, rk, midpoint,
 gauss4) would integrate another system, and is refused.
 
+``raydamp.integrate_ensemble`` of one-particle Kepler members (an ensemble of decaying orbits) by 3s, 2s
+or sv runs them in batches as the particles of one model, at the cost per orbit of ``Kepler(particles=N)``;
+each member's rows equal its single run's, its ``max_momentum_drift`` is the largest of its batch's.
+
     >>> k = raydamp.Kepler(mu=1.0, eps=1e-3)
     >>> q0, p0 = k.pericentre_state(1.0, e=0.5)
     >>> sol = raydamp.integrate(k, q0, p0, method="3s", h=0.05, t_end=1000, save_every=100)

@@ -2,7 +2,8 @@
 // spread over threads (ensemble.hpp), each handed to store(i, RunResult&&) as it ends. A member is a
 // single run (integrate_model), so member i equals its single run bit for bit, and a member that
 // fails (blows up, diverges) ends with its own status while the others run on. Members of the damped
-// pendulum that share eps run as the SIMD lanes of one run (lanes.hpp) and are split back.
+// pendulum that share eps run as the SIMD lanes of one run (lanes.hpp), and Kepler test particles that
+// share their parameters as the particles of one (lanes_kepler.hpp); both are split back.
 #pragma once
 
 #include <algorithm>
@@ -17,6 +18,7 @@
 
 #include "raydamp/ensemble.hpp"
 #include "raydamp/ensemble/lanes.hpp"
+#include "raydamp/ensemble/lanes_kepler.hpp"
 #include "raydamp/errors.hpp"
 #include "raydamp/implicit/linear_implicit_step.hpp"
 #include "raydamp/integrate.hpp"
@@ -113,30 +115,55 @@ int run_members(const std::vector<const Model*>& models, const std::vector<const
       rethrow_prefixed("member " + std::to_string(i) + ": ", e);
     }
   };
+  // Runs each batch with run_batch(batch) on the threads, progress counted in members.
+  auto for_each_batch = [&](const std::vector<LaneBatch>& batches, const auto& run_batch) {
+    std::atomic<long> finished{0};
+    EnsembleControl batch_control;
+    long reported = 0;  // called under for_each_member's lock: members counts only grow, as there
+    if (control.progress)
+      batch_control.progress = [&](long, long) {
+        const long now = finished.load();
+        if (now > reported) control.progress(reported = now, members);
+      };
+    for_each_member(static_cast<long>(batches.size()), ens.threads, [&](long b) {
+      run_batch(batches[b]);
+      finished.fetch_add(batches[b].end - batches[b].begin);
+    }, batch_control);
+  };
   if constexpr (lanes) {
     if (!loaded && !watched) {  // the lanes' step has no clock, nor events: such members run one by one
       // Runs of members sharing eps go as the lanes of one run (lanes.hpp).
-      const std::vector<LaneBatch> batches =
-          lane_batches(models, batch_lanes(members, ensemble_threads(ens.threads, members)));
-      std::atomic<long> finished{0};
-      EnsembleControl batch_control;
-      long reported = 0;  // called under for_each_member's lock: members counts only grow, as there
-      if (control.progress)
-        batch_control.progress = [&](long, long) {
-          const long now = finished.load();
-          if (now > reported) control.progress(reported = now, members);
-        };
-      for_each_member(static_cast<long>(batches.size()), ens.threads, [&](long b) {
-        const LaneBatch& batch = batches[b];
-        // With vector_sine every member runs as a lane, so that its sines are math::sin's.
-        if (batch.end - batch.begin < kMinLanes && !ens.vector_sine) {
-          for (long i = batch.begin; i < batch.end; ++i) run_member(i);
-        } else {
-          run_lanes<Method>(*models[batch.begin], batch, tab, comp, q0, p0, spec, ens.first_stream, member_control,
-                            ens.vector_sine, store, run_member);
-        }
-        finished.fetch_add(batch.end - batch.begin);
-      }, batch_control);
+      for_each_batch(lane_batches(models, batch_lanes(members, ensemble_threads(ens.threads, members))),
+                     [&](const LaneBatch& batch) {
+                       // With vector_sine every member runs as a lane, so that its sines are math::sin's.
+                       if (batch.end - batch.begin < kMinLanes && !ens.vector_sine) {
+                         for (long i = batch.begin; i < batch.end; ++i) run_member(i);
+                       } else {
+                         run_lanes<Method>(*models[batch.begin], batch, tab, comp, q0, p0, spec, ens.first_stream,
+                                           member_control, ens.vector_sine, store, run_member);
+                       }
+                     });
+      return factorisations;
+    }
+  }
+  // Kepler test particles by 3s, 2s, sv and their compositions: runs of members with the same parameters go
+  // as the particles of one run (lanes_kepler.hpp). Not with a load, noise, events, envelopes or saved
+  // coordinates, which the batch would see as one run's. Only those methods (baoab serves a temperature,
+  // rks is a tableau's): each instantiates the splitting back once more.
+  constexpr bool kepler_lanes =
+      std::is_same_v<Model, Planets> && (std::is_same_v<Method, ThreeTermSplitting> ||
+                                         std::is_same_v<Method, TwoTermSplitting> || std::is_same_v<Method, StormerVerlet>);
+  if constexpr (kepler_lanes) {
+    if (!loaded && !watched && spec.temperature == 0.0 && !spec.track_work && spec.save_dofs.empty()) {
+      for_each_batch(kepler_batches(models, batch_lanes(members, ensemble_threads(ens.threads, members))),
+                     [&](const LaneBatch& batch) {
+                       if (batch.end - batch.begin < kMinLanes) {
+                         for (long i = batch.begin; i < batch.end; ++i) run_member(i);
+                       } else {
+                         run_kepler_lanes<Method>(*models[batch.begin], batch, tab, comp, q0, p0, spec,
+                                                  member_control, store, run_member);
+                       }
+                     });
       return factorisations;
     }
   }

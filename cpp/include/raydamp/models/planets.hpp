@@ -142,6 +142,10 @@ struct Planets {
   std::vector<double> mu;      // per planet, G eta_i
   double eps;                  // the largest drag rate (0: no drag; the methods that ignore damping check it)
   bool interacting = true;     // false: test particles about a fixed central body (no kick)
+  // The momentum maps are listed per group of planets / groups consecutive bodies: an ensemble's members
+  // that run as one model's particles (ensemble/lanes_kepler.hpp) each keep their own L, so the step
+  // loop's drift from the law is the largest of the members' own.
+  int groups = 1;
   JacobiMass mass;
   PlanetDrag damping;
 
@@ -191,7 +195,7 @@ struct Planets {
   }
 
   int size() const { return d * planets; }
-  int momentum_count() const { return damping.uniform() ? (d == 2 ? 1 : 3) : 0; }
+  int momentum_count() const { return damping.uniform() ? (d == 2 ? 1 : 3) * groups : 0; }
 
   // Positions relative to the central body, x_0 = 0, from Jacobi Q: x_i = X_{i-1} + Q_i with
   // X_i = X_{i-1} + (m_i / eta_i) Q_i (the inner centre of mass, relative to body 0).
@@ -281,21 +285,27 @@ struct Planets {
   }
 
   // The total angular momentum, sum_i Q_i x P_i (the Jacobi map is a point transformation, so this is
-  // the barycentric one), listed when every planet has the same drag (then L(t) = L(0) e^{-eps t}).
+  // the barycentric one), listed when every planet has the same drag (then L(t) = L(0) e^{-eps t}); one
+  // per group (see groups), each summed over its bodies in order.
   void momenta(const Vec& q, const Vec& p, double* out) const {
     if (!damping.uniform()) return;
-    if (d == 2) {
-      double lz = 0.0;
-      for (int i = 0; i < planets; ++i) lz += q[2 * i] * p[2 * i + 1] - q[2 * i + 1] * p[2 * i];
-      out[0] = lz;
-      return;
-    }
-    out[0] = out[1] = out[2] = 0.0;
-    for (int i = 0; i < planets; ++i) {
-      const int k = 3 * i;
-      out[0] += q[k + 1] * p[k + 2] - q[k + 2] * p[k + 1];
-      out[1] += q[k + 2] * p[k] - q[k] * p[k + 2];
-      out[2] += q[k] * p[k + 1] - q[k + 1] * p[k];
+    const int per = planets / groups;
+    for (int g = 0; g < groups; ++g) {
+      const int first = g * per, last = first + per;
+      if (d == 2) {
+        double lz = 0.0;
+        for (int i = first; i < last; ++i) lz += q[2 * i] * p[2 * i + 1] - q[2 * i + 1] * p[2 * i];
+        out[g] = lz;
+        continue;
+      }
+      double* l = out + 3 * g;
+      l[0] = l[1] = l[2] = 0.0;
+      for (int i = first; i < last; ++i) {
+        const int k = 3 * i;
+        l[0] += q[k + 1] * p[k + 2] - q[k + 2] * p[k + 1];
+        l[1] += q[k + 2] * p[k] - q[k] * p[k + 2];
+        l[2] += q[k] * p[k + 1] - q[k + 1] * p[k];
+      }
     }
   }
 
