@@ -15,7 +15,7 @@
 //
 // The drift's Newton starts from the last drift's impulse where that drift was as long (the tables' drifts
 // of one step and the next: the impulse changes by O(h) relative between them, so the first residual is O(h)
-// smaller than from zero; 2.19 -> 1.36 iterations per drift on a 100-link chain's 3s at h = 1e-3), and
+// smaller than from zero; 2.85 -> 2.16 iterations per drift on bench_constraints.py's 100-link chain), and
 // iterates as SHAKE's chord iteration, with S = G(q0) M^{-1} G(q0)^T factored at q0
 // (where the previous sub-flows left it, so usually already factored). Its contraction per iteration is
 // about cond(S) |q - q0| / l, small for a pendulum's step but not for a long chain's (a 100-link cable at
