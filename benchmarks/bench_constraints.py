@@ -19,6 +19,20 @@ step: after each kick and the drift) plus the M^-1, G and band-solve passes it c
 times_G 4%, NormalPattern::solve 4%), SHAKE's Newton loop in drift 13%; the compiled constraint, Jacobian and
 gradient functions together 3%. So the cost is a dozen small passes over dynamic-size vectors per step, not
 the constraints' arithmetic; the free fall it is compared with is a gradient call and two vector updates.
+The 100-link chain (perf of the same headers built stand-alone with hand-written constraint functions, 3s,
+h = 1e-3): the band solves (latency-bound, a tridiagonal substitution of 100 rows) 21%, G and the factor at
+each new q 21%, the drift's own passes 27% (its G^T products and the residual test's divisions most), the
+projections 14%. A step takes two drifts (the tables' drifts are not merged: two constrained drifts are not
+one), each with its Newton iterations (2.85 from a zero impulse, 2.16 from the last drift's impulse, here),
+a check of g, a factor and a projection, and the kick's projection. Measured (medians of 5 runs, load 3 on
+2 cores): the floor is 3.0-4.7x the free step of the double pendulum and 13-22x the chain's, so <= 2x
+cannot be met by any RATTLE step of these systems; the constrained step is 3.1-3.4 floors on the double
+pendulum, 4.6-5.1 on the chain.
+The floor: the free step plus the least work any RATTLE step adds to it (constraints/least_work.hpp: g and G
+evaluated once at the new q, G M^-1 G^T formed and factored once, one Newton solve with the previous step's
+factor and one projection, with their products by G, G^T and M^-1), timed in C++ from a state of the run.
+floor/free is the least ratio any constrained step could reach; where it is above the target, the target
+cannot be met by any RATTLE implementation. constr/floor: how far the step is above that floor.
 The last column: per step, the drifts (3s has two), Newton iterations per drift, refreshes of Newton's
 matrix and factorisations of G M^-1 G^T.
 
@@ -81,14 +95,21 @@ def ns_per_step(system, q0, p0, method: str, h: float, steps: int, repeats: int)
     return best
 
 
-def solves_per_step(system, q0, p0, method: str, h: float, steps: int) -> str:
+def solves_per_step(system, q0, p0, method: str, h: float, steps: int) -> tuple[str, np.ndarray, np.ndarray]:
     """What the constraint solve did per step (the core's counters): drifts, Newton iterations, refreshes
-    of Newton's matrix, factorisations of G M^-1 G^T."""
+    of Newton's matrix, factorisations of G M^-1 G^T; and the state the run ended at."""
     out = system._core_model.integrate(method, "", "", np.asarray(q0, float), np.asarray(p0, float), h, steps, h,
                                        steps, False, None, None)
     drifts, iterations, refreshes, factorisations = out["constraint_solves"]
     return (f"{drifts / steps:.0f} drift, {iterations / max(drifts, 1):.2f} it/drift, "
-            f"{refreshes / steps:.2f} refresh, {factorisations / steps:.2f} factor")
+            f"{refreshes / steps:.2f} refresh, {factorisations / steps:.2f} factor"), out["q"][-1], out["p"][-1]
+
+
+def least_work_ns(system, q, p, h: float, steps: int, repeats: int) -> float:
+    """The least a RATTLE step adds to the free step, ns (constraints/least_work.hpp): g and G once, G M^-1 G^T
+    formed and factored once, one Newton solve and one projection, from a state on the constraints."""
+    q, p = np.asarray(q, float), np.asarray(p, float)
+    return min(system._core_model.least_constraint_work_ns(q, p, h, steps) for _ in range(repeats))
 
 
 def main() -> int:
@@ -99,16 +120,21 @@ def main() -> int:
     cases = [("double pendulum", double_pendulum, 1e-3, 200_000), (f"{links}-link chain", lambda c: chain(links, c),
                                                                    1e-3, 2_000)]
     print(f"raydamp {raydamp.__file__}; load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
-    print(f"{'system':<18} {'method':<6} {'free ns/step':>13} {'constrained':>12} {'ratio':>7}  target <= {TARGET}x"
-          "   per step")
+    print(f"{'system':<18} {'method':<6} {'free ns/step':>13} {'constrained':>12} {'ratio':>7} {'floor':>8} "
+          f"{'floor/free':>11} {'constr/floor':>13}  target <= {TARGET}x   per step")
     for label, build, h, steps in cases:
         free, q0, p0 = build(False)
         constrained, _, _ = build(True)
         for method in ("3s", "2s", "baoab"):
             a = ns_per_step(free, q0, p0, method, h, steps, 5)
             b = ns_per_step(constrained, q0, p0, method, h, steps, 5)
-            print(f"{label:<18} {method:<6} {a:>13.0f} {b:>12.0f} {b / a:>7.2f}                 "
-                  f"{solves_per_step(constrained, q0, p0, method, h, steps)}")
+            solves, q, p = solves_per_step(constrained, q0, p0, method, h, steps)
+            if hasattr(constrained._core_model, "least_constraint_work_ns"):  # an older install has no floor
+                floor = a + least_work_ns(constrained, q, p, h, steps, 5)
+                columns = f"{floor:>8.0f} {floor / a:>11.2f} {b / floor:>13.2f}"
+            else:
+                columns = f"{'-':>8} {'-':>11} {'-':>13}"
+            print(f"{label:<18} {method:<6} {a:>13.0f} {b:>12.0f} {b / a:>7.2f} {columns}                 {solves}")
     return 0
 
 

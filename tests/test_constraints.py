@@ -180,6 +180,18 @@ def test_double_pendulum_energy_balance_is_second_order():
     assert balance[-1] <= 1e-3 * abs(sol.energy[0])
 
 
+def test_the_floor_of_a_constrained_step_is_timed_from_a_state_on_the_constraints():
+    # benchmarks/bench_constraints.py's floor: a time, finite and positive, from a state on the constraints;
+    # a state of the wrong size is refused by name (no time is asserted)
+    length = 0.8
+    q0, p0 = pendulum_start(length)
+    model = pendulum(length)._core_model
+    ns = model.least_constraint_work_ns(q0, p0, 0.01, 1000)
+    assert math.isfinite(ns) and ns > 0.0
+    with pytest.raises(ValueError, match=r"^q, p: expected 2 entries"):
+        model.least_constraint_work_ns(q0[:1], p0, 0.01, 10)
+
+
 def test_json_form_round_trips():
     system = pendulum(tol=1e-9, project_initial=True)
     plain = system.to_dict()

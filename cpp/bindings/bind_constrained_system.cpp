@@ -8,6 +8,7 @@
 #include <type_traits>
 
 #include "bind_system.hpp"
+#include "raydamp/constraints/least_work.hpp"
 #include "raydamp/constraints/projected_dampers.hpp"
 #include "raydamp/constraints/rattle.hpp"
 #include "raydamp/models/constrained_system.hpp"
@@ -144,6 +145,17 @@ void bind_constrained_kind(py::module_& m, const char* name) {
     else throw std::invalid_argument("flow: unknown sub-flow '" + flow + "' (known: drift, kick, damp, kick_damp, project)");
     return py::make_tuple(z.q, z.p);
   });
+  // The floor of a constrained step's cost beside the free step's (benchmarks/bench_constraints.py).
+  cls.def(
+      "least_constraint_work_ns",
+      [](const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& p, double h, long steps) {
+        if (q.size() != model.constraints.n || p.size() != model.constraints.n)
+          throw std::invalid_argument("q, p: expected " + std::to_string(model.constraints.n) + " entries");
+        if (!(h > 0.0) || steps < 1) throw std::invalid_argument("h, steps: must be > 0");
+        py::gil_scoped_release released;
+        return constraints::least_work_ns(model.constraints, q, p, h, steps);
+      },
+      py::arg("q"), py::arg("p"), py::arg("h"), py::arg("steps"));
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 #include <atomic>
 #include <cstdint>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -110,6 +111,8 @@ struct ConstraintWork {
   Eigen::VectorXd u, v;           // n
   Eigen::VectorXd q_back, g_back, lambda_back;  // the Newton iterate before the last increment
   bool newton_next = false;       // the last drift took Newton's matrix
+  Eigen::VectorXd lambda_last;    // the last drift's impulse and its length, while q is where it ended
+  double last_t = std::numeric_limits<double>::quiet_NaN();
   ConstraintFailure failure;
   double max_residual = 0.0;      // max_i |g_i| / s_i after the drifts of the run
   double max_velocity_residual = 0.0;  // max_i |(G M^{-1} p)_i| / (|G_i| |M^{-1} p|) after the drifts
@@ -125,6 +128,8 @@ struct ConstraintWork {
     q_back.resize(n);
     g_back.resize(2 * k);
     lambda_back.resize(k);
+    lambda_last.setZero(k);
+    last_t = std::numeric_limits<double>::quiet_NaN();
     newton_next = false;
     G.resize(set.nonzeros());
     G1.resize(set.nonzeros());
