@@ -40,17 +40,24 @@ inline long batch_lanes(long members, int threads) {
   return std::clamp((per + 3) / 4 * 4, kMinBatchLanes, kLanes);
 }
 
-// Consecutive members with the same eps, cut every `lanes` members.
-inline std::vector<LaneBatch> lane_batches(const std::vector<const DampedPendulum*>& models, long lanes = kLanes) {
+// Consecutive members for which same(member, the batch's first) holds, cut every `lanes` members.
+template <class Model, class Same>
+std::vector<LaneBatch> consecutive_batches(const std::vector<const Model*>& models, long lanes, const Same& same) {
   std::vector<LaneBatch> out;
   const long members = static_cast<long>(models.size());
   long begin = 0;
   for (long i = 1; i <= members; ++i)
-    if (i == members || models[i]->eps != models[begin]->eps || i - begin == lanes) {
+    if (i == members || !same(*models[i], *models[begin]) || i - begin == lanes) {
       out.push_back({begin, i});
       begin = i;
     }
   return out;
+}
+
+// Consecutive members with the same eps, cut every `lanes` members.
+inline std::vector<LaneBatch> lane_batches(const std::vector<const DampedPendulum*>& models, long lanes = kLanes) {
+  return consecutive_batches(models, lanes,
+                             [](const DampedPendulum& a, const DampedPendulum& b) { return a.eps == b.eps; });
 }
 
 // Runs batch's members as lanes and hands each to store(i, RunResult) as its own

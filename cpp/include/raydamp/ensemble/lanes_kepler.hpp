@@ -49,15 +49,7 @@ inline bool same_test_particles(const Planets& a, const Planets& b) {
 // Consecutive members that run as one model's particles, cut every `lanes` members; an interacting
 // member is a batch of its own.
 inline std::vector<LaneBatch> kepler_batches(const std::vector<const Planets*>& models, long lanes) {
-  std::vector<LaneBatch> out;
-  const long members = static_cast<long>(models.size());
-  long begin = 0;
-  for (long i = 1; i <= members; ++i)
-    if (i == members || !same_test_particles(*models[i], *models[begin]) || i - begin == lanes) {
-      out.push_back({begin, i});
-      begin = i;
-    }
-  return out;
+  return consecutive_batches(models, lanes, same_test_particles);
 }
 
 // Runs batch's members (test particles, same_test_particles) as the particles of one Planets and hands
