@@ -9,7 +9,12 @@
 //
 // Its cost when off is one branch per step; the work sits in observe(), kept out of line so that the
 // flattened step loops do not carry copies of it. On, a step costs one call of the events' compiled
-// function and a branch-free scan of the signs of g and dg/dt at both ends (detect()).
+// function and a branch-free scan of the signs of g and dg/dt at both ends (detect()). Affine events
+// cost less (quiet()): those whose g differ only by their constant (levels of one drift, of q and of p)
+// share one form L = sum of coefficient * input, computed once a step; its rate is every such g's
+// dg/dt, and which of their g are positive is which of their levels -constant L passes. A step whose
+// every form stays inside the same gap between its levels, clear of both by a rounding bound, with its
+// rate's sign kept, has no crossing; any other step gets every g at both ends and the scan above.
 #pragma once
 
 #include <algorithm>
@@ -78,6 +83,7 @@ class EventWatcher {
             throw std::invalid_argument("events: g reads coordinate " + std::to_string(term.index) +
                                         ", not one of the model's 0.." + std::to_string(n_ - 1));
       affine_ = set_->all_affine();
+      if (affine_) group(events);
       for (const EventFunction& f : events)
         if (f.henon) {
           if (f.terminal)
@@ -149,6 +155,10 @@ class EventWatcher {
         if (!std::isfinite(g1_[e]))
           throw std::invalid_argument("events[" + std::to_string(e) + "].g ('" + set_->events[e].name +
                                       "') is not finite at the initial state");
+    if (affine_) {
+      quiet({q1().data(), p1().data(), v1().data(), f1().data()}, t);
+      settle();
+    }
     push_dense();
   }
 
@@ -218,8 +228,10 @@ class EventWatcher {
   // The step's ends move back: the end just read becomes the start.
   void shift(long i) {
     end_ ^= 1;
-    std::swap(g0_, g1_);
-    std::swap(dg0_, dg1_);
+    if (!affine_) {  // affine events' g are computed at both ends only where quiet() cannot rule a crossing out
+      std::swap(g0_, g1_);
+      std::swap(dg0_, dg1_);
+    }
     t0_ = t1_;
     if (terminal_) {
       marks0_ = marks1_;
@@ -231,6 +243,11 @@ class EventWatcher {
   // After the end (q1, p1, v1, f1 at t) is read: g and dg/dt there, the dense row, the crossings
   // (inlined in observe: one call per step fewer).
   void after_read(double t, End end) {
+    if (affine_) {
+      push_dense();
+      if (!quiet(end, t)) rescan();
+      return;
+    }
     if (set_) evaluate(t, end);
     push_dense();
     if (set_) detect();
@@ -246,8 +263,10 @@ class EventWatcher {
     if (set_) evaluate(t, {q1().data(), p1().data(), v1().data(), f1().data()});
   }
 
-  // g and dg/dt at the end just read (end: its values).
-  void evaluate(double t, End end) {
+  // g and dg/dt at the end just read (end: its values), into g1_ and dg1_ (by default).
+  void evaluate(double t, End end) { evaluate(t, end, g1_, dg1_); }
+
+  void evaluate(double t, End end, std::vector<double>& g_out, std::vector<double>& dg_out) {
     if (affine_) {  // no compiled call: g and dg/dt from their coefficients
       const std::vector<EventFunction>& events = set_->events;
       for (std::size_t e = 0; e < events.size(); ++e) {
@@ -259,18 +278,141 @@ class EventWatcher {
             default: g += term.coefficient * t, rate += term.coefficient; break;
           }
         }
-        g1_[e] = g;
-        dg1_[e] = rate;
+        g_out[e] = g;
+        dg_out[e] = rate;
       }
       return;
     }
     const std::vector<EventSlot>& slots = set_->slots;
     for (std::size_t k = 0; k < slots.size(); ++k) in_[k] = end_value(slots[k], t, end);
     set_->fn(out_.data(), in_.data());
-    for (std::size_t e = 0; e < g1_.size(); ++e) {
-      g1_[e] = out_[2 * e];
-      dg1_[e] = out_[2 * e + 1];
+    for (std::size_t e = 0; e < g_out.size(); ++e) {
+      g_out[e] = out_[2 * e];
+      dg_out[e] = out_[2 * e + 1];
     }
+  }
+
+  // Affine events grouped by form (the same terms, coefficients and order; they differ by constant
+  // only): the group's L = sum of coefficient * input at a step end is every member's g less its
+  // constant, and the group's R = sum of coefficient * rate is, bit for bit, each member's dg/dt as
+  // evaluate() computes it (the same sums from 0 in the same order). The members' levels -constant,
+  // sorted and distinct, cut the line into gaps; gap k lies between level k - 1 and level k.
+  struct Input {
+    int which;  // 0: q, 1: p, 2: t
+    int index;
+    double coefficient;
+  };
+  struct Group {
+    std::size_t first, last;    // its inputs: inputs_[first, last)
+    std::size_t level, levels;  // its levels: levels_[level, level + levels), between -DBL_MAX and DBL_MAX
+    double slack;               // the rounding bound's factor, by the number of terms
+    long gap = -1;              // the gap its L lay clear inside at the last step end, or -1
+    double lo = 0.0, hi = 0.0, lo_slack = 0.0, hi_slack = 0.0;  // that gap's levels, slack * |level|
+    double L = 0.0, S = 0.0, R = 0.0, R_was = 0.0;  // at the end just read (S: sum of |terms|); R at the one before
+  };
+
+  void group(const std::vector<EventFunction>& events) {
+    std::vector<std::vector<double>> levels;
+    for (const EventFunction& f : events) {
+      std::size_t g = 0;
+      for (; g < groups_.size(); ++g) {
+        const Group& gr = groups_[g];
+        bool same = gr.last - gr.first == f.terms.size();
+        for (std::size_t k = 0; same && k < f.terms.size(); ++k) {
+          const Input& in = inputs_[gr.first + k];
+          same = in.which == which(f.terms[k].kind) && in.index == f.terms[k].index &&
+                 bits(in.coefficient) == bits(f.terms[k].coefficient);
+        }
+        if (same) break;
+      }
+      if (g == groups_.size()) {
+        Group gr;
+        gr.first = inputs_.size();
+        for (const EventFunction::Term& term : f.terms)
+          inputs_.push_back({which(term.kind), term.kind == Kind::t ? 0 : term.index, term.coefficient});
+        gr.last = inputs_.size();
+        // g = constant + L is computed as ((constant + c_1 x_1) + c_2 x_2) + ..., L as (c_1 x_1 + c_2 x_2) + ...:
+        // each within (terms + 1) roundings of the exact sum, relative to |constant| + S; 8x that
+        // bounds their difference with room to spare.
+        gr.slack = 8.0 * static_cast<double>(f.terms.size() + 2) * DBL_EPSILON;
+        groups_.push_back(gr);
+        levels.emplace_back();
+      }
+      levels[g].push_back(-f.constant);
+    }
+    for (std::size_t g = 0; g < groups_.size(); ++g) {
+      std::vector<double>& l = levels[g];
+      std::sort(l.begin(), l.end());
+      l.erase(std::unique(l.begin(), l.end()), l.end());
+      groups_[g].level = levels_.size();
+      groups_[g].levels = l.size() + 2;
+      levels_.push_back(-DBL_MAX);
+      levels_.insert(levels_.end(), l.begin(), l.end());
+      levels_.push_back(DBL_MAX);
+    }
+  }
+
+  static int which(Kind kind) { return kind == Kind::q ? 0 : kind == Kind::p ? 1 : 2; }
+
+  // Whether L lies inside gap k of group g, clear of both its levels by more than the rounding bound (so
+  // every member's g, as evaluate() computes it, has the sign the gap gives it, and none is zero).
+  bool clear(const Group& g, long k) const {
+    const double lo = levels_[g.level + k], hi = levels_[g.level + k + 1];
+    return g.L - lo > g.slack * (std::abs(lo) + g.S) && hi - g.L > g.slack * (std::abs(hi) + g.S);
+  }
+
+  // The same for the gap settle() found, from its levels kept in g.
+  static bool inside(const Group& g, double L, double S) {
+    const double margin = g.slack * S;
+    return L - g.lo > g.lo_slack + margin && g.hi - L > g.hi_slack + margin;
+  }
+
+  // Every group's L, S and R at the end just read; true where no affine g can have changed sign or
+  // touched zero over the step, nor its rate changed sign: then detect() would find nothing.
+  bool quiet(End end, double t) {
+    bool all = true;
+    for (Group& g : groups_) {
+      double L = 0.0, S = 0.0, R = 0.0;
+      for (std::size_t k = g.first; k < g.last; ++k) {
+        const Input& in = inputs_[k];
+        const double c = in.coefficient;
+        double term;
+        switch (in.which) {
+          case 0: term = c * end.q[in.index], R += c * end.v[in.index]; break;
+          case 1: term = c * end.p[in.index], R += c * end.f[in.index]; break;
+          default: term = c * t, R += c; break;
+        }
+        L += term;
+        S += std::abs(term);
+      }
+      g.L = L, g.S = S, g.R_was = g.R, g.R = R;
+      // (A gap of -1 has lo = hi = 0, which nothing lies clear inside.)
+      all = all && inside(g, L, S) && !((bits(g.R_was) ^ bits(R)) >> 63);
+    }
+    return all;
+  }
+
+  // Each group's gap at the end just read (-1 where L is near a level, or not finite).
+  void settle() {
+    for (Group& g : groups_) {
+      g.gap = -1;
+      g.lo = g.hi = g.lo_slack = g.hi_slack = 0.0;
+      for (std::size_t k = 0; k + 1 < g.levels; ++k)
+        if (clear(g, static_cast<long>(k))) {
+          g.gap = static_cast<long>(k);
+          g.lo = levels_[g.level + k], g.hi = levels_[g.level + k + 1];
+          g.lo_slack = g.slack * std::abs(g.lo), g.hi_slack = g.slack * std::abs(g.hi);
+          break;
+        }
+    }
+  }
+
+  // A step quiet() could not rule out: every affine g and dg/dt at both ends, the scan and the search.
+  RAYDAMP_NOINLINE void rescan() {
+    evaluate(t0_, {q0().data(), p0().data(), v0().data(), f0().data()}, g0_, dg0_);
+    evaluate(t1_, {q1().data(), p1().data(), v1().data(), f1().data()}, g1_, dg1_);
+    detect();
+    settle();
   }
 
   static double end_value(const EventSlot& s, double t, End end) {
@@ -548,6 +690,9 @@ class EventWatcher {
   std::vector<double> in_, g0_, g1_, dg0_, dg1_;
   std::vector<double> out_;
   std::vector<Found> found_;
+  std::vector<Group> groups_;  // affine events by form (quiet())
+  std::vector<Input> inputs_;
+  std::vector<double> levels_;
   RecorderMarks marks0_{}, marks1_{}, marks_{};
 };
 
