@@ -1,7 +1,10 @@
 // Events and dense output (events/watcher.hpp): crossing times against a closed form, a terminal
 // event's shortened last step, and the stepped trajectory unchanged by watching it.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <string>
+#include <vector>
 
 #include "check.hpp"
 #include "raydamp/raydamp.hpp"
@@ -144,6 +147,63 @@ int main() {
     std::printf("crossing time errors at h = 0.1: interpolant %.3g, Henon %.3g\n", interpolated, landed);
     CHECK(landed < interpolated);
     CHECK(c.trajectory.q == a.trajectory.q);  // refining reads the steps, never changes them
+  }
+
+  // Levels of q and p (affine events grouped by form: a step is ruled out once per form) find what the
+  // compiled call of the same g at every step end finds, bit for bit (q - c is -c + 1 q): levels exactly at
+  // step-end values (g = 0 at a step's end), one twice, two one rounding apart, one just past the lowest
+  // step end of a swing (a touch inside a step), levels never reached, and both directions.
+  {
+    static std::vector<double> levels;
+    static int q_levels;
+    const DampedPendulum damped(0.05);
+    RunSpec spec{0.02, 2000, 0.02, 100};
+    spec.merge_steps = false;
+    spec.dense = true;
+    const RunResult plain = integrate<ThreeTermSplitting>(damped, tab, builtin_composition("none"),
+                                                          State<1>{Vector<1>(2.0), Vector<1>(0.0)}, spec);
+    const std::vector<double>& q = plain.dense.q;
+    const std::vector<double>& p = plain.dense.p;
+    const long bottom = std::min_element(q.begin() + 150, q.begin() + 280) - q.begin();
+    levels = {q[7], q[150], q[1001], 0.5, 0.5, std::nextafter(0.5, 1.0), q[bottom] - 1e-9, 3.0, -1.3};
+    q_levels = static_cast<int>(levels.size());
+    for (double c : {p[33], p[640], 0.25, -0.7, 5.0}) levels.push_back(c);
+    EventSet compiled, affine;
+    compiled.fn.fn = [](double* out, const double* in, void*) {
+      for (std::size_t e = 0; e < levels.size(); ++e) {
+        const bool on_q = static_cast<int>(e) < q_levels;
+        out[2 * e] = (on_q ? in[0] : in[2]) - levels[e];
+        out[2 * e + 1] = on_q ? in[1] : in[3];
+      }
+    };
+    compiled.slots = {{EventSlot::Kind::q, 0}, {EventSlot::Kind::v, 0}, {EventSlot::Kind::p, 0},
+                      {EventSlot::Kind::f, 0}};
+    affine.fn = compiled.fn;
+    affine.slots = compiled.slots;
+    for (std::size_t e = 0; e < levels.size(); ++e) {
+      const bool on_q = static_cast<int>(e) < q_levels;
+      EventFunction f(static_cast<int>(e % 3) - 1, false, "level" + std::to_string(e));
+      compiled.events.push_back(f);
+      f.affine = true;
+      f.constant = -levels[e];
+      f.terms = {{on_q ? EventSlot::Kind::q : EventSlot::Kind::p, 0, 1.0}};
+      affine.events.push_back(f);
+    }
+    spec.dense = false;
+    spec.events = &compiled;
+    const RunResult a = integrate<ThreeTermSplitting>(damped, tab, builtin_composition("none"),
+                                                      State<1>{Vector<1>(2.0), Vector<1>(0.0)}, spec);
+    spec.events = &affine;
+    const RunResult b = integrate<ThreeTermSplitting>(damped, tab, builtin_composition("none"),
+                                                      State<1>{Vector<1>(2.0), Vector<1>(0.0)}, spec);
+    std::printf("levels: %ld crossings by the compiled call, %ld by the grouped forms\n", a.events.size(),
+                b.events.size());
+    CHECK(a.events.size() > 40);
+    CHECK(a.events.t == b.events.t && a.events.q == b.events.q && a.events.p == b.events.p);
+    CHECK(a.events.event == b.events.event && a.events.direction == b.events.direction);
+    bool at_step_end = false;  // a level on a step end is found there
+    for (long i = 0; i < b.events.size(); ++i) at_step_end = at_step_end || (b.events.event[i] == 1 && b.events.t[i] == plain.dense.t[150]);
+    CHECK(at_step_end);
   }
 
   // Refusals, each naming the argument.
