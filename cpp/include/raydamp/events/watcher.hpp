@@ -243,14 +243,11 @@ class EventWatcher {
   // After the end (q1, p1, v1, f1 at t) is read: g and dg/dt there, the dense row, the crossings
   // (inlined in observe: one call per step fewer).
   void after_read(double t, End end) {
-    if (affine_) {
-      push_dense();
-      if (!quiet(end, t)) rescan();
-      return;
-    }
-    if (set_) evaluate(t, end);
+    if (set_ && !affine_) evaluate_compiled(t, end, g1_, dg1_);
     push_dense();
-    if (set_) detect();
+    if (!set_) return;
+    if (!affine_) detect();
+    else if (!quiet(end, t)) rescan();  // affine: every g read only where a crossing may be
   }
 
   // q1, p1, v1 (and f1 where needed) from x at t, and g, dg/dt there.
@@ -267,22 +264,30 @@ class EventWatcher {
   void evaluate(double t, End end) { evaluate(t, end, g1_, dg1_); }
 
   void evaluate(double t, End end, std::vector<double>& g_out, std::vector<double>& dg_out) {
-    if (affine_) {  // no compiled call: g and dg/dt from their coefficients
-      const std::vector<EventFunction>& events = set_->events;
-      for (std::size_t e = 0; e < events.size(); ++e) {
-        double g = events[e].constant, rate = 0.0;
-        for (const EventFunction::Term& term : events[e].terms) {
-          switch (term.kind) {
-            case Kind::q: g += term.coefficient * end.q[term.index], rate += term.coefficient * end.v[term.index]; break;
-            case Kind::p: g += term.coefficient * end.p[term.index], rate += term.coefficient * end.f[term.index]; break;
-            default: g += term.coefficient * t, rate += term.coefficient; break;
-          }
+    if (affine_) evaluate_affine(t, end, g_out, dg_out);
+    else evaluate_compiled(t, end, g_out, dg_out);
+  }
+
+  // Affine events: no compiled call, g and dg/dt from their coefficients (out of line: a step reads them
+  // only where quiet() cannot rule a crossing out).
+  RAYDAMP_NOINLINE void evaluate_affine(double t, End end, std::vector<double>& g_out, std::vector<double>& dg_out) {
+    const std::vector<EventFunction>& events = set_->events;
+    for (std::size_t e = 0; e < events.size(); ++e) {
+      double g = events[e].constant, rate = 0.0;
+      for (const EventFunction::Term& term : events[e].terms) {
+        switch (term.kind) {
+          case Kind::q: g += term.coefficient * end.q[term.index], rate += term.coefficient * end.v[term.index]; break;
+          case Kind::p: g += term.coefficient * end.p[term.index], rate += term.coefficient * end.f[term.index]; break;
+          default: g += term.coefficient * t, rate += term.coefficient; break;
         }
-        g_out[e] = g;
-        dg_out[e] = rate;
       }
-      return;
+      g_out[e] = g;
+      dg_out[e] = rate;
     }
+  }
+
+  // Through the events' compiled function: one call for every g and dg/dt.
+  void evaluate_compiled(double t, End end, std::vector<double>& g_out, std::vector<double>& dg_out) {
     const std::vector<EventSlot>& slots = set_->slots;
     for (std::size_t k = 0; k < slots.size(); ++k) in_[k] = end_value(slots[k], t, end);
     set_->fn(out_.data(), in_.data());
