@@ -40,6 +40,16 @@ inline long batch_lanes(long members, int threads) {
   return std::clamp((per + 3) / 4 * 4, kMinBatchLanes, kLanes);
 }
 
+// How a batch's run ended (status, steps, failed step, message, momentum drift), copied into one member's
+// result: every member of a batch ends as the batch did.
+inline void copy_outcome(const RunResult& batch, RunResult& member) {
+  member.status = batch.status;
+  member.steps = batch.steps;
+  member.failed_step = batch.failed_step;
+  member.message = batch.message;
+  member.max_momentum_drift = batch.max_momentum_drift;
+}
+
 // Consecutive members for which same(member, the batch's first) holds, cut every `lanes` members.
 template <class Model, class Same>
 std::vector<LaneBatch> consecutive_batches(const std::vector<const Model*>& models, long lanes, const Same& same) {
@@ -104,11 +114,7 @@ void run_lanes(const DampedPendulum& member, const LaneBatch& batch, const Butch
   RunResult one;
   Trajectory& out = one.trajectory;
   for (int lane = 0; lane < lanes; ++lane) {
-    one.status = r.status;
-    one.steps = r.steps;
-    one.failed_step = r.failed_step;
-    one.message = r.message;
-    one.max_momentum_drift = r.max_momentum_drift;
+    copy_outcome(r, one);
     out.n = 1;
     out.t = tr.t;
     out.q.resize(rows);

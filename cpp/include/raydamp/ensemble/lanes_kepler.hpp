@@ -88,11 +88,7 @@ void run_kepler_lanes(const Planets& member, const LaneBatch& batch, const Butch
   Trajectory& out = one.trajectory;
   State<Eigen::Dynamic> x{Vec(n), Vec(n)};
   for (int lane = 0; lane < lanes; ++lane) {
-    one.status = r.status;
-    one.steps = r.steps;
-    one.failed_step = r.failed_step;
-    one.message = r.message;
-    one.max_momentum_drift = r.max_momentum_drift;
+    copy_outcome(r, one);
     out.n = n;
     out.n_momenta = m;
     out.t = tr.t;
