@@ -99,6 +99,24 @@ def test_methods_and_models_listings():
     assert "damped_pendulum" in models.stdout and "elastic_pendulum" in models.stdout
 
 
+def test_methods_lists_newmark_with_what_each_method_runs(capsys):
+    """`raydamp methods` lists newmark too (structure_methods(), which methods() leaves out) with its description,
+    and says on every line what the method runs: newmark a Structure with springs only, midpoint and gauss4 a
+    LinearStructure only, the others any system (issue 42: newmark was missing where users look)."""
+    from raydamp.cli.commands import main
+    from raydamp.methods.catalogue import structure_methods
+
+    assert main(["methods"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    rows = [(line.split()[0], line[line.index("[") + 1:line.index("]")], line) for line in lines]
+    [newmark] = structure_methods()
+    assert [name for name, _, _ in rows] == [m.name for m in raydamp.methods()] + ["newmark"]
+    applies = {name: kind for name, kind, _ in rows}
+    assert applies["newmark"] == "Structure with springs only" and rows[-1][2].endswith(newmark.description)
+    assert applies["midpoint"] == applies["gauss4"] == "LinearStructure only"
+    assert {applies[name] for name in ("sv", "3s", "2s", "baoab", "rks", "rk4")} == {"any system"}
+
+
 OSCILLATOR = {"model": "damped_pendulum", "parameters": {"eps": 0.5}, "method": "baoab", "h": 0.1, "n_steps": 400,
               "save_every": 20, "initial_state": {"q": [0.3], "p": [0.0]}}
 

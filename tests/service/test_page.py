@@ -7,6 +7,7 @@ The screenshot of the Kepler run is written to docs/page.png (the README shows i
 
 from __future__ import annotations
 
+import json
 import math
 import re
 from collections.abc import Iterator
@@ -573,3 +574,27 @@ def test_a_structures_spring_has_its_force_deformation_loop(module_server) -> No
         page.wait_for_function("() => document.getElementById('plot-loop').layout.title.text"
                                " === 'force-deformation loop of springs[0]: q0 to q1'", timeout=30_000)
         assert _traces(page, "loop")[0]["y"] == [row[0] for row in forces]
+
+        # newmark runs a Structure with springs only (GET /v1/structure_methods): the method menu offers it while
+        # the system edited is one, with its description, and takes it back when the springs go.
+        def offered() -> list[str]:
+            return page.eval_on_selector_all("#method option", "options => options.map(o => o.value)")
+
+        page.check("input[name=source][value=system]")
+        assert "3s" in offered() and "newmark" not in offered()  # the first example: a pendulum
+        page.fill("#system", json.dumps(spec["system"]))
+        page.wait_for_function("() => [...document.querySelectorAll('#method option')]"
+                               ".some(o => o.value === 'newmark')", timeout=30_000)
+        page.select_option("#method", "newmark")
+        [newmark] = module_server.client.get("/v1/structure_methods").json()
+        assert page.inner_text("#method-description") == newmark["description"]
+        page.fill("#system", json.dumps({**spec["system"], "springs": []}))
+        page.wait_for_function("() => ![...document.querySelectorAll('#method option')]"
+                               ".some(o => o.value === 'newmark')", timeout=30_000)
+        assert page.input_value("#method") == "3s" and offered() == [m["name"] for m in _distinct_methods(module_server)]
+
+
+def _distinct_methods(server) -> list[dict]:
+    """GET /v1/methods, one row per name in its order: the menu's options for any system."""
+    rows = server.client.get("/v1/methods").json()
+    return [row for i, row in enumerate(rows) if row["name"] not in {r["name"] for r in rows[:i]}]

@@ -82,11 +82,16 @@ def main(argv: list[str] | None = None) -> int:
 
         return client_command(args)
     if args.command == "methods":
-        from ..methods.catalogue import methods
+        from ..methods.catalogue import linear_structure_methods, methods, structure_methods
 
-        for m in methods():
-            print(f"{m.name:<6} {m.tableau or '':<9} order {m.order}  {'damped' if m.damped else 'eps = 0 only'}"
-                  f"  {m.description}")
+        # What each method runs: every system, a LinearStructure only (midpoint, gauss4: implicit steps of its
+        # whole linear system), or a Structure with springs only (newmark, which methods() lists apart).
+        linear_only = linear_structure_methods()
+        for m, applies in [*((m, "LinearStructure only" if m.name in linear_only else "any system")
+                             for m in methods()),
+                           *((m, "Structure with springs only") for m in structure_methods())]:
+            print(f"{m.name:<8} {m.tableau or '':<9} order {m.order}  {'damped' if m.damped else 'eps = 0 only'}"
+                  f"  [{applies}]  {m.description}")
         return 0
     if args.command == "models":
         from ..systems.models import describe_models

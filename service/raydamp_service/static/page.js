@@ -7,8 +7,10 @@ const FINAL = new Set(["completed", "failed", "cancelled"]);
 const PLOT_POINTS = 5000; // points fetched for the plots at most; the downloads carry every point
 const POLL_MS = 250;
 
-const state = { models: [], methods: [], examples: { models: {}, systems: [] }, job: null, poll: null, overlays: [],
-  followed: 0 }; // followed counts the jobs opened, so that a poll still in flight for an earlier one stops
+// structureMethods: GET /v1/structure_methods (newmark); springs: whether the system edited has springs.
+const state = { models: [], methods: [], structureMethods: [], springs: false, examples: { models: {}, systems: [] },
+  job: null, poll: null, overlays: [], followed: 0 }; // followed counts the jobs opened, so that a poll still in
+// flight for an earlier one stops
 
 // ---- talking to the service --------------------------------------------------------------------
 
@@ -201,6 +203,7 @@ function showExample() {
   setNumbers("p", example.p);
   loadDefaults(example.q.length);
   for (const key of ["step_size", "t_end", "save_every"]) $(key).value = example[key];
+  offerMethods();
   $("method").value = example.method;
   showMethod();
 }
@@ -210,11 +213,46 @@ function showSource() {
   $("model-fields").hidden = system;
   $("system-fields").hidden = !system;
   if (system) showExample(); else showModel();
+  offerMethods();
+}
+
+// The methods GET /v1/structure_methods lists (newmark) run a Structure with springs only: the menu offers
+// them while the system being edited is one (its JSON's kind "structure" with springs), and not otherwise.
+function editingSprings() {
+  if (document.querySelector("input[name=source]:checked").value !== "system") return false;
+  let system;
+  try { system = JSON.parse($("system").value); } catch (error) { return false; }
+  return system !== null && typeof system === "object" && system.kind === "structure" &&
+    Array.isArray(system.springs) && system.springs.length > 0;
+}
+
+function offeredMethods() { return state.springs ? [...state.methods, ...state.structureMethods] : state.methods; }
+
+// Fills the menu from the offered methods, keeping the choice where it is still offered (else 3s).
+function fillMethods() {
+  const chosen = $("method").value;
+  const offered = offeredMethods();
+  $("method").replaceChildren();
+  for (const name of new Set(offered.map((m) => m.name))) {
+    const rows = offered.filter((m) => m.name === name);
+    option($("method"), name, `${name} (order ${Math.max(...rows.map((m) => m.order))}${rows[0].damped ? "" : ", undamped only"})`);
+  }
+  const fallback = offered.some((m) => m.name === "3s") ? "3s" : offered[0].name;
+  $("method").value = offered.some((m) => m.name === chosen) ? chosen : fallback;
+  if ($("method").value !== chosen) showMethod();
+}
+
+// Called as the system is edited: the menu changes only when the system becomes, or stops being, one with springs.
+function offerMethods() {
+  const springs = editingSprings();
+  if (springs === state.springs) return;
+  state.springs = springs;
+  fillMethods();
 }
 
 function showMethod() {
   const name = $("method").value;
-  const rows = state.methods.filter((m) => m.name === name);
+  const rows = offeredMethods().filter((m) => m.name === name);
   const tableau = $("tableau");
   tableau.replaceChildren();
   const tableaux = rows.filter((m) => m.tableau !== null);
@@ -230,7 +268,7 @@ function showMethod() {
 function showComposition() {
   const name = $("method").value;
   const tableau = $("tableau-label").hidden ? null : $("tableau").value;
-  const row = state.methods.find((m) => m.name === name && (tableau === null || m.tableau === tableau));
+  const row = offeredMethods().find((m) => m.name === name && (tableau === null || m.tableau === tableau));
   $("composition-label").hidden = !(row && row.symmetric);
 }
 
@@ -749,6 +787,7 @@ function wire() {
   $("load-kind").addEventListener("change", showLoad);
   $("record-file").addEventListener("change", uploadRecord);
   $("tableau").addEventListener("change", showComposition);
+  $("system").addEventListener("input", offerMethods);
   for (const radio of document.querySelectorAll("input[name=source]")) radio.addEventListener("change", showSource);
   $("job-form").addEventListener("submit", submit);
   $("cancel").addEventListener("click", () => api(`/v1/jobs/${$("job-id").textContent}/cancel`, { method: "POST" }));
@@ -758,19 +797,18 @@ function wire() {
 }
 
 async function load() {
-  [state.models, state.methods, state.compositions, state.examples] = await Promise.all(
-    [getJSON("/v1/models"), getJSON("/v1/methods"), getJSON("/v1/compositions"), getJSON("/static/examples.json")]);
+  [state.models, state.methods, state.structureMethods, state.compositions, state.examples] = await Promise.all(
+    [getJSON("/v1/models"), getJSON("/v1/methods"), getJSON("/v1/structure_methods"), getJSON("/v1/compositions"),
+      getJSON("/static/examples.json")]);
   for (const select of ["model", "method", "composition", "example"]) $(select).replaceChildren();
   for (const model of state.models) option($("model"), model.name, model.name);
-  for (const name of new Set(state.methods.map((m) => m.name))) {
-    const rows = state.methods.filter((m) => m.name === name);
-    option($("method"), name, `${name} (order ${Math.max(...rows.map((m) => m.order))}${rows[0].damped ? "" : ", undamped only"})`);
-  }
+  state.springs = editingSprings();
+  fillMethods();
   for (const c of state.compositions) {
     option($("composition"), c.name, c.name === "none" ? "none (order 2)" : `${c.name} (order ${c.order}, ${c.stages} stages)`);
   }
   state.examples.systems.forEach((example, i) => option($("example"), i, example.label));
-  $("method").value = state.methods.some((m) => m.name === "3s") ? "3s" : state.methods[0].name;
+  $("method").value = offeredMethods().some((m) => m.name === "3s") ? "3s" : offeredMethods()[0].name;
   showMethod();
   showSource();
   document.body.dataset.ready = "true";

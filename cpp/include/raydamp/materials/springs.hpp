@@ -11,8 +11,10 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
+#include "raydamp/materials/bouc_wen_lanes.hpp"
 #include "raydamp/materials/materials.hpp"
 #include "raydamp/materials/phases.hpp"
 
@@ -30,6 +32,9 @@ struct SpringSet {
   std::vector<int> i, j;  // d = q[j] - q[i], or q[j] where i < 0
   std::vector<Material> material;
   mutable std::vector<State> committed, trial, saved;
+  // Bouc-Wen's kicks take the springs' return maps in vectors (bouc_wen_lanes.hpp): their deformations and
+  // corrections pass through these, sized by add(), so a kick allocates nothing.
+  mutable std::vector<double> lane_deformations, lane_corrections;
   // Where kinks are located (materials/kinks.hpp): each spring's phase, and kicks that read its law.
   mutable std::vector<signed char> phase, saved_phase;
   // Whether each spring yielded at the last kick of the last committed step (a run without kink location):
@@ -44,6 +49,8 @@ struct SpringSet {
     j.push_back(to);
     material.push_back(m);
     committed.emplace_back();
+    lane_deformations.push_back(0.0);
+    lane_corrections.push_back(0.0);
     trial.emplace_back();
     saved.emplace_back();
     phase.push_back(static_cast<signed char>(initial_phase(m)));
@@ -65,6 +72,16 @@ struct SpringSet {
   template <class Vec>
   void add_correction(const Vec& q, Vec& g) const {
     if (phased) return add_phase_correction(q, g);
+    if constexpr (std::is_same_v<Material, BoucWen>) {
+      for (std::size_t s = 0; s < j.size(); ++s) lane_deformations[s] = deformation(q, s);
+      bouc_wen_lanes::corrections(material.data(), committed.data(), lane_deformations.data(), trial.data(),
+                                  lane_corrections.data(), j.size());
+      for (std::size_t s = 0; s < j.size(); ++s) {
+        g[j[s]] += lane_corrections[s];
+        if (i[s] >= 0) g[i[s]] -= lane_corrections[s];
+      }
+      return;
+    }
     for (std::size_t s = 0; s < j.size(); ++s) {
       const double d = deformation(q, s);
       const double f = material[s].force(committed[s], d, trial[s]) - material[s].stiffness() * d;
