@@ -275,7 +275,9 @@ def test_progress_is_live_and_cancel_stops_the_run(module_server) -> None:
         page.wait_for_function("() => { const bar = document.getElementById('progress');"
                                " return bar.value > 0 && bar.value < 1; }", timeout=RUN_TIMEOUT_MS)
         assert page.inner_text("#job-status") == "running"
-        page.click("#cancel")
+        # The click waits for the button as long as the run's own waits do: on a loaded host the
+        # browser took over 30 s (Playwright's default) to make it actionable (fresh clone, 2026-11-29).
+        page.click("#cancel", timeout=RUN_TIMEOUT_MS)
         page.wait_for_function("() => document.getElementById('plots').dataset.ready === 'true'",
                                timeout=RUN_TIMEOUT_MS)
         job = module_server.job(page.inner_text("#job-id"))
