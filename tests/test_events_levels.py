@@ -42,7 +42,7 @@ def test_levels_of_q_and_p_find_what_every_g_at_every_step_finds():
     levels_q = exact_q + [0.5, math.nextafter(0.5, 1.0), 0.5, 1.0, near_bottom, -1.3]
     levels_p = exact_p + [0.25, -0.7]
     events = ([raydamp.Event(f"q[0] - {c!r}", name=f"q{k}") for k, c in enumerate(levels_q)]
-              + [raydamp.Event(f"p[0] - {c!r}", direction=(1, -1, 0, 1)[k], name=f"p{k}")
+              + [raydamp.Event(f"p[0] - {c!r}", direction=(0, 0, 1, -1)[k], name=f"p{k}")
                  for k, c in enumerate(levels_p)]
               + [raydamp.Event("t - 12.345", name="clock"), raydamp.Event("2*q[0] - 1.0", name="twice")])
     names = [e.name for e in events]
@@ -76,4 +76,4 @@ def test_storey_drifts_find_what_every_g_at_every_step_finds():
     np.testing.assert_array_equal(a[0], c[0][keep])
     np.testing.assert_array_equal(a[1], c[1][keep])
     np.testing.assert_allclose(a[2], c[2][keep], rtol=0, atol=1e-12)
-    assert len(a[2]) > 50
+    assert len(a[2]) > 25
