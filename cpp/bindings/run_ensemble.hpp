@@ -101,7 +101,7 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
                       CancelToken* cancel, bool vector_sine, const std::vector<const BoundLoad*>& loads,
                       py::array_t<long, py::array::c_style | py::array::forcecast> load_index, double temperature,
                       std::uint64_t seed, std::uint64_t first_stream, const EventSet* events,
-                      const EnvelopeSpec* envelope) {
+                      const EnvelopeSpec* envelope, bool dense) {
   if (q0.ndim() != 2 || q0.shape(0) < 1) throw std::invalid_argument("q0: expected an array of shape (members, n), members >= 1");
   const long members = static_cast<long>(q0.shape(0));
   if (models.empty()) throw std::invalid_argument("models: empty");
@@ -120,7 +120,9 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
   spec.seed = seed;
   spec.events = events;
   spec.envelope = envelope;
+  spec.dense = dense;
   std::vector<EventLog> member_events(events ? members : 0);
+  std::vector<DenseRecord> member_dense(dense ? members : 0);
   std::vector<EnvelopeRecord> member_envelopes(envelope ? members : 0);  // each worker fills its members' slots
   // Each member's load: loads[load_index[i]] (none without loads).
   std::vector<const Load*> member_load(members, nullptr);
@@ -231,6 +233,7 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
     message[i] = std::move(r.message);
     if (events) member_events[i] = std::move(r.events);
     if (envelope) member_envelopes[i] = std::move(r.envelope);
+    if (dense) member_dense[i] = std::move(r.dense);
   };
   int factorisations = 0;  // of the linear implicit methods, over the whole ensemble
   {
@@ -270,6 +273,11 @@ py::dict run_ensemble(const std::vector<const Model*>& models, py::array_t<long,
   }
   if (events) out["events"] = ensemble_events(std::move(member_events), n);
   if (envelope) out["envelope"] = ensemble_envelopes(member_envelopes);
+  if (dense) {  // each member's, as a single run's (its own number of step ends)
+    py::list records;
+    for (DenseRecord& record : member_dense) records.append(dense_dict(std::move(record)));
+    out["dense"] = records;
+  }
   return out;
 }
 
@@ -286,7 +294,7 @@ void def_integrate_ensemble(py::module_&) {
                  py::arg("vector_sine") = false, py::arg("loads") = std::vector<const BoundLoad*>{},
                  py::arg("load_index") = py::array_t<long>(), py::arg("temperature") = 0.0, py::arg("seed") = 0,
                  py::arg("first_stream") = 0, py::arg("events").none(true) = py::none(),
-                 py::arg("envelope").none(true) = py::none());
+                 py::arg("envelope").none(true) = py::none(), py::arg("dense") = false);
 }
 
 }  // namespace raydamp::bindings

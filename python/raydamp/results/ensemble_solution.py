@@ -44,6 +44,10 @@ class EnsembleSolution:
         ``parameters``, {name: [one value per member]} of the parameters that vary (so member i
         is the job JSON with member i's values), and ``raydamp_version``.
 
+    dense : with ``dense=True``, each member's dense output (a tuple of
+        :class:`raydamp.results.dense.DenseOutput`, one per member, each up to that member's last step
+        end); ``at(t)`` reads every member at t, ``member(i).at(t)`` one.
+
     ``member(i)`` is member i as a :class:`raydamp.Solution`, equal bit for bit to a single
     ``raydamp.integrate`` run of it (to rounding when the ensemble ran with ``vector_sine``).
     ``to_xarray()`` gives a Dataset with dims (member, time, dof); ``save(path)`` writes NetCDF
@@ -79,6 +83,7 @@ class EnsembleSolution:
     origin: Any = field(default=None, compare=False)
     events: Any = field(default=None, compare=False)  # run/events.py's EventTable (with member), with events=
     envelope: Any = field(default=None, compare=False)  # a Dataset (member, dof | spring) of peaks, with envelope=
+    dense: Any = field(default=None, compare=False)  # a DenseOutput per member (results/dense.py), with dense=True
     spring_forces: np.ndarray | None = field(default=None)
     spring_deformations: np.ndarray | None = field(default=None)
     spring_forces_final: np.ndarray | None = field(default=None)
@@ -173,7 +178,33 @@ class EnsembleSolution:
                         composition=self.composition, h=self.h,
                         max_momentum_drift=float(self.max_momentum_drift[i]), origin=self._member_spec(i),
                         events=None if self.events is None else self.events.of_member(i),
-                        envelope=None if self.envelope is None else self.envelope.isel(member=i))
+                        envelope=None if self.envelope is None else self.envelope.isel(member=i),
+                        dense=None if self.dense is None else self.dense[i])
+
+    def at(self, t) -> tuple[np.ndarray, np.ndarray]:
+        """(q, p) of every member at time(s) t by its dense output: shape (members, n) each for a scalar t,
+        (members, len(t), n) for an array; each member's values are ``member(i).at(t)``'s, bit for bit. A
+        member whose run ended before t (a terminal event, a blow-up) has NaN there. Needs
+        ``integrate_ensemble(..., dense=True)``; a t outside the run's span [t[0], t[-1]] is a ValueError
+        naming t."""
+        if self.dense is None:
+            raise ValueError("at: this ensemble kept no dense output; run integrate_ensemble with dense=True")
+        times = np.asarray(t, dtype=float)
+        flat = np.atleast_1d(times)
+        if flat.ndim != 1 or flat.size == 0 or not np.all(np.isfinite(flat)) or flat.min() < self.t[0] \
+                or flat.max() > self.t[-1]:
+            raise ValueError(f"t must be a time or a 1-d array of times inside the run [{self.t[0]}, {self.t[-1]}], "
+                             f"got {t!r}")
+        n = self.q.shape[2]
+        q = np.full((self.members, flat.size, n), np.nan)
+        p = np.full((self.members, flat.size, n), np.nan)
+        for i, member in enumerate(self.dense):
+            inside = (flat >= member.t[0]) & (flat <= member.t[-1]) if len(member.t) else np.zeros(flat.size, bool)
+            if inside.any():
+                q[i, inside], p[i, inside] = member.at(flat[inside])
+        if times.ndim == 0:
+            return q[:, 0], p[:, 0]
+        return q, p
 
     def _member_spec(self, i: int) -> dict[str, Any] | None:
         """Member i's job JSON: the base spec with its parameters and initial state."""

@@ -78,7 +78,8 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
                        progress: Callable[[int, int], object] | None = None,
                        cancel: CancelToken | None = None, vector_sine: bool = False,
                        load: Load | None = None, temperature: float | None = None, seed: int | None = None,
-                       first_stream: int = 0, events=None, envelope=None, collapse=None) -> EnsembleSolution:
+                       first_stream: int = 0, events=None, envelope=None, collapse=None,
+                       dense: bool = False) -> EnsembleSolution:
     """Integrate many members of one system in one compiled call, spread over threads.
 
     Parameters
@@ -135,6 +136,11 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
         A Structure with springs records each member's spring forces and deformations at its saved rows
         (``EnsembleSolution.spring_forces``, ``spring_deformations``: (members, R, springs)), as a single
         run's ``Solution.spring_forces`` holds them.
+
+    dense : keep each member's dense output, as :func:`raydamp.integrate`'s ``dense=True`` does for one run
+        (whole steps; ``8 (n_steps + 1) (1 + 4 dim)`` bytes per member, refused past the saved-data limit):
+        ``EnsembleSolution.at(t)`` reads every member at t, ``member(i).at(t)`` one, both equal to the single
+        run's ``Solution.at(t)`` bit for bit.
 
     Member i's result equals ``raydamp.integrate`` of that member alone, bit for bit, whatever
     ``threads`` is: each member runs the same compiled step loop. (Kepler members that share mu, mass
@@ -213,7 +219,13 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
                          f"{members * rows * row_bytes / 2**30:.1f} GiB (limit {MAX_SAVED_BYTES / 2**30:.0f} GiB); "
                          "raise save_every or split the ensemble")
 
-    watch = _events.prepare(system, events, False, temperature=kT, callables=False)  # each member's (events.py)
+    watch = _events.prepare(system, events, dense, temperature=kT, callables=False)  # each member's (events.py)
+    if watch is not None and watch.dense and vector_sine:
+        raise ValueError("dense: the SIMD lanes of vector_sine keep no dense output; leave vector_sine off")
+    if watch is not None and watch.dense and members * _events.dense_bytes(n_steps, n) > MAX_SAVED_BYTES:
+        raise ValueError(f"dense: {members} members x {_events.dense_bytes(n_steps, n) / 2**20:.1f} MiB of dense "
+                         f"output would take {members * _events.dense_bytes(n_steps, n) / 2**30:.1f} GiB (limit "
+                         f"{MAX_SAVED_BYTES / 2**30:.0f} GiB); run fewer members or steps per call")
     peaks = None if envelope is None and collapse is None else _envelope.prepare(
         system, envelope, collapse=_envelope.limits(system, collapse), given_collapse=collapse)
     models, index, core_names, core_values = system.member_models(params, members)
@@ -223,7 +235,9 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
                                             composition or "", q0, p0, h, n_steps, h_last, save_every, threads,
                                             progress, cancel, vector_sine=vector_sine, loads=loads,
                                             load_index=load_index, temperature=kT, seed=seed,
-                                            first_stream=first_stream, **({"events": watch.core} if watch else {}),
+                                            first_stream=first_stream,
+                                            **({"events": watch.core} if watch and watch.core is not None else {}),
+                                            **({"dense": True} if watch and watch.dense else {}),
                                             **({"envelope": peaks.core} if peaks else {}))
     wall = time.perf_counter() - start
     composition_name = None if resolved_composition == "none" else resolved_composition
@@ -241,6 +255,8 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
         options["thermal"] = (kT, seed, first_stream)
     if peaks is not None:
         options.update(envelope=list(peaks.names), collapse=peaks.collapse)
+    if watch is not None and watch.dense:
+        options["dense"] = True
     return EnsembleSolution(
         t=out["t"], q=out["q"], p=out["p"], energy=out["energy"], momentum=out["momentum"], rows=out["rows"],
         t_final=out["t_final"], q_final=out["q_final"], p_final=out["p_final"], energy_final=out["energy_final"],
@@ -250,7 +266,7 @@ def integrate_ensemble(system: Model, q0, p0, *, parameters: Mapping[str, Any] |
         tableau=resolved_tableau if method in with_tableau else None, composition=composition_name, h=h,
         wall_time=wall, threads=out["threads"], origin=(system, options),
         **{name: _envelope.users_springs(system, out.get(key)) for name, key in _SPRING_KEYS.items()},
-        **(_events.results(watch, out) if watch else {}),
+        **(_events.results(watch, out, ensemble=True) if watch else {}),
         **({"envelope": _envelope.dataset(peaks, out, out["q_final"], ensemble=True)} if peaks else {}))
 
 

@@ -327,8 +327,9 @@ def _is_number(v) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(float(v))
 
 
-def results(prepared: Prepared, out: Mapping[str, Any]) -> dict[str, Any]:
-    """The Solution's events table and dense output from the core's answer."""
+def results(prepared: Prepared, out: Mapping[str, Any], *, ensemble: bool = False) -> dict[str, Any]:
+    """The Solution's events table and dense output from the core's answer (an ensemble's: a dense output
+    per member)."""
     found = {}
     if prepared.core is not None:
         e = out["events"]
@@ -337,7 +338,8 @@ def results(prepared: Prepared, out: Mapping[str, Any]) -> dict[str, Any]:
     if prepared.dense:
         from ..results.dense import DenseOutput
 
-        found["dense"] = DenseOutput(**out["dense"])
+        found["dense"] = (tuple(DenseOutput(**d) for d in out["dense"]) if ensemble
+                          else DenseOutput(**out["dense"]))
     if prepared.callables:
         from .events_python import with_callables
 
