@@ -67,6 +67,13 @@ struct SpringSet {
     return i[s] < 0 ? q[j[s]] : q[j[s]] - q[i[s]];
   }
 
+  // g += r f for spring s: the transpose of deformation (its force on q[j], the opposite on q[i]).
+  template <class Vec>
+  void scatter(std::size_t s, double f, Vec& g) const {
+    g[j[s]] += f;
+    if (i[s] >= 0) g[i[s]] -= f;
+  }
+
   // g += r (sigma(d) - k d) for each spring: what the springs add to a gradient taken with K0, which
   // holds their initial stiffness k r r^T. Writes the trial states.
   template <class Vec>
@@ -76,17 +83,12 @@ struct SpringSet {
       for (std::size_t s = 0; s < j.size(); ++s) lane_deformations[s] = deformation(q, s);
       bouc_wen_lanes::corrections(material.data(), committed.data(), lane_deformations.data(), trial.data(),
                                   lane_corrections.data(), j.size());
-      for (std::size_t s = 0; s < j.size(); ++s) {
-        g[j[s]] += lane_corrections[s];
-        if (i[s] >= 0) g[i[s]] -= lane_corrections[s];
-      }
+      for (std::size_t s = 0; s < j.size(); ++s) scatter(s, lane_corrections[s], g);
       return;
     }
     for (std::size_t s = 0; s < j.size(); ++s) {
       const double d = deformation(q, s);
-      const double f = material[s].force(committed[s], d, trial[s]) - material[s].stiffness() * d;
-      g[j[s]] += f;
-      if (i[s] >= 0) g[i[s]] -= f;
+      scatter(s, material[s].force(committed[s], d, trial[s]) - material[s].stiffness() * d, g);
     }
   }
 
@@ -95,9 +97,7 @@ struct SpringSet {
   void add_phase_correction(const Vec& q, Vec& g) const {
     for (std::size_t s = 0; s < j.size(); ++s) {
       const double d = deformation(q, s);
-      const double f = phase_force(material[s], committed[s], phase[s], d) - material[s].stiffness() * d;
-      g[j[s]] += f;
-      if (i[s] >= 0) g[i[s]] -= f;
+      scatter(s, phase_force(material[s], committed[s], phase[s], d) - material[s].stiffness() * d, g);
     }
   }
 
@@ -121,10 +121,7 @@ struct SpringSet {
       const double d = deformation(q, s);
       State t;
       material[s].force(committed[s], d, t);
-      const double dv = i[s] < 0 ? v[j[s]] : v[j[s]] - v[i[s]];
-      const double f = (material[s].tangent(t, d) - material[s].stiffness()) * dv;
-      out[j[s]] += f;
-      if (i[s] >= 0) out[i[s]] -= f;
+      scatter(s, (material[s].tangent(t, d) - material[s].stiffness()) * deformation(v, s), out);
     }
   }
 

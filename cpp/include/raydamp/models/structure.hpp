@@ -130,11 +130,8 @@ struct Structure : LinearStructure<Mass> {
   void gradient_with_forces(const Vec& q, const double* sigma, Vec& g) const {
     Base::gradient(q, g);
     springs.for_each([&](const auto& set) {
-      for (std::size_t s = 0; s < set.size(); ++s) {
-        const double f = sigma[s] - set.material[s].stiffness() * set.deformation(q, s);
-        g[set.j[s]] += f;
-        if (set.i[s] >= 0) g[set.i[s]] -= f;
-      }
+      for (std::size_t s = 0; s < set.size(); ++s)
+        set.scatter(s, sigma[s] - set.material[s].stiffness() * set.deformation(q, s), g);
       sigma += set.size();
     });
   }
