@@ -316,6 +316,27 @@ inline long out_of_memory(RunResult& result, long N, long save_every, long at) {
   return (rows - 1) * save_every;
 }
 
+// The progress a run reports: after the block that ends at each of about max_progress_calls even marks, and
+// once more at the end of a completed run whose last mark was not its last step.
+class ProgressReports {
+ public:
+  ProgressReports(const Control& control, long n)
+      : control_(control), n_(n), every_(std::max(1L, n / std::max(1L, control.max_progress_calls))), next_(every_) {}
+  long next() const { return next_; }  // the step where the next report is due (a block ends there)
+  void at(long k) {
+    if (k != next_) return;
+    if (control_.progress) control_.progress(k, n_);
+    next_ += every_;
+  }
+  void finish(Status status) const {
+    if (control_.progress && status == Status::completed && next_ - every_ != n_) control_.progress(n_, n_);
+  }
+
+ private:
+  const Control& control_;
+  long n_, every_, next_;
+};
+
 // Whether the loop merges the last sub-flow of a step with the first of the next. First-same-as-last
 // merging needs no intermediate state except the momentum maps', which are read before the merged
 // sub-flow: an exact flow of a part of H, which conserves J, or of the damping, which conserves J or
@@ -524,15 +545,15 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
     rec.on_step(x, i == N - 1 ? spec.h_last : spec.h, time_at(i + 1));
     envelope.after_step(x, i), watch.after_step(model, x, i, time_at(i + 1), rec);
   };
-  const long progress_every = std::max(1L, N / std::max(1L, control.max_progress_calls));
-  long next_save = spec.save_every, next_progress = progress_every, k = 0;
+  ProgressReports progress(control, N);
+  long next_save = spec.save_every, k = 0;
   double max_drift = 0.0;
   while (k < N) {
     if (control.cancel && control.cancel->load(std::memory_order_relaxed)) {
       stop(Status::cancelled, -1, "cancelled after " + std::to_string(k) + " of " + std::to_string(N) + " steps");
       break;
     }
-    const long end = std::min({N, next_save, next_progress, k + kBlock});
+    const long end = std::min({N, next_save, progress.next(), k + kBlock});
     checkpoint.take(z, ws, rec);  // a replay draws the same noise
     save_materials(model);        // and starts from the same material states
     ws.time = time_at(k);  // the merged loop's clock; advance() sets it per step
@@ -570,13 +591,10 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
       }
       next_save += spec.save_every;
     }
-    if (k == next_progress) {
-      if (control.progress) control.progress(k, N);
-      next_progress += progress_every;
-    }
+    progress.at(k);
   }
   end_run(result, rec, z, watch.stopped() ? watch.stop_time() : time_at(k), k, spec, max_drift);
-  if (control.progress && result.status == Status::completed && next_progress - progress_every != N) control.progress(N, N);
+  progress.finish(result.status);
   return result;
 }
 
