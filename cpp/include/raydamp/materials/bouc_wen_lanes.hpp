@@ -26,20 +26,9 @@ namespace raydamp::materials::bouc_wen_lanes {
 using D2 = double __attribute__((vector_size(16)));
 using I2 = std::int64_t __attribute__((vector_size(16)));
 
-// The largest |x| = c D the lanes take; pade_phi1 is within 2.2 ulp of phi1 there (4.9e-16 at x near 1/2).
-inline constexpr double kBound = 0.5;
-
-// phi1(x) = (e^x - 1) / x from the [6/6] Pade approximant e^x = (E(x^2) + x O(x^2)) / (E(x^2) - x O(x^2)):
-// phi1 = 2 O / (E - x O). The approximant errs by about (6!)^2 / (12! 13!) |x|^13 in e^x, 2e-17 at |x| = 1/2,
-// so rounding sets the error (test_materials.cpp checks it against expm1). Fewer operations than phi.hpp's
-// 9-term series, and one formula for every step where phi.hpp's phi1 switches between three.
-template <class V>
-inline __attribute__((always_inline)) V pade_phi1(V x) {
-  const V y = x * x;
-  const V odd = 0.5 + y * (1.0 / 66.0 + y * (1.0 / 15840.0));
-  const V even = 1.0 + y * (5.0 / 44.0 + y * (1.0 / 792.0 + y * (1.0 / 665280.0)));
-  return (odd + odd) / (even - x * odd);
-}
+// The largest |x| = c D the lanes take, and their phi1 (materials.hpp, where BoucWen's common step takes both).
+inline constexpr double kBound = kPadeBound;
+using materials::pade_phi1;
 
 // out[s] = sigma_s(d[s]) - k_s d[s] and the trial state t[s] from the committed c[s], for the L springs
 // at[0..L): lanes past `valid` repeat a spring and are not written.
@@ -83,7 +72,7 @@ inline __attribute__((always_inline)) void block(const BoucWen* m, const BoucWen
   if (__builtin_expect(any_slow, 0)) {
     for (int l = 0; l < valid; ++l) {
       const std::size_t s = at[l];
-      if (slow[l]) out[s] = m[s].force(c[s], d[s], t[s]) - m[s].k * d[s];
+      if (slow[l]) out[s] = m[s].correction(c[s], d[s], t[s]);
     }
   }
 }
