@@ -53,18 +53,14 @@ def main(argv: list[str] | None = None) -> None:
     if not is_loopback(settings.host) and settings.token is None:
         _refuse(f"binding to {settings.host} lets other machines submit, read and cancel jobs: set RAYDAMP_TOKEN "
                 "to a secret that clients send as 'Authorization: Bearer <token>', or bind 127.0.0.1")
-    try:
-        # First, and kept (the lifespan counts a second hold), to refuse with one line.
-        lock.hold(settings.db)
-    except lock.DatabaseInUse as error:
+    try:  # the lock first, and kept (the lifespan counts a second hold); the store opened (again by the lifespan):
+        lock.hold(settings.db)  # to refuse here with one line, not a traceback
+        store = JobStore(settings.db)
+        store.open()
+    except (lock.DatabaseInUse, StoreUnavailable) as error:
         _refuse(str(error))
-    except OSError as error:
+    except OSError as error:  # the lock file's
         _refuse(str(StoreUnavailable(settings.db, error)))
-    store = JobStore(settings.db)
-    try:
-        store.open()  # the lifespan opens it again; this is to fail here with one line, not a traceback
-    except StoreUnavailable as error:
-        _refuse(str(error))
     store.close()
     sys.setswitchinterval(0.001)  # threads serialising trajectories hand the event loop the GIL back sooner
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s")

@@ -14,13 +14,14 @@ from starlette.exceptions import HTTPException
 
 import raydamp
 
-from .checks.pool import CheckPool
+from .checks.pool import CheckPool, ChecksBusy
 from .config import Settings
 from .edge.guard import RequestGuard, needs_token
 from .edge.http import HeadAsGet, http_error_handler, validation_error_handler
 from .kinds.jobs import JobStore
 from .kinds.sweeps import SweepStore
 from .routes import catalogue, files, health, jobs, page, sweeps
+from .routes.tasks import checks_busy_handler
 from .tasks import lock
 from .tasks.runner import Runner
 from .tasks.store import Database
@@ -52,6 +53,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.add_middleware(HeadAsGet)  # outermost: the guard sees the HEAD as the GET it runs as
     app.add_exception_handler(RequestValidationError, validation_error_handler)
     app.add_exception_handler(HTTPException, http_error_handler)
+    app.add_exception_handler(ChecksBusy, checks_busy_handler)
     for router in ROUTERS:
         app.include_router(router, responses=_guarded(settings, router is files.router))
     page.mount_assets(app)

@@ -1,5 +1,4 @@
-"""Response bodies, and the request bodies of raydamp.jobs (the job's schema is the library's: one
-definition for the service, `raydamp run` and a Solution's provenance)."""
+"""Response bodies, and the request bodies of raydamp.jobs (one schema for the service, `raydamp run`, provenance)."""
 
 from __future__ import annotations
 

@@ -88,8 +88,7 @@ def check_spec(spec: JobSpec, settings: Settings, files=None) -> RaydampCall:
 
 
 def check_sweep_spec(spec: SweepSpec, settings: Settings) -> raydamp.SweepPlan:
-    """Every check of a sweep: the job's, the grid's size (before raydamp builds a member), raydamp's, then the
-    result's size."""
+    """Every check of a sweep: the job's, the grid's size (before raydamp builds a member), raydamp's, the result's."""
     try:
         check_spec(spec.job, settings)
         job, grid = spec.job_form(), spec.grid_arguments()

@@ -52,8 +52,7 @@ def isolated(spec: JobSpec) -> bool:
 
 
 def checked_inline(spec: JobSpec) -> bool:
-    """Whether a job's check is light enough for the event loop: a built-in model without a load, its initial
-    state given as numbers (not files, nor a rest or mode form whose sizes come from the model)."""
+    """Whether a job's check is light enough for the event loop: a built-in model, no load, a numeric initial state."""
     state = spec.initial_state
     return (spec.system is None and spec.load is None and spec.ground_motion is None
             and isinstance(getattr(state, "q", None), list) and isinstance(getattr(state, "p", None), list))
@@ -109,8 +108,7 @@ def _start_worker(settings: Settings) -> None:
 
 
 def _task(function, args: tuple, cpu_seconds: float) -> tuple[str, Any]:
-    """function(*args) within the CPU budget: ("ok" | "invalid" | "refused" | "error" | "cpu", value); a
-    MemoryError ends the process."""
+    """function(*args) within the CPU budget: ("ok" | "invalid" | "refused" | "error" | "cpu", value)."""
     started = time.process_time()
     signal.setitimer(signal.ITIMER_PROF, cpu_seconds)  # SIGPROF, whose default action ends the process
     try:
@@ -165,15 +163,13 @@ class CheckPool:
 
     def start(self) -> None:
         """Start the processes; the service answers while they warm up (a check waits for them)."""
-        # Built on a thread of its own: the pool's first fork waits for the forkserver's preload (raydamp's import
-        # and warm.py, about a second), which the service's start need not wait for.
+        # On a thread: the first fork waits for the forkserver's preload (about a second); the service's start need not.
         self._starting = threading.Thread(target=self._start_pool, name="raydamp-check-pool", daemon=True)
         self._starting.start()
 
     def _start_pool(self) -> None:
         context = multiprocessing.get_context("forkserver")
-        # Each process forks with raydamp imported and warmed up once, in the forkserver (warm.py), instead of
-        # each warming up on its own: a service start did the same plot and compiles once per check process.
+        # Each process forks with raydamp imported and warmed up once, in the forkserver (warm.py).
         context.set_forkserver_preload([__name__, f"{__package__}.warm"])
         pool = ProcessPool(self._settings.check_workers, initializer=_start_worker, initargs=(self._settings,),
                            context=context)
@@ -194,8 +190,7 @@ class CheckPool:
             pool.join(timeout=10)
 
     def job(self, spec: JobSpec, files=None) -> RaydampCall | None:
-        """Every check of a job (limits.check_spec), loading what it compiled; JobError naming the field, or
-        ChecksBusy. The call a check in this process built (None for a check process's)."""
+        """Every check of a job (limits.check_spec), loading what it compiled: the call if built here, else None."""
         if not isolated(spec):
             return check_spec(spec, self._settings, files=files)
         _load(self._run(_check_job, (spec, self._settings), ("system",)))
@@ -210,8 +205,7 @@ class CheckPool:
         return members
 
     def plot(self, read, draw, *args: Any) -> bytes:
-        """A plot's PNG, draw(record, read(), *args) in a check process, read() once a place is taken; ValueError
-        (a plot this run cannot have), ChecksBusy, or PlotOverBudget."""
+        """A plot's PNG, draw(record, read(), *args) in a check process, read() once a place is taken."""
         try:
             refused, png = self._run(draw, args, ("query", "width"), read=read)
         except JobError:
@@ -223,8 +217,7 @@ class CheckPool:
         return png
 
     def compile(self, spec: JobSpec) -> None:
-        """Compile a job's functions in a check process, waiting for a place, and load them here; JobError past a
-        budget, ChecksBusy if no place came free within check_seconds."""
+        """Compile a job's functions in a check process, waiting up to check_seconds for a place; load them here."""
         _load(self._run(JobSpec.compiled_form, (spec,), ("system",), wait=True))
 
     def call(self, function, *args: Any, where: tuple[str, ...] = ("body",)) -> Any:
@@ -276,8 +269,7 @@ class CheckPool:
 
 
 def build_for_run(checks: CheckPool | None, spec: JobSpec, run, files=None) -> RaydampCall | None:
-    """A run's call, its functions compiled by a check process (at submission, else now); None if the service
-    stops meanwhile. Without check processes (checks None), built here."""
+    """A run's call, its functions compiled by a check process (at submission, else now); None if the service stops."""
     if checks is None:
         return build_call(spec, files=files)
     try:

@@ -1,5 +1,4 @@
-"""Uploaded files as raydamp reads them: an upload's check (a Matrix Market matrix, its header checked against
-the service's size limit first; a record), and ParsedFiles, each stored upload parsed once."""
+"""Uploaded files as raydamp reads them: an upload's check (a matrix or a record), and ParsedFiles (parsed once)."""
 
 from __future__ import annotations
 
@@ -40,8 +39,7 @@ class RecordFileInfo:
 
 
 def check_upload_file(path: str, name: str, *, max_dim: int) -> MatrixFileInfo | RecordFileInfo:
-    """Read the upload the server spooled at path as raydamp will, by its name's suffix and content: a structure's
-    M or K (its header showing at most max_dim rows), or a record. UploadError says why not."""
+    """The upload spooled at path read as raydamp will: a matrix (its header checked first: max_dim), or a record."""
     content = Path(path).read_bytes()
     try:
         if record_format(content, name) == "mtx":

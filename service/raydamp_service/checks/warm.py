@@ -1,6 +1,5 @@
-"""The check processes' warm-up, run once by their forkserver when it imports this module (pool.py names it in
-set_forkserver_preload; nothing else imports it): each check process then forks with what a check loads on first
-use (SciPy, LLVM, matplotlib's fonts) already loaded, before it takes its memory budget, so none of it is charged.
+"""The check processes' warm-up, run once by their forkserver (pool.py's preload): each check process forks with
+what a check loads on first use (SciPy, LLVM, matplotlib's fonts) loaded before its memory budget: none is charged.
 Every failure is logged and swallowed: the forkserver must start, and a real check reports its own errors."""
 
 from __future__ import annotations
@@ -59,9 +58,8 @@ def warm_up() -> int:
 
 
 def touch(settings) -> None:
-    """In a freshly forked check process, before its first check's clock: the same checks again (compiled
-    already, so about 10 ms each), which copies the forkserver's pages a check writes to (reference counts) into
-    this process, so that the copying is not charged to a user's first check."""
+    """In a freshly forked check process: the same checks again (compiled: about 10 ms each), which copies the pages
+    a check writes to (reference counts) into this process before a user's first check, which is then not charged."""
     _checks(settings)
 
 

@@ -6,7 +6,7 @@ import functools
 import io
 import sqlite3
 import uuid
-from dataclasses import dataclass, replace
+from dataclasses import astuple, dataclass, replace
 from typing import BinaryIO
 
 from ..checks.uploads import ParsedFiles, RecordFileInfo
@@ -65,8 +65,7 @@ class FileStore:
 
     def add_file(self, name: str, content: bytes | BinaryIO, shape: tuple[int, int] = (0, 0), nnz: int = 0,
                  max_total_bytes: int = 0, *, record: RecordFileInfo | None = None) -> FileRecord | None:
-        """Store an upload (bytes, or a file of them, written a piece at a time), a matrix or a record; None
-        (nothing written) past max_total_bytes."""
+        """Store an upload (bytes or a file, written a piece at a time); None (nothing written) past max_total_bytes."""
         content = io.BytesIO(content) if isinstance(content, bytes) else content
         size = content.seek(0, io.SEEK_END)
         file = FileRecord(id=uuid.uuid4().hex, name=name, bytes=size, shape=tuple(shape), nnz=nnz, created_at=now())
@@ -78,11 +77,8 @@ class FileStore:
             stored = db.execute("SELECT COALESCE(SUM(bytes), 0) FROM files").fetchone()[0]
             if max_total_bytes and stored + size > max_total_bytes:
                 return None
-            row = db.execute(
-                "INSERT INTO files (id, name, bytes, rows, cols, nnz, created_at, content, kind, format, t_start, "
-                "t_end, dt) VALUES (?, ?, ?, ?, ?, ?, ?, zeroblob(?), ?, ?, ?, ?, ?)",
-                (file.id, name, size, *file.shape, file.nnz, file.created_at, size, file.kind, file.format,
-                 file.t_start, file.t_end, file.dt))
+            row = db.execute(f"INSERT INTO files ({_FILE_COLUMNS}, content) VALUES ({'?, ' * 12}zeroblob(?))",
+                             (file.id, name, size, *file.shape, file.nnz, *astuple(file)[5:], size))
             with db.blobopen("files", "content", row.lastrowid) as blob:
                 content.seek(0)
                 while piece := content.read(_PIECE):

@@ -95,8 +95,7 @@ class JobStore(TaskStore[JobRecord], FileStore):
         normalise_stored(db, self.TABLE, JobSpec)
 
     def listing(self, limit: int, status: str | None = None) -> list[sqlite3.Row]:
-        """Newest first, a list's line per job: label (model, system name or kind) and method (the one run, else
-        the one asked for) read by SQLite from the stored JSON, no spec parsed in Python."""
+        """Newest first, a line per job: label and method read by SQLite from the stored JSON (no spec parsed here)."""
         where, args = ("WHERE status = ?", (status,)) if status else ("", ())
         return self.db.connection().execute(
             f"SELECT id, status, progress, created_at, finished_at, {_LABEL} AS label, {_METHOD} AS method "
@@ -141,8 +140,7 @@ class JobStore(TaskStore[JobRecord], FileStore):
 
 
 class JobWork:
-    """A job's run: raydamp.integrate on a worker thread (the C++ loop releases the GIL), `workers` at once, with
-    the functions a check process compiled (checks.build_for_run)."""
+    """A job's run: raydamp.integrate on a worker thread (the C++ loop releases the GIL), `workers` at once."""
 
     def __init__(self, store: JobStore, settings: Settings, checks: CheckPool | None = None):
         self._store = store

@@ -56,8 +56,7 @@ class SweepStore(TaskStore[SweepRecord]):
 
 
 class SweepWork:
-    """A sweep's run, one at a time (it spreads over the whole cluster), on a Dask client made at the first sweep.
-    A cancel keeps the finished chunks."""
+    """A sweep's run, one at a time (it spreads over the whole cluster), on a Dask client made at the first sweep."""
 
     threads, fraction = 1, False  # progress: members done
 

@@ -1,5 +1,4 @@
-"""GET /v1/models, /v1/methods, /v1/structure_methods and /v1/compositions: what a job may ask for, read from
-raydamp's own catalogue."""
+"""GET /v1/models, /v1/methods, /v1/structure_methods, /v1/compositions: what a job may ask for (raydamp's)."""
 
 from __future__ import annotations
 

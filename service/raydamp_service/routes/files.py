@@ -12,12 +12,11 @@ from fastapi import APIRouter, File, HTTPException, Query, Request, Response, Up
 from fastapi.exceptions import RequestValidationError
 
 from ..checks.limits import JobError
-from ..checks.pool import ChecksBusy
 from ..checks.uploads import RecordFileInfo, check_upload_file
 from ..edge.guard import file_too_large
 from ..kinds.files import FileRecord
 from ..schemas import FileInfo, FileList
-from .tasks import SettingsDep, StoreDep, check_limit, checks_busy
+from .tasks import SettingsDep, StoreDep, check_limit
 
 router = APIRouter(prefix="/v1/files", tags=["files"])
 
@@ -27,12 +26,11 @@ _PIECE = 1 << 20  # bytes of an upload copied at once
 
 
 def _info(record: FileRecord) -> FileInfo:
+    common = {"id": record.id, "name": record.name, "bytes": record.bytes, "created_at": record.created_at}
     if record.kind == "record":
-        return FileInfo(id=record.id, name=record.name, bytes=record.bytes, kind="record", format=record.format,
-                        shape=None, nnz=None, samples=record.shape[0], t_start=record.t_start, t_end=record.t_end,
-                        dt=record.dt, created_at=record.created_at)
-    return FileInfo(id=record.id, name=record.name, bytes=record.bytes, shape=list(record.shape), nnz=record.nnz,
-                    created_at=record.created_at)
+        return FileInfo(**common, kind="record", format=record.format, shape=None, nnz=None, samples=record.shape[0],
+                        t_start=record.t_start, t_end=record.t_end, dt=record.dt)
+    return FileInfo(**common, shape=list(record.shape), nnz=record.nnz)
 
 
 def _name(filename: str | None) -> str:
@@ -70,8 +68,6 @@ def upload_file(file: Annotated[UploadFile, File(description="a Matrix Market (.
         except JobError as error:
             raise RequestValidationError([{"type": "value_error", "loc": error.loc, "msg": error.message,
                                            "input": _name(file.filename)}]) from None
-        except ChecksBusy as busy:
-            raise checks_busy(settings, busy) from None
         matrix = not isinstance(info, RecordFileInfo)
         record = store.add_file(_name(file.filename), spool, *((info.shape, info.nnz) if matrix else ()),
                                 max_total_bytes=settings.max_stored_file_bytes, record=None if matrix else info)

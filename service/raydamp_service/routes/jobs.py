@@ -18,7 +18,7 @@ from starlette.concurrency import run_in_threadpool
 from raydamp.jobs import validation_error
 
 from ..checks.limits import JobError, RaydampCall
-from ..checks.pool import CheckPool, ChecksBusy, PlotOverBudget, checked_inline
+from ..checks.pool import CheckPool, PlotOverBudget, checked_inline
 from ..config import Settings
 from ..edge.deadlines import TimedFileResponse, TimedStreamingResponse
 from ..edge.http import HEAD, UniqueKeysRoute
@@ -28,7 +28,7 @@ from ..tasks.runner import Runner
 from ..tasks.store import FINAL_STATUSES
 from ..trajectories.downloads import draw_plot, events_file, write_file
 from ..trajectories.stream import FetchLease, Selection, read_arrays, trajectory_chunks
-from .tasks import RunnerDep, SettingsDep, StoreDep, Tasks, check_limit, checks_busy, fields, invalid
+from .tasks import RunnerDep, SettingsDep, StoreDep, Tasks, check_limit, fields, invalid
 
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"], route_class=UniqueKeysRoute)
 
@@ -64,21 +64,19 @@ async def submit_job(spec: JobSpec, request: Request, response: Response) -> Job
     store, runner, settings, checks = state.store, state.runner, state.settings, state.checks
     spec = with_seed(spec)
     if checked_inline(spec):  # microseconds: a hop to the thread pool would cost more than the check
-        call = _check(spec, store, settings, checks)
+        call = _check(spec, store, checks)
     else:  # waits for a check process, or reads uploaded files (whose arrays a queued job should not hold)
-        call = await run_in_threadpool(_check, spec, store, settings, checks) and None
+        call = await run_in_threadpool(_check, spec, store, checks) and None
     record = JOBS.queue(request, response, store, runner, spec, settings.max_queued, "max_queued", settings,
                         prepare=lambda stored: stored.checked(spec, call))
     return JobCreated(id=record.id, status=record.status)
 
 
-def _check(spec: JobSpec, store: JobStore, settings: Settings, checks: CheckPool) -> RaydampCall | None:
+def _check(spec: JobSpec, store: JobStore, checks: CheckPool) -> RaydampCall | None:
     try:
         return checks.job(spec, files=store.parsed_files)
     except JobError as error:
         raise invalid(error, spec.model_dump()) from None
-    except ChecksBusy as busy:
-        raise checks_busy(settings, busy) from None
 
 
 @router.get("", response_model=JobList)
@@ -254,8 +252,6 @@ def get_plot(job_id: str, kind: Literal["energy", "phase", "projection"], reques
                 lease.release()
 
         png = request.app.state.checks.plot(read, draw_plot, record, spec, kind, options)  # drawn in a check process
-    except ChecksBusy as busy:
-        raise checks_busy(settings, busy) from None
     except PlotOverBudget as error:
         raise RequestValidationError([{"type": "value_error", "loc": ("query", "width"), "msg": str(error),
                                        "input": width}]) from None

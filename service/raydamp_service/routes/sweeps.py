@@ -7,14 +7,13 @@ from typing import Annotated, Literal
 from fastapi import APIRouter, HTTPException, Query, Request, Response
 
 from ..checks.limits import JobError
-from ..checks.pool import ChecksBusy
 from ..edge.deadlines import TimedStreamingResponse
 from ..edge.http import UniqueKeysRoute
 from ..kinds.sweeps import SweepRecord
 from ..schemas import JobStatus, SweepCreated, SweepList, SweepListItem, SweepSpec, SweepView
 from ..tasks.runner import Runner
 from .jobs import with_seed
-from .tasks import ChecksDep, SettingsDep, SweepRunnerDep, SweepsDep, Tasks, check_limit, checks_busy, fields, invalid
+from .tasks import ChecksDep, SettingsDep, SweepRunnerDep, SweepsDep, Tasks, check_limit, fields, invalid
 
 router = APIRouter(prefix="/v1/sweeps", tags=["sweeps"], route_class=UniqueKeysRoute)
 
@@ -57,8 +56,6 @@ def submit_sweep(spec: SweepSpec, request: Request, response: Response, settings
         members = checks.sweep(spec)
     except JobError as error:
         raise invalid(error) from None
-    except ChecksBusy as busy:
-        raise checks_busy(settings, busy) from None
     record = SWEEPS.queue(request, response, sweeps, runner, spec, settings.max_queued_sweeps, "max_queued_sweeps",
                           settings, members=members)
     return SweepCreated(id=record.id, status=record.status, members=record.members)

@@ -8,6 +8,7 @@ from collections.abc import Callable
 from typing import Annotated, Any
 
 from fastapi import Depends, HTTPException, Request, Response
+from fastapi.exception_handlers import http_exception_handler
 from fastapi.exceptions import RequestValidationError
 
 from ..checks.limits import JobError
@@ -18,8 +19,8 @@ from ..kinds.sweeps import SweepStore
 from ..tasks.runner import Runner
 from ..tasks.store import FINAL_STATUSES, FileGone, TaskStore
 
-__all__ = ["Tasks", "fields", "invalid", "check_limit", "checks_busy", "SettingsDep", "StoreDep", "RunnerDep",
-           "ChecksDep", "SweepsDep", "SweepRunnerDep"]
+__all__ = ["Tasks", "fields", "invalid", "check_limit", "checks_busy", "checks_busy_handler", "SettingsDep",
+           "StoreDep", "RunnerDep", "ChecksDep", "SweepsDep", "SweepRunnerDep"]
 
 
 def _state(name: str):
@@ -67,6 +68,11 @@ def checks_busy(settings: Settings, error: Exception | None = None) -> HTTPExcep
     return HTTPException(429, detail=str(error or "") or f"{settings.max_pending_checks} checks of submitted systems "
                          "are running or waiting (max_pending_checks); retry later",
                          headers={"Retry-After": str(settings.retry_after_seconds)})
+
+
+async def checks_busy_handler(request: Request, error: Exception) -> Response:
+    """A ChecksBusy out of any route (a check, a plot, an upload's parse): its 429."""
+    return await http_exception_handler(request, checks_busy(request.app.state.settings, error))
 
 
 def check_limit(limit: int, settings: Settings) -> None:

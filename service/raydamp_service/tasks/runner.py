@@ -82,8 +82,6 @@ class Runner:
         self._stopping = threading.Event()
         self._retention_wake = threading.Event()
 
-    # ---- called by the application ----
-
     def start(self) -> None:
         for i in range(self._work.threads):
             # daemon: a run that ignores cancellation must not keep a stopped service alive.
@@ -129,8 +127,6 @@ class Runner:
         """The live progress of a running task this process runs, else `stored`."""
         run = self._active.get(task_id) if status == "running" else None
         return run.progress if run is not None else stored
-
-    # ---- worker threads ----
 
     def _serve(self) -> None:
         while True:

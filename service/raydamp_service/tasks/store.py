@@ -1,6 +1,5 @@
-"""The SQLite store: one table per kind of task (kinds/), one lifecycle written once (queued -> running ->
-completed | failed | cancelled), WAL so that readers never wait for the writer. Every state change is one UPDATE
-guarded by the state it expects, so a cancel and a worker's claim cannot both win."""
+"""The SQLite store: one table per kind of task (kinds/), one lifecycle (queued -> running -> completed | failed |
+cancelled). Every state change is one UPDATE guarded by the state it expects: a cancel and a claim cannot both win."""
 
 from __future__ import annotations
 
@@ -114,8 +113,7 @@ class Database:
             yield connection
 
     def snapshot(self, query: str, args: tuple) -> tuple[sqlite3.Connection, sqlite3.Row] | None:
-        """A read-only connection holding a snapshot and the row the query finds in it (None: no row); the caller
-        reads blobs through it and closes it."""
+        """A read-only snapshot connection and the row the query finds in it (None: no row); the caller closes it."""
         connection = sqlite3.connect(f"{self.path.resolve().as_uri()}?mode=ro", uri=True, timeout=30.0,
                                      check_same_thread=False)  # used by one response, one piece at a time
         try:
@@ -146,8 +144,7 @@ class Database:
 
 
 def normalise_stored(db: sqlite3.Connection, table: str, model: type[BaseModel]) -> None:
-    """Rewrite a table's specs as the model's JSON of today (views send them as stored), once per schema change;
-    one that no longer validates is kept."""
+    """Rewrite a table's specs as the model's JSON (views send them as stored) once per schema change; invalid: kept."""
     key = f"{table}.spec schema"
     schema = hashlib.sha256(json.dumps(model.model_json_schema(), sort_keys=True).encode()).hexdigest()
     if db.execute("SELECT 1 FROM service WHERE key = ? AND value = ?", (key, schema)).fetchone():
@@ -190,8 +187,7 @@ Record = TypeVar("Record", bound=TaskRecord)
 
 
 class TaskStore(Generic[Record]):
-    """The tasks of one kind: one table of the lifecycle's columns and the kind's own (given a path, in a
-    database of its own)."""
+    """The tasks of one kind: a table of the lifecycle's columns and the kind's own (a path: a database of its own)."""
 
     TABLE: ClassVar[str]
     COLUMNS: ClassVar[str]  # the kind's columns in SQL: name type, ...
@@ -228,8 +224,6 @@ class TaskStore(Generic[Record]):
     def close(self) -> None:
         self.db.close()
 
-    # ---- reading ----
-
     def _record(self, row: sqlite3.Row) -> Record:
         """The record of a row selected as self._columns (the record's fields, in order)."""
         values = dict(zip(self._names, row))
@@ -259,12 +253,9 @@ class TaskStore(Generic[Record]):
         """Bytes of results held (the arrays; SQLite's own overhead is small beside them)."""
         return self.db.connection().execute(f"SELECT COALESCE(SUM({self.BYTES}), 0) FROM {self.TABLE}").fetchone()[0]
 
-    # ---- state changes ----
-
     def create(self, spec: dict[str, Any], max_queued: int | None = None, *, files: tuple[str, ...] = (),
                **columns: Any) -> Record | None:
-        """A new queued task; None (nothing written) when max_queued are queued; FileGone if one of `files`, the
-        uploads the spec reads, was deleted since its check."""
+        """A new queued task; None (nothing written) if max_queued are queued; FileGone if an upload in `files` went."""
         values = {"id": uuid.uuid4().hex, "status": "queued", "spec": json.dumps(spec), "created_at": now(), **columns}
         with self.db.transaction() as db:  # counted and inserted under the write lock: the bound is exact
             if max_queued is not None and db.execute(
@@ -282,8 +273,7 @@ class TaskStore(Generic[Record]):
 
     def _change(self, task_id: str, expected: str, changes: str, *args: Any,
                 also: tuple[str, tuple] | None = None) -> bool:
-        """One UPDATE guarded by the states expected (SQL: "('queued')"), and `also` in its transaction if it
-        changed the task. True if it did."""
+        """One UPDATE guarded by the expected states (SQL: "('queued')"), with `also` if it changed the task: True."""
         with self.db.transaction() as db:
             changed = db.execute(f"UPDATE {self.TABLE} SET {changes} WHERE id = ? AND status IN {expected}",
                                  (*args, task_id)).rowcount

@@ -68,7 +68,7 @@ def read_column(connection: sqlite3.Connection, stored: StoredTrajectory, column
 
 
 def read_arrays(connection: sqlite3.Connection, stored: StoredTrajectory, selection: Selection) -> TrajectoryArrays:
-    """The selected points of every array (a caller bounds their size: Selection.pieces, a plot's decimation)."""
+    """The selected points of every array (a caller bounds their size: a file's first row, a plot's decimation)."""
     return TrajectoryArrays(**{a.name: read_column(connection, stored, a.name, selection)
                                for a in SAVED if stored.has(a)})
 
