@@ -52,8 +52,10 @@ def start_server(root: Path, db: Path, log: Path, **settings: str) -> tuple[subp
     with socket.socket() as sock:
         sock.bind(("127.0.0.1", 0))
         port = sock.getsockname()[1]
-    env = {**os.environ, **settings, "RAYDAMP_DB": str(db),
-           "PYTHONPATH": os.pathsep.join([str(root / "service"), str(root / "python")])}
+    # The checkout's service; its raydamp too where the module is built in place (a developer's tree), else the
+    # installed one (a fresh clone after `make setup`: python/raydamp holds no _core there).
+    paths = [root / "service", *([root / "python"] if any((root / "python" / "raydamp").glob("_core*.so")) else [])]
+    env = {**os.environ, **settings, "RAYDAMP_DB": str(db), "PYTHONPATH": os.pathsep.join(map(str, paths))}
     with log.open("wb") as out:
         process = subprocess.Popen([sys.executable, "-m", "raydamp_service", "--port", str(port)], env=env,
                                    stdout=out, stderr=subprocess.STDOUT, cwd=root)
