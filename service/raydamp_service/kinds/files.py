@@ -6,7 +6,7 @@ import functools
 import io
 import sqlite3
 import uuid
-from dataclasses import astuple, dataclass, replace
+from dataclasses import dataclass, replace
 from typing import BinaryIO
 
 from ..checks.uploads import ParsedFiles, RecordFileInfo
@@ -77,8 +77,10 @@ class FileStore:
             stored = db.execute("SELECT COALESCE(SUM(bytes), 0) FROM files").fetchone()[0]
             if max_total_bytes and stored + size > max_total_bytes:
                 return None
-            row = db.execute(f"INSERT INTO files ({_FILE_COLUMNS}, content) VALUES ({'?, ' * 12}zeroblob(?))",
-                             (file.id, name, size, *file.shape, file.nnz, *astuple(file)[5:], size))
+            row = db.execute(
+                f"INSERT INTO files ({_FILE_COLUMNS}, content) VALUES ({', '.join('?' * 12)}, zeroblob(?))",
+                (file.id, name, size, *file.shape, file.nnz, file.created_at, file.kind, file.format, file.t_start,
+                 file.t_end, file.dt, size))
             with db.blobopen("files", "content", row.lastrowid) as blob:
                 content.seek(0)
                 while piece := content.read(_PIECE):
