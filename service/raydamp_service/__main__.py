@@ -35,8 +35,8 @@ def serve_command(argv: list[str]) -> int:
     """`raydamp serve [--host H] [--port P] [--workers N]`, checked under its own name, then handed to main."""
     parser = argparse.ArgumentParser(prog="raydamp serve",
                                      description="run the job service (same as python -m raydamp_service)")
-    main([arg for name, value in vars(_arguments(parser).parse_args(argv)).items() if value is not None
-          for arg in (f"--{name}", str(value))])
+    _arguments(parser).parse_args(argv)
+    main(argv)
     return 0
 
 

@@ -64,24 +64,22 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 @asynccontextmanager
 async def _serving(app: FastAPI, settings: Settings) -> AsyncIterator[None]:
     database = Database(settings.db)
-    store, sweeps = JobStore(database), SweepStore(database)
-    store.open()
-    sweeps.open()
+    app.state.store, app.state.sweeps = stores = JobStore(database), SweepStore(database)
+    for store in stores:
+        store.open()
     app.state.checks = checks = CheckPool(settings)
-    runner = Runner(store, settings, store.work(settings, checks))
-    sweep_runner = Runner(sweeps, settings, sweeps.work(settings, checks))
-    app.state.store, app.state.runner = store, runner
-    app.state.sweeps, app.state.sweep_runner = sweeps, sweep_runner
+    app.state.runner, app.state.sweep_runner = runners = [Runner(store, settings, store.work(settings, checks))
+                                                          for store in stores]
     checks.start()
-    runner.start()
-    sweep_runner.start()
+    for runner in runners:
+        runner.start()
     gc.freeze()  # what is built so far lives as long as the process: collections walk only what requests make
     try:
         yield
     finally:
         checks.stop()
-        sweep_runner.stop()
-        runner.stop()
+        for runner in reversed(runners):
+            runner.stop()
         database.close()
 
 

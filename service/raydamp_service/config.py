@@ -17,10 +17,8 @@ LOOPBACK_NAMES = ("127.0.0.1", "::1", "localhost")
 def is_loopback(host: str) -> bool:
     """True for an address or name that only this machine can reach."""
     host = host.strip("[]")
-    if host.lower() == "localhost":
-        return True
     try:
-        return ipaddress.ip_address(host).is_loopback
+        return host.lower() == "localhost" or ipaddress.ip_address(host).is_loopback
     except ValueError:
         return False
 

@@ -102,10 +102,9 @@ class Trajectory(BaseModel):
         None, description="each spring's hysteretic (dissipated) work W_h per point (a job with springs and work), "
         "so that H(t) - H(0) + W(t) + sum W_h(t) - W_f(t) is the energy budget's residual; else null")
     momentum: list[list[float | None]] = Field(description="momentum maps per point; [] rows if the model has none")
-    work: list[float | None] | None = Field(None, description="the damping work W(t) per point, so that "
-                                            "H(t) - H(0) + W(t) is the energy balance residual (zero for the exact "
-                                            "flow, O(h^2) for the order-2 methods); null for jobs stored before "
-                                            "it was kept")
+    work: list[float | None] | None = Field(None, description=(
+        "the damping work W(t) per point, so that H(t) - H(0) + W(t) is the energy balance residual (zero for the "
+        "exact flow, O(h^2) for the order-2 methods); null for jobs stored before it was kept"))
     load_work: list[float | None] | None = Field(None, description="the load's work W_f(t) per point (a job with a "
                                                  "load or ground motion), so that H(t) - H(0) + W(t) - W_f(t) is the "
                                                  "energy budget's residual; null for a job without a load")

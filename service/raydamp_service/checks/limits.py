@@ -46,17 +46,12 @@ def _check_sizes(spec: JobSpec, settings: Settings) -> None:
                            f"max_structure_dim = {settings.max_structure_dim} coordinates")
 
 
-def refuse_paths(spec: JobSpec) -> None:
-    """The service takes uploaded files by id only: a {"file": {"path": ...}} would read the server's files."""
-    found = next(iter(spec.local_paths()), None)
-    if found is not None:
-        raise JobError(found, ".".join(map(str, found)) + ": the service reads no paths; upload the file (POST "
-                       "/v1/files) and give its id")
-
-
 def check_spec(spec: JobSpec, settings: Settings, files=None) -> RaydampCall:
     """Every check a job must pass before it is queued; raises JobError naming the field."""
-    refuse_paths(spec)
+    found = next(iter(spec.local_paths()), None)
+    if found is not None:  # uploaded files by id only: a {"file": {"path": ...}} would read the server's files
+        raise JobError(found, ".".join(map(str, found)) + ": the service reads no paths; upload the file (POST "
+                       "/v1/files) and give its id")
     _check_sizes(spec, settings)
     steps = planned_steps(spec)
     if steps > settings.max_steps:

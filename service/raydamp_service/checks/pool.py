@@ -83,13 +83,6 @@ class _StoredFiles:
         return self._read("SELECT 1 FROM files WHERE id = ?", file_id) is not None
 
 
-def _status_bytes(field: str) -> int:
-    for line in Path("/proc/self/status").read_text().splitlines():
-        if line.startswith(field + ":"):
-            return int(line.split()[1]) * 1024
-    raise LookupError(field)
-
-
 def _start_worker(settings: Settings) -> None:
     """A check process's start: dies with the forkserver, then takes its memory budget (forked warm: warm.py)."""
     global _files
@@ -101,7 +94,8 @@ def _start_worker(settings: Settings) -> None:
 
     warm.touch(settings)
     _, hard = resource.getrlimit(resource.RLIMIT_AS)
-    limit = _status_bytes("VmSize") + settings.check_memory_bytes
+    size = int(Path("/proc/self/statm").read_text().split()[0]) * resource.getpagesize()  # VmSize
+    limit = size + settings.check_memory_bytes
     resource.setrlimit(resource.RLIMIT_AS, (limit if hard == resource.RLIM_INFINITY else min(limit, hard), hard))
     _files = ParsedFiles(_StoredFiles(str(Path(settings.db).resolve())),
                          settings.check_memory_bytes // 4 // _BYTES_PER_PARSED_ENTRY)

@@ -74,11 +74,8 @@ class ParsedFiles:
 
     def __call__(self, file_id: str) -> Any:
         with self._lock:
-            entry = self._parsed.get(file_id)
-            if entry is None:
-                entry = self._parsed[file_id] = (threading.Lock(), None)
+            lock, _ = self._parsed.setdefault(file_id, (threading.Lock(), None))
             self._parsed.move_to_end(file_id)
-        lock, _ = entry
         with lock:  # one parse per id; the others wait for it
             matrix = self._parsed.get(file_id, (None, None))[1]
             if matrix is not None and not self._store.file_exists(file_id):
@@ -88,15 +85,13 @@ class ParsedFiles:
             if matrix is None:
                 content = self._store.file_content(file_id)
                 if content is None:
-                    with self._lock:
-                        self._parsed.pop(file_id, None)
+                    self.forget(file_id)
                     raise ValueError(f"no uploaded file with id {file_id!r} (POST /v1/files uploads one, GET "
                                      "/v1/files lists them)")
                 try:
                     matrix = _parse(content, file_id)
                 except BaseException:
-                    with self._lock:
-                        self._parsed.pop(file_id, None)
+                    self.forget(file_id)
                     raise
                 with self._lock:
                     if self._parsed.get(file_id, (None, None))[0] is lock:  # not forgotten meanwhile (deleted)

@@ -17,8 +17,10 @@ SYSTEMS = (
 )
 
 
-def _checks(settings) -> int:
-    """A check of each of SYSTEMS; the number that failed (each logged)."""
+def touch(settings) -> int:
+    """A check of each of SYSTEMS; the number that failed (each logged). Run again in a freshly forked check process
+    (compiled: about 10 ms each), it copies the pages a check writes to (reference counts) into that process before
+    a user's first check, which is then not charged."""
     from raydamp.jobs import JobSpec
 
     from .limits import check_spec
@@ -52,15 +54,9 @@ def warm_up() -> int:
     except Exception:  # noqa: BLE001 - a warm-up only
         log.warning("check warm-up: the settings", exc_info=True)
         return failed + len(SYSTEMS)
-    failed += _checks(settings)
+    failed += touch(settings)
     gc.freeze()  # the collector no longer walks (so writes to) what every fork shares: fewer pages copied
     return failed
-
-
-def touch(settings) -> None:
-    """In a freshly forked check process: the same checks again (compiled: about 10 ms each), which copies the pages
-    a check writes to (reference counts) into this process before a user's first check, which is then not charged."""
-    _checks(settings)
 
 
 FAILED = warm_up()  # read by a check process (pool._warm_up_failures)

@@ -47,11 +47,9 @@ def protocol(header_seconds: float) -> type:
 
         def _disarm(self) -> None:
             if self._header_timer is not None:
-                self._header_timer.cancel()
-                self._header_timer = None
+                self._header_timer.cancel()  # a no-op once it has run
 
         def _late(self) -> None:
-            self._header_timer = None
             serving = self.cycle is not None and not self.cycle.response_complete
             if not serving and not self.transport.is_closing():
                 self.transport.close()

@@ -110,13 +110,11 @@ def _json_safe(value: Any) -> Any:
     return value
 
 
-def _path(loc: list[Any]) -> list[Any]:
-    """The JSON path the client wrote (raydamp.jobs.client_path: without the tags of a field's form)."""
-    return ["body", *client_path(loc[1:])] if loc and loc[0] == "body" else loc
-
-
 def _error(item: dict[str, Any]) -> dict[str, Any]:
-    out = _json_safe({**item, "loc": _path(list(item.get("loc", [])))})
+    loc = list(item.get("loc", []))
+    if loc[:1] == ["body"]:  # the JSON path the client wrote (client_path: without the tags of a field's form)
+        loc = ["body", *client_path(loc[1:])]
+    out = _json_safe({**item, "loc": loc})
     if isinstance(item.get("msg"), str):
         out["msg"] = _text(item["msg"].removeprefix("Value error, "), MAX_MESSAGE)  # our messages speak for themselves
     return out

@@ -18,6 +18,7 @@ from ..config import Settings
 from ..tasks.runner import Outcome, Run
 from ..tasks.store import TaskRecord, TaskStore, normalise_stored
 from ..trajectories.arrays import SAVED, SPRINGS_SQL, WIDTH_SQL, StoredTrajectory, TrajectoryArrays
+from ..trajectories.stream import read_arrays
 from .files import FILE_COLUMNS_ADDED, FILES_TABLE, FileStore
 
 __all__ = ["JobStore", "JobRecord", "JobWork", "TrajectoryArrays", "StoredTrajectory"]
@@ -25,13 +26,9 @@ __all__ = ["JobStore", "JobRecord", "JobWork", "TrajectoryArrays", "StoredTrajec
 _FLOAT = np.dtype("<f8")  # the blob format: little-endian float64, row-major
 _SHORT_WORK = 100_000  # steps x coordinates of a built-in model's run of milliseconds
 _TABLES = f"""
-CREATE TABLE IF NOT EXISTS trajectories (
-    job_id TEXT PRIMARY KEY REFERENCES jobs(id) ON DELETE CASCADE,
-    points INTEGER NOT NULL,
-    dim INTEGER NOT NULL,
-    momenta INTEGER NOT NULL,
-    {", ".join(f"{a.name} BLOB{'' if a.optional else ' NOT NULL'}" for a in SAVED)}
-);
+CREATE TABLE IF NOT EXISTS trajectories (job_id TEXT PRIMARY KEY REFERENCES jobs(id) ON DELETE CASCADE,
+    points INTEGER NOT NULL, dim INTEGER NOT NULL, momenta INTEGER NOT NULL,
+    {", ".join(f"{a.name} BLOB{'' if a.optional else ' NOT NULL'}" for a in SAVED)});
 """
 
 
@@ -57,10 +54,6 @@ class JobRecord(TaskRecord):
 
 def _blob(array: np.ndarray | None) -> memoryview | None:  # the array's own buffer, not a copy
     return memoryview(np.ascontiguousarray(array, dtype=_FLOAT).reshape(-1)).cast("B") if array is not None else None
-
-
-def _array(blob: bytes | None, *shape: int) -> np.ndarray | None:
-    return np.frombuffer(blob, dtype=_FLOAT).reshape(shape) if blob is not None else None
 
 
 def _first_given(*paths: str, otherwise: str = "NULL") -> str:
@@ -117,14 +110,14 @@ class JobStore(TaskStore[JobRecord], FileStore):
                               also=row, summary=summary, failed_step=failed_step)
 
     def trajectory(self, job_id: str) -> TrajectoryArrays | None:
-        row = self.db.connection().execute("SELECT * FROM trajectories WHERE job_id = ?", (job_id,)).fetchone()
-        if row is None:
+        opened = self.open_trajectory(job_id)
+        if opened is None:
             return None
-        blob = row["spring_forces"]
-        springs = 0 if blob is None else len(blob) // (8 * row["points"])
-        n, shape = row["points"], StoredTrajectory(0, row["points"], row["dim"], row["momenta"], springs=springs)
-        return TrajectoryArrays(**{a.name: _array(row[a.name], n, *([shape.width(a)] if a.width else []))
-                                   for a in SAVED})
+        connection, stored = opened
+        try:
+            return read_arrays(connection, stored, range(stored.points))
+        finally:
+            connection.close()
 
     def open_trajectory(self, job_id: str) -> tuple[sqlite3.Connection, StoredTrajectory] | None:
         """A snapshot connection in which the job's trajectory exists, and where it is; the caller closes it."""

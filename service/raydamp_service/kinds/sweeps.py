@@ -9,8 +9,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 import raydamp
 from raydamp.jobs import SweepSpec
 from raydamp.results.ensemble_solution import STATUSES
@@ -104,7 +102,7 @@ class SweepWork:
             path = Path(scratch) / "sweep.nc"
             save_sweep(ds, path)
             result: dict[str, Any] = {"outcomes": outcomes, "result": path.read_bytes()}
-        failed = 0 if cancelled else int(np.count_nonzero(status != STATUSES.index("completed")))
+        failed = 0 if cancelled else status.size - outcomes.get("completed", 0)
         error = f"{failed} of {status.size} members did not complete (see outcomes and the result's messages)" \
             if failed else None
         return Outcome("cancelled" if cancelled else "completed", error, done, result)

@@ -27,7 +27,7 @@ from ..schemas import JobCreated, JobList, JobListItem, JobSpec, JobStatus, JobV
 from ..tasks.runner import Runner
 from ..tasks.store import FINAL_STATUSES
 from ..trajectories.downloads import draw_plot, events_file, write_file
-from ..trajectories.stream import FetchLease, Selection, read_arrays, trajectory_chunks
+from ..trajectories.stream import FetchLease, read_arrays, trajectory_chunks
 from .tasks import RunnerDep, SettingsDep, StoreDep, Tasks, check_limit, fields, invalid
 
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"], route_class=UniqueKeysRoute)
@@ -40,7 +40,7 @@ def _view(record: JobRecord, runner: Runner) -> JobView:
                    trajectory=JOBS.url(record.id) + "/trajectory" if record.has_trajectory else None)
 
 
-JOBS = Tasks("job", "/v1/jobs", _view)
+JOBS = Tasks("job", "/v1/jobs", _view, "max_queued")
 
 
 def with_seed(spec: JobSpec) -> JobSpec:
@@ -67,8 +67,7 @@ async def submit_job(spec: JobSpec, request: Request, response: Response) -> Job
         call = _check(spec, store, checks)
     else:  # waits for a check process, or reads uploaded files (whose arrays a queued job should not hold)
         call = await run_in_threadpool(_check, spec, store, checks) and None
-    record = JOBS.queue(request, response, store, runner, spec, settings.max_queued, "max_queued", settings,
-                        prepare=lambda stored: stored.checked(spec, call))
+    record = JOBS.queue(request, response, store, runner, spec, settings, prepare=lambda row: row.checked(spec, call))
     return JobCreated(id=record.id, status=record.status)
 
 
@@ -112,11 +111,17 @@ def get_trajectory(job_id: str, request: Request, store: StoreDep, settings: Set
                                    "the job spec as provenance; raydamp.load reads them)")] = "json") -> Response:
     """The saved points start, start + every, ... before stop, streamed as JSON or written as a file."""
     record = JOBS.existing(store, job_id)
-    if format != "json":
-        return _trajectory_file(record, store, request, settings, slice(start, stop, every),
-                                "netcdf" if format == "nc" else format)
+    spec = None if format == "json" else _spec(record)
     connection, stored = _opened(record, store)
-    selection = Selection(*slice(start, stop, every).indices(stored.points))
+    selection = range(stored.points)[start:stop:every]
+    if spec is not None:  # a file, written a slice at a time (downloads.write_file) and sent from disk
+        if len(selection) == 0:
+            connection.close()
+            raise RequestValidationError([{"type": "value_error", "loc": ("query", "start"), "input": start, "msg":
+                                           f"start, stop, every select none of the {stored.points} saved points"}])
+        fmt = "netcdf" if format == "nc" else format
+        return _file(record, request, settings, connection, len(selection) * stored.row_bytes,
+                     lambda directory: write_file(record, spec, connection, stored, selection, fmt, directory))
     try:
         # A HEAD of the streamed JSON reads no body: no slot (a file's HEAD takes one: it writes the file).
         lease = FetchLease(None if request.scope.get(HEAD) else
@@ -162,20 +167,6 @@ def _large_slot(request: Request, settings: Settings, selected_bytes: int) -> th
                             "(max_large_fetches); retry, or ask for fewer points with every/stop",
                             headers={"Retry-After": "1"})
     return semaphore
-
-
-def _trajectory_file(record: JobRecord, store: JobStore, request: Request, settings: Settings, points: slice,
-                     fmt: str) -> Response:
-    """The selected points written as a file, a slice at a time (downloads.write_file), and sent from disk."""
-    spec = _spec(record)
-    connection, stored = _opened(record, store)
-    selection = Selection(*points.indices(stored.points))
-    if len(selection) == 0:
-        connection.close()
-        raise RequestValidationError([{"type": "value_error", "loc": ("query", "start"), "input": points.start,
-                                       "msg": f"start, stop, every select none of the {stored.points} saved points"}])
-    return _file(record, request, settings, connection, len(selection) * stored.row_bytes,
-                 lambda directory: write_file(record, spec, connection, stored, selection, fmt, directory))
 
 
 def _file(record: JobRecord, request: Request, settings: Settings, connection, selected_bytes: int, write) -> Response:
@@ -242,7 +233,7 @@ def get_plot(job_id: str, kind: Literal["energy", "phase", "projection"], reques
     connection, stored = _opened(record, store)
     try:  # a place among the checks, then a large-fetch slot, are taken before any stored array is read
         points = max(2, min(_PLOT_POINTS, settings.max_plot_bytes // stored.row_bytes))
-        selection = Selection(0, stored.points, max(1, -(-stored.points // points)))
+        selection = range(0, stored.points, max(1, -(-stored.points // points)))
 
         def read():
             lease = FetchLease(_large_slot(request, settings, len(selection) * stored.row_bytes))

@@ -33,7 +33,7 @@ def _view(record: SweepRecord, runner: Runner) -> SweepView:
                      result=SWEEPS.url(record.id) + "/result" if record.result_bytes else None)
 
 
-SWEEPS = Tasks("sweep", "/v1/sweeps", _view)
+SWEEPS = Tasks("sweep", "/v1/sweeps", _view, "max_queued_sweeps")
 
 
 @router.post("", status_code=202, response_model=SweepCreated,
@@ -56,8 +56,7 @@ def submit_sweep(spec: SweepSpec, request: Request, response: Response, settings
         members = checks.sweep(spec)
     except JobError as error:
         raise invalid(error) from None
-    record = SWEEPS.queue(request, response, sweeps, runner, spec, settings.max_queued_sweeps, "max_queued_sweeps",
-                          settings, members=members)
+    record = SWEEPS.queue(request, response, sweeps, runner, spec, settings, members=members)
     return SweepCreated(id=record.id, status=record.status, members=record.members)
 
 

@@ -82,11 +82,11 @@ def check_limit(limit: int, settings: Settings) -> None:
 
 
 class Tasks:
-    """One kind's lifecycle: submit (422, 429 when the queue is full, the Location), 404, cancel (409 once
-    finished) and delete (204 once finished, else a cancel); view(record, runner) is the body answered."""
+    """One kind's lifecycle: submit (422, 429 when the queue holds the setting max_queued names, the Location), 404,
+    cancel (409 once finished) and delete (204 once finished, else a cancel); view(record, runner) is the body."""
 
-    def __init__(self, noun: str, prefix: str, view: Callable[[Any, Runner], Any]):
-        self.noun, self.prefix, self.view = noun, prefix, view
+    def __init__(self, noun: str, prefix: str, view: Callable[[Any, Runner], Any], max_queued: str):
+        self.noun, self.prefix, self.view, self.max_queued = noun, prefix, view, max_queued
 
     def url(self, task_id: str) -> str:
         return f"{self.prefix}/{task_id}"
@@ -97,15 +97,16 @@ class Tasks:
             raise HTTPException(404, detail=f"no {self.noun} with id {task_id!r}")
         return record
 
-    def queue(self, request: Request, response: Response, store: TaskStore, runner: Runner, spec: Any, limit: int,
-              setting: str, settings: Settings, prepare: Callable[[Any], Any] | None = None, **columns: Any) -> Any:
-        """Store the checked spec as queued, hand it to the runner (as prepare(record)); 429 when limit wait."""
+    def queue(self, request: Request, response: Response, store: TaskStore, runner: Runner, spec: Any,
+              settings: Settings, prepare: Callable[[Any], Any] | None = None, **columns: Any) -> Any:
+        """Store the checked spec as queued, hand it to the runner (as prepare(record)); 429 when the queue is full."""
+        limit = getattr(settings, self.max_queued)
         try:
             record = store.create(spec.model_dump(mode="json"), limit, files=spec.uploads(), **columns)
         except FileGone as error:
             raise HTTPException(409, detail=str(error)) from None
         if record is None:
-            raise HTTPException(429, detail=f"{limit} {self.noun}s are already queued ({setting}); retry later",
+            raise HTTPException(429, detail=f"{limit} {self.noun}s are already queued ({self.max_queued}); retry later",
                                 headers={"Retry-After": str(settings.retry_after_seconds)})
         runner.submit(record.id, prepare(record) if prepare is not None else record)
         # A path, never built from the Host header: a forged Host must not come back as a redirect target.

@@ -178,13 +178,14 @@ class Runner:
             if record is None:
                 return  # cancelled while queued
             if record.cancel_requested:
-                run.cancelled_by_user = True
-                run.token.cancel()
+                self.cancel(task_id)
             if self._stopping.is_set():
                 self._store.requeue(task_id)
                 return
-            # The submitted row carries the spec validated and the run built by its check (the same spec).
-            outcome = self._outcome(record if stored is None else stored, run)
+            try:  # the submitted row carries the spec validated and the run built by its check (the same spec)
+                outcome = self._work.run(record if stored is None else stored, run)
+            except ValueError as error:  # the spec passed the checks at submission (a file named has gone since)
+                outcome = Outcome("failed", str(error))
             if outcome.status == "cancelled" and run.interrupted:
                 self._store.requeue(task_id)
             else:
@@ -194,9 +195,3 @@ class Runner:
             with self._lock:
                 self._active.pop(task_id, None)
             self._retention_wake.set()
-
-    def _outcome(self, record: TaskRecord, run: Run) -> Outcome:
-        try:
-            return self._work.run(record, run)
-        except ValueError as error:  # the spec passed the checks at submission (a file named has gone since)
-            return Outcome("failed", str(error))

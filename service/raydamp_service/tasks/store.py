@@ -261,12 +261,9 @@ class TaskStore(Generic[Record]):
             if max_queued is not None and db.execute(
                     f"SELECT COUNT(*) FROM {self.TABLE} WHERE status = 'queued'").fetchone()[0] >= max_queued:
                 return None
-            if files:  # the check read them; a DELETE may have removed one since
-                marks = ", ".join("?" * len(files))
-                present = {row[0] for row in db.execute(f"SELECT id FROM files WHERE id IN ({marks})", files)}
-                missing = next((file_id for file_id in files if file_id not in present), None)
-                if missing is not None:
-                    raise FileGone(missing)
+            for file_id in files:  # the check read them; a DELETE may have removed one since
+                if db.execute("SELECT 1 FROM files WHERE id = ?", (file_id,)).fetchone() is None:
+                    raise FileGone(file_id)
             db.execute(f"INSERT INTO {self.TABLE} ({', '.join(values)}) VALUES ({', '.join('?' * len(values))})",
                        tuple(values.values()))
         return self.RECORD(**{**values, "spec": spec})  # the row as written, its JSON not parsed back
@@ -325,41 +322,36 @@ class TaskStore(Generic[Record]):
 
     def delete_finished(self, task_id: str) -> bool:
         """Remove a finished task and its result; False if it is not (or no longer) finished."""
+        return self._delete_finished([task_id]) == 1
+
+    def _delete_finished(self, task_ids: list[str]) -> int:
         with self.db.transaction() as db:
-            deleted = db.execute(f"DELETE FROM {self.TABLE} WHERE id = ? AND status IN {_FINAL_SQL}",
-                                 (task_id,)).rowcount
+            deleted = db.executemany(f"DELETE FROM {self.TABLE} WHERE id = ? AND status IN {_FINAL_SQL}",
+                                     [(task_id,) for task_id in task_ids]).rowcount
         if deleted:
             self.db.give_back_space()
-        return bool(deleted)
+        return deleted
 
     def prune(self, *, max_jobs: int = 0, max_age_seconds: float = 0, max_bytes: int = 0) -> int:
         """Remove finished tasks, oldest first, until every given bound (0 = none) holds; returns how many."""
         self.db.give_back_space(pending_only=True)
         if not (max_jobs or max_age_seconds or max_bytes):
             return 0
+        cutoff = (datetime.now(timezone.utc).timestamp() - max_age_seconds) if max_age_seconds else None
+
+        def over(count: int, total: int, finished_at: str | None) -> bool:
+            """Whether tasks this many, of these bytes, the oldest finished at finished_at, pass a bound."""
+            return bool((max_jobs and count > max_jobs) or (max_bytes and total > max_bytes) or (cutoff is not None
+                        and finished_at is not None and datetime.fromisoformat(finished_at).timestamp() < cutoff))
+
         finished = f"FROM {self.TABLE} WHERE status IN {_FINAL_SQL}"
         # The common case, every bound held, is one aggregate in SQLite, not a Python loop over every task.
-        count, total, oldest = self.db.connection().execute(
-            f"SELECT COUNT(*), COALESCE(SUM({self.BYTES}), 0), MIN(finished_at) {finished}").fetchone()
-        cutoff = (datetime.now(timezone.utc).timestamp() - max_age_seconds) if max_age_seconds else None
-        if not ((max_jobs and count > max_jobs) or (max_bytes and total > max_bytes) or (
-                cutoff is not None and oldest is not None and datetime.fromisoformat(oldest).timestamp() < cutoff)):
+        if not over(*self.db.connection().execute(
+                f"SELECT COUNT(*), COALESCE(SUM({self.BYTES}), 0), MIN(finished_at) {finished}").fetchone()):
             return 0
-        rows = self.db.connection().execute(f"SELECT id, finished_at, COALESCE({self.BYTES}, 0) AS bytes {finished} "
-                                            "ORDER BY finished_at DESC, seq DESC").fetchall()  # newest first: kept
-        doomed, kept, kept_bytes, full = [], 0, 0, False
-        for row in rows:
-            too_old = cutoff is not None and datetime.fromisoformat(row["finished_at"]).timestamp() < cutoff
-            # Once a bound is reached every older task goes, so what is kept is always the newest.
-            full = full or bool(max_jobs and kept >= max_jobs) or bool(
-                max_bytes and kept_bytes + row["bytes"] > max_bytes)
-            if full or too_old:
-                doomed.append(row["id"])
-            else:
-                kept, kept_bytes = kept + 1, kept_bytes + row["bytes"]
-        if doomed:
-            with self.db.transaction() as db:
-                db.executemany(f"DELETE FROM {self.TABLE} WHERE id = ? AND status IN {_FINAL_SQL}",
-                               [(task_id,) for task_id in doomed])
-            self.db.give_back_space()
-        return len(doomed)
+        # Each task with itself and the newer ones: past a bound it goes and every older one too, so what is kept is
+        # always the newest.
+        rows = self.db.connection().execute(
+            f"SELECT id, ROW_NUMBER() OVER newer, SUM(COALESCE({self.BYTES}, 0)) OVER newer, finished_at {finished} "
+            "WINDOW newer AS (ORDER BY finished_at DESC, seq DESC)").fetchall()
+        return self._delete_finished([row[0] for row in rows if over(*row[1:])])

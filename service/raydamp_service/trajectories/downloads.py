@@ -16,7 +16,7 @@ from raydamp.results.io.dataset import events_csv
 from raydamp.results.stored import stored_solution as solution_of
 
 from .arrays import SAVED, StoredTrajectory, TrajectoryArrays
-from .stream import Selection, read_arrays, read_column
+from .stream import read_arrays, read_column
 
 __all__ = ["draw_plot", "events_file", "stored_solution", "write_file"]
 
@@ -32,15 +32,12 @@ def stored_solution(record, arrays: TrajectoryArrays, spec: JobSpec) -> raydamp.
 
 
 def write_file(record, spec: JobSpec, connection: sqlite3.Connection, stored: StoredTrajectory,
-               selection: Selection, fmt: Literal["csv", "npz", "netcdf"], directory: Path) -> tuple[Path, str]:
+               selection: range, fmt: Literal["csv", "npz", "netcdf"], directory: Path) -> tuple[Path, str]:
     """(path, media type) of the selected points written in directory, a slice at a time."""
-    head = stored_solution(record, read_arrays(connection, stored, Selection(selection.start, selection.start + 1,
-                                                                             selection.every)), spec)
+    head = stored_solution(record, read_arrays(connection, stored, selection[:1]), spec)
 
     def read(column: str, start: int, stop: int) -> np.ndarray:
-        first = selection.start + start * selection.every
-        return read_column(connection, stored, column, Selection(first, selection.start + stop * selection.every,
-                                                                 selection.every))
+        return read_column(connection, stored, column, selection[start:stop])
 
     suffix, media_type = FILES[fmt]
     write_solution(path := directory / f"trajectory{suffix}", fmt, head, read, len(selection))
@@ -50,7 +47,7 @@ def write_file(record, spec: JobSpec, connection: sqlite3.Connection, stored: St
 def events_file(record, spec: JobSpec, connection: sqlite3.Connection, stored: StoredTrajectory,
                 directory: Path) -> Path:
     """The job's events table as CSV (name, t, direction, q_<name>..., p_<name>...), written in directory."""
-    head = stored_solution(record, read_arrays(connection, stored, Selection(0, 1, 1)), spec)
+    head = stored_solution(record, read_arrays(connection, stored, range(1)), spec)
     names, rows = events_csv(head)
     path = directory / "events.csv"
     path.write_text("\n".join([",".join(names), *(",".join(row) for row in rows)]) + "\n")

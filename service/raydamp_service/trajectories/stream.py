@@ -1,5 +1,5 @@
-"""A stored trajectory as a JSON body (exactly the Trajectory schema) written piece by piece, with start/stop/every
-decimation: each array read from its blob a bounded slice at a time, so a fetch holds about CHUNK_BYTES."""
+"""A stored trajectory as a JSON body (exactly the Trajectory schema), the saved points of a range (start/stop/every)
+written piece by piece: each array read from its blob a bounded slice at a time, so a fetch holds about CHUNK_BYTES."""
 
 from __future__ import annotations
 
@@ -8,14 +8,13 @@ import shutil
 import sqlite3
 import threading
 from collections.abc import Iterator
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from .arrays import SAVED, StoredTrajectory, TrajectoryArrays
+from .arrays import SAVED, Saved, StoredTrajectory, TrajectoryArrays
 
-__all__ = ["FetchLease", "Selection", "read_arrays", "read_column", "trajectory_chunks"]
+__all__ = ["FetchLease", "read_arrays", "read_column", "trajectory_chunks"]
 
 CHUNK_BYTES = 1 << 16  # read per piece; small: json.dumps holds the GIL (and the event loop) for a piece
 _ROW_READ_LIMIT = 1 << 16  # bytes of one read of a blob
@@ -41,21 +40,11 @@ class FetchLease:
         self.release()
 
 
-@dataclass(frozen=True)
-class Selection:
-    start: int
-    stop: int
-    every: int
-
-    def __len__(self) -> int:
-        return len(range(self.start, self.stop, self.every))
-
-
 _BY_NAME = {array.name: array for array in SAVED}
 
 
 def read_column(connection: sqlite3.Connection, stored: StoredTrajectory, column: str,
-                selection: Selection) -> np.ndarray:
+                selection: range) -> np.ndarray:
     """One array's selected rows, (points,) or (points, width), read from a part of its blob."""
     array = _BY_NAME[column]
     width, n = stored.width(array), len(selection)
@@ -63,11 +52,11 @@ def read_column(connection: sqlite3.Connection, stored: StoredTrajectory, column
         rows = np.empty((n, width))
     else:
         with connection.blobopen("trajectories", column, stored.rowid, readonly=True) as blob:
-            rows = _read_rows(blob, selection.start, n, selection.every, width)
+            rows = _read_rows(blob, selection.start, n, selection.step, width)
     return rows if array.width else rows[:, 0]
 
 
-def read_arrays(connection: sqlite3.Connection, stored: StoredTrajectory, selection: Selection) -> TrajectoryArrays:
+def read_arrays(connection: sqlite3.Connection, stored: StoredTrajectory, selection: range) -> TrajectoryArrays:
     """The selected points of every array (a caller bounds their size: a file's first row, a plot's decimation)."""
     return TrajectoryArrays(**{a.name: read_column(connection, stored, a.name, selection)
                                for a in SAVED if stored.has(a)})
@@ -75,14 +64,11 @@ def read_arrays(connection: sqlite3.Connection, stored: StoredTrajectory, select
 
 def _json_rows(array: np.ndarray) -> str:
     """The rows as JSON without the enclosing brackets; non-finite values (an overflowed energy) are null."""
+    if array.ndim == 2 and array.shape[1] == 0:  # momentum of a model without symmetries: nothing stored
+        return ",".join(["[]"] * len(array))
     finite = np.isfinite(array)
-    if finite.all():
-        rows = array.tolist()
-    else:
-        boxed = array.astype(object)
-        boxed[~finite] = None
-        rows = boxed.tolist()
-    return json.dumps(rows, allow_nan=False, separators=(",", ":"))[1:-1]
+    rows = array if finite.all() else np.where(finite, array.astype(object), None)
+    return json.dumps(rows.tolist(), allow_nan=False, separators=(",", ":"))[1:-1]
 
 
 def _read_rows(blob: sqlite3.Blob, first: int, count: int, every: int, width: int) -> np.ndarray:
@@ -99,26 +85,18 @@ def _read_rows(blob: sqlite3.Blob, first: int, count: int, every: int, width: in
     return out
 
 
-def _array_json(connection: sqlite3.Connection, stored: StoredTrajectory, column: str, width: int | None,
-                selection: Selection) -> Iterator[str]:
-    """One array's JSON value, '[' ... ']', in pieces. width None: a 1-D array (t, energy)."""
-    n = len(selection)
+def _array_json(connection: sqlite3.Connection, stored: StoredTrajectory, array: Saved,
+                selection: range) -> Iterator[str]:
+    """One array's JSON value, '[' ... ']', in pieces of about CHUNK_BYTES (a width of 0: empty rows, nothing read)."""
+    per_piece = max(1, CHUNK_BYTES // (8 * max(stored.width(array), 1) * selection.step))
     yield "["
-    if width == 0:  # momentum of a model without symmetries: one empty row per point, nothing stored
-        for first in range(0, n, 100_000):
-            yield ("," if first else "") + ",".join(["[]"] * min(100_000, n - first))
-    elif n:
-        row_width = width or 1
-        per_piece = max(1, CHUNK_BYTES // (8 * row_width * selection.every))
-        with connection.blobopen("trajectories", column, stored.rowid, readonly=True) as blob:
-            for done in range(0, n, per_piece):
-                count = min(per_piece, n - done)
-                rows = _read_rows(blob, selection.start + done * selection.every, count, selection.every, row_width)
-                yield ("," if done else "") + _json_rows(rows if width else rows[:, 0])
+    for done in range(0, len(selection), per_piece):
+        rows = read_column(connection, stored, array.name, selection[done:done + per_piece])
+        yield ("," if done else "") + _json_rows(rows)
     yield "]"
 
 
-def trajectory_chunks(connection: sqlite3.Connection, stored: StoredTrajectory, selection: Selection,
+def trajectory_chunks(connection: sqlite3.Connection, stored: StoredTrajectory, selection: range,
                       lease: FetchLease) -> Iterator[bytes]:
     """The body of GET .../trajectory. Owns the read connection (a snapshot: a concurrent DELETE or
     retention pass does not change what is being sent) and the lease; both end when the body does."""
@@ -128,8 +106,7 @@ def trajectory_chunks(connection: sqlite3.Connection, stored: StoredTrajectory, 
             if not stored.has(array):  # an optional array the job has not: null, as the Trajectory schema says
                 yield b"null"
                 continue
-            width = stored.width(array) if array.width else None
-            for piece in _array_json(connection, stored, array.name, width, selection):
+            for piece in _array_json(connection, stored, array, selection):
                 yield piece.encode()
         yield b"}"
     finally:
