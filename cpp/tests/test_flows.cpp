@@ -1,5 +1,6 @@
 // Each exact sub-flow against a fine classical RK4 solution of its own ODE, on both models.
 #include <cmath>
+#include <limits>
 
 #include "check.hpp"
 #include "raydamp/raydamp.hpp"
@@ -51,7 +52,47 @@ void check_flows(const Model& model, State<Dim> z0, double t) {
   CHECK_NEAR(distance(z, reference(z0, t, field(false, true, true))), 0.0, 1e-12);
 }
 
+// A damping kind that counts the factors it makes (damping/factors_cache.hpp keeps them per length).
+struct CountingDamping {
+  struct Factors {
+    double t = std::numeric_limits<double>::quiet_NaN();
+    double twice = 0.0;
+  };
+  mutable int made = 0;
+  Factors factors(double t) const {
+    ++made;
+    return {t, 2.0 * t};
+  }
+};
+
+// A composed whole step cycles through a few lengths (3s + suzuki4's damps: three); each is made once.
+void check_factors_cache() {
+  CountingDamping damping;
+  FactorsCache<CountingDamping::Factors> cache;
+  const double cycle[] = {0.05, 0.1, 0.3, 0.3, 0.1, 0.05};
+  for (int step = 0; step < 100; ++step)
+    for (double t : cycle) CHECK(cache.get(t, damping).twice == 2.0 * t);
+  CHECK(damping.made == 3);
+  // Six lengths fit (the last two and four earlier), in any order; a cycle of seven is made again and again.
+  for (const int lengths : {6, 7}) {
+    CountingDamping fresh;
+    FactorsCache<CountingDamping::Factors> six;
+    for (int step = 0; step < 100; ++step)
+      for (int k = 0; k < 2 * lengths; ++k) {
+        const double t = 1.0 + (k < lengths ? k : 2 * lengths - 1 - k);  // up the lengths and back down
+        CHECK(six.get(t, fresh).twice == 2.0 * t);
+      }
+    if (lengths == 6) CHECK(fresh.made == 6);
+    else CHECK(fresh.made > 100);
+  }
+  // A scalar damping's few numbers are made again past the last two lengths (no lock, no allocation to save).
+  IsotropicDamping scalar{0.5};
+  FactorsCache<DecayFactors> decay;
+  for (double t : cycle) CHECK(decay.get(t, scalar).exp == std::exp(-0.5 * t));
+}
+
 int main() {
+  check_factors_cache();
   for (double eps : {0.0, 1e-9, 0.01, 0.5, 3.0}) {
     DampedPendulum pendulum(eps);
     State<1> z{Vector<1>(2.0), Vector<1>(-0.7)};

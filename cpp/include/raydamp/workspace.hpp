@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "raydamp/damping/decay_factors.hpp"
+#include "raydamp/damping/factors_cache.hpp"
 #include "raydamp/load.hpp"
 #include "raydamp/random/philox.hpp"
 #include "raydamp/state.hpp"
@@ -23,9 +24,8 @@ struct Workspace {
   std::vector<Vector<Dim>> kq, kp;  // Runge-Kutta stage derivatives
   bool track_work = false;  // accumulate the damping work W in `work`
   double work = 0.0;
-  // For the last t each exact damping flow ran for, and the damp's t before that: a merged 3s
-  // run damps for h/2 at the ends of each block of steps and for h between its steps.
-  Factors damp_factors, kick_damp_factors, previous_damp_factors;
+  // The damping's factors of the last few sub-flow lengths the exact damp and kick+damp flows ran for.
+  FactorsCache<Factors> factors;
   // The load and the clock it reads: t, advanced by the drifts (flows/exact.hpp) and set
   // by the step loop at each step it starts from scratch. load_work: W_f = int f . M^{-1} p dt.
   const Load* load = nullptr;

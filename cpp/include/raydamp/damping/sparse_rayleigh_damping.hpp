@@ -122,9 +122,12 @@ class SparseRayleighDamping {
   Factors factors(double t) const { return {t, series(t), std::sqrt(std::max(0.0, -std::expm1(-2.0 * alpha_ * t)))}; }
 
   std::shared_ptr<const Series> series(double t) const {
-    std::lock_guard<std::mutex> lock(caches_->mutex);
-    for (const auto& s : caches_->series)
-      if (s->t == t) return s;
+    {
+      std::lock_guard<std::mutex> lock(caches_->mutex);
+      if (auto cached = find_series(t)) return cached;
+    }
+    // Made outside the lock, which every run of the model shares: a kink-located run asks for a new length at
+    // every yield or unloading, and two threads' runs then waited on each other's modal products.
     auto fresh = std::make_shared<Series>();
     fresh->t = t;
     if (modes_) {
@@ -134,6 +137,8 @@ class SparseRayleighDamping {
       make_chebyshev(*fresh);
     }
     std::shared_ptr<const Series> made = std::move(fresh);
+    std::lock_guard<std::mutex> lock(caches_->mutex);
+    if (auto cached = find_series(t)) return cached;  // made by another run meanwhile: the same numbers
     if (caches_->series.size() >= kCachedLengths) caches_->series.erase(caches_->series.begin());
     caches_->series.push_back(made);
     return made;
@@ -252,6 +257,13 @@ class SparseRayleighDamping {
     std::once_flag root_once;
     std::unique_ptr<const SparseCholesky> root;  // C = R R^T (beta > 0 and C positive definite), else null
   };
+
+  // The cached series of length t, or null; the caller holds caches_->mutex.
+  std::shared_ptr<const Series> find_series(double t) const {
+    for (const auto& s : caches_->series)
+      if (s->t == t) return s;
+    return nullptr;
+  }
 
   // The Chebyshev series of s's length, once (the caller holds no lock: chebyshev_series may take a while).
   void make_chebyshev(const Series& s) const {

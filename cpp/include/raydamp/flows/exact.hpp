@@ -129,14 +129,10 @@ inline void thermal_noise(const Model& model, State<Dim>& z, const F& factors, W
   }
 }
 
-// The damping's factors for a damp of length t, computed once per length (the last two kept).
+// The damping's factors for a flow of length t, computed once per length (the last few kept).
 template <class Model, class WS>
 inline const typename WS::Factors& damp_factors(const Model& model, double t, WS& ws) {
-  if (ws.damp_factors.t != t) {
-    std::swap(ws.damp_factors, ws.previous_damp_factors);
-    if (ws.damp_factors.t != t) ws.damp_factors = model.damping.factors(t);
-  }
-  return ws.damp_factors;
+  return ws.factors.get(t, model.damping);
 }
 
 // exp(t eps Y): p <- exp(-t eps D(q) M^{-1}) p (and, at a temperature, the OU flow's noise).
@@ -151,10 +147,7 @@ inline void damp(const Model& model, State<Dim>& z, double t, WS& ws) {
 // (q and the load's time frozen), p(t) = e^{-tA} p - t phi1(-tA) (grad V(q) - f).
 template <class Model, int Dim, class WS>
 inline void kick_damp_body(const Model& model, State<Dim>& z, double t, WS& ws) {
-  auto factors = [&]() -> const typename WS::Factors& {
-    if (ws.kick_damp_factors.t != t) ws.kick_damp_factors = model.damping.factors(t);
-    return ws.kick_damp_factors;
-  };
+  auto factors = [&]() -> const typename WS::Factors& { return damp_factors(model, t, ws); };
   if constexpr (has_kick_damp<Model>::value) {
     if (!load_of(ws) && !noisy(ws)) {  // a load enters through phi1, noise after: the general path below
       model.kick_damp(z.q, z.p, factors(), ws.g);
@@ -165,7 +158,7 @@ inline void kick_damp_body(const Model& model, State<Dim>& z, double t, WS& ws) 
   // The factors after the gradient, not before: the damped pendulum's 2s then keeps q in a register
   // into sin (12.4 ns/step; 14.9 with the factors' test first).
   model.damping.decay_affine(z.q, factors(), ws.g, z.p);
-  if (noisy(ws)) thermal_noise(model, z, ws.kick_damp_factors, ws);
+  if (noisy(ws)) thermal_noise(model, z, factors(), ws);
 }
 
 // A model whose step loop is not flattened (a compiled System: its step is calls into compiled functions)
