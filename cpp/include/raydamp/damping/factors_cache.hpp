@@ -4,10 +4,9 @@
 // A merged 3s run asks for two lengths (h between its steps, h/2 at the ends of a block of steps). A
 // composed run, or one that runs whole steps (events, envelopes, collapse limits), cycles through a few
 // more in every step: 3s + suzuki4's whole step damps for three lengths, 2s + suzuki4 kicks and damps for
-// two. A cache of two for the damp and one for the kick+damp missed there every step, and a miss is more than
-// the arithmetic: a structure's factors(t) looks its length up under a lock that every run of the model
-// shares, so the composed members of an incremental dynamic analysis spent 20% of their time there and two
-// threads ran them 1.5x as fast as one (benchmarks/ida_frame.py).
+// two. Keeping six per run matters beyond the arithmetic: a structure's factors(t) looks its length up under
+// a lock that every run of the model shares, so a miss per step is contention between an ensemble's threads
+// (benchmarks/bench_ida_threads.py).
 #pragma once
 
 #include <array>
