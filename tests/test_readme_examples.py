@@ -47,6 +47,7 @@ GROUPS = {
     "system": ("kepler = raydamp.System(",),
     "constraints": ("double = raydamp.System(",),
     "orbits": ("raydamp.Kepler(mu=1.0, eps=1e-3)",),
+    "tables": ('composition="saba2", h=0.046',),
     "planets": ("raydamp.Planets([1e-3, 1e-3]",),
     "chains": ("raydamp.Chain(32",),
     "structures": ('raydamp.LinearStructure("M.mtx"', 'method="gauss4", h=0.5', "raydamp.advise(s"),
@@ -378,6 +379,16 @@ def test_kepler_block(tmp_path, monkeypatch):
     shown = s.at('k.elements(sol.q, sol.p)["a"][-1]')
     assert 0.05 < shown.value < 0.5, shown.value
     assert s.at("k.to_dict()").value["kind"] == "kepler"
+
+
+def test_near_integrable_block(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    s = Session()
+    s.run('composition="saba2", h=0.046')
+    assert s.at("sol.max_momentum_drift").value < 1e-12  # "rounding, 2e-13" (measured 2.0e-13 of L0 = 1.1)
+    tables = s.names["tables"]
+    assert [name for name, *_ in tables] == ["saba2", "saba3", "saba4", "sbab2", "sbab3", "sbab4"]
+    assert [order for _, order, *_ in tables] == [4, 6, 8, 4, 6, 8]
 
 
 def test_planets_block(tmp_path, monkeypatch):

@@ -93,6 +93,9 @@ void bind_catalogue(py::module_& m) {
       row["stages"] = c.stages();
       row["gammas"] = c.gammas();
       row["reference"] = c.reference();
+      row["kind"] = c.is_table() ? "near_integrable" : "composition";
+      row["ends"] = c.ends();
+      row["eps_order"] = c.eps_order();
       rows.append(row);
     }
     return rows;

@@ -59,6 +59,38 @@ int main() {
     CHECK(throws([] { builtin_composition("yoshida6"); }));
   }
 
+  // The near-integrable tables, computed from the Legendre polynomials, against Laskar & Robutel's closed
+  // forms; a table whose kicks do not integrate tau^k exactly for k < its eps-order is refused, and so is a
+  // base that is not a drift, kick, drift.
+  {
+    const Composition& saba2 = builtin_composition("saba2");
+    CHECK(saba2.is_table() && saba2.order() == 2 && saba2.eps_order() == 4 && saba2.stages() == 2);
+    CHECK_NEAR(saba2.ends()[0], 0.5 - std::sqrt(3.0) / 6.0, 1e-16);
+    CHECK_NEAR(saba2.ends()[1], std::sqrt(3.0) / 3.0, 1e-16);
+    CHECK_NEAR(builtin_composition("saba3").gamma(0), 5.0 / 18.0, 1e-16);
+    CHECK_NEAR(builtin_composition("saba3").ends()[0], 0.5 - std::sqrt(15.0) / 10.0, 1e-16);
+    CHECK_NEAR(builtin_composition("saba4").gamma(0), 0.25 - std::sqrt(30.0) / 72.0, 1e-16);
+    const Composition& sbab3 = builtin_composition("sbab3");
+    CHECK(sbab3.ends()[0] == 0.0 && sbab3.ends()[4] == 0.0 && sbab3.stages() == 4);
+    CHECK_NEAR(sbab3.ends()[1], 0.5 - std::sqrt(5.0) / 10.0, 1e-16);
+    CHECK_NEAR(sbab3.gamma(0), 1.0 / 12.0, 1e-16);
+    CHECK_NEAR(builtin_composition("sbab4").gamma(1), 49.0 / 180.0, 1e-16);
+    CHECK(!builtin_composition("yoshida4").is_table());
+    CHECK(throws([] { Composition("saba2 as order 6", 6, near_integrable::saba(2), "test"); }));
+    near_integrable::Table typo = near_integrable::saba(3);
+    typo.middles[0] = typo.middles[2] = 0.27777777777777L;  // 5/18 to 14 digits
+    typo.middles[1] = 1.0L - 2.0L * typo.middles[0];
+    CHECK(throws([&] { Composition("typo", 6, typo, "test"); }));
+    for (const char* m : {"3s", "baoab", "midpoint"}) {
+      const MethodEntry& e = method_entry(m);
+      CHECK(throws([&] { resolve_composition(e, resolve_tableau(e, ""), "saba2"); }));
+    }
+    for (const char* m : {"sv", "2s"}) {
+      const MethodEntry& e = method_entry(m);
+      CHECK(!throws([&] { resolve_composition(e, resolve_tableau(e, ""), "sbab2"); }));
+    }
+  }
+
   // Only symmetric order-2 bases compose.
   {
     const MethodEntry& rks = method_entry("rks");
@@ -90,6 +122,26 @@ int main() {
     }
   }
 
+  // A near-integrable table by hand: one saba2 step over 2s is drift a_0 h, kick+damp b_1 h, drift a_1 h,
+  // kick+damp b_2 h, drift a_2 h.
+  {
+    ElasticPendulum elastic(0.3);
+    const Composition& saba2 = builtin_composition("saba2");
+    const ButcherTableau& tab = builtin_tableau("euler");
+    State<3> z = elas0;
+    WorkspaceFor<ElasticPendulum> ws(3, 1);
+    for (int i = 0; i < 2; ++i) {
+      apply_flow<Flow::drift>(elastic, tab, z, saba2.ends()[i] * 0.1, ws);
+      apply_flow<Flow::kick_damp>(elastic, tab, z, saba2.gamma(i) * 0.1, ws);
+    }
+    apply_flow<Flow::drift>(elastic, tab, z, saba2.ends()[2] * 0.1, ws);
+    RunResult r = run(elastic, "2s", "", "saba2", elas0, RunSpec{0.1, 1, 0.1, 1});
+    for (int i = 0; i < 3; ++i) {
+      CHECK_NEAR(r.trajectory.q[3 + i], z.q[i], 1e-15);
+      CHECK_NEAR(r.trajectory.p[3 + i], z.p[i], 1e-15);
+    }
+  }
+
   // Merged (the default) against whole steps, for every mergeable method, plain and
   // composed, on both paper models, with a short last step, saving every 7 steps
   // (blocks of all lengths).
@@ -99,7 +151,8 @@ int main() {
     struct Case { const char* method; const char* tableau; const char* composition; };
     const std::vector<Case> cases{{"3s", "", ""},         {"2s", "", ""},         {"rks", "heun", ""},
                                   {"rks", "midpoint", ""}, {"rksb", "heun", ""},   {"3s", "", "yoshida4"},
-                                  {"2s", "", "kahan_li8"}, {"rks", "midpoint", "suzuki4"}};
+                                  {"2s", "", "kahan_li8"}, {"rks", "midpoint", "suzuki4"}, {"2s", "", "saba3"},
+                                  {"2s", "", "sbab2"}, {"rks", "midpoint", "saba2"}};
     for (const Case& c : cases) {
       RunSpec merged{0.05, 1000, 0.03, 7};
       RunSpec whole = merged;

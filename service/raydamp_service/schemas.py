@@ -163,8 +163,13 @@ class CompositionInfo(BaseModel):
     name: str
     order: int = Field(description="the order of the composed method (a symmetric order-2 base raised)")
     stages: int = Field(description="base steps per composed step")
-    gammas: list[float] = Field(description="the fractions of h of the base steps (a palindrome summing to 1)")
+    gammas: list[float] = Field(description="the fractions of h of the base steps (a palindrome summing to 1); "
+                                             "for a near-integrable table, its kicks'")
     reference: str
+    kind: Literal["composition", "near_integrable"] = Field(
+        "composition", description="near_integrable: a table of drifts (ends) and kicks (gammas), SABA/SBAB")
+    ends: list[float] = Field(default_factory=list, description="a near-integrable table's drift fractions of h")
+    eps_order: int = Field(2, description="a near-integrable table's error O(eps h^eps_order + eps^2 h^2); else order")
 
 
 class Health(BaseModel):

@@ -20,6 +20,29 @@ def test_methods_are_raydamps(server):
     assert response.json() == [method._asdict() for method in raydamp.methods()]
 
 
+def test_compositions_are_raydamps_with_the_near_integrable_tables(server):
+    response = server.client.get("/v1/compositions")
+    assert response.status_code == 200
+    assert response.json() == [composition._asdict() for composition in raydamp.compositions()]
+    saba2 = next(row for row in response.json() if row["name"] == "saba2")
+    assert saba2["kind"] == "near_integrable" and saba2["eps_order"] == 4 and len(saba2["ends"]) == 3
+
+
+def test_a_kepler_job_runs_a_near_integrable_table(server):
+    system = {"kind": "kepler", "mu": 1.0, "eps": 1e-3}
+    job = {"system": system, "method": "2s", "composition": "saba3", "step_size": 0.2, "n_steps": 100,
+           "save_every": 50, "initial_state": {"q": [1.0, 0.0], "p": [0.0, 1.1]}}
+    done = server.wait_finished(server.submit(job))
+    assert done["status"] == "completed", done
+    trajectory = server.client.get(f"/v1/jobs/{done['id']}/trajectory").json()
+    local = raydamp.integrate(raydamp.Kepler.from_dict(system), [1.0, 0.0], [0.0, 1.1], method="2s",
+                              composition="saba3", h=0.2, n_steps=100, save_every=50)
+    assert trajectory["q"] == local.q.tolist()
+    refused = server.client.post("/v1/jobs", json={**job, "method": "3s"})
+    assert refused.status_code == 422 and "near-integrable table" in refused.text, refused.text
+    assert "composition" in str([d["loc"] for d in refused.json()["detail"]]), refused.text
+
+
 def test_health(server):
     response = server.client.get("/healthz")
     assert response.status_code == 200

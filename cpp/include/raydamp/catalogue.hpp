@@ -32,6 +32,7 @@ struct MethodEntry {
   bool linear_implicit = false;  // an implicit step of a LinearStructure's whole system, for that kind only
   bool free_drift_in_rk = false;  // a Runge-Kutta stage steps the kinetic part as q' = M^{-1} p (rksb, rk)
   bool springs_only = false;      // a nonlinear implicit step of a Structure with springs (newmark), that kind only
+  int table_stages = 0;           // sub-flows of its stage table (0: an implicit method's own step)
 };
 
 template <class Method>
@@ -45,9 +46,11 @@ constexpr bool steps_free_drift_in_rk() {
 template <class Method>
 MethodEntry entry(std::string name, std::string description, std::string default_tableau = "",
                   bool tableau_fixed = false, bool ignores_damping = false) {
-  return {std::move(name),    std::move(description), Method::name,    Method::tableau,
-          Method::splitting_order, std::move(default_tableau), tableau_fixed, ignores_damping,
-          is_mergeable<Method>(), false, steps_free_drift_in_rk<Method>()};
+  MethodEntry e{std::move(name),    std::move(description), Method::name,    Method::tableau,
+                Method::splitting_order, std::move(default_tableau), tableau_fixed, ignores_damping,
+                is_mergeable<Method>(), false, steps_free_drift_in_rk<Method>()};
+  e.table_stages = static_cast<int>(Method::stages.size());
+  return e;
 }
 
 // The implicit methods of a linear structure's whole system (methods/linear_implicit.hpp).
@@ -186,6 +189,10 @@ inline bool is_composable(const MethodEntry& method, const ButcherTableau& tab) 
 inline const Composition& resolve_composition(const MethodEntry& method, const ButcherTableau& tab,
                                               const std::string& composition) {
   const Composition& c = builtin_composition(composition);
+  if (c.is_table() && (method.table_stages != 3 || !is_composable(method, tab)))
+    throw std::invalid_argument("composition: '" + c.name() + "' is a near-integrable table of a symmetric base "
+                                "drift, kick, drift (sv, 2s, or rks with tableau='midpoint'), and method '" +
+                                method.name + "' is not one");
   if (c.stages() == 1 || is_composable(method, tab)) return c;
   std::string base = "'" + method.name + "'";
   if (method.tableau_use != TableauUse::none) base += " with tableau '" + tab.name() + "'";

@@ -15,6 +15,7 @@
 #include <array>
 #include <cstddef>
 #include <stdexcept>
+#include <string>
 #include <type_traits>
 #include <utility>
 
@@ -35,8 +36,13 @@ struct StepDurations {
   int m = 1;
   std::array<double, kMaxCompositionStages * stride> body{};  // m * stride used; the last joint slot unused
   std::array<double, kMaxCompositionStages> stage{};           // gamma_s h: each stage's step size
+  bool table = false;  // a near-integrable table: each end and middle sub-flow its own fraction, no joints
 
   StepDurations(const Composition& c, double h) : m(c.stages()) {
+    if (c.is_table()) {
+      from_table(c, h);
+      return;
+    }
     const double first = Method::stages[0].fraction, last = Method::stages[S - 1].fraction;
     lead = first * c.gamma(0) * h;
     trail = last * c.gamma(m - 1) * h;
@@ -47,12 +53,42 @@ struct StepDurations {
     }
   }
 
+  // X(a_0 h) Y(b_1 h) X(a_1 h) ... Y(b_m h) X(a_m h) of a base X Y X: lead a_0 h, trail a_m h, and the X
+  // between two Y's where a composition has its joints.
+  void from_table(const Composition& c, double h) {
+    if constexpr (S != 3) {
+      throw std::invalid_argument("composition: '" + c.name() + "' is a near-integrable table of a base drift, kick, "
+                                  "drift (sv, 2s, rks); method table '" + Method::name + "' has " +
+                                  std::to_string(S) + " sub-flows");
+    } else {
+      table = true;
+      lead = c.ends()[0] * h;
+      trail = c.ends()[m] * h;
+      for (int s = 0; s < m; ++s) {
+        stage[s] = c.gamma(s) * h;
+        body[s * stride] = c.gamma(s) * h;
+        if (s + 1 < m) body[s * stride + 1] = c.ends()[s + 1] * h;
+      }
+    }
+  }
+
   // Every sub-flow of the step in order (for the amplification bound), as
   // f(flow, duration, stage, fraction, joint): the sub-flow runs for fraction * gamma_stage * h,
   // or, a joint, for fraction * (gamma_stage + gamma_{stage+1}) * h (a symmetric table's first
   // and last fractions are equal), stages counted from 0.
   template <class F>
   void for_each(F f) const {
+    if (table) {  // every sub-flow forward: fraction = its duration / h, in stage s's place
+      double h = 0.0;  // the kicks' fractions sum to 1
+      for (int s = 0; s < m; ++s) h += stage[s];
+      f(Method::stages[0].flow, lead, 0, lead / h, false);
+      for (int s = 0; s < m; ++s) {
+        f(Method::stages[1].flow, body[s * stride], s, body[s * stride] / h, false);
+        if (s + 1 < m) f(Method::stages[0].flow, body[s * stride + 1], s, body[s * stride + 1] / h, false);
+      }
+      f(Method::stages[S - 1].flow, trail, m - 1, trail / h, false);
+      return;
+    }
     const double first = Method::stages[0].fraction;
     f(Method::stages[0].flow, lead, 0, first, false);
     for (int s = 0; s < m; ++s) {
@@ -107,8 +143,9 @@ class ComposedStepper {
     apply_flow<Method::stages[S - 1].flow>(model, tab, z, d.trail, ws);
   }
 
-  // Composition stages: 1 for the method itself.
-  int stages() const { return regular_.m; }
+  // Composition stages: 1 for the method itself. A near-integrable table counts as one: its sub-flows are not
+  // steps of a symmetric base, so the damping work's trapezoid takes the whole step's ends (order 2).
+  int stages() const { return regular_.table ? 1 : regular_.m; }
 
   // The whole step i, one composition stage at a time (each joint run as the two flows it merges, equal
   // to rounding), calling at_stage(gamma_s h) after stage s: for a quadrature at the stages' end points.
@@ -176,8 +213,12 @@ class ComposedStepper {
       detail::inner_stages<Method>(model, tab, z, t, ws, std::make_index_sequence<S - 2>{});
       if (s + 1 < d.m) {
         if constexpr (has_constraints<Model>::value) {  // a constrained drift for a, then b, is not the one for a + b
-          apply_flow<Method::stages[S - 1].flow>(model, tab, z, Method::stages[S - 1].fraction * d.stage[s], ws);
-          apply_flow<Method::stages[0].flow>(model, tab, z, Method::stages[0].fraction * d.stage[s + 1], ws);
+          if (d.table) {  // a table's drift between two kicks is one flow, not a joint
+            apply_flow<Method::stages[0].flow>(model, tab, z, t[S - 2], ws);
+          } else {
+            apply_flow<Method::stages[S - 1].flow>(model, tab, z, Method::stages[S - 1].fraction * d.stage[s], ws);
+            apply_flow<Method::stages[0].flow>(model, tab, z, Method::stages[0].fraction * d.stage[s + 1], ws);
+          }
         } else {
           apply_flow<Method::stages[0].flow>(model, tab, z, t[S - 2], ws);
         }

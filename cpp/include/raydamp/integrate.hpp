@@ -91,6 +91,11 @@ void check_temperature(const Model& model, const Composition& composition, doubl
     throw std::invalid_argument(std::string("temperature: method '") + Method::name +
                                 "' has no exact noise flow (a Runge-Kutta or implicit sub-step, or no damping "
                                 "sub-flow); use 3s, 2s or baoab");
+  if (composition.is_table())
+    throw std::invalid_argument("temperature: composition '" + composition.name() +
+                                "' is a near-integrable table, made for the deterministic error O(eps h^" +
+                                std::to_string(composition.eps_order()) + " + eps^2 h^2); at a temperature use the "
+                                "order-2 method");
   if (composition.stages() != 1)
     throw std::invalid_argument("temperature: composition '" + composition.name() +
                                 "' runs sub-steps backward, and a noise flow over a negative time is meaningless; "

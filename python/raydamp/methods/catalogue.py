@@ -24,13 +24,25 @@ class MethodInfo(NamedTuple):
 
 
 class CompositionInfo(NamedTuple):
-    """A composition Psi_h = Phi_{gamma_m h} o ... o Phi_{gamma_1 h} of a symmetric step Phi."""
+    """A composition Psi_h = Phi_{gamma_m h} o ... o Phi_{gamma_1 h} of a symmetric step Phi, or a
+    near-integrable table (``kind == "near_integrable"``: SABA_n, SBAB_n).
+
+    A table steps a base drift, kick, drift (sv, 2s, or rks with tableau='midpoint') as
+    drift(a_0 h) kick(b_1 h) drift(a_1 h) ... kick(b_n h) drift(a_n h): ``ends`` are the a_i,
+    ``gammas`` the b_i and ``stages`` their count. Its ``order`` is 2, what it guarantees on any
+    system; where the kick carries a small part eps B of H = A + eps B and the drift is A's exact flow
+    (raydamp.Kepler, raydamp.Planets: the Kepler drift; the kick the interaction and, with 2s, the drag),
+    its error is O(eps h^eps_order + eps^2 h^2).
+    """
 
     name: str
     order: int
     stages: int
     gammas: list[float]
     reference: str
+    kind: str = "composition"
+    ends: list[float] = []
+    eps_order: int = 2
 
 
 class TableauInfo(NamedTuple):
@@ -92,5 +104,11 @@ def compositions() -> list[CompositionInfo]:
     coefficients are symmetric, sum to 1 and satisfy the odd-power order
     conditions, all checked when the core builds them; every composition of
     order above 2 has a negative coefficient (a backward sub-step).
+
+    The near-integrable tables 'saba2'-'saba4' and 'sbab2'-'sbab4' (Laskar & Robutel 2001; kicks at the
+    Gauss-Legendre or Gauss-Lobatto nodes, computed, never typed, and checked to integrate tau^k exactly
+    for k < eps_order) have no backward sub-step: with 2s on a Kepler or Planets model their error is
+    O(eps h^eps_order + eps^2 h^2), eps the drag and the planets' interaction. They take sv, 2s and rks
+    (midpoint); 3s and baoab, whose drift is not their end sub-flow, refuse them, as does a temperature.
     """
     return [CompositionInfo(**row) for row in _core.compositions()]

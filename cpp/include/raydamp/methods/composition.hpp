@@ -20,6 +20,8 @@
 #include <utility>
 #include <vector>
 
+#include "raydamp/methods/near_integrable.hpp"
+
 namespace raydamp {
 
 // Stages a composition may have (kahan_li8 has 17): the step loop keeps a composed
@@ -44,8 +46,27 @@ class Composition {
     for (long double g : full) gammas_.push_back(static_cast<double>(g));
   }
 
+  // A near-integrable table (methods/near_integrable.hpp) over a base X(1/2) Y(1) X(1/2): the step
+  // X(a_0 h) Y(b_1 h) X(a_1 h) ... Y(b_n h) X(a_n h), its error O(eps h^{eps_order} + eps^2 h^2) where the base's
+  // Y carries the small part eps B of H = A + eps B and X is A's exact flow. Its order() is 2, what it
+  // guarantees on any system; gammas() are its middle fractions b_i (so stages() counts its kicks).
+  Composition(std::string name, int eps_order, near_integrable::Table table, std::string reference)
+      : name_(std::move(name)), order_(2), eps_order_(eps_order), reference_(std::move(reference)) {
+    if (static_cast<int>(table.middles.size()) > kMaxCompositionStages)
+      throw std::invalid_argument("composition " + name_ + ": more than " + std::to_string(kMaxCompositionStages) +
+                                  " stages");
+    validate_table(table);
+    for (long double b : table.middles) gammas_.push_back(static_cast<double>(b));
+    for (long double a : table.ends) ends_.push_back(static_cast<double>(a));
+  }
+
   const std::string& name() const { return name_; }
   int order() const { return order_; }
+  // Whether this is a near-integrable table (its sub-flow fractions are ends() and gammas()), and the power
+  // of h in its error's eps term; a composition's own order otherwise.
+  bool is_table() const { return !ends_.empty(); }
+  int eps_order() const { return is_table() ? eps_order_ : order_; }
+  const std::vector<double>& ends() const { return ends_; }
   const std::string& reference() const { return reference_; }
   int stages() const { return static_cast<int>(gammas_.size()); }
   const std::vector<double>& gammas() const { return gammas_; }
@@ -76,8 +97,39 @@ class Composition {
     }
   }
 
+  // Fractions >= 0 summing to 1, palindromes, and kicks that integrate 1, tau, ..., tau^{eps_order - 1} over
+  // [0, 1] exactly: a mistyped or mis-computed entry is refused.
+  void validate_table(const near_integrable::Table& t) const {
+    const std::string where = "composition " + name_ + ": ";
+    if (t.middles.empty() || t.ends.size() != t.middles.size() + 1)
+      throw std::invalid_argument(where + "a table has one more end fraction than middle ones");
+    constexpr long double tolerance = 1e-16L;
+    for (const auto* v : {&t.ends, &t.middles}) {
+      long double sum = 0.0L;
+      const std::size_t m = v->size();
+      for (std::size_t i = 0; i < m; ++i) {
+        if (!((*v)[i] >= 0.0L)) throw std::invalid_argument(where + "a negative fraction");
+        if ((*v)[i] != (*v)[m - 1 - i]) throw std::invalid_argument(where + "not a palindrome");
+        sum += (*v)[i];
+      }
+      if (std::abs(sum - 1.0L) > tolerance) throw std::invalid_argument(where + "fractions do not sum to 1");
+    }
+    for (int k = 0; k < eps_order_; ++k) {
+      long double tau = 0.0L, moment = 0.0L;
+      for (std::size_t i = 0; i < t.middles.size(); ++i) {
+        tau += t.ends[i];
+        moment += t.middles[i] * std::pow(tau, k);
+      }
+      if (std::abs(moment - 1.0L / (k + 1)) > tolerance)
+        throw std::invalid_argument(where + "its kicks do not integrate tau^" + std::to_string(k) +
+                                    " exactly, so the eps-order cannot be " + std::to_string(eps_order_));
+    }
+  }
+
   std::string name_;
   int order_;
+  int eps_order_ = 0;
+  std::vector<double> ends_;
   std::string reference_;
   std::vector<double> gammas_;
 };
@@ -112,6 +164,15 @@ inline const std::vector<Composition>& builtin_compositions() {
                                             -0.39590389413323757733623154L, 0.18453964097831570709183254L,
                                             0.25837438768632204729397911L, 0.29501172360931029887096624L},
                    "Kahan & Li, Math. Comp. 66 (1997) 1089: s17odr8a");
+    // Near-integrable tables: for the 3-stage bases (sv, 2s, rks) whose drift is an exact integrable flow.
+    for (int n = 2; n <= 4; ++n)
+      c.emplace_back("saba" + std::to_string(n), 2 * n, near_integrable::saba(n),
+                     "Laskar & Robutel, Celest. Mech. Dyn. Astron. 80 (2001) 39: SABA_" + std::to_string(n) +
+                         ", kicks at the Gauss-Legendre nodes; error O(eps h^" + std::to_string(2 * n) + " + eps^2 h^2)");
+    for (int n = 2; n <= 4; ++n)
+      c.emplace_back("sbab" + std::to_string(n), 2 * n, near_integrable::sbab(n),
+                     "Laskar & Robutel, Celest. Mech. Dyn. Astron. 80 (2001) 39: SBAB_" + std::to_string(n) +
+                         ", kicks at the Gauss-Lobatto nodes; error O(eps h^" + std::to_string(2 * n) + " + eps^2 h^2)");
     return c;
   }();
   return compositions;
