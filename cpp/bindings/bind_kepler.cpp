@@ -15,8 +15,9 @@ void bind_kepler(py::module_& m) {
   // Planets whose bodies do not interact.
   py::class_<Planets> planets(m, "Planets");
   planets
-      .def(py::init<double, double, std::vector<double>, int, std::vector<double>>(), py::arg("G"),
-           py::arg("central_mass"), py::arg("masses"), py::arg("dim"), py::arg("eps"))
+      .def(py::init([](double G, double central, std::vector<double> masses, int dim, std::vector<double> eps,
+                       int drag) { return Planets(G, central, std::move(masses), dim, std::move(eps), drag_direction(drag)); }),
+           py::arg("G"), py::arg("central_mass"), py::arg("masses"), py::arg("dim"), py::arg("eps"), py::arg("drag") = 0)
       .def_readonly("planets", &Planets::planets)
       .def_readonly("mu", &Planets::mu)
       .def_property_readonly("reduced_masses", [](const Planets& p) {
@@ -27,10 +28,10 @@ void bind_kepler(py::module_& m) {
       .def_property_readonly("space_dim", [](const Planets& p) { return p.d; });
   m.def(
       "Kepler",
-      [](double mu, double mass, int dim, int particles, double eps) {
-        return Planets(TestParticles{}, mu, mass, dim, particles, eps);
+      [](double mu, double mass, int dim, int particles, double eps, int drag) {
+        return Planets(TestParticles{}, mu, mass, dim, particles, eps, drag_direction(drag));
       },
-      py::arg("mu"), py::arg("mass"), py::arg("dim"), py::arg("particles"), py::arg("eps"));
+      py::arg("mu"), py::arg("mass"), py::arg("dim"), py::arg("particles"), py::arg("eps"), py::arg("drag") = 0);
   add_model_functions<Planets>(planets);
   def_integrate<Planets>(m);
   def_integrate_ensemble<Planets>(m);

@@ -2,6 +2,7 @@
 // against its closed form, a drift undone by the drift back, the invariants a drift keeps, the drag's
 // exact law for the angular momentum through the step loop, and the methods the kind refuses.
 #include <cmath>
+#include <tuple>
 
 #include "check.hpp"
 #include "raydamp/models/kepler.hpp"
@@ -86,6 +87,42 @@ int main() {
     CHECK(test::throws([] { Kepler(0.0, 1.0, 2, 1, 0.0); }));
     CHECK(test::throws([] { Kepler(1.0, -1.0, 2, 1, 0.0); }));
     CHECK(test::throws([] { Kepler(1.0, 1.0, 4, 1, 0.0); }));
+  }
+
+  // Radial and tangential drag: the damping flows against the matrix exponential of A = a_r r r^T +
+  // a_t (I - r r^T) at the frozen q (p(t) = e^{-tA} p - t phi1(-tA) g, closed form per direction), the rate
+  // A p and the shifted solve (I + cA)^{-1}.
+  {
+    const Eigen::VectorXd q = (Eigen::VectorXd(3) << 0.3, -1.1, 0.7).finished();
+    const Eigen::VectorXd p0 = (Eigen::VectorXd(3) << 0.9, 0.2, -0.4).finished();
+    const Eigen::VectorXd g = (Eigen::VectorXd(3) << -0.5, 0.8, 0.1).finished();
+    const Eigen::Vector3d r = q.normalized();
+    const Eigen::Matrix3d along = r * r.transpose(), across = Eigen::Matrix3d::Identity() - along;
+    const double t = 0.7, c = 0.3;
+    for (auto [direction, a_r, a_t] : {std::tuple{DragDirection::radial, 0.2, 0.0},
+                                       std::tuple{DragDirection::tangential, 0.0, 0.2},
+                                       std::tuple{DragDirection::isotropic, 0.2, 0.2}}) {
+      PlanetDrag drag;
+      drag.set({0.2}, 3, direction);
+      const PlanetDrag::Factors f = drag.factors(t);
+      auto phi = [&](double a) { return a == 0.0 ? t : -std::expm1(-a * t) / a; };
+      const Eigen::Matrix3d e = std::exp(-a_r * t) * along + std::exp(-a_t * t) * across;
+      const Eigen::Matrix3d tphi = phi(a_r) * along + phi(a_t) * across;
+      Eigen::VectorXd p = p0;
+      drag.decay(q, f, p);
+      CHECK((p - e * p0).norm() <= 1e-15);
+      p = p0;
+      drag.decay_affine(q, f, g, p);
+      CHECK((p - (e * p0 - tphi * g)).norm() <= 1e-15);
+      Eigen::VectorXd out(3);
+      drag.rate(q, p0, out);
+      CHECK((out - (a_r * along + a_t * across) * p0).norm() <= 1e-15);
+      Eigen::VectorXd x = p0;
+      drag.solve_shifted(q, c, x);
+      CHECK((x - (Eigen::Matrix3d::Identity() + c * (a_r * along + a_t * across)).inverse() * p0).norm() <= 1e-15);
+      CHECK(drag.momentum_decay_rate() == a_t && drag.spectral_radius() == 0.2);
+    }
+    CHECK(test::throws([] { drag_direction(3); }));
   }
   return test::failures == 0 ? 0 : 1;
 }

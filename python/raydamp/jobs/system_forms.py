@@ -263,6 +263,9 @@ class ChainInput(SystemKind):
 # ---- orbits: raydamp.Kepler.to_dict()'s form ------------------------------------------------------
 
 MAX_KEPLER_PARTICLES = 10**6
+DragDirection = Literal["isotropic", "radial", "tangential"]
+DRAG_DESCRIPTION = ("the drag's direction: the whole momentum (isotropic), its part along the radius vector "
+                    "(radial: no torque, L conserved) or across it (tangential)")
 
 
 class KeplerInput(SystemKind):
@@ -275,6 +278,7 @@ class KeplerInput(SystemKind):
     dim: Literal[2, 3] = Field(2, description="2 or 3 dimensions")
     particles: int = Field(1, ge=1, le=MAX_KEPLER_PARTICLES, description="number of test particles")
     eps: FiniteFloat = Field(0.0, ge=0, description="drag rate: p' = -grad H - eps p")
+    drag: DragDirection = Field("isotropic", description=DRAG_DESCRIPTION)
 
     def names(self, dim: int, momenta: int, save_dofs: list[int] | None) -> tuple[list[str], list[str]]:
         axes = "xyz"[: self.dim]
@@ -313,6 +317,7 @@ class PlanetsInput(SystemKind):
     dim: Literal[2, 3] = Field(2, description="2 or 3 dimensions")
     eps: PlanetDrag = Field(0.0, description="drag rate, one for every planet or one per planet: "
                                              "P_i' = -grad_i H - eps_i P_i")
+    drag: DragDirection = Field("isotropic", description=DRAG_DESCRIPTION)
 
     def names(self, dim: int, momenta: int, save_dofs: list[int] | None) -> tuple[list[str], list[str]]:
         axes = "xyz"[: self.dim]

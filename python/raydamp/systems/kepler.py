@@ -43,23 +43,40 @@ __all__ = ["Kepler"]
 
 _AXES = ("x", "y", "z")
 
+# The drag's directions (models/planets.hpp's DragDirection): the whole momentum, or its part along the
+# radius vector (a radial dashpot) or across it (a tangential one).
+DRAG_DIRECTIONS = {"isotropic": 0, "radial": 1, "tangential": 2}
+
+
+def drag_code(drag: str) -> int:
+    """The core's code for ``drag``; a ValueError naming ``drag`` for anything else."""
+    if not isinstance(drag, str) or drag not in DRAG_DIRECTIONS:
+        raise ValueError(f"drag: must be one of {', '.join(DRAG_DIRECTIONS)}, got {drag!r}")
+    return DRAG_DIRECTIONS[drag]
+
 
 class Kepler(SharedModel):
     """Test particles of mass ``mass`` around a fixed central body (see the module docstring).
 
     mu: G times the central mass (> 0); dim: 2 or 3; particles: how many (>= 1), each with its own
     block of ``dim`` coordinates (x0, y0, x1, y1, ...); eps: the drag rate (>= 0), p' = ... - eps p.
+    drag: "isotropic" (the whole momentum), "radial" (only p's part along q_i: a radial dashpot, which
+    exerts no torque, so L is conserved) or "tangential" (only the part across q_i; L decays as e^{-eps t}).
+    Each is an exact damping flow at the frozen q (its two parts scale by their own factors).
     """
 
     name = "kepler"
 
-    def __init__(self, mu: float = 1.0, mass: float = 1.0, dim: int = 2, particles: int = 1, eps: float = 0.0):
+    def __init__(self, mu: float = 1.0, mass: float = 1.0, dim: int = 2, particles: int = 1, eps: float = 0.0,
+                 drag: str = "isotropic"):
         self.mu = real("mu", mu, positive=True)
         self.mass = real("mass", mass, positive=True)
         self.space_dim = integer("dim", dim, minimum=2, maximum=3)
         self.particles = integer("particles", particles, minimum=1, maximum=2**31 // 3 - 1)
         self.eps = real("eps", eps, nonnegative=True)
-        self._core_model = _core.Kepler(self.mu, self.mass, self.space_dim, self.particles, self.eps)
+        self.drag = drag
+        self._core_model = _core.Kepler(self.mu, self.mass, self.space_dim, self.particles, self.eps,
+                                        drag_code(drag))
         self.momentum_names = ("L",) if self.space_dim == 2 else ("Lx", "Ly", "Lz")
         self._freeze()
 
@@ -67,16 +84,18 @@ class Kepler(SharedModel):
     @property
     def parameters(self) -> dict[str, Any]:
         """The constructor's arguments, by name (``replace`` and the JSON form use them)."""
-        return {"mu": self.mu, "mass": self.mass, "dim": self.space_dim, "particles": self.particles, "eps": self.eps}
+        return {"mu": self.mu, "mass": self.mass, "dim": self.space_dim, "particles": self.particles, "eps": self.eps,
+                "drag": self.drag}
 
     def to_dict(self) -> dict[str, Any]:
-        """The JSON form: ``{"kind": "kepler", "mu": ..., "mass": ..., "dim": ..., "particles": ..., "eps": ...}``."""
+        """The JSON form: ``{"kind": "kepler", "mu": ..., "mass": ..., "dim": ..., "particles": ..., "eps": ...,
+        "drag": ...}``."""
         return {"kind": "kepler", **self.parameters}
 
     @classmethod
     def from_dict(cls, spec: Mapping[str, Any]) -> Kepler:
         """Build from ``to_dict()``'s form; errors name the key."""
-        return cls._from_form(spec, "kepler", "Kepler system", ("mu", "mass", "dim", "particles", "eps"))
+        return cls._from_form(spec, "kepler", "Kepler system", ("mu", "mass", "dim", "particles", "eps", "drag"))
 
     @property
     def coordinates(self) -> tuple[str, ...]:

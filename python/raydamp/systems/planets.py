@@ -37,6 +37,7 @@ import numpy as np
 
 from .. import _core
 from .._validation import _short, integer, numeric_array, real, real_array
+from .kepler import drag_code
 from .models import SharedModel
 
 __all__ = ["Planets"]
@@ -57,13 +58,14 @@ class Planets(SharedModel):
 
     masses: the planets' masses (> 0), inner to outer as the Jacobi coordinates order them;
     central_mass (> 0); G (> 0); dim: 2 or 3; eps: the drag rate (>= 0), one for every planet or
-    a list with one per planet.
+    a list with one per planet; drag: its direction, "isotropic" (all of P_i), "radial" (P_i's part along
+    Q_i: no torque, so L is conserved) or "tangential" (the part across Q_i), as raydamp.Kepler's.
     """
 
     name = "planets"
 
     def __init__(self, masses, central_mass: float = 1.0, G: float = 1.0, dim: int = 2,  # noqa: N803
-                 eps: float | list[float] = 0.0):
+                 eps: float | list[float] = 0.0, drag: str = "isotropic"):
         self.masses = tuple(_positive_list("masses", masses, allow_zero=False))
         if len(self.masses) > MAX_PLANETS:
             raise ValueError(f"masses: at most {MAX_PLANETS} planets, got {len(self.masses)}")
@@ -81,9 +83,12 @@ class Planets(SharedModel):
             rates = [self.eps] * planets
         self.planets = planets
         self._rates = np.array(rates)
-        self._core_model = _core.Planets(self.G, self.central_mass, list(self.masses), self.space_dim, rates)
+        self.drag = drag
+        self._core_model = _core.Planets(self.G, self.central_mass, list(self.masses), self.space_dim, rates,
+                                         drag_code(drag))
         self.reduced_masses = np.array(self._core_model.reduced_masses)
-        uniform = bool(np.all(self._rates == self._rates[0]))
+        # L is listed when every planet's momentum decays at one rate across its radius (a radial drag at 0)
+        uniform = drag == "radial" or bool(np.all(self._rates == self._rates[0]))
         self.momentum_names = (() if not uniform else ("L",) if self.space_dim == 2 else ("Lx", "Ly", "Lz"))
         self._freeze()
 
@@ -93,17 +98,17 @@ class Planets(SharedModel):
         """The constructor's arguments, by name (``replace`` and the JSON form use them)."""
         eps = list(self.eps) if isinstance(self.eps, tuple) else self.eps
         return {"masses": list(self.masses), "central_mass": self.central_mass, "G": self.G, "dim": self.space_dim,
-                "eps": eps}
+                "eps": eps, "drag": self.drag}
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON form: ``{"kind": "planets", "masses": [...], "central_mass": ..., "G": ..., "dim": ...,
-        "eps": ...}``."""
+        "eps": ..., "drag": ...}``."""
         return {"kind": "planets", **self.parameters}
 
     @classmethod
     def from_dict(cls, spec: Mapping[str, Any]) -> Planets:
         """Build from ``to_dict()``'s form; errors name the key."""
-        return cls._from_form(spec, "planets", "Planets system", ("masses", "central_mass", "G", "dim", "eps"),
+        return cls._from_form(spec, "planets", "Planets system", ("masses", "central_mass", "G", "dim", "eps", "drag"),
                               {"masses": "required (the planets' masses)"})
 
     @property

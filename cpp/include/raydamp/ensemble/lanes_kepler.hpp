@@ -1,7 +1,7 @@
 // The ensemble's lane path for Kepler test particles: runs of consecutive members that share mu, the
-// mass, eps, the dimension and the particle count (only their initial states differ: the usual ensemble
-// of decaying orbits) go through the one step loop as the particles of one Planets, then are split back
-// into members.
+// mass, eps and its direction, the dimension and the particle count (only their initial states differ:
+// the usual ensemble of decaying orbits) go through the one step loop as the particles of one Planets,
+// then are split back into members.
 //
 // Why a member's rows equal its single run's bit for bit: test particles do not interact, so each
 // sub-flow acts on every particle alone, with the arithmetic of a member's own run. The drift is
@@ -43,7 +43,7 @@ namespace raydamp {
 inline bool same_test_particles(const Planets& a, const Planets& b) {
   if (&a == &b) return !a.interacting;
   return !a.interacting && !b.interacting && a.G == b.G && a.d == b.d && a.planets == b.planets &&
-         a.eps == b.eps && a.mass.m[0] == b.mass.m[0];
+         a.eps == b.eps && a.drag == b.drag && a.mass.m[0] == b.mass.m[0];
 }
 
 // Consecutive members that run as one model's particles, cut every `lanes` members; an interacting
@@ -69,7 +69,8 @@ void run_kepler_lanes(const Planets& member, const LaneBatch& batch, const Butch
   } catch (const std::invalid_argument& e) {
     rethrow_prefixed("member " + std::to_string(batch.begin) + ": ", e);
   }
-  Planets model(TestParticles{}, member.G, member.mass.m[0], member.d, member.planets * lanes, member.eps);
+  Planets model(TestParticles{}, member.G, member.mass.m[0], member.d, member.planets * lanes, member.eps,
+                member.drag);
   model.groups = lanes;
   State<Eigen::Dynamic> z{Eigen::Map<const Vec>(q0 + batch.begin * n, static_cast<long>(lanes) * n),
                           Eigen::Map<const Vec>(p0 + batch.begin * n, static_cast<long>(lanes) * n)};

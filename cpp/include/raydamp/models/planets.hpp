@@ -50,21 +50,39 @@ struct JacobiMass {
   double kinetic(const P& p) const { return 0.5 * p.cwiseProduct(inverse).dot(p); }
 };
 
-// A = diag(eps_i I_d): planet i's momentum decays at eps_i.
-struct PlanetDrag {
-  std::vector<double> rates;  // per planet
-  int d = 2;
-  bool same = false;          // every rate equal: one factor for all of p (1,000 test particles: one exp)
+// The drag's directions (Planets::drag): along each planet's whole momentum (isotropic, D = M), or only
+// its component along Q_i (a radial dashpot) or across it (a tangential one). Radial drag exerts no torque
+// about the centre, so the angular momentum decays at the tangential rate alone.
+enum class DragDirection { isotropic = 0, radial = 1, tangential = 2 };
 
-  void set(std::vector<double> r, int d_) {
-    rates = std::move(r);
+inline DragDirection drag_direction(int code) {
+  if (code < 0 || code > 2) throw std::invalid_argument("drag: must be isotropic (0), radial (1) or tangential (2)");
+  return static_cast<DragDirection>(code);
+}
+
+// A = eps_i (a_r r r^T + a_t (I - r r^T)) on planet i's block, r = Q_i / |Q_i| at the frozen q: planet i's
+// momentum decays at `rates[i]` across r (and along it too when isotropic) and at `radial[i]` along r. The
+// two projectors commute with A, so each flow is its scalar flow on each part: p's part along r with the
+// radial factors, the rest with the tangential ones.
+struct PlanetDrag {
+  std::vector<double> rates;   // per planet: across Q_i (all of P_i when isotropic)
+  std::vector<double> radial;  // per planet: along Q_i
+  int d = 2;
+  bool same = false;          // isotropic, every rate equal: one factor for all of p (1,000 test particles: one exp)
+  bool isotropic = true;
+
+  void set(std::vector<double> r, int d_, DragDirection direction = DragDirection::isotropic) {
     d = d_;
-    same = uniform();
+    isotropic = direction == DragDirection::isotropic;
+    radial = direction == DragDirection::tangential ? std::vector<double>(r.size(), 0.0) : r;
+    rates = direction == DragDirection::radial ? std::vector<double>(r.size(), 0.0) : std::move(r);
+    same = isotropic && uniform();
   }
 
   struct Factors {
     double t = std::numeric_limits<double>::quiet_NaN();
     std::vector<DecayFactors> planet;  // one per planet, or one for all when `same`
+    std::vector<DecayFactors> along;   // along Q_i, one per planet (none when isotropic)
   };
   Factors factors(double t) const {
     Factors f;
@@ -75,50 +93,109 @@ struct PlanetDrag {
     }
     f.planet.reserve(rates.size());
     for (double a : rates) f.planet.push_back(decay_factors(a, t));
+    if (!isotropic)
+      for (double a : radial) f.along.push_back(decay_factors(a, t));
     return f;
   }
-  double spectral_radius() const { return rates.empty() ? 0.0 : *std::max_element(rates.begin(), rates.end()); }
-  // With one rate for every planet, L = sum Q_i x P_i decays as e^{-eps t} under the exact flow.
+  double spectral_radius() const {
+    double rho = 0.0;
+    for (const auto* v : {&rates, &radial})
+      for (double a : *v) rho = std::max(rho, a);
+    return rho;
+  }
+  // With one tangential rate for every planet, L = sum Q_i x P_i decays as e^{-eps t} under the exact flow.
   double momentum_decay_rate() const { return rates.front(); }
   bool uniform() const {
     return std::all_of(rates.begin(), rates.end(), [this](double a) { return a == rates.front(); });
   }
 
   template <class Q, class P>
-  void decay(const Q&, const Factors& f, P& p) const {
+  void decay(const Q& q, const Factors& f, P& p) const {
     if (same) {
       p *= f.planet[0].exp;
       return;
     }
-    for (std::size_t i = 0; i < rates.size(); ++i) p.segment(d * i, d) *= f.planet[i].exp;
+    for (std::size_t i = 0; i < rates.size(); ++i) {
+      auto pi = p.segment(d * i, d);
+      if (isotropic) {
+        pi *= f.planet[i].exp;
+        continue;
+      }
+      const auto r = unit(q, i);
+      const double along = pi.dot(r);
+      pi = f.planet[i].exp * pi + ((f.along[i].exp - f.planet[i].exp) * along) * r;
+    }
   }
   template <class Q, class G, class P>
-  void decay_affine(const Q&, const Factors& f, const G& g, P& p) const {
+  void decay_affine(const Q& q, const Factors& f, const G& g, P& p) const {
     if (same) {
       p = f.planet[0].exp * p - f.planet[0].t_phi1 * g;
       return;
     }
     for (std::size_t i = 0; i < rates.size(); ++i) {
       const DecayFactors& k = f.planet[i];
-      p.segment(d * i, d) = k.exp * p.segment(d * i, d) - k.t_phi1 * g.segment(d * i, d);
+      auto pi = p.segment(d * i, d);
+      const auto gi = g.segment(d * i, d);
+      if (isotropic) {
+        pi = k.exp * pi - k.t_phi1 * gi;
+        continue;
+      }
+      const DecayFactors& a = f.along[i];
+      const auto r = unit(q, i);
+      const double p_along = pi.dot(r), g_along = gi.dot(r);
+      pi = k.exp * pi - k.t_phi1 * gi + ((a.exp - k.exp) * p_along - (a.t_phi1 - k.t_phi1) * g_along) * r;
     }
   }
-  // Noise of the exact OU flow per planet: covariance kT (1 - e^{-2 t eps_i}) m'_i per coordinate.
+  // Noise of the exact OU flow per planet: covariance kT (1 - e^{-2 t a}) m'_i along each direction.
   template <class Q, class Mass, class X, class P>
-  void add_noise(const Q&, const Factors& f, const Mass& mass, double sigma, const X& xi, P& p) const {
-    for (std::size_t i = 0; i < rates.size(); ++i)
+  void add_noise(const Q& q, const Factors& f, const Mass& mass, double sigma, const X& xi, P& p) const {
+    for (std::size_t i = 0; i < rates.size(); ++i) {
+      const double across = f.planet[same ? 0 : i].noise;
+      if (isotropic) {
+        for (int j = 0; j < d; ++j) {
+          const int k = d * static_cast<int>(i) + j;
+          p[k] += sigma * across * std::sqrt(mass.m[k]) * xi[k];
+        }
+        continue;
+      }
+      const Small r = unit(q, i);
+      const double along_xi = xi.segment(d * i, d).dot(r), extra = f.along[i].noise - across;
       for (int j = 0; j < d; ++j) {
         const int k = d * static_cast<int>(i) + j;
-        p[k] += sigma * f.planet[same ? 0 : i].noise * std::sqrt(mass.m[k]) * xi[k];
+        p[k] += sigma * std::sqrt(mass.m[k]) * (across * xi[k] + extra * along_xi * r[j]);
       }
+    }
   }
   template <class Q, class P, class O>
-  void rate(const Q&, const P& p, O& out) const {
-    for (std::size_t i = 0; i < rates.size(); ++i) out.segment(d * i, d) = rates[i] * p.segment(d * i, d);
+  void rate(const Q& q, const P& p, O& out) const {
+    for (std::size_t i = 0; i < rates.size(); ++i) {
+      out.segment(d * i, d) = rates[i] * p.segment(d * i, d);
+      if (isotropic) continue;
+      const auto r = unit(q, i);
+      out.segment(d * i, d) += ((radial[i] - rates[i]) * p.segment(d * i, d).dot(r)) * r;
+    }
   }
   template <class Q, class X>
-  void solve_shifted(const Q&, double c, X& x) const {
-    for (std::size_t i = 0; i < rates.size(); ++i) x.segment(d * i, d) /= 1.0 + c * rates[i];
+  void solve_shifted(const Q& q, double c, X& x) const {
+    for (std::size_t i = 0; i < rates.size(); ++i) {
+      auto xi = x.segment(d * i, d);
+      if (isotropic) {
+        xi /= 1.0 + c * rates[i];
+        continue;
+      }
+      const double across = 1.0 / (1.0 + c * rates[i]);
+      const auto r = unit(q, i);
+      const double along = xi.dot(r);
+      xi = across * xi + ((1.0 / (1.0 + c * radial[i]) - across) * along) * r;
+    }
+  }
+
+ private:
+  // Q_i / |Q_i|: the direction of planet i's radial dashpot (on the stack: at most 3 components).
+  using Small = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 3, 1>;
+  template <class Q>
+  Small unit(const Q& q, std::size_t i) const {
+    return q.segment(d * i, d).normalized();
   }
 };
 
@@ -148,11 +225,13 @@ struct Planets {
   int groups = 1;
   JacobiMass mass;
   PlanetDrag damping;
+  DragDirection drag = DragDirection::isotropic;
 
   // `particles` test particles of mass m about a fixed central body of G M = mu, drag eps on each:
   // H = sum_i |p_i|^2 / (2 m) - mu m / |q_i|.
-  Planets(TestParticles, double mu_, double m, int d_, int particles, double eps_)
-      : G(mu_), d(d_), planets(particles), eps(eps_), interacting(false) {
+  Planets(TestParticles, double mu_, double m, int d_, int particles, double eps_,
+          DragDirection drag_ = DragDirection::isotropic)
+      : G(mu_), d(d_), planets(particles), eps(eps_), interacting(false), drag(drag_) {
     if (!(mu_ > 0.0) || !std::isfinite(mu_))
       throw std::invalid_argument("mu: must be a finite number > 0 (G times the central mass)");
     if (!(m > 0.0) || !std::isfinite(m)) throw std::invalid_argument("mass: must be a finite number > 0");
@@ -162,11 +241,12 @@ struct Planets {
     mu.assign(planets, mu_);
     mass.m = Eigen::VectorXd::Constant(d * planets, m);
     mass.inverse = Eigen::VectorXd::Constant(d * planets, 1.0 / m);
-    damping.set(std::vector<double>(planets, eps), d);
+    damping.set(std::vector<double>(planets, eps), d, drag);
   }
 
-  Planets(double G_, double central, std::vector<double> planet_masses, int d_, std::vector<double> drag)
-      : G(G_), d(d_), planets(static_cast<int>(planet_masses.size())) {
+  Planets(double G_, double central, std::vector<double> planet_masses, int d_, std::vector<double> rates,
+          DragDirection drag_ = DragDirection::isotropic)
+      : G(G_), d(d_), planets(static_cast<int>(planet_masses.size())), drag(drag_) {
     if (!(G > 0.0) || !std::isfinite(G)) throw std::invalid_argument("G: must be a finite number > 0");
     if (!(central > 0.0) || !std::isfinite(central))
       throw std::invalid_argument("central_mass: must be a finite number > 0");
@@ -175,10 +255,10 @@ struct Planets {
     for (int i = 0; i < planets; ++i)
       if (!(planet_masses[i] > 0.0) || !std::isfinite(planet_masses[i]))
         throw std::invalid_argument("masses[" + std::to_string(i) + "]: must be a finite number > 0");
-    if (static_cast<int>(drag.size()) != planets)
+    if (static_cast<int>(rates.size()) != planets)
       throw std::invalid_argument("eps: expected one drag rate per planet (" + std::to_string(planets) + ")");
     for (int i = 0; i < planets; ++i)
-      if (!(drag[i] >= 0.0) || !std::isfinite(drag[i]))
+      if (!(rates[i] >= 0.0) || !std::isfinite(rates[i]))
         throw std::invalid_argument("eps[" + std::to_string(i) + "]: must be finite and >= 0");
     masses.push_back(central);
     masses.insert(masses.end(), planet_masses.begin(), planet_masses.end());
@@ -190,7 +270,7 @@ struct Planets {
       mass.m.segment(d * (i - 1), d).setConstant(masses[i] * eta[i - 1] / eta[i]);
     }
     mass.inverse = mass.m.cwiseInverse();
-    damping.set(std::move(drag), d);
+    damping.set(std::move(rates), d, drag);
     eps = damping.spectral_radius();
   }
 
