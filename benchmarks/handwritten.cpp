@@ -38,17 +38,18 @@ struct Pendulum {
   double q, p;
 };
 
-// 3s: damp h/2, drift h/2, kick h, drift h/2, damp h/2.
+// 3s: damp h/2, drift h/2, kick h, drift h/2, damp h/2. A damp is p + (e^{-t eps} - 1) p, as raydamp's
+// (damping/isotropic_damping.hpp: e^{-t eps} rounded would bias the decay rate).
 void pendulum_3s(Pendulum& s, long n_steps, double h) {
   const double half = 0.5 * h;
-  const double decay = std::exp(-half * s.eps);
+  const double decay = std::expm1(-half * s.eps);
   double q = s.q, p = s.p;
   for (long i = 0; i < n_steps; ++i) {
-    p *= decay;
+    p += decay * p;
     q += half * p;
     p -= h * std::sin(q);
     q += half * p;
-    p *= decay;
+    p += decay * p;
   }
   s.q = q;
   s.p = p;
@@ -58,33 +59,33 @@ void pendulum_3s(Pendulum& s, long n_steps, double h) {
 // h/2 ending one step and the damp h/2 starting the next are one damp h.
 void pendulum_3s_merged(Pendulum& s, long n_steps, double h) {
   const double half = 0.5 * h;
-  const double decay_half = std::exp(-half * s.eps), decay = std::exp(-h * s.eps);
+  const double decay_half = std::expm1(-half * s.eps), decay = std::expm1(-h * s.eps);
   double q = s.q, p = s.p;
-  p *= decay_half;
+  p += decay_half * p;
   for (long i = 0; i + 1 < n_steps; ++i) {
     q += half * p;
     p -= h * std::sin(q);
     q += half * p;
-    p *= decay;
+    p += decay * p;
   }
   q += half * p;
   p -= h * std::sin(q);
   q += half * p;
-  p *= decay_half;
+  p += decay_half * p;
   s.q = q;
   s.p = p;
 }
 
-// 2s: drift h/2, exact kick+damp h (p <- e^{-h eps} p - h phi1(-h eps) sin q), drift h/2.
+// 2s: drift h/2, exact kick+damp h (p <- p + (e^{-h eps} - 1) p - h phi1(-h eps) sin q), drift h/2.
 void pendulum_2s(Pendulum& s, long n_steps, double h) {
   const double half = 0.5 * h;
   const double x = -h * s.eps;
-  const double decay = std::exp(x);
+  const double decay = std::expm1(x);
   const double kick = h * phi1(x);
   double q = s.q, p = s.p;
   for (long i = 0; i < n_steps; ++i) {
     q += half * p;
-    p = decay * p - kick * std::sin(q);
+    p += decay * p - kick * std::sin(q);
     q += half * p;
   }
   s.q = q;

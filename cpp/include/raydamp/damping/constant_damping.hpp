@@ -27,6 +27,7 @@ struct ConstantDamping {
   struct Factors {
     double t = std::numeric_limits<double>::quiet_NaN();  // the time they are for
     SmallMatrix exp;     // exp(-tA)
+    SmallMatrix expm1;   // exp(-tA) - I: a flow adds expm1 p to p (isotropic_damping.hpp says why)
     SmallMatrix t_phi1;  // t phi1(-tA)
     SmallMatrix noise;   // N with N N^T = M - E M^T E^T = L V (I - e^{-2t Lambda}) V^T L^T: the OU flow's noise factor
     mutable SmallVector scratch;  // per workspace, so flows of one run never allocate
@@ -58,12 +59,14 @@ struct ConstantDamping {
     Factors f;
     f.t = t;
     const auto n = lambda.size();
-    SmallVector e(n), p1(n);
+    SmallVector e(n), e1(n), p1(n);
     for (Eigen::Index i = 0; i < n; ++i) {
       e[i] = std::exp(-t * lambda[i]);
+      e1[i] = std::expm1(-t * lambda[i]);
       p1[i] = t * phi1(-t * lambda[i]);
     }
     f.exp = from_modes * e.asDiagonal() * to_modes;
+    f.expm1 = from_modes * e1.asDiagonal() * to_modes;
     SmallVector s(n);
     for (Eigen::Index i = 0; i < n; ++i) s[i] = std::sqrt(std::max(0.0, -std::expm1(-2.0 * t * lambda[i])));
     f.noise = from_modes * s.asDiagonal();
@@ -74,15 +77,15 @@ struct ConstantDamping {
 
   template <class Q, class P>
   void decay(const Q&, const Factors& f, P& p) const {
-    f.scratch.noalias() = f.exp * p;
-    p = f.scratch;
+    f.scratch.noalias() = f.expm1 * p;
+    p += f.scratch;
   }
 
   template <class Q, class G, class P>
   void decay_affine(const Q&, const Factors& f, const G& g, P& p) const {
-    f.scratch.noalias() = f.exp * p;
+    f.scratch.noalias() = f.expm1 * p;
     f.scratch.noalias() -= f.t_phi1 * g;
-    p = f.scratch;
+    p += f.scratch;
   }
 
   // p += sigma N xi: the noise of the exact OU flow (the mass is in N already).

@@ -18,14 +18,18 @@ struct IsotropicDamping {
   // (the step loop's momentum drift measures the distance from that law).
   double momentum_decay_rate() const { return a; }
 
-  // p <- exp(-t A) p: the exact flow of eps Y (f = factors(t)).
+  // p <- exp(-t A) p: the exact flow of eps Y (f = factors(t)), as p + (e^{-ta} - 1) p. The factor
+  // e^{-ta} rounded to a double is off by up to half an ulp, the same way at every step: over 10^6 steps
+  // p would decay at a rate off by 1e-16 / (t a) relative (L_z of a damped pendulum 1e-10 from its law);
+  // e^{-ta} - 1 rounds relative to its own small size, so the decay's only error is the addition's
+  // rounding, unbiased (2e-14 after those 10^6 steps).
   template <class Q, class P>
-  void decay(const Q&, const DecayFactors& f, P& p) const { p *= f.exp; }
+  void decay(const Q&, const DecayFactors& f, P& p) const { p += f.expm1 * p; }
 
   // p <- exp(-t A) p - t phi1(-t A) g: the exact flow of p' = -g - A p with q
-  // (and so g = grad V(q)) frozen.
+  // (and so g = grad V(q)) frozen; exp(-tA) p as in decay().
   template <class Q, class G, class P>
-  void decay_affine(const Q&, const DecayFactors& f, const G& g, P& p) const { p = f.exp * p - f.t_phi1 * g; }
+  void decay_affine(const Q&, const DecayFactors& f, const G& g, P& p) const { p += f.expm1 * p - f.t_phi1 * g; }
 
   // p += sigma sqrt(1 - e^{-2ta}) M^{1/2} xi: the noise of the exact OU flow with A = a I, whose
   // covariance is kT (M - E M E^T) = kT (1 - e^{-2ta}) M (sigma = sqrt(kT), xi standard normal).

@@ -111,25 +111,26 @@ struct PlanetDrag {
 
   template <class Q, class P>
   void decay(const Q& q, const Factors& f, P& p) const {
+    // p + (e^{-ta} - 1) p, not e^{-ta} p: unbiased (damping/isotropic_damping.hpp)
     if (same) {
-      p *= f.planet[0].exp;
+      p += f.planet[0].expm1 * p;
       return;
     }
     for (std::size_t i = 0; i < rates.size(); ++i) {
       auto pi = p.segment(d * i, d);
       if (isotropic) {
-        pi *= f.planet[i].exp;
+        pi += f.planet[i].expm1 * pi;
         continue;
       }
       const auto r = unit(q, i);
       const double along = pi.dot(r);
-      pi = f.planet[i].exp * pi + ((f.along[i].exp - f.planet[i].exp) * along) * r;
+      pi += f.planet[i].expm1 * pi + ((f.along[i].expm1 - f.planet[i].expm1) * along) * r;
     }
   }
   template <class Q, class G, class P>
   void decay_affine(const Q& q, const Factors& f, const G& g, P& p) const {
     if (same) {
-      p = f.planet[0].exp * p - f.planet[0].t_phi1 * g;
+      p += f.planet[0].expm1 * p - f.planet[0].t_phi1 * g;
       return;
     }
     for (std::size_t i = 0; i < rates.size(); ++i) {
@@ -137,13 +138,13 @@ struct PlanetDrag {
       auto pi = p.segment(d * i, d);
       const auto gi = g.segment(d * i, d);
       if (isotropic) {
-        pi = k.exp * pi - k.t_phi1 * gi;
+        pi += k.expm1 * pi - k.t_phi1 * gi;
         continue;
       }
       const DecayFactors& a = f.along[i];
       const auto r = unit(q, i);
       const double p_along = pi.dot(r), g_along = gi.dot(r);
-      pi = k.exp * pi - k.t_phi1 * gi + ((a.exp - k.exp) * p_along - (a.t_phi1 - k.t_phi1) * g_along) * r;
+      pi += k.expm1 * pi - k.t_phi1 * gi + ((a.expm1 - k.expm1) * p_along - (a.t_phi1 - k.t_phi1) * g_along) * r;
     }
   }
   // Noise of the exact OU flow per planet: covariance kT (1 - e^{-2 t a}) m'_i along each direction.
