@@ -57,6 +57,28 @@ def test_a_loose_tolerance_is_honoured_and_used():
     assert deviation.max() > 1e-9  # the solve stopped at the tolerance, not at rounding
 
 
+@pytest.mark.parametrize(("method", "composition", "order", "hs", "high"), [
+    # The "order 4/6/8 where the theory says": RATTLE is a symmetric order-2 step, so the compositions
+    # raise it. Measured on this pendulum: kahan_li6 3s slopes 6.02, 5.97, 6.09 (2s the same); kahan_li8 3s
+    # 8.78, 8.53, 8.22 over h = 0.2 ... 0.1, falling toward 8 (still above it where the error is above the
+    # reference's), so its bound is wider above.
+    ("3s", "kahan_li6", 6, [0.2, 0.16, 0.125, 0.1], 0.4), ("2s", "kahan_li6", 6, [0.2, 0.16, 0.125, 0.1], 0.4),
+    ("3s", "kahan_li8", 8, [0.2, 0.16, 0.125, 0.1], 1.0)])
+def test_planar_pendulum_compositions_reach_orders_6_and_8(method, composition, order, hs, high):
+    length, mass, theta, omega, t_end = 0.8, 1.3, 1.1, 0.4, 2.0
+    system = pendulum(length, mass, eps=0.3)
+    q0, p0 = pendulum_start(length, mass, theta, omega)
+    exact = one_angle(length, 0.3, theta, omega, t_end)
+    errors = []
+    for h in hs:
+        sol = raydamp.integrate(system, q0, p0, method=method, composition=composition, h=h, t_end=t_end,
+                                save_every=10_000)
+        assert sol.status == "completed", sol.message
+        errors.append(float(np.max(np.abs(sol.q[-1] - exact))))
+    slope = fitted_slope(hs, errors)
+    assert order - 0.2 <= slope <= order + high, (errors, slope)
+
+
 @pytest.mark.parametrize("method,composition,order", [("3s", None, 2), ("2s", None, 2), ("baoab", None, 2),
                                                       ("rks", None, 2), ("sv", None, 2), ("3s", "yoshida4", 4),
                                                       ("2s", "yoshida4", 4)])
