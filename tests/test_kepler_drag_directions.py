@@ -63,13 +63,27 @@ def test_each_direction_keeps_the_splittings_order(drag, method, composition, or
     assert slopes.min() >= order - 0.2, (errors, slopes)
 
 
-def test_the_isotropic_default_is_unchanged():
+def test_isotropic_is_the_default_and_the_form_round_trips():
     a = raydamp.Kepler(MU, eps=1e-2)
     b = raydamp.Kepler(MU, eps=1e-2, drag="isotropic")
     sa = raydamp.integrate(a, [1.0, 0.0], [0.0, 1.2], method="2s", h=0.05, n_steps=400, save_every=40)
     sb = raydamp.integrate(b, [1.0, 0.0], [0.0, 1.2], method="2s", h=0.05, n_steps=400, save_every=40)
     assert np.array_equal(sa.q, sb.q) and np.array_equal(sa.p, sb.p)
     assert b.to_dict()["drag"] == "isotropic" and raydamp.Kepler.from_dict(b.to_dict()).to_dict() == b.to_dict()
+    radial = raydamp.Kepler(MU, eps=1e-2, drag="radial")
+    assert raydamp.Kepler.from_dict(radial.to_dict()).drag == "radial"
+
+
+def test_radial_drag_at_a_temperature_samples_the_boltzmann_law_of_the_momentum():
+    # The OU noise of each direction's damping (planets.hpp's add_noise): with the Kepler force switched off in
+    # effect (a huge orbit, mu small), p is an OU process whose radial part relaxes at eps and whose stationary
+    # law is N(0, kT m) in every direction; the tangential part is not damped and keeps its start.
+    k = raydamp.Kepler(1e-12, mass=2.0, eps=1.0, drag="radial")
+    sol = raydamp.integrate(k, [1e6, 0.0], [0.0, 0.0], method="baoab", h=0.05, n_steps=200_000, save_every=20,
+                            temperature=0.5, seed=11)
+    radial, tangential = sol.p[500:, 0], sol.p[500:, 1]
+    assert abs(np.var(radial) / (0.5 * 2.0) - 1.0) <= 0.1, np.var(radial)
+    assert np.max(np.abs(tangential)) <= 1e-9
 
 
 def test_planets_with_radial_drag_keep_the_total_angular_momentum():

@@ -121,6 +121,28 @@ int main() {
       drag.solve_shifted(q, c, x);
       CHECK((x - (Eigen::Matrix3d::Identity() + c * (a_r * along + a_t * across)).inverse() * p0).norm() <= 1e-15);
       CHECK(drag.momentum_decay_rate() == a_t && drag.spectral_radius() == 0.2);
+      // The OU noise p += sigma N xi: its covariance N N^T (columns from unit xi) is M - E M E^T, M = m I.
+      struct Mass {
+        Eigen::VectorXd m = Eigen::VectorXd::Constant(3, 1.7);
+      } mass;
+      Eigen::Matrix3d N;
+      for (int j = 0; j < 3; ++j) {
+        Eigen::VectorXd column = Eigen::VectorXd::Zero(3);
+        drag.add_noise(q, f, mass, 1.0, Eigen::VectorXd(Eigen::Vector3d::Unit(j)), column);
+        N.col(j) = column;
+      }
+      CHECK((N * N.transpose() - 1.7 * (Eigen::Matrix3d::Identity() - e * e.transpose())).norm() <= 1e-15);
+    }
+    // Two planets of different rates, isotropic: each block its own factor (the per-planet path, not `same`).
+    {
+      PlanetDrag drag;
+      drag.set({0.2, 0.05}, 3);
+      const PlanetDrag::Factors f = drag.factors(t);
+      const Eigen::VectorXd q6 = (Eigen::VectorXd(6) << q, -q).finished();
+      Eigen::VectorXd p6 = (Eigen::VectorXd(6) << p0, 2.0 * p0).finished();
+      drag.decay(q6, f, p6);
+      CHECK((p6.head(3) - std::exp(-0.2 * t) * p0).norm() <= 1e-15);
+      CHECK((p6.tail(3) - std::exp(-0.05 * t) * 2.0 * p0).norm() <= 1e-15);
     }
     CHECK(test::throws([] { drag_direction(3); }));
   }

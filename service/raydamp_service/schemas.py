@@ -162,7 +162,7 @@ class MethodInfo(BaseModel):
 class CompositionInfo(BaseModel):
     name: str
     order: int = Field(description="the order of the composed method (a symmetric order-2 base raised)")
-    stages: int = Field(description="base steps per composed step")
+    stages: int = Field(description="base steps per composed step (a near-integrable table: its kicks)")
     gammas: list[float] = Field(description="the fractions of h of the base steps (a palindrome summing to 1); "
                                              "for a near-integrable table, its kicks'")
     reference: str

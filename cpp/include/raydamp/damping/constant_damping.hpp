@@ -26,7 +26,6 @@ struct ConstantDamping {
 
   struct Factors {
     double t = std::numeric_limits<double>::quiet_NaN();  // the time they are for
-    SmallMatrix exp;     // exp(-tA)
     SmallMatrix expm1;   // exp(-tA) - I: a flow adds expm1 p to p (isotropic_damping.hpp says why)
     SmallMatrix t_phi1;  // t phi1(-tA)
     SmallMatrix noise;   // N with N N^T = M - E M^T E^T = L V (I - e^{-2t Lambda}) V^T L^T: the OU flow's noise factor
@@ -59,13 +58,11 @@ struct ConstantDamping {
     Factors f;
     f.t = t;
     const auto n = lambda.size();
-    SmallVector e(n), e1(n), p1(n);
+    SmallVector e1(n), p1(n);
     for (Eigen::Index i = 0; i < n; ++i) {
-      e[i] = std::exp(-t * lambda[i]);
       e1[i] = std::expm1(-t * lambda[i]);
       p1[i] = t * phi1(-t * lambda[i]);
     }
-    f.exp = from_modes * e.asDiagonal() * to_modes;
     f.expm1 = from_modes * e1.asDiagonal() * to_modes;
     SmallVector s(n);
     for (Eigen::Index i = 0; i < n; ++i) s[i] = std::sqrt(std::max(0.0, -std::expm1(-2.0 * t * lambda[i])));

@@ -3,7 +3,7 @@
 // the one step loop (integrate.hpp) advances all of them at once. The pendulums are
 // uncoupled (M = I, D = I, V = sum_i 1 - cos q_i), so every exact sub-flow acts on
 // each lane exactly as on one DampedPendulum: drift q += t p, kick p -= t sin q,
-// damp p *= e^{-t eps} with the same factors. The mass and damping kinds are the
+// damp p += (e^{-t eps} - 1) p with the same factors. The mass and damping kinds are the
 // single pendulum's, and by default each lane's sin is the same std::sin call, so
 // lane i of a run equals the single run of member i bit for bit (no lane sees
 // another, and with the baseline x86-64 flags no fused multiply-add changes a

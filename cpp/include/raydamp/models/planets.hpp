@@ -192,11 +192,14 @@ struct PlanetDrag {
   }
 
  private:
-  // Q_i / |Q_i|: the direction of planet i's radial dashpot (on the stack: at most 3 components).
+  // Q_i / |Q_i|: the direction of planet i's radial dashpot, on the stack (at most 3 components). Copied,
+  // then normalised in place: normalized() of a run-time-size segment makes a heap VectorXd first.
   using Small = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 3, 1>;
   template <class Q>
   Small unit(const Q& q, std::size_t i) const {
-    return q.segment(d * i, d).normalized();
+    Small r = q.segment(d * i, d);
+    r.normalize();
+    return r;
   }
 };
 
