@@ -213,7 +213,9 @@ template <class Method, class Model>
 void check_amplification(const Model& model, const typename Model::Vec& q0, const ButcherTableau& tab,
                          const Composition& composition, double h) {
   if constexpr (is_mergeable<Method>()) {
-    if (composition.stages() == 1) return;
+    // The base alone, and the near-integrable tables (every sub-step forward), run no damping backward: no
+    // rate to estimate (for a large structure, a Lanczos run).
+    if (composition.stages() == 1 || composition.is_table()) return;
     const DampingRate rate = damping_rate(model, q0);
     const double rho = rate.rho;
     const BackwardStep worst = worst_backward_step<Method>(composition, tab, h, rho);
