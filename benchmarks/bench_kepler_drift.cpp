@@ -7,7 +7,7 @@
 //         near kShortReach (the most a double step takes), each form against the other: a rounding that
 //         repeats from step to step would show as |dE/E| growing like n rather than sqrt(n).
 //   step loop: ns per member per step of 2s on one Kepler(particles=1000) (bench_vs_rebound.py's ensemble
-//         door), with the drift as it is and with every drift in long double (the kind as it was).
+//         door), with the drift as it is (lanes), one body at a time, and every drift in long double.
 // Prints figures; never passes or fails on time.
 //
 //   g++ -O2 -march=x86-64-v2 -DNDEBUG -I cpp/include -I /usr/include/eigen3 benchmarks/bench_kepler_drift.cpp \
@@ -60,6 +60,32 @@ double ns_per_drift(const Orbits& start, double h, long steps, int rounds, Drift
   return 1e9 * best / (static_cast<double>(start.q.size()) * steps);
 }
 
+// The Kepler kind with its drift one body at a time: the step loop as it ran before the lanes.
+struct ScalarKepler : raydamp::Kepler {
+  using raydamp::Kepler::Kepler;
+  void drift(Vec& q, Vec& p, double t) const {
+    for (int i = 0; i < planets; ++i)
+      raydamp::kepler::drift_body(mu[i], mass.m[2 * i], mass.inverse[2 * i], t, 2, &q[2 * i], &p[2 * i]);
+  }
+};
+
+// Every body of the ensemble drifted `steps` times by drift_bodies (mass 1: p = v), best of `rounds`.
+double ns_per_lane_drift(const Orbits& start, double h, long steps, int rounds, double& check) {
+  const int n = static_cast<int>(start.q.size());
+  std::vector<double> mu(n, 1.0), m(2 * n, 1.0), q0(2 * n), p0(2 * n);
+  for (int i = 0; i < n; ++i) q0[2 * i] = start.q[i][0], q0[2 * i + 1] = start.q[i][1], p0[2 * i] = start.v[i][0],
+                             p0[2 * i + 1] = start.v[i][1];
+  double best = 1e300;
+  for (int r = 0; r < rounds; ++r) {
+    std::vector<double> q = q0, p = p0;
+    const auto t0 = std::chrono::steady_clock::now();
+    for (long k = 0; k < steps; ++k) raydamp::kepler::drift_bodies(mu.data(), m.data(), m.data(), h, 2, n, q.data(), p.data());
+    best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    check = q[0] + q[2 * n - 1];
+  }
+  return 1e9 * best / (static_cast<double>(n) * steps);
+}
+
 // The Kepler kind with every drift in long double: the step loop as it ran before the short-step path.
 struct ExtendedKepler : raydamp::Kepler {
   using raydamp::Kepler::Kepler;
@@ -105,15 +131,22 @@ int main(int argc, char** argv) {
               "that no other process interrupted):\n", rounds);
   std::printf("  kepler::drift (short steps in double)   %6.1f ns per drift\n", ns_fast);
   std::printf("  kepler::extended_drift (long double)    %6.1f ns per drift   (checks %.3f %.3f)\n", ns_ext, a, b);
+  double l = 0;
+  const double ns_lanes = ns_per_lane_drift(o, 0.01, 100, rounds, l);
+  std::printf("  kepler::drift_bodies (SIMD lanes)       %6.1f ns per drift   (check %.3f)\n", ns_lanes, l);
 
   const raydamp::Kepler model(1.0, 1.0, 2, 1000, 1e-3);
+  const ScalarKepler scalar_model(1.0, 1.0, 2, 1000, 1e-3);
   const ExtendedKepler extended_model(1.0, 1.0, 2, 1000, 1e-3);
-  double c = 0, d = 0;
+  double c = 0, d = 0, e = 0;
   const double step_fast = ns_per_member_step(model, o, rounds / 10 + 1, 100, c);
+  const double step_scalar = ns_per_member_step(scalar_model, o, rounds / 10 + 1, 100, e);
   const double step_ext = ns_per_member_step(extended_model, o, rounds / 10 + 1, 100, d);
   std::printf("\nstep loop, 2s, eps = 1e-3, one Kepler(particles=1000), 100 steps of h = 0.01 (best of %d):\n",
               rounds / 10 + 1);
-  std::printf("  the drift as it is                      %6.1f ns per member per step\n", step_fast);
+  std::printf("  the drift as it is (SIMD lanes)         %6.1f ns per member per step\n", step_fast);
+  std::printf("  one body at a time                      %6.1f ns per member per step   (check %.3f)\n",
+              step_scalar, e);
   std::printf("  every drift in long double (as before)  %6.1f ns per member per step   (checks %.3f %.3f)\n",
               step_ext, c, d);
 

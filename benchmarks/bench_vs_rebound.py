@@ -570,14 +570,12 @@ def two_planets(repeats: int) -> None:
 
 # ---------------------------------------------------------------------------------------------- ensemble
 # Earlier figures of the same rows, for the side by side: (method, one Kepler with the orbits as particles?) ->
-# ns per member per step. Before short drifts were formed in double (flows/kepler.hpp, kShortReach;
-# benchmarks/bench_kepler_drift.cpp times the two drifts themselves in one process), and before
-# integrate_ensemble ran members that share mu, mass and eps as one model's particles
-# (ensemble/lanes_kepler.hpp), when each member was a run of its own.
+# ns per member per step. Before the drift ran in SIMD lanes (flows/kepler_lanes.hpp; measured 2026-11-29
+# 21:48, load 0.9, in the same hour as the lanes' 23.3 / 25.8 / 38.7 / 40.9 ns), and before short drifts were
+# formed in double (flows/kepler.hpp, kShortReach; benchmarks/bench_kepler_drift.cpp times the drifts alone).
+BEFORE_LANES = {("2s", True): "49.2 ns", ("2s", False): "51.4 ns", ("3s", True): "88.9 ns", ("3s", False): "91.1 ns"}
 BEFORE_SHORT_STEPS = {("2s", True): "88 ns", ("2s", False): "101 ns", ("3s", True): "163 ns",
                       ("3s", False): "not recorded"}
-BEFORE_LANES = {("2s", True): "35 ns", ("2s", False): "66 ns", ("3s", True): "not recorded",
-                ("3s", False): "not recorded"}  # the row "each member its own run" measures the second now
 
 
 def one_by_one(method: str, q0: np.ndarray, p0: np.ndarray, h: float, steps: int) -> dict:
@@ -625,8 +623,8 @@ def ensemble(members: int, h: float, t_end: float, repeats: int) -> None:
             per, per_cpu = 1e9 * best / (members * steps), 1e9 * cpu / (members * steps)
             particles = door.startswith("one")
             earlier = "" if door.endswith("own run") else (
-                f"; before, {BEFORE_LANES[method, particles]} on 2026-11-29, load 3.5; with every drift in long "
-                f"double: {BEFORE_SHORT_STEPS[method, particles]}, load 1.9")
+                f"; with the scalar drift {BEFORE_LANES[method, particles]}; with every drift in long "
+                f"double {BEFORE_SHORT_STEPS[method, particles]}")
             print(f"  raydamp {method}, {door}: {steps} steps in {best:.3e} s = {per:.1f} ns per member per step "
                   f"(CPU {per_cpu:.1f} ns{earlier})")
     if rebound is None:

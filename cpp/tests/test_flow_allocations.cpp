@@ -1,6 +1,6 @@
 // The damping flows that run inside the step loop allocate nothing: Eigen's own check (EIGEN_RUNTIME_NO_MALLOC,
 // its assertion made to throw, so it works in a release build) around each call, for the Kepler kinds' drag in
-// every direction and for isotropic damping. Compiled alone: the macros must come before any Eigen header.
+// every direction (fixed axes too) and for isotropic damping. Compiled alone: the macros must come before any Eigen header.
 // (The radial and tangential drag first normalised a run-time-size segment, a heap VectorXd per planet per flow.)
 #include <stdexcept>
 #define eigen_assert(x) \
@@ -45,9 +45,12 @@ int main() {
   xi.setConstant(0.3);
   // The check itself: a flow that makes a VectorXd is caught.
   CHECK(allocates([&] { Eigen::VectorXd made = q.segment(0, 3).normalized(); (void)made; }));
-  for (DragDirection direction : {DragDirection::isotropic, DragDirection::radial, DragDirection::tangential}) {
+  Eigen::MatrixXd A(3, 3);
+  A << 2.0, 0.3, -0.4, 0.3, 1.0, 0.2, -0.4, 0.2, 0.5;
+  for (DragDirection direction :
+       {DragDirection::isotropic, DragDirection::radial, DragDirection::tangential, DragDirection::axes}) {
     PlanetDrag drag;
-    drag.set({0.2, 0.1}, 3, direction);
+    drag.set({0.2, 0.1}, 3, direction, A);
     const PlanetDrag::Factors f = drag.factors(0.1);
     CHECK(!allocates([&] { drag.decay(q, f, p); }));
     CHECK(!allocates([&] { drag.decay_affine(q, f, g, p); }));

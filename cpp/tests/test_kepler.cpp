@@ -4,6 +4,8 @@
 #include <cmath>
 #include <tuple>
 
+#include <unsupported/Eigen/MatrixFunctions>
+
 #include "check.hpp"
 #include "raydamp/models/kepler.hpp"
 #include "raydamp/raydamp.hpp"
@@ -144,7 +146,67 @@ int main() {
       CHECK((p6.head(3) - std::exp(-0.2 * t) * p0).norm() <= 1e-15);
       CHECK((p6.tail(3) - std::exp(-0.05 * t) * 2.0 * p0).norm() <= 1e-15);
     }
-    CHECK(test::throws([] { drag_direction(3); }));
+    CHECK(test::throws([] { drag_direction(4); }));
+  }
+
+  // Drag along fixed axes, P_i' = -eps_i A P_i: the flows against Eigen's matrix exponential of -t eps_i A
+  // (Pade, independent of the eigen-decomposition the flows use), on two planets with their own eps_i, for
+  // a positive definite A (p(t) = e^{-tB} p - B^{-1} (I - e^{-tB}) g, B = eps A) and one with a zero
+  // eigenvalue (A = e_z e_z^T: only the vertical momentum decays).
+  {
+    Eigen::MatrixXd spd(3, 3);
+    spd << 2.0, 0.3, -0.4, 0.3, 1.0, 0.2, -0.4, 0.2, 0.5;
+    const Eigen::MatrixXd vertical = Eigen::Vector3d::UnitZ() * Eigen::Vector3d::UnitZ().transpose();
+    const Eigen::VectorXd q = (Eigen::VectorXd(6) << 0.3, -1.1, 0.7, 1.5, 0.2, -0.3).finished();
+    const Eigen::VectorXd p0 = (Eigen::VectorXd(6) << 0.9, 0.2, -0.4, -0.3, 0.6, 0.25).finished();
+    const Eigen::VectorXd g = (Eigen::VectorXd(6) << -0.5, 0.8, 0.1, 0.2, -0.1, 0.4).finished();
+    const double t = 0.7, c = 0.3, rates[2] = {0.2, 0.05};
+    for (bool definite : {true, false}) {
+      const Eigen::MatrixXd& A = definite ? spd : vertical;
+      PlanetDrag drag;
+      drag.set({rates[0], rates[1]}, 3, DragDirection::axes, A);
+      CHECK(!drag.uniform());
+      const PlanetDrag::Factors f = drag.factors(t);
+      Eigen::VectorXd p = p0, pa = p0, out(6), x = p0;
+      drag.decay(q, f, p);
+      drag.decay_affine(q, f, g, pa);
+      drag.rate(q, p0, out);
+      drag.solve_shifted(q, c, x);
+      for (int i = 0; i < 2; ++i) {
+        const Eigen::Matrix3d B = rates[i] * A;
+        const Eigen::Matrix3d e = (-t * B).exp();
+        const Eigen::Vector3d pi = p0.segment<3>(3 * i), gi = g.segment<3>(3 * i);
+        CHECK((p.segment<3>(3 * i) - e * pi).norm() <= 1e-15);
+        CHECK((out.segment<3>(3 * i) - B * pi).norm() <= 1e-15);
+        CHECK((x.segment<3>(3 * i) - (Eigen::Matrix3d::Identity() + c * B).inverse() * pi).norm() <= 1e-15);
+        if (definite) CHECK((pa.segment<3>(3 * i) - (e * pi - B.inverse() * (Eigen::Matrix3d::Identity() - e) * gi)).norm() <= 1e-14);
+        else CHECK((pa.segment<3>(3 * i) - (e * pi - Eigen::Vector3d(t * gi[0], t * gi[1], (1.0 - e(2, 2)) / rates[i] * gi[2]))).norm() <= 1e-15);
+        // the OU noise's covariance N N^T (columns from unit xi) is M - E M E^T, M = m I
+        struct Mass {
+          Eigen::VectorXd m = Eigen::VectorXd::Constant(6, 1.7);
+        } mass;
+        Eigen::Matrix3d N;
+        for (int j = 0; j < 3; ++j) {
+          Eigen::VectorXd column = Eigen::VectorXd::Zero(6);
+          drag.add_noise(q, f, mass, 1.0, Eigen::VectorXd(Eigen::VectorXd::Unit(6, 3 * i + j)), column);
+          N.col(j) = column.segment<3>(3 * i);
+        }
+        CHECK((N * N.transpose() - 1.7 * (Eigen::Matrix3d::Identity() - e * e.transpose())).norm() <= 4e-15);
+      }
+      CHECK(std::abs(drag.spectral_radius() - 0.2 * Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(A).eigenvalues().maxCoeff()) <= 1e-15);
+    }
+    // refused: not square, not symmetric, indefinite, not finite
+    PlanetDrag drag;
+    CHECK(test::throws([&] { drag.set({0.1}, 3, DragDirection::axes, Eigen::MatrixXd::Identity(2, 2)); }));
+    Eigen::MatrixXd bad = spd;
+    bad(0, 1) = 0.31;
+    CHECK(test::throws([&] { drag.set({0.1}, 3, DragDirection::axes, bad); }));
+    bad = spd;
+    bad(2, 2) = -1.0;
+    CHECK(test::throws([&] { drag.set({0.1}, 3, DragDirection::axes, bad); }));
+    bad = spd;
+    bad(1, 1) = std::nan("");
+    CHECK(test::throws([&] { drag.set({0.1}, 3, DragDirection::axes, bad); }));
   }
   return test::failures == 0 ? 0 : 1;
 }

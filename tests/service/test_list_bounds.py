@@ -58,7 +58,11 @@ EXAMPLES = [
     ("/v1/jobs", {**_JOB, "initial_state": {"q": [1.0, 0.0], "p": [0.0, 0.0]},
                   "system": {"coordinates": ["x", "y"], "potential": "y", "constraints": ["x^2 + y^2 - 1"]}}),
     ("/v1/jobs", {**_JOB, "initial_state": {"q": [1.0, 0.0, 0.0, 2.0], "p": [0.0, 1e-3, -7e-4, 0.0]},
-                  "system": {"kind": "planets", "masses": [1e-3, 1e-3], "eps": [0.0, 1e-3]}}),
+                  "system": {"kind": "planets", "masses": [1e-3, 1e-3], "eps": [0.0, 1e-3],
+                             "drag": [[1.0, 0.0], [0.0, 0.0]]}}),
+    ("/v1/jobs", {**_JOB, "initial_state": {"q": [1.0, 0.0, 0.0], "p": [0.0, 1.0, 0.1]},
+                  "system": {"kind": "kepler", "dim": 3, "eps": 1e-3,
+                             "drag": [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0]]}}),
     ("/v1/sweeps", {"job": {**_JOB, "model": "damped_pendulum", "work": False}, "grid": {"eps": [0.1, 0.2]}}),
 ]
 

@@ -157,6 +157,8 @@ def build_job(spec: JobSpec, files: FileResolver | None = None) -> JobCall:
         options["envelope"] = list(spec.envelope)
     if spec.collapse is not None:
         options["collapse"] = spec.collapse
+    if spec.corrector is not None:
+        options["corrector"] = spec.corrector
     if spec.temperature:
         options.update({"temperature": spec.temperature, "seed": spec.seed, "stream": spec.stream})
     load = job_load(spec, files)

@@ -9,7 +9,7 @@ accepted for one release: an error then names ``step_size``, the key the client 
 from __future__ import annotations
 
 from collections.abc import Iterator
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 from pydantic import (
     AfterValidator,
@@ -258,6 +258,10 @@ class JobSpec(ModelSpec):
     collapse: CollapseValue | None = Field(
         None, description="a limit of |drift| for every spring (a number, or one per spring): the run stops at the "
                           "first step's end past it, status \"collapsed\"")
+    corrector: Literal[4, 6, 8, 10] | None = Field(
+        None, description="a symplectic corrector for planets without drag stepped by sv, 2s or 3s: the error "
+                          "linear in the mass ratio eps falls from O(eps h^2) to O(eps h^corrector) "
+                          "(raydamp.run.correctors)")
     _h_key: str = PrivateAttr("h")
 
     @model_validator(mode="wrap")

@@ -263,9 +263,14 @@ class ChainInput(SystemKind):
 # ---- orbits: raydamp.Kepler.to_dict()'s form ------------------------------------------------------
 
 MAX_KEPLER_PARTICLES = 10**6
-DragDirection = Literal["isotropic", "radial", "tangential"]
+_DragRow = bounded(FiniteFloat, 3, min_length=2)
+DragDirection = Annotated[Annotated[Literal["isotropic", "radial", "tangential"], Tag("direction form")]
+                          | Annotated[bounded(_DragRow, 3, min_length=2), Tag("matrix form")],
+                          Discriminator(lambda value: "matrix form" if isinstance(value, list) else "direction form")]
 DRAG_DESCRIPTION = ("the drag's direction: the whole momentum (isotropic), its part along the radius vector "
-                    "(radial: no torque, L conserved) or across it (tangential)")
+                    "(radial: no torque, L conserved) or across it (tangential); or a dim x dim symmetric positive "
+                    "semi-definite matrix A of fixed axes, p' = ... - eps A p ([[0,0,0],[0,0,0],[0,0,1]] damps the "
+                    "vertical momentum alone)")
 
 
 class KeplerInput(SystemKind):
@@ -536,6 +541,7 @@ FORM_TAGS = {"damping": frozenset({"scalar form", "diagonal form", "matrix form"
              "mass": frozenset({"number form", "vector form", "matrix form"}),
              "c": frozenset({"number form", "vector form"}),
              "eps": frozenset({"number form", "vector form"}),
+             "drag": frozenset({"direction form", "matrix form"}),
              "material": frozenset({"elastic_plastic", "bilinear", "bouc_wen"})}
 VALUE_TAGS = frozenset({"number form", "expression form", "vector form"})  # after a parameter's name
 AnySystemInput = Annotated[Annotated[SystemInput, Tag("expressions")] | Annotated[ChainInput, Tag("chain")]

@@ -19,7 +19,8 @@ def job_spec(model: Model, q0: np.ndarray, p0: np.ndarray, *, method: str, table
              composition: str | None, h: float, t_end: float | None, n_steps: int | None, save_every: int,
              work: bool, save_dofs: list[int] | None = None, load=None, thermal=None,
              method_reason: str | None = None, divergence: float | None = None, events: list | None = None,
-             dense: bool = False, envelope: list | None = None, collapse: list | None = None) -> dict[str, Any]:
+             dense: bool = False, envelope: list | None = None, collapse: list | None = None,
+             corrector: int | None = None) -> dict[str, Any]:
     """The job spec of a run: what Solution.provenance holds; ``method_reason`` says why the method was
     chosen when the run named none (raydamp.run.choose_method)."""
     spec = describe_model(model)
@@ -42,6 +43,8 @@ def job_spec(model: Model, q0: np.ndarray, p0: np.ndarray, *, method: str, table
         spec["envelope"] = list(envelope)
     if collapse is not None:
         spec["collapse"] = collapse if isinstance(collapse, (int, float)) else list(collapse)  # one for all, or each
+    if corrector is not None:
+        spec["corrector"] = corrector
     if thermal is not None:
         kT, seed, stream = thermal
         spec.update({"temperature": kT, "seed": seed})

@@ -44,15 +44,33 @@ __all__ = ["Kepler"]
 _AXES = ("x", "y", "z")
 
 # The drag's directions (models/planets.hpp's DragDirection): the whole momentum, or its part along the
-# radius vector (a radial dashpot) or across it (a tangential one).
+# radius vector (a radial dashpot) or across it (a tangential one); code 3 is a matrix of fixed axes.
 DRAG_DIRECTIONS = {"isotropic": 0, "radial": 1, "tangential": 2}
+_AXES_CODE = 3
 
 
-def drag_code(drag: str) -> int:
-    """The core's code for ``drag``; a ValueError naming ``drag`` for anything else."""
-    if not isinstance(drag, str) or drag not in DRAG_DIRECTIONS:
-        raise ValueError(f"drag: must be one of {', '.join(DRAG_DIRECTIONS)}, got {drag!r}")
-    return DRAG_DIRECTIONS[drag]
+def drag_form(drag, dim: int) -> tuple[str | tuple[tuple[float, ...], ...], int, np.ndarray]:
+    """``drag`` as kept (a direction's name, or the matrix as a tuple of rows), the core's code, and the
+    matrix (0 x 0 for a direction). A ValueError naming ``drag`` for anything else; the core checks that a
+    matrix is finite, symmetric and positive semi-definite, in errors that name ``drag`` too."""
+    if isinstance(drag, str):
+        if drag not in DRAG_DIRECTIONS:
+            raise ValueError(f"drag: must be one of {', '.join(DRAG_DIRECTIONS)} or a {dim} x {dim} matrix, "
+                             f"got {drag!r}")
+        return drag, DRAG_DIRECTIONS[drag], np.zeros((0, 0))
+    try:
+        matrix = np.array(drag, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"drag: must be one of {', '.join(DRAG_DIRECTIONS)} or a {dim} x {dim} matrix of numbers, "
+                         f"got {drag!r}") from None
+    if matrix.shape != (dim, dim):
+        raise ValueError(f"drag: a matrix must be {dim} x {dim} (dim), got shape {matrix.shape}")
+    return tuple(tuple(float(x) for x in row) for row in matrix), _AXES_CODE, matrix
+
+
+def drag_json(drag) -> str | list[list[float]]:
+    """The JSON form of a kept ``drag``: the name, or the matrix as a list of rows."""
+    return drag if isinstance(drag, str) else [list(row) for row in drag]
 
 
 class Kepler(SharedModel):
@@ -62,22 +80,25 @@ class Kepler(SharedModel):
     block of ``dim`` coordinates (x0, y0, x1, y1, ...); eps: the drag rate (>= 0), p' = ... - eps p.
     drag: "isotropic" (the whole momentum), "radial" (only p's part along q_i: a radial dashpot, which
     exerts no torque, so L is conserved) or "tangential" (only the part across q_i; L decays as e^{-eps t}).
-    Each is an exact damping flow at the frozen q (its two parts scale by their own factors).
+    Each is an exact damping flow at the frozen q (its two parts scale by their own factors). Or a
+    ``dim`` x ``dim`` symmetric positive semi-definite matrix A of fixed axes: p_i' = ... - eps A p_i (the
+    damping matrix D = eps m A). ``[[0, 0, 0], [0, 0, 0], [0, 0, 1]]`` damps the vertical momentum alone, and
+    so the inclination, with no torque about z (L_z is kept); its exact flow is e^{-t eps A} per particle,
+    by A's eigenvectors. With a matrix no angular momentum is listed: A has no law for all of L.
     """
 
     name = "kepler"
 
     def __init__(self, mu: float = 1.0, mass: float = 1.0, dim: int = 2, particles: int = 1, eps: float = 0.0,
-                 drag: str = "isotropic"):
+                 drag: str | list[list[float]] | np.ndarray = "isotropic"):
         self.mu = real("mu", mu, positive=True)
         self.mass = real("mass", mass, positive=True)
         self.space_dim = integer("dim", dim, minimum=2, maximum=3)
         self.particles = integer("particles", particles, minimum=1, maximum=2**31 // 3 - 1)
         self.eps = real("eps", eps, nonnegative=True)
-        self.drag = drag
-        self._core_model = _core.Kepler(self.mu, self.mass, self.space_dim, self.particles, self.eps,
-                                        drag_code(drag))
-        self.momentum_names = ("L",) if self.space_dim == 2 else ("Lx", "Ly", "Lz")
+        self.drag, code, matrix = drag_form(drag, self.space_dim)
+        self._core_model = _core.Kepler(self.mu, self.mass, self.space_dim, self.particles, self.eps, code, matrix)
+        self.momentum_names = (() if code == _AXES_CODE else ("L",) if self.space_dim == 2 else ("Lx", "Ly", "Lz"))
         self._freeze()
 
     # -- plain data ---------------------------------------------------------------------------
@@ -85,7 +106,7 @@ class Kepler(SharedModel):
     def parameters(self) -> dict[str, Any]:
         """The constructor's arguments, by name (``replace`` and the JSON form use them)."""
         return {"mu": self.mu, "mass": self.mass, "dim": self.space_dim, "particles": self.particles, "eps": self.eps,
-                "drag": self.drag}
+                "drag": drag_json(self.drag)}
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON form: ``{"kind": "kepler", "mu": ..., "mass": ..., "dim": ..., "particles": ..., "eps": ...,

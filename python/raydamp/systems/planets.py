@@ -37,7 +37,7 @@ import numpy as np
 
 from .. import _core
 from .._validation import _short, integer, numeric_array, real, real_array
-from .kepler import drag_code
+from .kepler import drag_form, drag_json
 from .models import SharedModel
 
 __all__ = ["Planets"]
@@ -59,13 +59,14 @@ class Planets(SharedModel):
     masses: the planets' masses (> 0), inner to outer as the Jacobi coordinates order them;
     central_mass (> 0); G (> 0); dim: 2 or 3; eps: the drag rate (>= 0), one for every planet or
     a list with one per planet; drag: its direction, "isotropic" (all of P_i), "radial" (P_i's part along
-    Q_i: no torque, so L is conserved) or "tangential" (the part across Q_i), as raydamp.Kepler's.
+    Q_i: no torque, so L is conserved) or "tangential" (the part across Q_i), or a dim x dim symmetric
+    positive semi-definite matrix A of fixed axes, P_i' = ... - eps_i A P_i, as raydamp.Kepler's.
     """
 
     name = "planets"
 
     def __init__(self, masses, central_mass: float = 1.0, G: float = 1.0, dim: int = 2,  # noqa: N803
-                 eps: float | list[float] = 0.0, drag: str = "isotropic"):
+                 eps: float | list[float] = 0.0, drag: str | list[list[float]] | np.ndarray = "isotropic"):
         self.masses = tuple(_positive_list("masses", masses, allow_zero=False))
         if len(self.masses) > MAX_PLANETS:
             raise ValueError(f"masses: at most {MAX_PLANETS} planets, got {len(self.masses)}")
@@ -83,12 +84,13 @@ class Planets(SharedModel):
             rates = [self.eps] * planets
         self.planets = planets
         self._rates = np.array(rates)
-        self.drag = drag
+        self.drag, code, matrix = drag_form(drag, self.space_dim)
         self._core_model = _core.Planets(self.G, self.central_mass, list(self.masses), self.space_dim, rates,
-                                         drag_code(drag))
+                                         code, matrix)
         self.reduced_masses = np.array(self._core_model.reduced_masses)
-        # L is listed when every planet's momentum decays at one rate across its radius (a radial drag at 0)
-        uniform = drag == "radial" or bool(np.all(self._rates == self._rates[0]))
+        # L is listed when every planet's momentum decays at one rate across its radius (a radial drag at 0);
+        # never with fixed axes
+        uniform = isinstance(self.drag, str) and (self.drag == "radial" or bool(np.all(self._rates == self._rates[0])))
         self.momentum_names = (() if not uniform else ("L",) if self.space_dim == 2 else ("Lx", "Ly", "Lz"))
         self._freeze()
 
@@ -98,7 +100,7 @@ class Planets(SharedModel):
         """The constructor's arguments, by name (``replace`` and the JSON form use them)."""
         eps = list(self.eps) if isinstance(self.eps, tuple) else self.eps
         return {"masses": list(self.masses), "central_mass": self.central_mass, "G": self.G, "dim": self.space_dim,
-                "eps": eps, "drag": self.drag}
+                "eps": eps, "drag": drag_json(self.drag)}
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON form: ``{"kind": "planets", "masses": [...], "central_mass": ..., "G": ..., "dim": ...,

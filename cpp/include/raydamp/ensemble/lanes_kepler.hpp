@@ -1,5 +1,5 @@
 // The ensemble's lane path for Kepler test particles: runs of consecutive members that share mu, the
-// mass, eps and its direction, the dimension and the particle count (only their initial states differ:
+// mass, eps and its direction (or matrix), the dimension and the particle count (only their initial states differ:
 // the usual ensemble of decaying orbits) go through the one step loop as the particles of one Planets,
 // then are split back into members.
 //
@@ -43,7 +43,9 @@ namespace raydamp {
 inline bool same_test_particles(const Planets& a, const Planets& b) {
   if (&a == &b) return !a.interacting;
   return !a.interacting && !b.interacting && a.G == b.G && a.d == b.d && a.planets == b.planets &&
-         a.eps == b.eps && a.drag == b.drag && a.mass.m[0] == b.mass.m[0];
+         a.eps == b.eps && a.drag == b.drag && a.mass.m[0] == b.mass.m[0] &&
+         a.drag_matrix.rows() == b.drag_matrix.rows() && a.drag_matrix.cols() == b.drag_matrix.cols() &&
+         a.drag_matrix == b.drag_matrix;
 }
 
 // Consecutive members that run as one model's particles, cut every `lanes` members; an interacting
@@ -70,7 +72,7 @@ void run_kepler_lanes(const Planets& member, const LaneBatch& batch, const Butch
     rethrow_prefixed("member " + std::to_string(batch.begin) + ": ", e);
   }
   Planets model(TestParticles{}, member.G, member.mass.m[0], member.d, member.planets * lanes, member.eps,
-                member.drag);
+                member.drag, member.drag_matrix);
   model.groups = lanes;
   State<Eigen::Dynamic> z{Eigen::Map<const Vec>(q0 + batch.begin * n, static_cast<long>(lanes) * n),
                           Eigen::Map<const Vec>(p0 + batch.begin * n, static_cast<long>(lanes) * n)};

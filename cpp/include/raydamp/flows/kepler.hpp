@@ -22,6 +22,16 @@ namespace raydamp::kepler {
 // length and is formed in double, at 0.6 of the cost (benchmarks/bench_kepler_drift.cpp).
 
 
+// c2 = sum_j (-x)^j / (2j + 2)!, c3 = sum_j (-x)^j / (2j + 3)!, by Horner in stumpff (and in
+// flows/kepler_lanes.hpp, which must round alike): |x| <= 0.1 puts the first term left out below 1e-23 of
+// the first.
+template <class Real>
+inline constexpr Real kStumpff2[] = {1.0L / 2, 1.0L / 24, 1.0L / 720, 1.0L / 40320, 1.0L / 3628800, 1.0L / 479001600,
+                                     1.0L / 87178291200, 1.0L / 20922789888000};
+template <class Real>
+inline constexpr Real kStumpff3[] = {1.0L / 6, 1.0L / 120, 1.0L / 5040, 1.0L / 362880, 1.0L / 39916800,
+                                     1.0L / 6227020800, 1.0L / 1307674368000, 1.0L / 355687428096000};
+
 // c0..c3 of x (Stumpff functions): c0 = cos sqrt x, c1 = sin sqrt x / sqrt x, c2 = (1 - c0) / x,
 // c3 = (1 - c1) / x, and their cosh/sinh forms for x < 0. For |x| <= 4, by series at x / 4^k,
 // |x / 4^k| < 0.1, then quadrupled back with c0(4x) = 2 c0^2 - 1, c1(4x) = c0 c1,
@@ -50,17 +60,13 @@ inline Stumpff<Real> stumpff(Real x) {
     x *= 0.25;
     ++levels;
   }
-  // c2 = sum_j (-x)^j / (2j + 2)!, c3 = sum_j (-x)^j / (2j + 3)! by Horner: |x| <= 0.1 puts the
-  // first term left out below 1e-23 of the first.
-  constexpr Real a2[] = {1.0L / 2, 1.0L / 24, 1.0L / 720, 1.0L / 40320, 1.0L / 3628800, 1.0L / 479001600,
-                         1.0L / 87178291200, 1.0L / 20922789888000};
-  constexpr Real a3[] = {1.0L / 6, 1.0L / 120, 1.0L / 5040, 1.0L / 362880, 1.0L / 39916800, 1.0L / 6227020800,
-                         1.0L / 1307674368000, 1.0L / 355687428096000};
   // Terms up to j = top: the first left out, |x|^(top+1) / (2 top + 4)!, is below 3e-23 of the first
   // in each range (a step short beside the orbit has a small x, and needs four).
   const Real size = std::abs(x);
   const int top = size < 1e-4 ? 3 : size < 1e-3 ? 4 : size < 1e-2 ? 5 : size < 0.03 ? 6 : 7;
   const Real y = -x;
+  constexpr const Real* a2 = kStumpff2<Real>;
+  constexpr const Real* a3 = kStumpff3<Real>;
   Real c2 = a2[top], c3 = a3[top];
   for (int j = top - 1; j >= 0; --j) {
     c2 = a2[j] + y * c2;

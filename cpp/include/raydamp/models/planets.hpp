@@ -24,6 +24,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -33,6 +34,7 @@
 
 #include "raydamp/damping/decay_factors.hpp"
 #include "raydamp/flows/kepler.hpp"
+#include "raydamp/flows/kepler_lanes.hpp"
 #include "raydamp/state.hpp"
 #include "raydamp/thread_scratch.hpp"
 
@@ -52,27 +54,61 @@ struct JacobiMass {
 
 // The drag's directions (Planets::drag): along each planet's whole momentum (isotropic, D = M), or only
 // its component along Q_i (a radial dashpot) or across it (a tangential one). Radial drag exerts no torque
-// about the centre, so the angular momentum decays at the tangential rate alone.
-enum class DragDirection { isotropic = 0, radial = 1, tangential = 2 };
+// about the centre, so the angular momentum decays at the tangential rate alone. Or along fixed axes:
+// P_i' = -eps_i A P_i with A a symmetric positive semi-definite d x d matrix in the inertial frame
+// (D = eps_i m'_i A per planet, symmetric since each block's mass is a scalar); A = e_z e_z^T damps the
+// vertical momentum alone, and so the inclination, exerting no torque about z (L_z is kept).
+enum class DragDirection { isotropic = 0, radial = 1, tangential = 2, axes = 3 };
 
 inline DragDirection drag_direction(int code) {
-  if (code < 0 || code > 2) throw std::invalid_argument("drag: must be isotropic (0), radial (1) or tangential (2)");
+  if (code < 0 || code > 3)
+    throw std::invalid_argument("drag: must be isotropic (0), radial (1), tangential (2) or a matrix (3)");
   return static_cast<DragDirection>(code);
 }
+
+// A = V diag(lambda) V^T of a drag matrix, checked: d x d, finite, symmetric to 1e-12 of its largest entry,
+// and its eigenvalues >= -1e-12 of the largest (those within it are taken as 0).
+struct DragAxes {
+  Eigen::Matrix3d V = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d lambda = Eigen::Vector3d::Zero();
+
+  static DragAxes of(const Eigen::MatrixXd& A, int d) {
+    if (A.rows() != d || A.cols() != d)
+      throw std::invalid_argument("drag: a matrix must be " + std::to_string(d) + " x " + std::to_string(d) + ", got " +
+                                  std::to_string(A.rows()) + " x " + std::to_string(A.cols()));
+    if (!A.allFinite()) throw std::invalid_argument("drag: the matrix must be finite");
+    const double size = A.cwiseAbs().maxCoeff();
+    if ((A - A.transpose()).cwiseAbs().maxCoeff() > 1e-12 * size)
+      throw std::invalid_argument("drag: the matrix must be symmetric (D = eps m A is a damping matrix)");
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(0.5 * (A + A.transpose()));
+    if (eig.eigenvalues().minCoeff() < -1e-12 * size)
+      throw std::invalid_argument("drag: the matrix must be positive semi-definite (an eigenvalue is " +
+                                  std::to_string(eig.eigenvalues().minCoeff()) + "); a negative one would feed energy in");
+    DragAxes axes;
+    axes.V.topLeftCorner(d, d) = eig.eigenvectors();
+    for (int k = 0; k < d; ++k) axes.lambda[k] = std::max(0.0, eig.eigenvalues()[k]);
+    return axes;
+  }
+};
 
 // A = eps_i (a_r r r^T + a_t (I - r r^T)) on planet i's block, r = Q_i / |Q_i| at the frozen q: planet i's
 // momentum decays at `rates[i]` across r (and along it too when isotropic) and at `radial[i]` along r. The
 // two projectors commute with A, so each flow is its scalar flow on each part: p's part along r with the
 // radial factors, the rest with the tangential ones.
 struct PlanetDrag {
-  std::vector<double> rates;   // per planet: across Q_i (all of P_i when isotropic)
+  std::vector<double> rates;   // per planet: across Q_i (all of P_i when isotropic; eps_i with axes)
   std::vector<double> radial;  // per planet: along Q_i
   int d = 2;
   bool same = false;          // isotropic, every rate equal: one factor for all of p (1,000 test particles: one exp)
   bool isotropic = true;
+  bool fixed_axes = false;    // P_i' = -eps_i A P_i, A = V diag(lambda) V^T (DragAxes)
+  DragAxes axes;
 
-  void set(std::vector<double> r, int d_, DragDirection direction = DragDirection::isotropic) {
+  void set(std::vector<double> r, int d_, DragDirection direction = DragDirection::isotropic,
+           const Eigen::MatrixXd& A = Eigen::MatrixXd()) {
     d = d_;
+    fixed_axes = direction == DragDirection::axes;
+    if (fixed_axes) axes = DragAxes::of(A, d);
     isotropic = direction == DragDirection::isotropic;
     radial = direction == DragDirection::tangential ? std::vector<double>(r.size(), 0.0) : r;
     rates = direction == DragDirection::radial ? std::vector<double>(r.size(), 0.0) : std::move(r);
@@ -82,13 +118,18 @@ struct PlanetDrag {
   struct Factors {
     double t = std::numeric_limits<double>::quiet_NaN();
     std::vector<DecayFactors> planet;  // one per planet, or one for all when `same`
-    std::vector<DecayFactors> along;   // along Q_i, one per planet (none when isotropic)
+    std::vector<DecayFactors> along;   // along Q_i, one per planet (none when isotropic); d per planet, one per axis
   };
   Factors factors(double t) const {
     Factors f;
     f.t = t;
     if (same) {
       f.planet.assign(1, decay_factors(rates.front(), t));
+      return f;
+    }
+    if (fixed_axes) {
+      for (double a : rates)
+        for (int k = 0; k < d; ++k) f.along.push_back(decay_factors(a * axes.lambda[k], t));
       return f;
     }
     f.planet.reserve(rates.size());
@@ -98,15 +139,18 @@ struct PlanetDrag {
     return f;
   }
   double spectral_radius() const {
+    const double scale = fixed_axes ? axes.lambda.maxCoeff() : 1.0;
     double rho = 0.0;
     for (const auto* v : {&rates, &radial})
-      for (double a : *v) rho = std::max(rho, a);
+      for (double a : *v) rho = std::max(rho, a * scale);
     return rho;
   }
   // With one tangential rate for every planet, L = sum Q_i x P_i decays as e^{-eps t} under the exact flow.
   double momentum_decay_rate() const { return rates.front(); }
+  // Whether L has that law: not along fixed axes (A = e_z e_z^T keeps L_z and not L_x, L_y).
   bool uniform() const {
-    return std::all_of(rates.begin(), rates.end(), [this](double a) { return a == rates.front(); });
+    return !fixed_axes &&
+           std::all_of(rates.begin(), rates.end(), [this](double a) { return a == rates.front(); });
   }
 
   template <class Q, class P>
@@ -118,6 +162,12 @@ struct PlanetDrag {
     }
     for (std::size_t i = 0; i < rates.size(); ++i) {
       auto pi = p.segment(d * i, d);
+      if (fixed_axes) {
+        Small y = axes_of(pi);
+        for (int k = 0; k < d; ++k) y[k] *= f.along[d * i + k].expm1;
+        pi += from_axes(y);
+        continue;
+      }
       if (isotropic) {
         pi += f.planet[i].expm1 * pi;
         continue;
@@ -134,9 +184,16 @@ struct PlanetDrag {
       return;
     }
     for (std::size_t i = 0; i < rates.size(); ++i) {
-      const DecayFactors& k = f.planet[i];
       auto pi = p.segment(d * i, d);
       const auto gi = g.segment(d * i, d);
+      if (fixed_axes) {
+        Small y = axes_of(pi);
+        const Small gy = axes_of(gi);
+        for (int k = 0; k < d; ++k) y[k] = f.along[d * i + k].expm1 * y[k] - f.along[d * i + k].t_phi1 * gy[k];
+        pi += from_axes(y);
+        continue;
+      }
+      const DecayFactors& k = f.planet[i];
       if (isotropic) {
         pi += k.expm1 * pi - k.t_phi1 * gi;
         continue;
@@ -151,6 +208,17 @@ struct PlanetDrag {
   template <class Q, class Mass, class X, class P>
   void add_noise(const Q& q, const Factors& f, const Mass& mass, double sigma, const X& xi, P& p) const {
     for (std::size_t i = 0; i < rates.size(); ++i) {
+      if (fixed_axes) {
+        // V diag(noise_k) V^T xi_i: covariance V diag(noise_k^2) V^T = kT (I - e^{-2 t eps_i A}) per unit mass
+        Small y = axes_of(xi.segment(d * i, d));
+        for (int k = 0; k < d; ++k) y[k] *= f.along[d * i + k].noise;
+        const Small n = from_axes(y);
+        for (int j = 0; j < d; ++j) {
+          const int k = d * static_cast<int>(i) + j;
+          p[k] += sigma * std::sqrt(mass.m[k]) * n[j];
+        }
+        continue;
+      }
       const double across = f.planet[same ? 0 : i].noise;
       if (isotropic) {
         for (int j = 0; j < d; ++j) {
@@ -170,6 +238,12 @@ struct PlanetDrag {
   template <class Q, class P, class O>
   void rate(const Q& q, const P& p, O& out) const {
     for (std::size_t i = 0; i < rates.size(); ++i) {
+      if (fixed_axes) {
+        Small y = axes_of(p.segment(d * i, d));
+        for (int k = 0; k < d; ++k) y[k] *= rates[i] * axes.lambda[k];
+        out.segment(d * i, d) = from_axes(y);
+        continue;
+      }
       out.segment(d * i, d) = rates[i] * p.segment(d * i, d);
       if (isotropic) continue;
       const auto r = unit(q, i);
@@ -180,6 +254,12 @@ struct PlanetDrag {
   void solve_shifted(const Q& q, double c, X& x) const {
     for (std::size_t i = 0; i < rates.size(); ++i) {
       auto xi = x.segment(d * i, d);
+      if (fixed_axes) {
+        Small y = axes_of(xi);
+        for (int k = 0; k < d; ++k) y[k] /= 1.0 + c * rates[i] * axes.lambda[k];
+        xi = from_axes(y);
+        continue;
+      }
       if (isotropic) {
         xi /= 1.0 + c * rates[i];
         continue;
@@ -200,6 +280,26 @@ struct PlanetDrag {
     Small r = q.segment(d * i, d);
     r.normalize();
     return r;
+  }
+  // V^T x and V y for one planet's block, on the stack
+  template <class X>
+  Small axes_of(const X& x) const {
+    Small y(d);
+    for (int k = 0; k < d; ++k) {
+      double s = 0.0;
+      for (int j = 0; j < d; ++j) s += axes.V(j, k) * x[j];
+      y[k] = s;
+    }
+    return y;
+  }
+  Small from_axes(const Small& y) const {
+    Small x(d);
+    for (int j = 0; j < d; ++j) {
+      double s = 0.0;
+      for (int k = 0; k < d; ++k) s += axes.V(j, k) * y[k];
+      x[j] = s;
+    }
+    return x;
   }
 };
 
@@ -230,12 +330,13 @@ struct Planets {
   JacobiMass mass;
   PlanetDrag damping;
   DragDirection drag = DragDirection::isotropic;
+  Eigen::MatrixXd drag_matrix;  // A, with drag == axes (else empty)
 
   // `particles` test particles of mass m about a fixed central body of G M = mu, drag eps on each:
   // H = sum_i |p_i|^2 / (2 m) - mu m / |q_i|.
   Planets(TestParticles, double mu_, double m, int d_, int particles, double eps_,
-          DragDirection drag_ = DragDirection::isotropic)
-      : G(mu_), d(d_), planets(particles), eps(eps_), interacting(false), drag(drag_) {
+          DragDirection drag_ = DragDirection::isotropic, Eigen::MatrixXd matrix = Eigen::MatrixXd())
+      : G(mu_), d(d_), planets(particles), eps(eps_), interacting(false), drag(drag_), drag_matrix(std::move(matrix)) {
     if (!(mu_ > 0.0) || !std::isfinite(mu_))
       throw std::invalid_argument("mu: must be a finite number > 0 (G times the central mass)");
     if (!(m > 0.0) || !std::isfinite(m)) throw std::invalid_argument("mass: must be a finite number > 0");
@@ -245,12 +346,12 @@ struct Planets {
     mu.assign(planets, mu_);
     mass.m = Eigen::VectorXd::Constant(d * planets, m);
     mass.inverse = Eigen::VectorXd::Constant(d * planets, 1.0 / m);
-    damping.set(std::vector<double>(planets, eps), d, drag);
+    damping.set(std::vector<double>(planets, eps), d, drag, drag_matrix);
   }
 
   Planets(double G_, double central, std::vector<double> planet_masses, int d_, std::vector<double> rates,
-          DragDirection drag_ = DragDirection::isotropic)
-      : G(G_), d(d_), planets(static_cast<int>(planet_masses.size())), drag(drag_) {
+          DragDirection drag_ = DragDirection::isotropic, Eigen::MatrixXd matrix = Eigen::MatrixXd())
+      : G(G_), d(d_), planets(static_cast<int>(planet_masses.size())), drag(drag_), drag_matrix(std::move(matrix)) {
     if (!(G > 0.0) || !std::isfinite(G)) throw std::invalid_argument("G: must be a finite number > 0");
     if (!(central > 0.0) || !std::isfinite(central))
       throw std::invalid_argument("central_mass: must be a finite number > 0");
@@ -274,7 +375,7 @@ struct Planets {
       mass.m.segment(d * (i - 1), d).setConstant(masses[i] * eta[i - 1] / eta[i]);
     }
     mass.inverse = mass.m.cwiseInverse();
-    damping.set(std::move(rates), d, drag);
+    damping.set(std::move(rates), d, drag, drag_matrix);
     eps = damping.spectral_radius();
   }
 
@@ -393,21 +494,10 @@ struct Planets {
     }
   }
 
-  // H_kepler's exact flow: each planet's Kepler flow with mu_i = G eta_i.
+  // H_kepler's exact flow: each planet's Kepler flow with mu_i = G eta_i (in blocks of SIMD lanes,
+  // flows/kepler_lanes.hpp, with the bits of one at a time).
   void drift(Vec& q, Vec& p, double t) const {
-    for (int i = 0; i < planets; ++i) {
-      const int k = d * i;
-      const double m = mass.m[k], inverse = mass.inverse[k];
-      if (d == 2) {
-        Eigen::Vector2d x(q[k], q[k + 1]), v(inverse * p[k], inverse * p[k + 1]);
-        kepler::drift(mu[i], t, x, v);
-        for (int j = 0; j < 2; ++j) q[k + j] = x[j], p[k + j] = m * v[j];
-      } else {
-        Eigen::Vector3d x(q[k], q[k + 1], q[k + 2]), v(inverse * p[k], inverse * p[k + 1], inverse * p[k + 2]);
-        kepler::drift(mu[i], t, x, v);
-        for (int j = 0; j < 3; ++j) q[k + j] = x[j], p[k + j] = m * v[j];
-      }
-    }
+    kepler::drift_bodies(mu.data(), mass.m.data(), mass.inverse.data(), t, d, planets, q.data(), p.data());
   }
 };
 
