@@ -97,3 +97,28 @@ def test_runs_it_does_not_apply_to_are_refused_naming_corrector(model, kwargs, m
     options = {"method": "sv", "h": 0.1, "n_steps": 10, **kwargs}
     with pytest.raises(ValueError, match=message):
         raydamp.integrate(model, q0, p0, **options)
+
+
+def test_a_shortened_last_step_is_refused():
+    # t_end = 20.1 with h = 0.2 ends on a step of 0.1, a leapfrog conjugate by another C: read through C_h its
+    # row erred 8x more than the rows before it (1.6e-11 against 1.9e-12, found in review); refused instead
+    system = raydamp.Planets([1e-6, 1e-6])
+    q0, p0 = system.jacobi_state(START_X, START_V)
+    with pytest.raises(ValueError, match=r"corrector: t_end must be a whole number of steps of h"):
+        raydamp.integrate(system, q0, p0, method="sv", h=0.2, t_end=20.1, corrector=6)
+    sol = raydamp.integrate(system, q0, p0, method="sv", h=0.2, t_end=20.0, corrector=6)
+    assert sol.t[-1] == 20.0
+
+
+def test_a_sweep_refuses_the_corrector():
+    # integrate_ensemble has no corrector: a sweep's members would run uncorrected while the job said otherwise
+    from raydamp.jobs import JobError, SweepSpec
+
+    system = raydamp.Planets([1e-3, 1e-3])
+    q0, p0 = system.jacobi_state(START_X, START_V)
+    job = {"system": system.to_dict(), "method": "sv", "h": 0.1, "n_steps": 20, "corrector": 4,
+           "initial_state": {"q": q0.tolist(), "p": p0.tolist()}}
+    with pytest.raises(ValueError, match=r"corrector: a sweep's members run uncorrected"):
+        raydamp.check_sweep(job, {"h": [0.1, 0.05]})
+    with pytest.raises(JobError, match=r"job.corrector: a sweep's members run uncorrected"):
+        SweepSpec.model_validate({"job": job, "grid": {"h": [0.1, 0.05]}}).job_form()

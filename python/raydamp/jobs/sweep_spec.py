@@ -76,6 +76,9 @@ class SweepSpec(Input):
                                             "set it false")
         if self.job.save_dofs is not None:
             raise JobError(("job", "save_dofs"), "job.save_dofs: a sweep saves every coordinate; leave save_dofs out")
+        if self.job.corrector is not None:
+            raise JobError(("job", "corrector"), "job.corrector: a sweep's members run uncorrected; run each point as "
+                                                 "a job of its own with the corrector")
         job = self.job.model_dump(mode="json", exclude_none=True, exclude={"work"})
         if self.job.system is not None:  # as the client wrote it: the compile cache's key
             job["system"] = self.job.system.model_dump(mode="json", exclude_unset=True)

@@ -5,14 +5,15 @@ to first order in the planets' mass ratio eps, the exact flow seen through a map
 (Wisdom, Holman & Touma 1996). Started from C^{-1}(z0) and read through C at every saved row, its error
 linear in eps falls from O(eps h^2) to O(eps h^k), leaving the O(eps^2 h^2) part: about 1/eps smaller for
 planets of mass ratio 1e-3, and the stepping costs nothing more (C runs once at the start and once per
-saved row, 5 k/2 - 5 Kepler drifts and k - 2 kicks each). ``corrector`` is that k: 4, 6, 8 or 10
+saved row, 3 k/2 - 3 Kepler drifts and k - 2 kicks each). ``corrector`` is that k: 4, 6, 8 or 10
 (methods/corrector.hpp builds each from exact flows and checks its coefficients).
 
 It applies only where the step is that leapfrog and the split near-integrable: a ``raydamp.Planets`` with no
-drag (a damping flow adds terms C does not remove), method sv, 2s or 3s without a composition, no load and
-no temperature. The saved rows, the energy and the angular momentum are of the corrected states; the
-rows between the saves, the events, dense output and envelopes would see the uncorrected ones, and are
-refused with it.
+drag (a damping flow adds terms C does not remove), method sv, 2s or 3s without a composition, no load, no
+temperature, and whole steps of h (a shortened last step is another leapfrog, with another C). The saved
+rows, the energy and the angular momentum are of the corrected states; the rows between the saves, the
+events, dense output and envelopes would see the uncorrected ones, and are refused with it, as are sweeps
+(their members run through integrate_ensemble, which has no corrector).
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ _LEAPFROGS = ("sv", "2s", "3s")
 
 
 def check(model, corrector, *, method, composition, load, temperature, save_dofs, events, dense, envelope,
-          collapse) -> int:
+          collapse, h: float, h_last: float) -> int:
     """``corrector`` checked against the run it corrects; a ValueError naming ``corrector`` otherwise."""
     from ..systems.planets import Planets
 
@@ -46,6 +47,11 @@ def check(model, corrector, *, method, composition, load, temperature, save_dofs
             raise ValueError(f"corrector: not with {name} (the corrected states are the saved rows alone)")
     if dense:
         raise ValueError("corrector: not with dense=True (dense output would be of the uncorrected states)")
+    if h_last != h:
+        # the last step's leapfrog is conjugate by the corrector of h_last, not of h: its row would fall back to
+        # the O(eps h^2) error
+        raise ValueError(f"corrector: t_end must be a whole number of steps of h (the last step would be "
+                         f"{h_last!r}, read through the corrector of h = {h!r}); give n_steps, or t_end = n h")
     return int(corrector)
 
 

@@ -271,10 +271,6 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
         _core.resolve(method, tableau_name)  # a bad tableau is named first, as before
         raise ValueError(f"composition must be a composition name or None, got {composition!r}")
     resolved_tableau, resolved_composition = _resolved(method, tableau_name, composition or "")
-    if corrector is not None:
-        corrector = _correctors.check(model, corrector, method=method, composition=composition, load=load,
-                                      temperature=temperature, save_dofs=save_dofs, events=events, dense=dense,
-                                      envelope=envelope, collapse=collapse)
     if not (type(h) is float and 0.0 < h < math.inf):
         h = real("h", h, positive=True)
     dim, most_row_bytes = _facts(model)
@@ -288,6 +284,10 @@ def integrate(model: Model, q0, p0, *, method: str | None = None, h: float, t_en
         h_last = h  # what span() gives for n_steps
     else:
         n_steps, h_last = span(h, t_end, n_steps)
+    if corrector is not None:
+        corrector = _correctors.check(model, corrector, method=method, composition=composition, load=load,
+                                      temperature=temperature, save_dofs=save_dofs, events=events, dense=dense,
+                                      envelope=envelope, collapse=collapse, h=h, h_last=h_last)
     bar = None
     if progress is True or progress is False:
         bar, progress = _bar(n_steps) if progress else (None, None)

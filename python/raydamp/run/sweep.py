@@ -59,6 +59,9 @@ def _base(spec: Mapping[str, Any]) -> tuple[Model, np.ndarray, np.ndarray, dict[
         del options["work"]
         if options.get("save_dofs") is not None:
             raise ValueError("save_dofs: a sweep saves every coordinate; leave save_dofs out")
+        if options.get("corrector") is not None:
+            raise ValueError("corrector: a sweep's members run uncorrected (integrate_ensemble has no corrector); "
+                             "run each point with raydamp.integrate(..., corrector=k)")
     else:
         unknown = [k for k in spec if k not in SPEC_KEYS]
         if unknown:

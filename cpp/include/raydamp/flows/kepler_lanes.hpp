@@ -13,7 +13,9 @@
 // 1,000 independent orbits are the same chain in parallel (2s on Kepler(particles=1000), ns per member per
 // step: benchmarks/bench_vs_rebound.py --ensemble-only).
 //
-// AVX only, not FMA: a fused multiply-add would round a*b+c once where the scalar code rounds twice.
+// AVX2 only, not FMA, and built with -ffp-contract=off (CMakeLists.txt): a fused multiply-add would round
+// a*b+c once where the scalar code rounds twice. cpp/tests/test_kepler_lanes.cpp runs at -O3, where GCC would
+// contract.
 #pragma once
 
 #include <cmath>

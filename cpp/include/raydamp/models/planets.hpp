@@ -86,7 +86,10 @@ struct DragAxes {
                                   std::to_string(eig.eigenvalues().minCoeff()) + "); a negative one would feed energy in");
     DragAxes axes;
     axes.V.topLeftCorner(d, d) = eig.eigenvectors();
-    for (int k = 0; k < d; ++k) axes.lambda[k] = std::max(0.0, eig.eigenvalues()[k]);
+    for (int k = 0; k < d; ++k) {
+      const double lambda = eig.eigenvalues()[k];
+      axes.lambda[k] = std::abs(lambda) <= 1e-12 * size ? 0.0 : lambda;
+    }
     return axes;
   }
 };
