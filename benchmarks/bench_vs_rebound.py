@@ -75,6 +75,7 @@ operator), the same h: ns per particle per step, and how far apart the two tools
     nice -n 5 .venv/bin/python benchmarks/bench_vs_rebound.py --quick   # first case only, 3 repeats
     nice -n 5 .venv/bin/python benchmarks/bench_vs_rebound.py --ensemble-only
     nice -n 5 .venv/bin/python benchmarks/bench_vs_rebound.py --planets-only
+    nice -n 5 .venv/bin/python benchmarks/bench_vs_rebound.py --correctors-only   # two planets, no drag
 
 It prints figures and exits 0 whatever they are.
 """
@@ -420,7 +421,7 @@ def bodies_energy(x: np.ndarray, v: np.ndarray) -> np.ndarray:
     return energy
 
 
-def planets_reference(x0: np.ndarray, v0: np.ndarray) -> Reference:
+def planets_reference(x0: np.ndarray, v0: np.ndarray, eps: float = PLANET_EPS) -> Reference:
     m = np.array([MU, *PLANET_MASSES])
     xb = np.vstack([np.zeros(2), x0])
     vb = np.vstack([np.zeros(2), v0])
@@ -435,7 +436,7 @@ def planets_reference(x0: np.ndarray, v0: np.ndarray) -> Reference:
                 k = 1.0 / (r @ r) ** 1.5
                 a[i] += m[j] * k * r
                 a[j] -= m[i] * k * r
-        force = -PLANET_EPS * m[0] * m[1] / (m[0] + m[1]) * (v[1] - v[0])  # on the inner planet; its reaction
+        force = -eps * m[0] * m[1] / (m[0] + m[1]) * (v[1] - v[0])  # on the inner planet; its reaction
         a[1] += force / m[1]
         a[0] -= force / m[0]
         return np.concatenate([v.reshape(-1), a.reshape(-1)])
@@ -458,8 +459,9 @@ def planet_errors(ref: Reference, x: np.ndarray, v: np.ndarray) -> tuple[float, 
     return e, q
 
 
-def raydamp_planets_runner(method: str, composition: str | None) -> Runner:
-    system = raydamp.Planets(list(PLANET_MASSES), central_mass=MU, eps=[PLANET_EPS, 0.0])
+def raydamp_planets_runner(method: str, composition: str | None, eps: float = PLANET_EPS,
+                           corrector: int | None = None) -> Runner:
+    system = raydamp.Planets(list(PLANET_MASSES), central_mass=MU, eps=[eps, 0.0])
     q0, p0 = system.jacobi_state(PLANET_X, PLANET_V)
 
     def build(n: int):
@@ -467,7 +469,7 @@ def raydamp_planets_runner(method: str, composition: str | None) -> Runner:
 
         def run():
             sol = raydamp.integrate(system, q0, p0, method=method, composition=composition, h=h, t_end=T_END,
-                                    save_every=n)
+                                    save_every=n, corrector=corrector)
             rows = np.flatnonzero(np.asarray(sol.t) > 0.5 * T_SAVE)
             x, v = system.heliocentric(np.asarray(sol.q)[rows], np.asarray(sol.p)[rows])
             return x, v, SAVES * n
@@ -566,6 +568,65 @@ def two_planets(repeats: int) -> None:
         print(f"  speed-up of raydamp's fastest ({ours.tool}, {ours.seconds:.3e} s) against the fastest WHFast "
               f"variant ({best.tool.removeprefix('REBOUND ')}, {best.seconds:.3e} s): "
               f"{best.seconds / ours.seconds:.1f}x")
+
+
+# ------------------------------------------------------------------------------- two planets without drag
+# The symplectic correctors' table: the same two planets with no drag, raydamp's leapfrog with and without its
+# corrector (raydamp.run.correctors) and SABA, against WHFast with and without its own (correctors 11 and 17, the
+# latter with the lazy implementer's kernel, REBOUND's "whckl"; in the mode REBOUND documents for correctors:
+# safe_mode 0, keep_unsynchronized 1, synchronised at each save).
+def planets_free_whfast_runner(corrector: int, kernel: str = "default") -> Runner:
+    def build(n: int):
+        sim = rebound_planets("whfast")
+        sim.dt = T_SAVE / n
+        sim.integrator.corrector = corrector
+        sim.integrator.kernel = kernel
+        sim.integrator.safe_mode = 0
+        sim.integrator.keep_unsynchronized = 1
+        x = np.empty((SAVES, 2, 2))
+        v = np.empty((SAVES, 2, 2))
+
+        def run():
+            ps = sim.particles
+            for i in range(SAVES):
+                sim.steps(n)
+                sim.synchronize()
+                star = ps[0]
+                for k in (1, 2):
+                    x[i, k - 1] = ps[k].x - star.x, ps[k].y - star.y
+                    v[i, k - 1] = ps[k].vx - star.vx, ps[k].vy - star.vy
+            return x, v, SAVES * n
+
+        return run
+
+    return build
+
+
+def two_free_planets(repeats: int) -> None:
+    print(f"\n== two planets without drag (masses {PLANET_MASSES[0]:g}, {PLANET_MASSES[1]:g}; a = 1, 2), "
+          f"t_end = {T_END:g}, {SAVES} saves: symplectic correctors")
+    ref = planets_reference(PLANET_X, PLANET_V, eps=0.0)
+    rows: list[Row] = []
+    for method, comp, corrector in (("sv", None, None), ("sv", None, 4), ("sv", None, 6), ("sv", None, 10),
+                                    ("2s", "saba2", None)):
+        name = f"raydamp Planets {method}" + (f" + {comp}" if comp else "") + (
+            f", corrector {corrector}" if corrector else "")
+        row = scan(name, raydamp_planets_runner(method, comp, eps=0.0, corrector=corrector), ref, repeats,
+                   error_of=planet_errors)
+        if row:
+            rows.append(row)
+    theirs: list[Row] = []
+    if rebound is not None:
+        for corrector, kernel in ((0, "default"), (11, "default"), (17, "lazy")):
+            name = f"REBOUND WHFast, corrector {corrector}" + (f", {kernel} kernel" if kernel != "default" else "")
+            row = scan(name, planets_free_whfast_runner(corrector, kernel), ref, repeats, error_of=planet_errors)
+            if row:
+                theirs.append(row)
+    print_rows(rows + theirs)
+    if rows and theirs:
+        ours, best = min(rows, key=lambda r: r.seconds), min(theirs, key=lambda r: r.seconds)
+        print(f"  speed-up of raydamp's fastest ({ours.tool}, {ours.seconds:.3e} s) against the fastest WHFast "
+              f"row ({best.tool.removeprefix('REBOUND ')}, {best.seconds:.3e} s): {best.seconds / ours.seconds:.1f}x")
 
 
 # ---------------------------------------------------------------------------------------------- ensemble
@@ -670,6 +731,8 @@ def main() -> None:
     parser.add_argument("--ensemble-only", action="store_true", help="the 1,000-orbit table only")
     parser.add_argument("--no-planets", action="store_true", help="without the two-planet table")
     parser.add_argument("--planets-only", action="store_true", help="the two-planet table only")
+    parser.add_argument("--correctors-only", action="store_true",
+                        help="the two planets without drag only: symplectic correctors")
     args = parser.parse_args()
     repeats = 3 if args.quick else args.repeats
     print(f"raydamp {raydamp.__version__}; "
@@ -681,12 +744,17 @@ def main() -> None:
     if args.planets_only:
         two_planets(repeats)
         return
+    if args.correctors_only:
+        two_free_planets(repeats)
+        return
     if not args.ensemble_only:
         single_orbit("e = 0.21 (issue 46's case)", np.array([1.0, 0.0]), np.array([0.0, 1.1]), repeats)
     if not (args.quick or args.ensemble_only):
         single_orbit("e = 0.5, at the pericentre", np.array([1.0, 0.0]), np.array([0.0, math.sqrt(1.5)]), repeats)
     if not args.ensemble_only and not args.no_planets:
         two_planets(repeats)
+        if not args.quick:
+            two_free_planets(repeats)
     if not args.no_ensemble:
         ensemble(1000, 0.01, 20.0, repeats)
 
