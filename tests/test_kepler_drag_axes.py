@@ -46,6 +46,11 @@ def test_vertical_drag_damps_the_inclination_and_keeps_lz():
     assert np.degrees(np.arctan(tan_i[0])) == pytest.approx(30.0, abs=1e-9)
     assert tan_i[-1] / tan_i[0] == pytest.approx(np.exp(-2e-2 * 300.0 / 2), rel=0.05)
     assert np.all(np.diff(tan_i[:: 10]) < 0)
+    # Kepler.elements gives the inclination (radians) and the rest as in 2D
+    elements = k.elements(sol.q, sol.p)
+    assert np.allclose(np.tan(elements["inclination"][:, 0]), tan_i, rtol=1e-12, atol=0)  # (rows, particles)
+    assert elements["inclination"][0, 0] == pytest.approx(np.radians(30.0), rel=1e-12)
+    assert "inclination" not in raydamp.Kepler(MU).elements([1.0, 0.0], [0.0, 1.0])
     q_ref, _ = dop853(2e-2, VERTICAL, q0, p0, sol.t)
     assert np.max(np.linalg.norm(sol.q - q_ref, axis=1)) <= 2e-3
 

@@ -164,7 +164,9 @@ class Kepler(SharedModel):
     def elements(self, q, p) -> dict[str, np.ndarray]:
         """Per particle: specific energy, semi-major axis a = -mu / (2 energy) (inf for a parabola,
         negative for a hyperbola), eccentricity e and the angular momentum's size |L| / m, for rows of
-        (q, p) of shape (rows, n) or (n,)."""
+        (q, p) of shape (rows, n) or (n,). In 3 dimensions also the inclination to the x-y plane, in
+        radians, arctan2(|L_xy|, L_z) (0 to pi; what drag along z, ``drag=[[0, 0, 0], [0, 0, 0], [0, 0, 1]]``,
+        damps)."""
         q, p = real_array("q", q), real_array("p", p)
         if q.shape != p.shape or q.shape[-1] != self.dim:
             raise ValueError(f"q, p: expected arrays with last dimension n = {self.dim}, got {q.shape} and {p.shape}")
@@ -172,11 +174,14 @@ class Kepler(SharedModel):
         x, v = q.reshape(shape), p.reshape(shape) / self.mass
         r = np.linalg.norm(x, axis=-1)
         energy = 0.5 * np.sum(v * v, axis=-1) - self.mu / r
+        extra = {}
         if self.space_dim == 2:
             h = np.abs(x[..., 0] * v[..., 1] - x[..., 1] * v[..., 0])
         else:
-            h = np.linalg.norm(np.cross(x, v), axis=-1)
+            L = np.cross(x, v)
+            h = np.linalg.norm(L, axis=-1)
+            extra["inclination"] = np.arctan2(np.hypot(L[..., 0], L[..., 1]), L[..., 2])
         with np.errstate(divide="ignore"):
             a = -self.mu / (2.0 * energy)
         e = np.sqrt(np.maximum(0.0, 1.0 + 2.0 * energy * h * h / self.mu**2))
-        return {"energy": energy, "a": a, "e": e, "h": h}
+        return {"energy": energy, "a": a, "e": e, "h": h, **extra}
