@@ -515,28 +515,46 @@ def check_planet_drag_mapping() -> float:
     return float(np.max(np.linalg.norm(a - expected, axis=1)) / (PLANET_EPS * np.linalg.norm(u)))
 
 
+def planets_run(sim, n: int, *, keep=None, synchronize: bool = False):
+    """The timed run of a two-planet WHFast simulation: n steps per save, the planets' heliocentric x, v at each
+    save (after synchronising, where the integrator is left unsynchronised); keep: what must outlive the build."""
+    x = np.empty((SAVES, 2, 2))
+    v = np.empty((SAVES, 2, 2))
+
+    def run():
+        _keep = keep
+        ps = sim.particles
+        for i in range(SAVES):
+            sim.steps(n)
+            if synchronize:
+                sim.synchronize()
+            star = ps[0]
+            for k in (1, 2):
+                x[i, k - 1] = ps[k].x - star.x, ps[k].y - star.y
+                v[i, k - 1] = ps[k].vx - star.vx, ps[k].vy - star.vy
+        return x, v, SAVES * n
+
+    return run
+
+
 def planets_whfast_runner(*, as_operator: str | None) -> Runner:
     def build(n: int):
         sim = rebound_planets("whfast")
         sim.dt = T_SAVE / n
         rebx, _ = attach_planet_drag(sim, as_operator=as_operator)
-        x = np.empty((SAVES, 2, 2))
-        v = np.empty((SAVES, 2, 2))
-
-        def run():
-            _keep = rebx
-            ps = sim.particles
-            for i in range(SAVES):
-                sim.steps(n)
-                star = ps[0]
-                for k in (1, 2):
-                    x[i, k - 1] = ps[k].x - star.x, ps[k].y - star.y
-                    v[i, k - 1] = ps[k].vx - star.vx, ps[k].vy - star.vy
-            return x, v, SAVES * n
-
-        return run
+        return planets_run(sim, n, keep=rebx)
 
     return build
+
+
+def print_speedup(rows: list[Row], theirs: list[Row]) -> None:
+    """The table, and raydamp's fastest row against REBOUND's."""
+    print_rows(rows + theirs)
+    if rows and theirs:
+        ours, best = min(rows, key=lambda r: r.seconds), min(theirs, key=lambda r: r.seconds)
+        print(f"  speed-up of raydamp's fastest ({ours.tool}, {ours.seconds:.3e} s) against the fastest WHFast "
+              f"variant ({best.tool.removeprefix('REBOUND ')}, {best.seconds:.3e} s): "
+              f"{best.seconds / ours.seconds:.1f}x")
 
 
 def two_planets(repeats: int) -> None:
@@ -562,12 +580,7 @@ def two_planets(repeats: int) -> None:
             row = scan(name, runner, ref, repeats, error_of=planet_errors)
             if row:
                 theirs.append(row)
-    print_rows(rows + theirs)
-    if rows and theirs:
-        ours, best = min(rows, key=lambda r: r.seconds), min(theirs, key=lambda r: r.seconds)
-        print(f"  speed-up of raydamp's fastest ({ours.tool}, {ours.seconds:.3e} s) against the fastest WHFast "
-              f"variant ({best.tool.removeprefix('REBOUND ')}, {best.seconds:.3e} s): "
-              f"{best.seconds / ours.seconds:.1f}x")
+    print_speedup(rows, theirs)
 
 
 # ------------------------------------------------------------------------------- two planets without drag
@@ -583,21 +596,7 @@ def planets_free_whfast_runner(corrector: int, kernel: str = "default") -> Runne
         sim.integrator.kernel = kernel
         sim.integrator.safe_mode = 0
         sim.integrator.keep_unsynchronized = 1
-        x = np.empty((SAVES, 2, 2))
-        v = np.empty((SAVES, 2, 2))
-
-        def run():
-            ps = sim.particles
-            for i in range(SAVES):
-                sim.steps(n)
-                sim.synchronize()
-                star = ps[0]
-                for k in (1, 2):
-                    x[i, k - 1] = ps[k].x - star.x, ps[k].y - star.y
-                    v[i, k - 1] = ps[k].vx - star.vx, ps[k].vy - star.vy
-            return x, v, SAVES * n
-
-        return run
+        return planets_run(sim, n, synchronize=True)
 
     return build
 
@@ -622,11 +621,7 @@ def two_free_planets(repeats: int) -> None:
             row = scan(name, planets_free_whfast_runner(corrector, kernel), ref, repeats, error_of=planet_errors)
             if row:
                 theirs.append(row)
-    print_rows(rows + theirs)
-    if rows and theirs:
-        ours, best = min(rows, key=lambda r: r.seconds), min(theirs, key=lambda r: r.seconds)
-        print(f"  speed-up of raydamp's fastest ({ours.tool}, {ours.seconds:.3e} s) against the fastest WHFast "
-              f"row ({best.tool.removeprefix('REBOUND ')}, {best.seconds:.3e} s): {best.seconds / ours.seconds:.1f}x")
+    print_speedup(rows, theirs)
 
 
 # ---------------------------------------------------------------------------------------------- ensemble

@@ -6,6 +6,7 @@ A = diag(1, 1, 0) on a planar orbit is isotropic drag; ensembles batch only memb
 
 import numpy as np
 import pytest
+from test_kepler_drag_directions import assert_batched_as_single_runs
 
 import raydamp
 
@@ -98,28 +99,14 @@ def test_planets_take_fixed_axes_per_planet_rate():
 
 
 def test_ensemble_members_equal_single_runs_and_matrices_are_not_mixed():
-    from raydamp import _core
-
-    tilted = raydamp.Kepler(MU, dim=3, eps=1e-2, drag=TILTED)
-    vertical = raydamp.Kepler(MU, dim=3, eps=1e-2, drag=VERTICAL)
     members = 24
     rng = np.random.default_rng(46)
     rp, e = rng.uniform(0.5, 2.0, members), rng.uniform(0.0, 0.7, members)
     q0 = np.column_stack([rp, np.zeros(members), 0.1 * rp])
     p0 = np.column_stack([np.zeros(members), np.sqrt(MU * (1.0 + e) / rp), np.full(members, 0.05)])
-    ens = raydamp.integrate_ensemble(tilted, q0, p0, method="3s", h=0.05, n_steps=200, save_every=50, threads=2)
-    for i in range(members):
-        single = raydamp.integrate(tilted, q0[i], p0[i], method="3s", h=0.05, n_steps=200, save_every=50)
-        assert np.array_equal(ens.member(i).q, single.q) and np.array_equal(ens.member(i).p, single.p), i
-    index = np.zeros(members, dtype=np.int64)
-    index[16:] = 1
-    out = _core.Planets.integrate_ensemble([tilted._core_model, vertical._core_model], index, [],
-                                           np.zeros((members, 0)), "3s", "", "", q0, p0, 0.05, 200, 0.05, 50, 1,
-                                           None, None)
-    for i in range(members):
-        model = tilted if i < 16 else vertical
-        single = raydamp.integrate(model, q0[i], p0[i], method="3s", h=0.05, n_steps=200, save_every=50)
-        assert np.array_equal(out["q"][i], single.q), i
+    # members 16-23 with another matrix: not run as particles of the first members' batch
+    assert_batched_as_single_runs(raydamp.Kepler(MU, dim=3, eps=1e-2, drag=TILTED),
+                                  raydamp.Kepler(MU, dim=3, eps=1e-2, drag=VERTICAL), q0, p0, "3s", split=16)
 
 
 def test_the_json_form_round_trips_and_runs_as_a_job():

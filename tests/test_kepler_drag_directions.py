@@ -96,31 +96,37 @@ def test_planets_with_radial_drag_keep_the_total_angular_momentum():
     assert raydamp.Planets.from_dict(system.to_dict()).to_dict() == system.to_dict()
 
 
-def test_ensemble_members_equal_single_runs_and_directions_are_not_mixed():
+def assert_batched_as_single_runs(model, other, q0, p0, method, split):
+    """integrate_ensemble of model's members equals their single runs bit for bit; and through the core's door
+    with members [split:] of ``other`` (another drag, the same eps), none of those runs as a particle of the
+    first members' batch: each still equals its own single run."""
     from raydamp import _core
 
-    radial = raydamp.Kepler(MU, eps=1e-2, drag="radial")
-    isotropic = raydamp.Kepler(MU, eps=1e-2)
+    members = len(q0)
+    run = {"method": method, "h": 0.05, "n_steps": 200, "save_every": 50}
+    ens = raydamp.integrate_ensemble(model, q0, p0, threads=2, **run)
+    for i in range(members):
+        single = raydamp.integrate(model, q0[i], p0[i], **run)
+        assert np.array_equal(ens.member(i).q, single.q) and np.array_equal(ens.member(i).p, single.p), i
+    index = np.zeros(members, dtype=np.int64)
+    index[split:] = 1
+    out = _core.Planets.integrate_ensemble([model._core_model, other._core_model], index, [],
+                                           np.zeros((members, 0)), method, "", "", q0, p0, 0.05, 200, 0.05, 50, 1,
+                                           None, None)
+    for i in range(members):
+        single = raydamp.integrate(model if i < split else other, q0[i], p0[i], **run)
+        assert np.array_equal(out["q"][i], single.q), i
+
+
+def test_ensemble_members_equal_single_runs_and_directions_are_not_mixed():
     members = 40
     rng = np.random.default_rng(7)
     rp, e = rng.uniform(0.5, 2.0, members), rng.uniform(0.0, 0.7, members)
     q0 = np.column_stack([rp, np.zeros(members)])
     p0 = np.column_stack([np.zeros(members), np.sqrt(MU * (1.0 + e) / rp)])
-    ens = raydamp.integrate_ensemble(radial, q0, p0, method="2s", h=0.05, n_steps=200, save_every=50, threads=2)
-    for i in range(members):
-        single = raydamp.integrate(radial, q0[i], p0[i], method="2s", h=0.05, n_steps=200, save_every=50)
-        assert np.array_equal(ens.member(i).q, single.q) and np.array_equal(ens.member(i).p, single.p), i
-    # The core's door with both models, the same eps: members 30-39 (isotropic) are not run as particles of
-    # the radial members' batch.
-    index = np.zeros(members, dtype=np.int64)
-    index[30:] = 1
-    out = _core.Planets.integrate_ensemble([radial._core_model, isotropic._core_model], index, [],
-                                           np.zeros((members, 0)), "2s", "", "", q0, p0, 0.05, 200, 0.05, 50, 1,
-                                           None, None)
-    for i in range(members):
-        model = radial if i < 30 else isotropic
-        single = raydamp.integrate(model, q0[i], p0[i], method="2s", h=0.05, n_steps=200, save_every=50)
-        assert np.array_equal(out["q"][i], single.q), i
+    # members 30-39 isotropic: not run as particles of the radial members' batch
+    assert_batched_as_single_runs(raydamp.Kepler(MU, eps=1e-2, drag="radial"), raydamp.Kepler(MU, eps=1e-2),
+                                  q0, p0, "2s", split=30)
 
 
 def test_a_bad_direction_is_refused_naming_drag():

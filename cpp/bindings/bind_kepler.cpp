@@ -36,8 +36,7 @@ void bind_kepler(py::module_& m) {
                          py::array_t<double, py::array::c_style | py::array::forcecast> p, double h, int order,
                          bool inverse) {
         const int n = model.size(), m = momentum_count(model);
-        if (q.ndim() != 2 || p.ndim() != 2 || q.shape(1) != n || p.shape(1) != n || q.shape(0) != p.shape(0))
-          throw std::invalid_argument("q, p: expected two arrays of shape (rows, " + std::to_string(n) + ")");
+        check_rows(q, p, n);
         const Corrector corrector(order);
         const py::ssize_t rows = q.shape(0);
         py::array_t<double> qo({rows, static_cast<py::ssize_t>(n)}), po({rows, static_cast<py::ssize_t>(n)});

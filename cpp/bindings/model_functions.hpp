@@ -13,14 +13,19 @@ namespace raydamp::bindings {
 
 namespace py = pybind11;
 
+// q and p as rows of a trajectory: two arrays of shape (rows, n).
+inline void check_rows(const py::array& q, const py::array& p, int n) {
+  if (q.ndim() != 2 || p.ndim() != 2 || q.shape(1) != n || p.shape(1) != n || q.shape(0) != p.shape(0))
+    throw std::invalid_argument("q, p: expected two arrays of shape (rows, " + std::to_string(n) + ")");
+}
+
 // Applies f(model, state, workspace) -> double to each row of (q, p): diagnostics
 // over a whole trajectory in one call.
 template <class Model, class F>
 inline py::array_t<double> per_row(const Model& model, py::array_t<double, py::array::c_style | py::array::forcecast> q,
                             py::array_t<double, py::array::c_style | py::array::forcecast> p, F f) {
   const int n = model.size();
-  if (q.ndim() != 2 || p.ndim() != 2 || q.shape(1) != n || p.shape(1) != n || q.shape(0) != p.shape(0))
-    throw std::invalid_argument("q, p: expected two arrays of shape (rows, " + std::to_string(n) + ")");
+  check_rows(q, p, n);
   const py::ssize_t rows = q.shape(0);
   py::array_t<double> out(rows);
   auto qv = q.template unchecked<2>();

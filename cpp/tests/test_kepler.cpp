@@ -17,6 +17,23 @@ namespace {
 double energy(double mu, const Eigen::Vector2d& q, const Eigen::Vector2d& v) { return 0.5 * v.squaredNorm() - mu / q.norm(); }
 double angular(const Eigen::Vector2d& q, const Eigen::Vector2d& v) { return q[0] * v[1] - q[1] * v[0]; }
 
+// The OU noise p += sigma N xi of planet `planet`'s block (3 coordinates, every mass 1.7): N's columns from
+// unit xi, so N N^T is the noise's covariance.
+Eigen::Matrix3d noise_matrix(const PlanetDrag& drag, const Eigen::VectorXd& q, const PlanetDrag::Factors& f,
+                             int planet) {
+  const int n = static_cast<int>(q.size());
+  struct Mass {
+    Eigen::VectorXd m;
+  } mass{Eigen::VectorXd::Constant(n, 1.7)};
+  Eigen::Matrix3d N;
+  for (int j = 0; j < 3; ++j) {
+    Eigen::VectorXd column = Eigen::VectorXd::Zero(n);
+    drag.add_noise(q, f, mass, 1.0, Eigen::VectorXd(Eigen::VectorXd::Unit(n, 3 * planet + j)), column);
+    N.col(j) = column.segment<3>(3 * planet);
+  }
+  return N;
+}
+
 }  // namespace
 
 int main() {
@@ -123,16 +140,8 @@ int main() {
       drag.solve_shifted(q, c, x);
       CHECK((x - (Eigen::Matrix3d::Identity() + c * (a_r * along + a_t * across)).inverse() * p0).norm() <= 1e-15);
       CHECK(drag.momentum_decay_rate() == a_t && drag.spectral_radius() == 0.2);
-      // The OU noise p += sigma N xi: its covariance N N^T (columns from unit xi) is M - E M E^T, M = m I.
-      struct Mass {
-        Eigen::VectorXd m = Eigen::VectorXd::Constant(3, 1.7);
-      } mass;
-      Eigen::Matrix3d N;
-      for (int j = 0; j < 3; ++j) {
-        Eigen::VectorXd column = Eigen::VectorXd::Zero(3);
-        drag.add_noise(q, f, mass, 1.0, Eigen::VectorXd(Eigen::Vector3d::Unit(j)), column);
-        N.col(j) = column;
-      }
+      // The OU noise's covariance N N^T is M - E M E^T, M = m I.
+      const Eigen::Matrix3d N = noise_matrix(drag, q, f, 0);
       CHECK((N * N.transpose() - 1.7 * (Eigen::Matrix3d::Identity() - e * e.transpose())).norm() <= 1e-15);
     }
     // Two planets of different rates, isotropic: each block its own factor (the per-planet path, not `same`).
@@ -181,16 +190,8 @@ int main() {
         CHECK((x.segment<3>(3 * i) - (Eigen::Matrix3d::Identity() + c * B).inverse() * pi).norm() <= 1e-15);
         if (definite) CHECK((pa.segment<3>(3 * i) - (e * pi - B.inverse() * (Eigen::Matrix3d::Identity() - e) * gi)).norm() <= 1e-14);
         else CHECK((pa.segment<3>(3 * i) - (e * pi - Eigen::Vector3d(t * gi[0], t * gi[1], (1.0 - e(2, 2)) / rates[i] * gi[2]))).norm() <= 1e-15);
-        // the OU noise's covariance N N^T (columns from unit xi) is M - E M E^T, M = m I
-        struct Mass {
-          Eigen::VectorXd m = Eigen::VectorXd::Constant(6, 1.7);
-        } mass;
-        Eigen::Matrix3d N;
-        for (int j = 0; j < 3; ++j) {
-          Eigen::VectorXd column = Eigen::VectorXd::Zero(6);
-          drag.add_noise(q, f, mass, 1.0, Eigen::VectorXd(Eigen::VectorXd::Unit(6, 3 * i + j)), column);
-          N.col(j) = column.segment<3>(3 * i);
-        }
+        // the OU noise's covariance N N^T is M - E M E^T, M = m I
+        const Eigen::Matrix3d N = noise_matrix(drag, q, f, i);
         CHECK((N * N.transpose() - 1.7 * (Eigen::Matrix3d::Identity() - e * e.transpose())).norm() <= 4e-15);
       }
       CHECK(std::abs(drag.spectral_radius() - 0.2 * Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(A).eigenvalues().maxCoeff()) <= 1e-15);

@@ -21,6 +21,8 @@
 // gave b_i up to 19 at n = 4, kicks that cancel to 1e-14 of their size).
 #pragma once
 
+#include <Eigen/Core>
+#include <Eigen/LU>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -39,28 +41,21 @@ struct Corrector {
     const int n = order / 2 - 1;
     // G's odd coefficients g_1, g_3, g_5, g_7 (x / sinh x at x / 2, less 1, over x)
     constexpr long double g[] = {-1.0L / 24, 7.0L / 5760, -31.0L / 967680, 127.0L / 154828800};
-    // sum_i w_i (a_i^2)^j = -g_{2j+1} (2j+1)!, w_i = 2 b_i a_i; Gaussian elimination in long double
-    std::vector<long double> nodes(n), w(n);
-    std::vector<std::vector<long double>> V(n, std::vector<long double>(n + 1));
+    // sum_i w_i (a_i^2)^j = -g_{2j+1} (2j+1)!, w_i = 2 b_i a_i: a Vandermonde system, solved in long double
+    using Matrix = Eigen::Matrix<long double, Eigen::Dynamic, Eigen::Dynamic>;
+    using Vector = Eigen::Matrix<long double, Eigen::Dynamic, 1>;
+    Vector nodes(n), rhs(n);
+    Matrix V(n, n);
     long double factorial = 1;
     for (int j = 0; j < n; ++j) {
       if (j > 0) factorial *= (2.0L * j) * (2.0L * j + 1);
       for (int i = 0; i < n; ++i) {
         nodes[i] = static_cast<long double>(i + 1) / n;
-        V[j][i] = std::pow(nodes[i] * nodes[i], static_cast<long double>(j));
+        V(j, i) = std::pow(nodes[i] * nodes[i], static_cast<long double>(j));
       }
-      V[j][n] = -g[j] * factorial;
+      rhs[j] = -g[j] * factorial;
     }
-    for (int c = 0; c < n; ++c)
-      for (int r = c + 1; r < n; ++r) {
-        const long double f = V[r][c] / V[c][c];
-        for (int k = c; k <= n; ++k) V[r][k] -= f * V[c][k];
-      }
-    for (int r = n - 1; r >= 0; --r) {
-      long double s = V[r][n];
-      for (int k = r + 1; k < n; ++k) s -= V[r][k] * w[k];
-      w[r] = s / V[r][r];
-    }
+    const Vector w = V.partialPivLu().solve(rhs);
     for (int i = 0; i < n; ++i) {
       a.push_back(static_cast<double>(nodes[i]));
       b.push_back(static_cast<double>(w[i] / (2 * nodes[i])));
