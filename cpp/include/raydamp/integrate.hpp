@@ -531,6 +531,7 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
   auto advance = [&](auto& w, State<Dim>& x, long i) {  // w: ws, or the same as Unhooked
     if (watch.stopped() || envelope.stopped()) return;  // a terminal event or a collapse ended the run
     if (ws.load) ws.time = time_at(i);
+    watch.keep(x, rec);  // the step's start, for an event's search (screened events: events/watcher.hpp)
     if constexpr (has_materials_v<Model>) {
       if (kinks.on()) {
         step_at_kinks<Method>(kinks, model, tab, composition, spec, stepper, x, i, w, ws, rec);

@@ -27,6 +27,8 @@ System's functions, in the names:
 Its rate dg/dt is derived symbolically, and every event's g and rate are compiled into one function,
 which the step loop calls once per step end, without Python. A step where every g and its rate keep
 their signs costs that call and a branch-free scan; the root finder runs only where one changes sign.
+An affine g (a level of q, a drift, a clock) needs no call: levels of one form share one sum, and where
+no g reads p the step loop screens that sum inline, observing only the steps that may hold a crossing.
 """
 
 from __future__ import annotations

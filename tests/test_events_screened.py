@@ -1,0 +1,150 @@
+"""Screened events (issue 41): affine events of q and t are ruled out inline in the step loop, and only the
+steps that may hold a crossing are observed, from the state kept before the step. A run with dense output
+observes every step's end (the path without the screen), so the two must log the same crossings, bit for bit:
+any crossing the screen let pass, or a step searched from a wrong start, shows as a difference here."""
+
+import numpy as np
+import pytest
+
+import raydamp
+from raydamp.materials import Bilinear
+from raydamp.models import DampedPendulum
+
+
+def assert_same_log(screened, observed):
+    assert len(screened.events) == len(observed.events) > 0
+    np.testing.assert_array_equal(screened.events.t, observed.events.t)
+    np.testing.assert_array_equal(screened.events.q, observed.events.q)
+    np.testing.assert_array_equal(screened.events.p, observed.events.p)
+    np.testing.assert_array_equal(screened.events.event, observed.events.event)
+    np.testing.assert_array_equal(screened.events.direction, observed.events.direction)
+
+
+def levels(count, spacing, name="level"):
+    return [raydamp.Event(f"q[0] - {spacing * k!r}", name=f"{name}{k}") for k in range(count)]
+
+
+@pytest.mark.parametrize("method, composition",
+                         [("3s", None), ("2s", None), ("3s", "yoshida4"), ("baoab", None), ("rk4", None)])
+def test_screened_pendulum_events_equal_the_observed_ones(method, composition):
+    pendulum = DampedPendulum(eps=0.1)
+    events = (levels(10, 0.1) + [raydamp.Event("q[0] + 0.01*t - 0.3", direction=1, name="ramp"),
+                                 raydamp.Event("t - 12.345", name="clock"),
+                                 raydamp.Event("-q[0] - 0.25", direction=-1, name="below")])
+    run = dict(method=method, composition=composition, h=0.01, t_end=60.0, save_every=97, events=events)
+    screened = raydamp.integrate(pendulum, [2.0], [0.0], **run)
+    observed = raydamp.integrate(pendulum, [2.0], [0.0], dense=True, **run)
+    assert_same_log(screened, observed)
+    assert len(screened.events) > 100
+    assert list(screened.events["clock"].t) == [pytest.approx(12.345, abs=1e-12)]
+    np.testing.assert_array_equal(screened.q, observed.q)  # dense output does not change the stepping
+
+
+def test_screened_touches_equal_the_observed_ones():
+    # Levels just below the swing's turning points are touched or crossed twice inside one step, with g of
+    # one sign at both ends: found by the rate's sign change, which the screen must not hide.
+    pendulum, h = DampedPendulum(eps=0.0), 0.05
+    run = dict(method="sv", composition="yoshida4", h=h, t_end=20.0)
+    dense = raydamp.integrate(pendulum, [0.0], [2 * np.sin(0.5)], dense=True, **run)
+    top = dense.at(np.linspace(1.0, 2.4, 20001))[0][:, 0].max()
+    events = [raydamp.Event(f"q[0] - {float(top - d)!r}", name=f"near{k}") for k, d in enumerate((1e-6, 1e-5, 1e-4))]
+    screened = raydamp.integrate(pendulum, [0.0], [2 * np.sin(0.5)], events=events, **run)
+    observed = raydamp.integrate(pendulum, [0.0], [2 * np.sin(0.5)], events=events, dense=True, **run)
+    assert_same_log(screened, observed)
+    assert len(screened.events) >= 10
+    pairs = [np.floor(table.t[k] / h) == np.floor(table.t[k + 1] / h)
+             for table in (screened.events[f"near{k}"] for k in range(3)) for k in range(len(table.t) - 1)]
+    assert any(pairs)  # some level was crossed up and down inside one step
+
+
+STOREYS, K_STOREY = 10, 400.0
+
+
+def frame():
+    """A 10-storey shear frame of unit masses (storey 0 to the ground), 5% Rayleigh damping in modes 1 and 3,
+    and a seeded record as its ground motion."""
+    K = np.zeros((STOREYS, STOREYS))
+    for s in range(STOREYS):  # storey s joins floor s to floor s - 1 (the ground for s = 0)
+        K[s, s] += K_STOREY
+        if s:
+            K[s - 1, s - 1] += K_STOREY
+            K[s - 1, s] = K[s, s - 1] = -K_STOREY
+    w = np.sqrt(np.linalg.eigvalsh(K))
+    alpha, beta = raydamp.rayleigh_coefficients(w[0], w[2], 0.05, 0.05)
+    rng = np.random.default_rng(7)
+    n, dt = 1001, 0.01
+    a = rng.standard_normal(n) * np.sin(np.pi * np.arange(n) / (n - 1)) * 8.0
+    return np.eye(STOREYS), K, alpha, beta, raydamp.GroundMotion((np.arange(n) * dt, a), np.ones(STOREYS))
+
+
+def drift_events(limit):
+    return [raydamp.Event(f"q[0] - {limit!r}", name="drift0")] + [
+        raydamp.Event(f"q[{k}] - q[{k - 1}] - {limit!r}", name=f"drift{k}") for k in range(1, 10)] + [
+        raydamp.Event(f"q[{k}] - q[{k - 1}] + {limit!r}", direction=-1, name=f"back{k}") for k in range(1, 10)]
+
+
+def test_screened_storey_drifts_under_a_record_equal_the_observed_ones():
+    M, K, alpha, beta, motion = frame()
+    model = raydamp.LinearStructure(M, K, alpha=alpha, beta=beta)
+    run = dict(method="3s", h=0.0025, t_end=10.0, load=motion, save_every=400, events=drift_events(0.05))
+    screened = raydamp.integrate(model, np.zeros(STOREYS), np.zeros(STOREYS), **run)
+    observed = raydamp.integrate(model, np.zeros(STOREYS), np.zeros(STOREYS), dense=True, **run)
+    assert_same_log(screened, observed)
+    assert len(set(screened.events.event)) > 5
+
+
+def test_screened_events_on_yielding_storeys_with_kinks_located():
+    M, K, alpha, beta, motion = frame()
+    springs = [raydamp.Spring((0,) if s == 0 else (s - 1, s), Bilinear(K_STOREY, 16.0, 0.05)) for s in range(10)]
+    model = raydamp.Structure(M, springs=springs, alpha=alpha, beta=beta, locate_kinks=True)
+    run = dict(method="3s", h=0.0025, t_end=10.0, load=motion, save_every=400, events=drift_events(0.03))
+    screened = raydamp.integrate(model, np.zeros(STOREYS), np.zeros(STOREYS), **run)
+    observed = raydamp.integrate(model, np.zeros(STOREYS), np.zeros(STOREYS), dense=True, **run)
+    assert_same_log(screened, observed)
+
+
+def test_a_screened_terminal_event_stops_where_the_observed_one_does():
+    M, K, alpha, beta, motion = frame()
+    model = raydamp.LinearStructure(M, K, alpha=alpha, beta=beta)
+    roof = [raydamp.Event("q[9] - 0.3", terminal=True, name="roof")]
+    run = dict(method="3s", h=0.0025, t_end=10.0, load=motion, save_every=400, events=roof)
+    screened = raydamp.integrate(model, np.zeros(STOREYS), np.zeros(STOREYS), **run)
+    observed = raydamp.integrate(model, np.zeros(STOREYS), np.zeros(STOREYS), dense=True, **run)
+    assert screened.status == observed.status == "event"
+    assert_same_log(screened, observed)
+    assert screened.t[-1] == observed.t[-1] == screened.events.t[0]
+    np.testing.assert_array_equal(screened.q[-1], observed.q[-1])
+    np.testing.assert_array_equal(screened.p[-1], observed.p[-1])
+    assert abs(screened.q[-1, 9] - 0.3) < 1e-5  # the shortened step lands within its local error
+
+
+def test_screened_events_before_a_blow_up_equal_the_observed_ones():
+    # Over its barrier (V = x^2/2 - x^6/6 peaks at x = 1) the oscillator runs away and blows up in finite
+    # time; the block that stepped into it is replayed step by step, the screen keeping each start again.
+    system = raydamp.System(["x"], "x^2/2 - x^6/6", damping={"scalar": 0.01}, eps=1.0)
+    events = [raydamp.Event(f"x - {0.1 * k!r}", name=f"x{k}") for k in range(-5, 6)]
+    run = dict(method="3s", h=0.01, t_end=100.0, save_every=1000, events=events)
+    screened = raydamp.integrate(system, [0.0], [0.9], **run)
+    observed = raydamp.integrate(system, [0.0], [0.9], dense=True, **run)
+    assert screened.status == observed.status == "non_finite"
+    assert screened.steps == observed.steps
+    assert_same_log(screened, observed)
+
+
+def test_screened_terminal_events_stop_each_ensemble_member_as_its_single_run():
+    pendulum = DampedPendulum(eps=0.05)
+    q0 = np.linspace(0.3, 2.5, 200)[:, None]
+    p0 = np.zeros_like(q0)
+    events = [raydamp.Event("q[0]", direction=-1, terminal=True, name="vertical"), *levels(3, 0.4)]
+    run = dict(method="3s", h=0.01, t_end=10.0, save_every=50, events=events)
+    ens = raydamp.integrate_ensemble(pendulum, q0, p0, **run)
+    assert set(ens.status) == {"event"}
+    for i in range(len(q0)):
+        single = raydamp.integrate(pendulum, q0[i], p0[i], **run)
+        observed = raydamp.integrate(pendulum, q0[i], p0[i], dense=True, **run)
+        assert_same_log(single, observed)
+        assert single.t[-1] == ens.t_final[i] == observed.t[-1]
+        assert single.q[-1, 0] == ens.q_final[i, 0] and single.p[-1, 0] == ens.p_final[i, 0]
+        member = ens.events.of_member(i)
+        np.testing.assert_array_equal(member.t, single.events.t)
+        np.testing.assert_array_equal(member.q, single.events.q)
