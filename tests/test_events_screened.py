@@ -40,14 +40,41 @@ def test_screened_pendulum_events_equal_the_observed_ones(method, composition):
     np.testing.assert_array_equal(screened.q, observed.q)  # dense output does not change the stepping
 
 
-def test_screened_touches_equal_the_observed_ones():
+def chain(sites=6):
+    """A Fermi-Pasta-Ulam-like chain of run-time size, fixed ends, weakly damped: several groups of levels
+    over its q are screened by the bound on how far q moved (the budget), not group by group."""
+    names = [f"x{k}" for k in range(sites)]
+    bonds = " + ".join(f"(x{k + 1} - x{k})^2/2 + (x{k + 1} - x{k})^4/4" for k in range(sites - 1))
+    return raydamp.System(names, f"x0^2/2 + x{sites - 1}^2/2 + {bonds}", damping={"scalar": 0.02}, eps=1.0)
+
+
+@pytest.mark.parametrize("method", ["3s", "rk4"])
+def test_budget_screened_events_equal_the_observed_ones(method):
+    model = chain()
+    events = (levels(6, 0.15, "site0_") + [raydamp.Event(f"q[{k}] - q[{k - 1}] - 0.2", name=f"bond{k}")
+                                           for k in range(1, 6)] + [raydamp.Event("-q[5] - 0.3", name="end")])
+    q0 = np.array([0.9, -0.3, 0.5, 0.0, -0.6, 0.2])
+    run = dict(method=method, h=0.01, t_end=80.0, save_every=113, events=events)
+    screened = raydamp.integrate(model, q0, np.zeros(6), **run)
+    observed = raydamp.integrate(model, q0, np.zeros(6), dense=True, **run)
+    assert_same_log(screened, observed)
+    assert len(set(screened.events.event)) >= 8
+
+
+@pytest.mark.parametrize("budget", [False, True])
+def test_screened_touches_equal_the_observed_ones(budget):
     # Levels just below the swing's turning points are touched or crossed twice inside one step, with g of
-    # one sign at both ends: found by the rate's sign change, which the screen must not hide.
-    pendulum, h = DampedPendulum(eps=0.0), 0.05
+    # one sign at both ends: found by the rate's sign change, which the screen must not hide. With budget, an
+    # oscillator of run-time size (a LinearStructure) and a second group make the bound on q's movement screen
+    # it: the bound must hold q's interpolant between the step ends, not only the ends. (A System of up to 3
+    # coordinates runs at a fixed size, summing its groups.)
+    pendulum = raydamp.LinearStructure(np.eye(1), np.eye(1)) if budget else DampedPendulum(eps=0.0)
+    h = 0.05
     run = dict(method="sv", composition="yoshida4", h=h, t_end=20.0)
     dense = raydamp.integrate(pendulum, [0.0], [2 * np.sin(0.5)], dense=True, **run)
     top = dense.at(np.linspace(1.0, 2.4, 20001))[0][:, 0].max()
     events = [raydamp.Event(f"q[0] - {float(top - d)!r}", name=f"near{k}") for k, d in enumerate((1e-6, 1e-5, 1e-4))]
+    events += [raydamp.Event("-q[0] - 5", name="never")] if budget else []
     screened = raydamp.integrate(pendulum, [0.0], [2 * np.sin(0.5)], events=events, **run)
     observed = raydamp.integrate(pendulum, [0.0], [2 * np.sin(0.5)], events=events, dense=True, **run)
     assert_same_log(screened, observed)
@@ -148,3 +175,20 @@ def test_screened_terminal_events_stop_each_ensemble_member_as_its_single_run():
         member = ens.events.of_member(i)
         np.testing.assert_array_equal(member.t, single.events.t)
         np.testing.assert_array_equal(member.q, single.events.q)
+
+
+def test_the_budget_holds_the_interpolant_between_equal_step_ends():
+    # x = cos(t - h/2) starts half a step before its top: the first step's two ends are equal (cos(h/2)), so q
+    # moved nothing end to end, while its interpolant rises to the top between them and crosses a level twice.
+    # The bound on how far q moved must count that rise; a second group makes the bound screen this run.
+    oscillator, h = raydamp.LinearStructure(np.eye(1), np.eye(1)), 0.1  # of run-time size: the budget screens it
+    events = [raydamp.Event("q[0] - 0.9995", name="near_top"), raydamp.Event("-q[0] - 5", name="never")]
+    run = dict(method="sv", h=h, t_end=0.3, events=events)
+    start = ([np.cos(h / 2)], [np.sin(h / 2)])
+    screened = raydamp.integrate(oscillator, *start, **run)
+    observed = raydamp.integrate(oscillator, *start, dense=True, **run)
+    assert_same_log(screened, observed)
+    assert list(screened.events.direction) == [1, -1]
+    assert np.all(screened.events.t < h)  # both inside the first step
+    # (the interpolant's crossings, within its error near a turning point at this h)
+    np.testing.assert_allclose(screened.events.t, [h / 2 - np.arccos(0.9995), h / 2 + np.arccos(0.9995)], atol=1e-3)

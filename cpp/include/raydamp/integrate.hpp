@@ -573,6 +573,7 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
     if (!z.all_finite()) {
       checkpoint.restore(z, ws, rec);
       restore_materials(model);
+      watch.restart_screen();
       const long i = replay_block(ws, rec, before, z, k, end, track_momenta, advance, step_drift, max_drift);
       if (i < end) {
         k = i;

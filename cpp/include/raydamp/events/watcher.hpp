@@ -16,7 +16,9 @@
 // every form stays inside the same gap between its levels, clear of both by a rounding bound, with its
 // rate's sign kept, has no crossing; any other step gets every g at both ends and the scan above.
 // Affine events of q and t alone (no force needed at a step end) are screened so inline in the loop
-// (screen), and nothing of a quiet step is stored or called (after_step).
+// (screen), and nothing of a quiet step is stored or called (after_step). Where several groups read the
+// q of a model of run-time size, the step is screened by a bound on how far its q moved instead
+// (within_budget): no sum per group until some group's L may have come near one of its levels.
 #pragma once
 
 #include <algorithm>
@@ -100,6 +102,14 @@ class EventWatcher {
         }
       forces_ = forces_ || set_->reads_momenta();
       gated_ = screens(spec);
+      budgeted_ = gated_ && groups_.size() > 1;
+      for (const Input& in : inputs_) {
+        budgeted_ = budgeted_ && in.which == 0;
+        if (in.which == 0 && std::find(read_q_.begin(), read_q_.end(), in.index) == read_q_.end())
+          read_q_.push_back(in.index);
+      }
+      h_max_ = std::max(std::abs(h_), std::abs(h_last_));
+      read_all_ = static_cast<int>(read_q_.size()) == n_;
       in_.assign(set_->slots.size(), 0.0);
       out_.assign(2 * events.size(), 0.0);
       g0_.assign(events.size(), 0.0);
@@ -190,6 +200,7 @@ class EventWatcher {
       settle();
     }
     if (gated_) kept_q_ = q1(), kept_p_ = p1();
+    if (budgeted_) rearm();
     push_dense();
   }
 
@@ -240,15 +251,75 @@ class EventWatcher {
   bool screen(const Model& model, const State<Dim>& x, double t) {
     using MVec = typename Model::Vec;
     if constexpr (std::is_same_v<MVec, Vec>) {
-      model.mass.velocity(x.p, v1());  // v1 is rewritten by a step observed out of line anyway
-      return screen_groups({x.q.data(), x.p.data(), v1().data(), nullptr}, t);
+      model.mass.velocity(x.p, v1());  // v1 and v0 are rewritten by a step observed out of line anyway
+      if (budgeted_) {
+        model.mass.velocity(kept_p_, v0());
+        if (read_all_) {  // every q: in vectors, without the indices
+          const double most =
+              (1.25 * (x.q - kept_q_).array().abs() + (0.25 * h_max_) * v0().array().abs().max(v1().array().abs()))
+                  .maxCoeff();
+          if (spend(most)) return true;
+        } else if (within_budget(x.q.data(), v0().data(), v1().data())) {
+          return true;
+        }
+      }
+      const End end{x.q.data(), x.p.data(), v1().data(), nullptr};
+      return screen_groups(end, t) && (!budgeted_ || rearm(end));
     } else {
       // on copies: the address of x itself, taken, would keep the loop's state out of registers
+      // (A model of fixed size has a few q: its groups are summed, without the budget's branch.)
       MVec q = x.q, v = MVec::Zero(x.p.size());
       model.mass.velocity(x.p, v);
       return screen_groups({q.data(), nullptr, v.data(), nullptr}, t);
     }
   }
+
+  // Several groups (storey drifts, say) cost a sum each a step. Instead, the movement of every q they read
+  // is bounded: on a step, q_j's cubic Hermite interpolant (which events are located on) differs from
+  // q_j at the start by at most |dq| + max(|a|, |b|) / 4 <= 1.25 |dq| + 0.25 h max(|v0|, |v1|) (dq over the
+  // step; a, b as at keeps_sign()); summed over the steps since every group's L was last taken, moved_
+  // bounds how far any q has gone, and C moved_ how far a group's L. While that stays within the room its L
+  // had to the nearest of its levels (less the rounding bound, rearm()), no g can reach zero on any step's
+  // interpolant: the step is quiet whatever the rates do.
+  bool within_budget(const double* q, const double* v0, const double* v1) {
+    double most = 0.0;
+    for (const int j : read_q_) {
+      const double dq = std::abs(q[j] - kept_q_[j]);
+      most = std::max(most, 1.25 * dq + 0.25 * h_max_ * std::max(std::abs(v0[j]), std::abs(v1[j])));
+    }
+    return spend(most);
+  }
+  bool spend(double most) {
+    moved_ += most * (1.0 + 64.0 * DBL_EPSILON);  // (a NaN never fits: the groups are then taken)
+    return moved_ <= budget_;
+  }
+
+  // Each group's room at end (every group quiet there): how far its L can move and keep every member's g
+  // clear of zero by the rounding bound (inside()); the budget is the least room over C. Returns true.
+  RAYDAMP_NOINLINE bool rearm(End end) {
+    double budget = DBL_MAX;
+    for (const Group& g : groups_) {
+      double L = 0.0, S = 0.0;
+      for (std::size_t k = g.first; k < g.last; ++k) {
+        const double term = inputs_[k].coefficient * end.q[inputs_[k].index];
+        L += term;
+        S += std::abs(term);
+      }
+      // L' - lo > lo_slack + slack S' for |L' - L| <= m and S' <= S + m: m (1 + slack) < L - lo - lo_slack - slack S
+      const double room = std::min(L - g.lo - g.lo_slack - g.slack * S, g.hi - g.hi_slack - g.slack * S - L);
+      if (g.C > 0.0) budget = std::min(budget, room / ((1.0 + g.slack) * g.C));
+    }
+    budget_ = budget * (1.0 - 64.0 * DBL_EPSILON);
+    moved_ = 0.0;
+    return true;
+  }
+  bool rearm() { return rearm({q1().data(), p1().data(), v1().data(), f1().data()}); }
+
+ public:
+  // Before steps replayed from a checkpoint: the budget's movement counts from a later state.
+  void restart_screen() { budget_ = -1.0; }
+
+ private:
 
   bool screen_groups(End end, double t) const {
     bool all = true;
@@ -294,6 +365,7 @@ class EventWatcher {
     }
     quiet({q1().data(), p1().data(), v1().data(), f1().data()}, t);
     rescan();
+    if (budgeted_) rearm();
   }
 
   // Whether every q and p of x is finite: x * 0 is 0 for a finite x and NaN for an infinite or NaN one,
@@ -410,6 +482,7 @@ class EventWatcher {
     long gap = -1;              // the gap its L lay clear inside at the last step end, or -1
     double lo = 0.0, hi = 0.0, lo_slack = 0.0, hi_slack = 0.0;  // that gap's levels, slack * |level|
     double L = 0.0, S = 0.0, R = 0.0, R_was = 0.0;  // at the end just read (S: sum of |terms|); R at the one before
+    double C = 0.0;                                 // sum of |coefficient| (budgeted groups read q only)
   };
 
   void group(const std::vector<EventFunction>& events) {
@@ -432,6 +505,7 @@ class EventWatcher {
         for (const EventFunction::Term& term : f.terms)
           inputs_.push_back({which(term.kind), term.kind == Kind::t ? 0 : term.index, term.coefficient});
         gr.last = inputs_.size();
+        for (const EventFunction::Term& term : f.terms) gr.C += std::abs(term.coefficient);
         // g = constant + L is computed as ((constant + c_1 x_1) + c_2 x_2) + ..., L as (c_1 x_1 + c_2 x_2) + ...:
         // each within (terms + 1) roundings of the exact sum, relative to |constant| + S; 8x that
         // bounds their difference with room to spare.
@@ -779,7 +853,10 @@ class EventWatcher {
   const bool on_;
   const double h_, h_last_;  // the run's steps, for a step's start time
   const long steps_;
-  bool forces_ = false, terminal_ = false, stopped_ = false, affine_ = false, gated_ = false;
+  bool forces_ = false, terminal_ = false, stopped_ = false, affine_ = false, gated_ = false, budgeted_ = false;
+  bool read_all_ = false;                             // the groups read every q
+  double h_max_ = 0.0, moved_ = 0.0, budget_ = -1.0;  // within_budget()
+  std::vector<int> read_q_;                           // the q the groups read
   int n_ = 0;
   long step_ = -1;
   std::size_t stop_event_ = 0;
