@@ -192,3 +192,19 @@ def test_the_budget_holds_the_interpolant_between_equal_step_ends():
     assert np.all(screened.events.t < h)  # both inside the first step
     # (the interpolant's crossings, within its error near a turning point at this h)
     np.testing.assert_allclose(screened.events.t, [h / 2 - np.arccos(0.9995), h / 2 + np.arccos(0.9995)], atol=1e-3)
+
+
+def test_a_budget_spent_on_a_turning_step_observes_that_step():
+    # Found in review: while the bound on q's movement held, a group's L turned back (its rate changed sign)
+    # unchecked; on the step where the budget ran out, L turned again and crossed a level twice inside the
+    # step, its ends on one side. Compared with the rate's sign kept from before the first turn, the step
+    # looked quiet. Two unit oscillators (run-time size), coarse steps (h = 1.5, about 4 a period).
+    model = raydamp.LinearStructure(np.eye(2), np.eye(2))
+    events = [raydamp.Event("q[0] - 0.95", name="near_top"), raydamp.Event("q[1] - 5", name="never")]
+    angle = np.radians(25.0)
+    run = dict(method="3s", h=1.5, n_steps=40, events=events)
+    start = ([np.cos(angle), 0.0], [-np.sin(angle), 0.0])
+    screened = raydamp.integrate(model, *start, **run)
+    observed = raydamp.integrate(model, *start, dense=True, **run)
+    assert_same_log(screened, observed)
+    assert len(screened.events) == 20
