@@ -131,15 +131,10 @@ class EventWatcher {
   double stop_time() const { return t_stop_; }
   const std::string& stop_name() const { return set_->events[stop_event_].name; }
 
-  // Screened runs (gated(): affine events of q and t only, no dense output) rule a quiet step out inline, in
+  // Screened runs (gated_: affine events of q and t only, no dense output) rule a quiet step out inline, in
   // the loop (screen), and observe only the others, out of line (observe_from), from their end and the state
   // the loop kept before stepping (keep). Observing every step's end out of line cost the damped pendulum's
   // whole step 1.65x, screened 1.3x (benchmarks/bench_event_watcher.cpp).
-  bool gated() const { return gated_; }
-  static bool screens(const RunSpec& spec) {
-    return spec.events && spec.events->all_affine() && !spec.events->reads_momenta() && !spec.dense;
-  }
-
   template <int Dim, class Rec>
   void keep(const State<Dim>& x, const Rec& rec) {
     if (!gated_) return;
@@ -304,17 +299,10 @@ class EventWatcher {
   // update that, and a rate may have turned since (a level crossed twice inside this step, its ends on one
   // side, looked quiet against the kept sign: test_events_screened.py). Then the budget is rearmed there.
   RAYDAMP_NOINLINE bool overrun(End end, const double* v0) {
-    for (const Group& g : groups_) {
-      double L = 0.0, S = 0.0, R0 = 0.0, R1 = 0.0;
-      for (std::size_t k = g.first; k < g.last; ++k) {  // budgeted groups read q only
-        const Input& in = inputs_[k];
-        const double c = in.coefficient, term = c * end.q[in.index];
-        R0 += c * v0[in.index];
-        R1 += c * end.v[in.index];
-        L += term;
-        S += std::abs(term);
-      }
-      if (!inside(g, L, S) || ((bits(R0) ^ bits(R1)) >> 63)) return false;
+    for (const Group& g : groups_) {  // (budgeted groups read q only: no t, p or f)
+      const Sums at_end = sums(g, end, 0.0);
+      const double R0 = sums(g, {end.q, end.p, v0, nullptr}, 0.0).R;
+      if (!inside(g, at_end.L, at_end.S) || ((bits(R0) ^ bits(at_end.R)) >> 63)) return false;
     }
     rearm(end);
     return true;
@@ -326,12 +314,8 @@ class EventWatcher {
   RAYDAMP_NOINLINE void rearm(End end) {
     double budget = DBL_MAX;
     for (const Group& g : groups_) {
-      double L = 0.0, S = 0.0;
-      for (std::size_t k = g.first; k < g.last; ++k) {
-        const double term = inputs_[k].coefficient * end.q[inputs_[k].index];
-        L += term;
-        S += std::abs(term);
-      }
+      const auto [L, S, R] = sums(g, end, 0.0);  // (budgeted groups read q only)
+      static_cast<void>(R);
       // L' - lo > lo_slack + slack S' for |L' - L| <= m and S' <= S + m: m (1 + slack) < L - lo - lo_slack - slack S
       const double room = std::min(L - g.lo - g.lo_slack - g.slack * S, g.hi - g.hi_slack - g.slack * S - L);
       if (g.C > 0.0) budget = std::min(budget, room / ((1.0 + g.slack) * g.C));
@@ -347,6 +331,8 @@ class EventWatcher {
 
  private:
 
+  // quiet()'s test without storing, inlined in the step loop: the sums of sums() for groups that read no p,
+  // without its switch.
   bool screen_groups(End end, double t) const {
     bool all = true;
     for (const Group& g : groups_) {
@@ -392,6 +378,11 @@ class EventWatcher {
     quiet({q1().data(), p1().data(), v1().data(), f1().data()}, t);
     rescan();
     if (budgeted_) rearm();
+  }
+
+  // Whether a run's events are screened (gated_).
+  static bool screens(const RunSpec& spec) {
+    return spec.events && spec.events->all_affine() && !spec.events->reads_momenta() && !spec.dense;
   }
 
   // Whether every q and p of x is finite: x * 0 is 0 for a finite x and NaN for an infinite or NaN one,
@@ -570,22 +561,31 @@ class EventWatcher {
 
   // Every group's L, S and R at the end just read; true where no affine g can have changed sign or
   // touched zero over the step, nor its rate changed sign: then detect() would find nothing.
+  // Group g's L, S and R at end (t: its time).
+  struct Sums {
+    double L, S, R;
+  };
+  Sums sums(const Group& g, End end, double t) const {
+    double L = 0.0, S = 0.0, R = 0.0;
+    for (std::size_t k = g.first; k < g.last; ++k) {
+      const Input& in = inputs_[k];
+      const double c = in.coefficient;
+      double term;
+      switch (in.which) {
+        case 0: term = c * end.q[in.index], R += c * end.v[in.index]; break;
+        case 1: term = c * end.p[in.index], R += c * end.f[in.index]; break;
+        default: term = c * t, R += c; break;
+      }
+      L += term;
+      S += std::abs(term);
+    }
+    return {L, S, R};
+  }
+
   bool quiet(End end, double t) {
     bool all = true;
     for (Group& g : groups_) {
-      double L = 0.0, S = 0.0, R = 0.0;
-      for (std::size_t k = g.first; k < g.last; ++k) {
-        const Input& in = inputs_[k];
-        const double c = in.coefficient;
-        double term;
-        switch (in.which) {
-          case 0: term = c * end.q[in.index], R += c * end.v[in.index]; break;
-          case 1: term = c * end.p[in.index], R += c * end.f[in.index]; break;
-          default: term = c * t, R += c; break;
-        }
-        L += term;
-        S += std::abs(term);
-      }
+      const auto [L, S, R] = sums(g, end, t);
       g.L = L, g.S = S, g.R_was = g.R, g.R = R;
       // (A gap of -1 has lo = hi = 0, which nothing lies clear inside.)
       all = all && inside(g, L, S) && !((bits(g.R_was) ^ bits(R)) >> 63);
