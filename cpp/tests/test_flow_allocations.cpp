@@ -1,6 +1,6 @@
 // The damping flows that run inside the step loop allocate nothing: Eigen's own check (EIGEN_RUNTIME_NO_MALLOC,
 // its assertion made to throw, so it works in a release build) around each call, for the Kepler kinds' drag in
-// every direction (fixed axes too) and for isotropic damping. Compiled alone: the macros must come before any Eigen header.
+// every direction (fixed axes too) and for isotropic damping, and a Structure's gradient with its springs. Compiled alone: the macros must come before any Eigen header.
 // (The radial and tangential drag first normalised a run-time-size segment, a heap VectorXd per planet per flow.)
 #include <stdexcept>
 #define eigen_assert(x) \
@@ -15,6 +15,7 @@
 #include "check.hpp"
 #include "raydamp/damping/isotropic_damping.hpp"
 #include "raydamp/models/planets.hpp"
+#include "raydamp/models/structure.hpp"
 
 using namespace raydamp;
 
@@ -63,6 +64,30 @@ int main() {
   const DecayFactors f = isotropic.factors(0.1);
   CHECK(!allocates([&] { isotropic.decay(q, f, p); }));
   CHECK(!allocates([&] { isotropic.decay_affine(q, f, g, p); }));
-  if (test::failures == 0) std::printf("no damping flow allocates\n");
+  // A Structure's kick: K q - f plus the springs' forces, K dense (a few coordinates) or sparse (past
+  // kMaxDenseDim), zero or not, and gradient_with_forces. (K q - f in one sparse expression made a heap temporary.)
+  for (const int n : {3, 40}) {
+    for (const bool frame : {false, true}) {
+      SparseColMajor k(n, n);
+      if (frame) {
+        std::vector<Eigen::Triplet<double>> entries;
+        for (int i = 0; i < n; ++i) entries.emplace_back(i, i, -0.1);  // a P-Delta-like softening
+        k.setFromTriplets(entries.begin(), entries.end());
+      }
+      materials::Springs springs;
+      for (int s = 0; s < n; ++s) {
+        if (s % 2) springs.bouc_wen.add(s - 1, s, materials::BoucWen(10.0, 1.0, 0.1, 0.5, 0.5));
+        else springs.bilinear.add(s - 1, s, materials::Bilinear(10.0, 1.0, 0.05));
+      }
+      const Structure<LumpedMass> structure(LumpedMass(Eigen::VectorXd::Ones(n), "M"), k, springs,
+                                            Eigen::VectorXd::Constant(n, 0.2), 0.1, 0.01);
+      const Eigen::VectorXd at = Eigen::VectorXd::LinSpaced(n, 0.0, 0.3);
+      Eigen::VectorXd grad(n);
+      const std::vector<double> sigma(n, 0.5);
+      CHECK(!allocates([&] { structure.gradient(at, grad); }));
+      CHECK(!allocates([&] { structure.gradient_with_forces(at, sigma.data(), grad); }));
+    }
+  }
+  if (test::failures == 0) std::printf("no damping flow or structure's gradient allocates\n");
   return test::failures == 0 ? 0 : 1;
 }

@@ -138,9 +138,17 @@ void bouc_wen_lanes_match_the_return_map() {
     const int n = 7;  // three blocks of two, and one padded
     std::vector<BoucWen> m;
     for (int s = 0; s < n; ++s) m.emplace_back(10.0 * (1 + s), 7.5 + s, 0.1 * s, beta, gamma);
+    bouc_wen_lanes::Params all;
+    std::vector<bouc_wen_lanes::Params> one(n);
+    for (int s = 0; s < n; ++s) {
+      all.add(m[s]);
+      one[s].add(m[s]);
+    }
     for (int trial = 0; trial < 3000; ++trial) {
-      std::vector<BoucWen::State> c(n), two(n), alone(n), reference(n);
-      std::vector<double> d(n), out_two(n), out_alone(n);
+      std::vector<BoucWen::State> c(n), two(n), alone(n), reference(n), narrow(n), wide(n);
+      const std::size_t padded = bouc_wen_lanes::Params::padded(n);
+      std::vector<double> d(n), out_two(padded), out_alone(n * bouc_wen_lanes::kWidest), out_narrow(padded),
+          out_wide(padded);
       for (int s = 0; s < n; ++s) {
         const double dy = m[s].fy / m[s].k, bound = 1.0 / (beta + gamma);
         c[s] = {3.0 * dy * unit(rng), bound * unit(rng)};
@@ -148,20 +156,41 @@ void bouc_wen_lanes_match_the_return_map() {
         const double scale = std::pow(10.0, -6.0 + 6.3 * (0.5 + 0.5 * unit(rng)));
         d[s] = trial % 7 == 0 ? c[s].d : c[s].d + dy * scale * unit(rng);
       }
-      bouc_wen_lanes::corrections(m.data(), c.data(), d.data(), two.data(), out_two.data(), n);
+      bouc_wen_lanes::forces(m.data(), all, c.data(), d.data(), two.data(), out_two.data(), n);
+      // Each width's lanes alone, whichever the processor's forces() takes: two to a vector, and four (AVX2).
+      const bool narrow_slow = bouc_wen_lanes::common_forces2(all, c.data(), d.data(), narrow.data(),
+                                                              out_narrow.data(), n);
+#if defined(__x86_64__) || defined(__i386__)
+      const bool four = bouc_wen_lanes::has_avx2();
+      const bool wide_slow = four && bouc_wen_lanes::common_forces4(all, c.data(), d.data(), wide.data(),
+                                                                    out_wide.data(), n);
+#else
+      const bool four = false, wide_slow = false;
+#endif
+      bool slow = false;
       for (int s = 0; s < n; ++s) {
-        bouc_wen_lanes::corrections(&m[s], &c[s], &d[s], &alone[s], &out_alone[s], 1);
+        const std::size_t at = s * bouc_wen_lanes::kWidest;
+        bouc_wen_lanes::forces(&m[s], one[s], &c[s], &d[s], &alone[s], &out_alone[at], 1);
         // The scalar return map takes the lanes' operations on the common step and hands them the others, so
         // the kick's force and every other reader's are the same bits (they were 1 ulp apart, the scalar map
         // then taking phi.hpp's series).
-        CHECK(out_two[s] == m[s].correction(c[s], d[s], reference[s]));
+        CHECK(out_two[s] == m[s].force(c[s], d[s], reference[s]));
         CHECK(two[s].z == reference[s].z);
         // and the force is sigma(d): elastic d + hysteretic z
         BoucWen::State check;
         CHECK(m[s].force(c[s], d[s], check) == m[s].elastic * d[s] + m[s].hysteretic * two[s].z);
         CHECK(two[s].d == d[s]);
-        CHECK(out_two[s] == out_alone[s] && two[s].z == alone[s].z);  // the same bits alone as in the set
+        CHECK(out_two[s] == out_alone[at] && two[s].z == alone[s].z);  // the same bits alone as in the set
+        double z;
+        if (m[s].common_step(c[s], d[s], z)) {
+          CHECK(out_narrow[s] == out_two[s] && narrow[s].z == two[s].z && narrow[s].d == d[s]);
+          if (four) CHECK(out_wide[s] == out_two[s] && wide[s].z == two[s].z && wide[s].d == d[s]);
+        } else {
+          slow = true;
+        }
       }
+      CHECK(narrow_slow == slow);
+      if (four) CHECK(wide_slow == slow);
     }
   }
 }

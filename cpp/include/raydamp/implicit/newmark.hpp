@@ -161,7 +161,7 @@ class NewmarkCore {
   void restoring(const Eigen::VectorXd& q, Eigen::VectorXd& out) {
     out.noalias() = *sys_.stiffness * q;
     out -= sys_.force;
-    springs_->for_each([&](const auto& set) { set.add_correction(q, out); });
+    springs_->for_each([&](const auto& set) { set.template add_forces<true>(q, out); });
   }
 
   // out = C v = alpha M v + beta K0 v.

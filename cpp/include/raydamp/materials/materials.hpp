@@ -208,12 +208,6 @@ struct BoucWen {
     return elastic * d + hysteretic * t.z;
   }
 
-  // sigma(d) - k d, the kick's share beside K0's k d, as the lanes form it: (alpha k - k) d + (1 - alpha) fy z.
-  double correction(const State& c, double d, State& t) const {
-    force(c, d, t);
-    return (elastic - k) * d + hysteretic * t.z;
-  }
-
   // The elastic part 1/2 alpha k d^2 and the hysteretic part's recoverable 1/2 (1 - alpha) fy d_y z^2.
   double stored(const State& t, double d) const {
     return 0.5 * alpha * k * d * d + 0.5 * (1.0 - alpha) * fy * (fy / k) * t.z * t.z;

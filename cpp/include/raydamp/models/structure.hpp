@@ -1,7 +1,9 @@
 // A structure with hysteretic springs: the linear structure of K0 = K + sum_s k_s r_s r_s^T (each
 // spring's initial stiffness added to K) with Rayleigh damping C = alpha M + beta K0, plus for each spring
 // the difference between its force and its initial stiffness's, r_s (sigma_s(d_s) - k_s d_s):
-//   grad V(q) = K0 q - f + sum_s r_s (sigma_s(d_s) - k_s d_s).
+//   grad V(q) = K0 q - f + sum_s r_s (sigma_s(d_s) - k_s d_s) = K q - f + sum_s r_s sigma_s(d_s),
+// the kick taking the last form: K0's product would be work the springs' terms then take back (a frame of
+// springs alone has K = 0: its kick has no product at all).
 // The damping of the initial stiffness keeps every damping sub-flow exact (and LinearStructure's dense
 // modal or sparse Chebyshev flows serve unchanged); its cost is a spurious damping force beta k_s r_s d_s'
 // in a spring that has yielded, which a tangent-stiffness damping would drop.
@@ -14,6 +16,7 @@
 // copy with fresh material states (fresh_run), so one model serves concurrent runs.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -79,20 +82,35 @@ struct Structure : LinearStructure<Mass> {
         springs(std::move(springs_)),
         damping(Base::damping) {
     damping.attach(&springs);
+    keep_frame_stiffness(k);
     if (tangent_damping) {
       const Eigen::MatrixXd k0 = Base::dense_stiffness ? *Base::dense_stiffness
                                                        : Eigen::MatrixXd(SparseColMajor(*Base::stiffness));
       damping.use_tangent(Eigen::MatrixXd(Base::mass.matrix()), k0);
     }
   }
-  Structure(const Structure& o) : Base(o), springs(o.springs), damping(o.damping) { damping.attach(&springs); }
-  Structure(Structure&& o) noexcept : Base(std::move(o)), springs(std::move(o.springs)), damping(std::move(o.damping)) {
+  Structure(const Structure& o)
+      : Base(o),
+        springs(o.springs),
+        damping(o.damping),
+        frame_stiffness(o.frame_stiffness),
+        dense_frame_stiffness(o.dense_frame_stiffness) {
+    damping.attach(&springs);
+  }
+  Structure(Structure&& o) noexcept
+      : Base(std::move(o)),
+        springs(std::move(o.springs)),
+        damping(std::move(o.damping)),
+        frame_stiffness(std::move(o.frame_stiffness)),
+        dense_frame_stiffness(std::move(o.dense_frame_stiffness)) {
     damping.attach(&springs);
   }
   Structure& operator=(const Structure& o) {
     Base::operator=(o);
     springs = o.springs;
     damping = o.damping;
+    frame_stiffness = o.frame_stiffness;
+    dense_frame_stiffness = o.dense_frame_stiffness;
     damping.attach(&springs);
     return *this;
   }
@@ -100,6 +118,8 @@ struct Structure : LinearStructure<Mass> {
     Base::operator=(std::move(o));
     springs = std::move(o.springs);
     damping = std::move(o.damping);
+    frame_stiffness = std::move(o.frame_stiffness);
+    dense_frame_stiffness = std::move(o.dense_frame_stiffness);
     damping.attach(&springs);
     return *this;
   }
@@ -115,8 +135,8 @@ struct Structure : LinearStructure<Mass> {
   double potential(const Vec& q) const { return Base::potential(q) + springs_energy(q); }
 
   void gradient(const Vec& q, Vec& g) const {
-    Base::gradient(q, g);
-    springs.for_each([&](const auto& set) { set.add_correction(q, g); });
+    frame_gradient(q, g);
+    springs.for_each([&](const auto& set) { set.add_forces(q, g); });
   }
 
   void hessian_product(const Vec& q, const Vec& v, Vec& out) const {
@@ -128,10 +148,9 @@ struct Structure : LinearStructure<Mass> {
   // instead of read from its material's committed state: the gradient of a row after the run, whose
   // material states are gone.
   void gradient_with_forces(const Vec& q, const double* sigma, Vec& g) const {
-    Base::gradient(q, g);
+    frame_gradient(q, g);
     springs.for_each([&](const auto& set) {
-      for (std::size_t s = 0; s < set.size(); ++s)
-        set.scatter(s, sigma[s] - set.material[s].stiffness() * set.deformation(q, s), g);
+      for (std::size_t s = 0; s < set.size(); ++s) set.scatter(s, sigma[s], g);
       sigma += set.size();
     });
   }
@@ -158,6 +177,27 @@ struct Structure : LinearStructure<Mass> {
   }
 
  private:
+  // K as given, without the springs' initial stiffness: null where it has no entry, dense where the damping is
+  // (a few coordinates: LinearStructure's choice for its K0).
+  std::shared_ptr<const SparseRowMajor> frame_stiffness;
+  std::shared_ptr<const Eigen::MatrixXd> dense_frame_stiffness;
+
+  void keep_frame_stiffness(const SparseColMajor& k) {
+    SparseRowMajor kept(k);
+    kept.prune(0.0);
+    if (kept.nonZeros() == 0) return;
+    if (Base::dense_stiffness) dense_frame_stiffness = std::make_shared<const Eigen::MatrixXd>(kept);
+    else frame_stiffness = std::make_shared<const SparseRowMajor>(std::move(kept));
+  }
+
+  // g = K q - f. (A sparse product inside a larger expression goes through a heap temporary: two statements.)
+  void frame_gradient(const Vec& q, Vec& g) const {
+    if (dense_frame_stiffness) g.noalias() = dense_frame_stiffness->lazyProduct(q);
+    else if (frame_stiffness) g.noalias() = *frame_stiffness * q;
+    if (dense_frame_stiffness || frame_stiffness) g -= Base::force;
+    else g.noalias() = -Base::force;  // one pass: a frame of springs alone
+  }
+
   double springs_energy(const Vec& q) const {
     double sum = 0.0;
     springs.for_each([&](const auto& set) { sum += set.energy_correction(q); });
