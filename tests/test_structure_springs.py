@@ -7,8 +7,9 @@
   best is within 1e-5 u_max at every step, worst over h = 0.01/9, 0.01/10, 0.01/11.
 - Bilinear against the same event-driven solution; Bouc-Wen against solve_ivp at rtol 1e-12, and its order
   (the kick's return maps of Bouc-Wen springs run in vectors, materials/bouc_wen_lanes.hpp).
-- A Structure without springs steps as a LinearStructure bit for bit; a composition's backward sub-steps
-  create no plastic flow.
+- A Structure without springs steps as a LinearStructure bit for bit; one whose springs never yield, beside a
+  K of its own, as the LinearStructure of K0 = K + the springs' stiffness to rounding (K dense and sparse); a
+  composition's backward sub-steps create no plastic flow.
 """
 
 from __future__ import annotations
@@ -183,6 +184,38 @@ def test_a_structure_without_springs_steps_as_its_linear_structure_bit_for_bit()
         a = raydamp.integrate(plain, [0.01, 0, 0], [0, 0.1, 0], method=method, h=0.01, n_steps=300, load=load)
         b = raydamp.integrate(linear, [0.01, 0, 0], [0, 0.1, 0], method=method, h=0.01, n_steps=300, load=load)
         assert np.array_equal(a.q, b.q) and np.array_equal(a.p, b.p), method
+
+
+@pytest.mark.parametrize("n", [3, 40])  # K dense (a few coordinates) and sparse (past 32)
+def test_k_beside_springs_that_stay_elastic_steps_as_the_linear_structure_of_k0(n):
+    # The kick takes K q + sum_s r_s sigma_s (K without the springs' stiffness): springs too strong to yield
+    # must then step as the LinearStructure of K0 = K + sum_s k_s r_s r_s^T, to rounding (a K dropped, or
+    # taken twice, is off by the storeys' whole stiffness).
+    rng = np.random.default_rng(7)
+    masses = 1.0 + rng.random(n)
+    ks = 20.0 + 20.0 * rng.random(n)
+    ground = 5.0 + rng.random(n)  # K: each storey tied to the ground as well
+    k0 = np.diag(ground)
+    springs = []
+    for s in range(n):
+        dofs = (0,) if s == 0 else (s - 1, s)
+        r = np.zeros(n)
+        r[dofs[-1]] = 1.0
+        if len(dofs) == 2:
+            r[dofs[0]] = -1.0
+        k0 += ks[s] * np.outer(r, r)
+        material = Bilinear(ks[s], 1e9, 0.05) if s % 2 else ElasticPlastic(ks[s], 1e9)
+        springs.append(raydamp.Spring(dofs, material))
+    frame = raydamp.Structure(np.diag(masses), np.diag(ground), springs=springs, alpha=0.2, beta=0.002)
+    linear = raydamp.LinearStructure(np.diag(masses), k0, alpha=0.2, beta=0.002)
+    q0, p0 = 0.01 * rng.standard_normal(n), 0.1 * rng.standard_normal(n)
+    load = raydamp.Load.harmonic(np.linspace(0.5, 1.0, n), 3.0)
+    for method in ("3s", "2s", "baoab"):
+        a = raydamp.integrate(frame, q0, p0, method=method, h=0.005, n_steps=400, load=load)
+        b = raydamp.integrate(linear, q0, p0, method=method, h=0.005, n_steps=400, load=load)
+        assert a.status == b.status == "completed"
+        assert np.max(np.abs(a.q - b.q)) <= 1e-13 * np.max(np.abs(b.q)), method  # measured 3e-16 to 2.2e-15
+        assert np.max(np.abs(a.p - b.p)) <= 1e-13 * np.max(np.abs(b.p)), method
 
 
 def test_a_yielding_frame_runs_every_splitting_and_converges_to_one_answer():
