@@ -314,8 +314,8 @@ class EventWatcher {
   RAYDAMP_NOINLINE void rearm(End end) {
     double budget = DBL_MAX;
     for (const Group& g : groups_) {
-      const auto [L, S, R] = sums(g, end, 0.0);  // (budgeted groups read q only)
-      static_cast<void>(R);
+      const Sums at = sums(g, end, 0.0);  // (budgeted groups read q only)
+      const double L = at.L, S = at.S;
       // L' - lo > lo_slack + slack S' for |L' - L| <= m and S' <= S + m: m (1 + slack) < L - lo - lo_slack - slack S
       const double room = std::min(L - g.lo - g.lo_slack - g.slack * S, g.hi - g.hi_slack - g.slack * S - L);
       if (g.C > 0.0) budget = std::min(budget, room / ((1.0 + g.slack) * g.C));

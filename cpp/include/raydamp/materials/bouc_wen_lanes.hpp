@@ -53,7 +53,6 @@ struct Params {
     ++count;
     for (auto* v : arrays()) v->resize(padded(count), v->back());
   }
-  std::size_t size() const { return count; }
   // The entries of a forces() output for n springs.
   static std::size_t padded(std::size_t n) { return (n + kWidest - 1) / kWidest * kWidest; }
 

@@ -88,7 +88,7 @@ struct SpringSet {
         bouc_wen_lanes::forces(material.data(), lane_params, committed.data(), lane_deformations.data(), trial.data(),
                                lane_forces.data(), j.size());
         for (std::size_t s = 0; s < j.size(); ++s)
-          scatter(s, initial ? lane_forces[s] - material[s].k * lane_deformations[s] : lane_forces[s], g);
+          scatter(s, initial ? lane_forces[s] - material[s].stiffness() * lane_deformations[s] : lane_forces[s], g);
         return;
       }
     }

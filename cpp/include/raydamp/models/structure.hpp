@@ -192,10 +192,13 @@ struct Structure : LinearStructure<Mass> {
 
   // g = K q - f. (A sparse product inside a larger expression goes through a heap temporary: two statements.)
   void frame_gradient(const Vec& q, Vec& g) const {
+    if (!dense_frame_stiffness && !frame_stiffness) {  // a frame of springs alone: one pass
+      g.noalias() = -Base::force;
+      return;
+    }
     if (dense_frame_stiffness) g.noalias() = dense_frame_stiffness->lazyProduct(q);
-    else if (frame_stiffness) g.noalias() = *frame_stiffness * q;
-    if (dense_frame_stiffness || frame_stiffness) g -= Base::force;
-    else g.noalias() = -Base::force;  // one pass: a frame of springs alone
+    else g.noalias() = *frame_stiffness * q;
+    g -= Base::force;
   }
 
   double springs_energy(const Vec& q) const {
