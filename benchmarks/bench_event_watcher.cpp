@@ -1,19 +1,21 @@
 // The event watcher's cost per step (events/watcher.hpp) on the damped pendulum (eps = 0.1, 3s, h = 0.01,
 // 10^6 whole steps, released from q = 1), from C++ with no Python around it. Through integrate(): the
 // whole-step run without events; the floor (one affine g = t - 1e9 that never crosses); one level g = q[0];
-// ten levels g = q[0] - 0.1 k; five levels of q and five of p (p's rate is the force: one more sine a step).
-// Beside them, the floor of any watcher: the same 3s step in a bare loop, alone and with ten sign checks
-// of q[0] - 0.1 k inlined after it (no call, no copy, no rate): what ten events cost at the least.
+// ten levels g = q[0] - 0.1 k; five levels of q and five of p (p's rate is the force: one more sine a step);
+// and the one and ten levels again, screened a step at a time in the loop instead of a block at a time
+// (RunSpec::batch_screens = false: the watcher's form before batching, the same events). Beside them, the
+// floor of any watcher: the same 3s step in a bare loop, alone and with ten sign checks of q[0] - 0.1 k
+// inlined after it (no call, no copy, no rate): what ten events cost at the least.
 // Then the 10-storey shear frame of benchmarks/ground_motion_frame.py (storey masses 1e5 kg, storey
 // stiffness 2e8 N/m, lumped M, 5% Rayleigh damping in modes 1 and 3) by 3s, h = 0.005, 2 10^5 whole steps of
 // free vibration from a linear shape (roof at 0.1 m): without events, the floor, and ten storey-drift events
 // q[k] - q[k-1] - 0.005 (q[0] - 0.005 for the first storey), as Python's affine forms of those expressions.
 // Best of 9 rounds each, the cases interleaved; the ratio to the whole-step run is issue 41's figure
 // (target 1.2x). `perf record` on it shows where a step's time goes without the interpreter's share.
-// Prints figures; never passes or fails on time. An argument 0-6 runs that pendulum case only, "frame" the
+// Prints figures; never passes or fails on time. An argument 0-8 runs that pendulum case only, "frame" the
 // frame's cases only (for perf).
 //
-//   g++ -O3 -DNDEBUG -std=c++17 -fPIC -DEIGEN_UNALIGNED_VECTORIZE=0 -Wno-psabi -I cpp/include
+//   g++ -O3 -DNDEBUG -std=c++17 -fPIC -ffp-contract=off -DEIGEN_UNALIGNED_VECTORIZE=0 -Wno-psabi -I cpp/include
 //       -isystem /usr/include/eigen3 benchmarks/bench_event_watcher.cpp -o build/bench_event_watcher
 //   build/bench_event_watcher
 #include <algorithm>
@@ -147,11 +149,12 @@ int main(int argc, char** argv) {
   const long N = 1000000;
   EventSet floor_ = affine_set(1, 1, true), one = affine_set(1, 1, false), ten = affine_set(10, 10, false),
            mixed = affine_set(10, 5, false);
-  const EventSet* cases[] = {nullptr, &floor_, &one, &ten, &mixed};
-  const char* names[] = {"whole steps, no events", "floor: 1 event t - 1e9", "1 event q",
-                         "10 events q - 0.1k",     "5 on q, 5 on p",         "bare 3s loop",
-                         "bare loop + 10 sign checks"};
-  constexpr int kCases = 7;
+  // the last two: the same events screened in the loop, a step at a time (RunSpec::batch_screens = false)
+  const EventSet* cases[] = {nullptr, &floor_, &one, &ten, &mixed, &one, &ten};
+  const char* names[] = {"whole steps, no events",  "floor: 1 event t - 1e9",   "1 event q",
+                         "10 events q - 0.1k",      "5 on q, 5 on p",           "1 event q, in the loop",
+                         "10 events, in the loop",  "bare 3s loop",             "bare loop + 10 sign checks"};
+  constexpr int kCases = 9, kBare = 7;
   std::vector<double> best(kCases, 1e9);
   std::vector<long> found(kCases, 0);
   if (argc > 1 && std::strcmp(argv[1], "frame") == 0) return frame(), 0;
@@ -161,15 +164,16 @@ int main(int argc, char** argv) {
       if (only >= 0 && c != only) continue;
       RunSpec spec{0.01, N, 0.01, N};
       spec.merge_steps = false;
-      if (c >= 5) {
+      if (c >= kBare) {
         long crossings = 0;
-        const double ns = c == 5 ? bare<false>(pendulum, tab, none, z0, spec, crossings)
+        const double ns = c == kBare ? bare<false>(pendulum, tab, none, z0, spec, crossings)
                                  : bare<true>(pendulum, tab, none, z0, spec, crossings);
         best[c] = std::min(best[c], ns);
         found[c] = crossings;
         continue;
       }
       spec.events = cases[c];
+      spec.batch_screens = c < 5;
       const auto t0 = std::chrono::steady_clock::now();
       RunResult r = integrate<ThreeTermSplitting>(pendulum, tab, none, z0, spec);
       const double ns = std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count() / N;
@@ -181,7 +185,7 @@ int main(int argc, char** argv) {
               "checks to the bare loop)\n",
               N);
   for (int c = 0; c < kCases; ++c)
-    std::printf("  %-28s %6.2f ns/step  x%.2f  (%ld %s)\n", names[c], best[c], best[c] / best[c >= 5 ? 5 : 0],
-                found[c], c >= 5 ? "steps with a crossing" : "crossings");
+    std::printf("  %-28s %6.2f ns/step  x%.2f  (%ld %s)\n", names[c], best[c], best[c] / best[c >= kBare ? kBare : 0],
+                found[c], c >= kBare ? "steps with a crossing" : "crossings");
   if (only < 0) frame();
 }

@@ -1,7 +1,9 @@
-"""Screened events (issue 41): affine events of q and t are ruled out inline in the step loop, and only the
-steps that may hold a crossing are observed, from the state kept before the step. A run with dense output
-observes every step's end (the path without the screen), so the two must log the same crossings, bit for bit:
-any crossing the screen let pass, or a step searched from a wrong start, shows as a difference here."""
+"""Screened events (issue 41): affine events of q and t are ruled out without observing every step, and only
+the steps that may hold a crossing are observed, from the state before the step. On a model of fixed size (the
+damped pendulum) the loop stores each step's end and screens a block of them at once; elsewhere it screens each
+step inline, from the state it kept. A run with dense output observes every step's end (the path without the
+screen), so the two must log the same crossings, bit for bit: any crossing the screen let pass, or a step
+searched from a wrong start, shows as a difference here."""
 
 import numpy as np
 import pytest
@@ -38,6 +40,27 @@ def test_screened_pendulum_events_equal_the_observed_ones(method, composition):
     assert len(screened.events) > 100
     assert list(screened.events["clock"].t) == [pytest.approx(12.345, abs=1e-12)]
     np.testing.assert_array_equal(screened.q, observed.q)  # dense output does not change the stepping
+
+
+def test_block_screened_pendulum_events_equal_the_observed_ones_over_whole_blocks():
+    """Blocks of 256 steps between saved rows (30,000 steps, one row at each end): levels, a touch-prone level
+    near a swing's turn, a clock in the last step; then a terminal event found after its block ran on, whose
+    run must end where the observed one does, with the same work done."""
+    pendulum = DampedPendulum(eps=0.1)
+    events = levels(10, 0.1) + [raydamp.Event("q[0] + 1.9", name="deep"), raydamp.Event("t - 299.995", name="clock")]
+    run = dict(method="3s", h=0.01, n_steps=30_000, save_every=30_000, events=events)
+    screened = raydamp.integrate(pendulum, [2.0], [0.0], **run)
+    observed = raydamp.integrate(pendulum, [2.0], [0.0], dense=True, **run)
+    assert_same_log(screened, observed)
+    assert len(screened.events) > 150 and len(screened.events["clock"]) == 1
+    stop = [raydamp.Event("q[0] + 0.5", direction=-1, terminal=True, name="stop")]
+    run = dict(method="3s", h=0.01, n_steps=30_000, save_every=30_000, events=stop, work=True)
+    screened = raydamp.integrate(pendulum, [2.0], [0.0], **run)
+    observed = raydamp.integrate(pendulum, [2.0], [0.0], dense=True, **run)
+    assert screened.status == observed.status == "event"
+    assert_same_log(screened, observed)
+    assert screened.t[-1] == observed.t[-1] and screened.q[-1, 0] == observed.q[-1, 0]
+    assert screened.work[-1] == observed.work[-1] > 0.0
 
 
 def chain(sites=6):

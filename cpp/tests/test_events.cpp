@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,63 @@ double ellipk(double k) {
     a = next;
   }
   return M_PI / (2.0 * a);
+}
+
+// Whether two runs found the same events, bit for bit, and stepped the same rows.
+bool same_runs(const RunResult& a, const RunResult& b) {
+  return a.events.t == b.events.t && a.events.q == b.events.q && a.events.p == b.events.p &&
+         a.events.event == b.events.event && a.events.direction == b.events.direction &&
+         a.trajectory.t == b.trajectory.t && a.trajectory.q == b.trajectory.q && a.trajectory.p == b.trajectory.p &&
+         a.trajectory.work == b.trajectory.work && a.steps == b.steps && a.status == b.status;
+}
+
+// Affine events of q[index] - level and of t - clock, direction 0 unless given.
+EventSet levels_of(int index, const std::vector<double>& levels, const std::vector<double>& clocks,
+                   bool terminal = false, int direction = 0) {
+  EventSet set;
+  set.fn.fn = &angle;  // never called: every g is affine
+  set.slots = {{EventSlot::Kind::q, index}, {EventSlot::Kind::v, index}};
+  for (std::size_t k = 0; k < levels.size(); ++k) {
+    EventFunction f(direction, terminal, "level" + std::to_string(k));
+    f.affine = true;
+    f.constant = -levels[k];
+    f.terms = {{EventSlot::Kind::q, index, 1.0}};
+    set.events.push_back(f);
+  }
+  for (const double clock : clocks) {
+    EventFunction f(0, terminal, "clock");
+    f.affine = true;
+    f.constant = -clock;
+    f.terms = {{EventSlot::Kind::t, 0, 1.0}};
+    set.events.push_back(f);
+  }
+  return set;
+}
+
+// The batched screen's kernel (events/block_sums.hpp) against inside()'s test written out, end by end:
+// levels hit exactly, a rounding either side, rates of +0 and -0, NaN and infinity, a group of two terms
+// and one of t; from every start, on both widths where the processor has AVX2.
+struct KernelInput {
+  int which, index;
+  double coefficient;
+};
+long first_loud_by_hand(const std::vector<block_sums::Group<KernelInput>>& groups, const double* rows, const double* t,
+                        long j, long m) {
+  for (; j < m; ++j)
+    for (const auto& g : groups) {
+      double L = 0.0, S = 0.0, R = 0.0;
+      for (const KernelInput* in = g.first; in != g.last; ++in) {
+        const double c = in->coefficient;
+        const double term = in->which == 0 ? c * rows[4 * j + in->index] : c * t[j];
+        R += in->which == 0 ? c * rows[4 * j + 2 + in->index] : c;  // rows of q0 q1 p0 p1, M = 1
+        L += term;
+        S += std::abs(term);
+      }
+      const double margin = g.slack * S;
+      if (!(L - g.lo > g.lo_slack + margin && g.hi - L > g.hi_slack + margin && std::signbit(R) == g.falling))
+        return j;
+    }
+  return m;
 }
 
 }  // namespace
@@ -137,7 +195,7 @@ int main() {
     const RunResult c = integrate<StormerVerlet>(pendulum, tab, sixth, z0, spec);
     CHECK(a.events.size() == 6 && b.events.size() == 6 && c.events.size() == 6);
     double interpolated = 0.0, landed = 0.0;
-    for (long i = 0; i < a.events.size(); ++i) {
+    for (long i = 0; i < std::min({a.events.size(), b.events.size(), c.events.size()}); ++i) {
       CHECK(a.events.t[i] == b.events.t[i] && a.events.q[i] == b.events.q[i] && a.events.p[i] == b.events.p[i]);
       CHECK(std::abs(c.events.q[i]) <= 1e-15);
       CHECK(c.events.direction[i] == a.events.direction[i]);
@@ -204,6 +262,119 @@ int main() {
     bool at_step_end = false;  // a level on a step end is found there
     for (long i = 0; i < b.events.size(); ++i) at_step_end = at_step_end || (b.events.event[i] == 1 && b.events.t[i] == plain.dense.t[150]);
     CHECK(at_step_end);
+  }
+
+  // Screens batched a block at a time (fixed-size models: events/watcher.hpp, batch_screens) find what the
+  // loop's screen of every step finds, bit for bit: ten levels of a damped pendulum's angle and a clock, over
+  // blocks of steps with a short last step; a pendulum on a spring (three coordinates read at a stride, a
+  // scalar mass); terminal events mid-block, on a step's end (the clock at a step end: the recorder's work
+  // sums of that end, not of the block's), and at the first step of a block.
+  {
+    const DampedPendulum damped(0.1);
+    const Composition& none = builtin_composition("none");
+    const State<1> start{Vector<1>(2.0), Vector<1>(0.0)};
+    std::vector<double> ten;
+    for (int k = 0; k < 10; ++k) ten.push_back(0.1 * k - 0.3);
+    Control control;
+    control.max_progress_calls = 1;  // blocks of kBlock steps between saved rows (not a hundredth of the run)
+    auto both = [&](const auto& model, const auto& z, const EventSet& set, RunSpec spec) {
+      spec.events = &set;
+      spec.track_work = true;
+      spec.merge_steps = false;
+      const RunResult batched = integrate<ThreeTermSplitting>(model, tab, none, z, spec, control);
+      spec.batch_screens = false;
+      const RunResult looped = integrate<ThreeTermSplitting>(model, tab, none, z, spec, control);
+      CHECK(same_runs(batched, looped));
+      return batched;
+    };
+    // a level at a step end's value (g = 0 there), and one just past the lowest step end of a swing (a touch
+    // inside the step: its rate turns there, and the interpolant dips through the level between the ends)
+    RunSpec dense_spec{0.01, 3000, 0.015, 3000};
+    dense_spec.merge_steps = false;
+    dense_spec.dense = true;
+    const RunResult path = integrate<ThreeTermSplitting>(damped, tab, none, start, dense_spec);
+    const long bottom = std::min_element(path.dense.q.begin() + 150, path.dense.q.begin() + 450) - path.dense.q.begin();
+    ten.push_back(path.dense.q[700]);
+    ten.push_back(path.dense.q[bottom] - 1e-9);
+    // (a last step longer than h: the clock at 30.002 lies past 3000 h, inside it)
+    const EventSet levels = levels_of(0, ten, {7.005, 30.002});
+    const RunResult r = both(damped, start, levels, RunSpec{0.01, 3000, 0.015, 1000});
+    std::printf("batched screens: %ld crossings of ten levels and two clocks\n", r.events.size());
+    CHECK(r.events.size() > 60);
+    CHECK(std::count(r.events.event.begin(), r.events.event.end(), 12) == 1);  // each clock, once
+    CHECK(std::count(r.events.event.begin(), r.events.event.end(), 13) == 1);
+    CHECK(std::count(r.events.t.begin(), r.events.t.end(), path.dense.t[700]) == 1);  // on the step end
+    long touched = 0;  // the touch: two crossings inside the bottom's step
+    for (long i = 0; i < r.events.size(); ++i)
+      touched += r.events.event[i] == 11 && r.events.t[i] > path.dense.t[bottom - 1] &&
+                 r.events.t[i] < path.dense.t[bottom + 1];
+    CHECK(touched == 2);
+
+    const ElasticPendulum spring(0.2);
+    const State<3> hung{Vector<3>(0.3, -0.2, -1.1), Vector<3>(0.0, 0.4, 0.0)};
+    const RunResult s = both(spring, hung, levels_of(1, {-0.1, 0.0, 0.15}, {}), RunSpec{0.01, 2000, 0.01, 500});
+    CHECK(s.events.size() > 10);
+    // a level just inside the interpolant's turn at a block's first step (a block a step: save_every = 1),
+    // crossed twice inside it: that step's start rate is the block start's M^-1 p (a scalar mass here; the
+    // review found it read as 0, which ruled the turn out and lost both crossings)
+    const State<3> swung{Vector<3>(0.3, -0.2, -1.1), Vector<3>(0.0, 0.8, 0.0)};
+    const RunResult turn = both(spring, swung, levels_of(2, {-2.3523289745457943}, {}), RunSpec{0.25, 100, 0.25, 1});
+    CHECK(turn.events.size() == 4);
+
+    // terminal: the first fall through 0.2, mid-block; the clock on a step's end (3.0 = 300 h); the clock
+    // inside the first step of the second block (step 256 ends at 2.57)
+    const RunResult mid = both(damped, start, levels_of(0, {0.2}, {}, true, -1), RunSpec{0.01, 3000, 0.01, 3000});
+    CHECK(mid.status == Status::event && mid.steps % kBlock != 0);
+    const RunResult on_end = both(damped, start, levels_of(0, {}, {3.0}, true), RunSpec{0.01, 3000, 0.01, 3000});
+    CHECK(on_end.status == Status::event && on_end.steps == 300 && on_end.trajectory.t.back() == 3.0);
+    const RunResult first = both(damped, start, levels_of(0, {}, {2.565}, true), RunSpec{0.01, 3000, 0.01, 3000});
+    CHECK(first.status == Status::event && first.steps == kBlock + 1);
+    std::printf("terminal, batched as looped: steps %ld, %ld, %ld\n", mid.steps, on_end.steps, first.steps);
+  }
+
+  // The batched screen's kernel, end by end (first_loud_by_hand).
+  {
+    const double inf = std::numeric_limits<double>::infinity(), nan = std::nan("");
+    const double lo = 0.25, hi = 0.75;
+    const std::vector<double> q0 = {0.5, lo, std::nextafter(lo, 1.0), hi, std::nextafter(hi, 0.0), 0.5, 0.5, nan, 0.6,
+                                    inf, 0.4, 0.5, 0.3, std::nextafter(lo, 0.0), 0.7, 0.5, 0.5, 0.53};
+    const std::vector<double> v0 = {1.0, 1.0, 1.0, 1.0, 1.0,    0.0, -0.0, 1.0, nan,
+                                    1.0, -2.0, 1e-300, 2.0, 1.0, 1.0, 1.0, 1.0, 1.0};
+    const long m = static_cast<long>(q0.size());
+    std::vector<double> rows(4 * (m + 4), 0.0), t(m + 4, 0.0);
+    for (long j = 0; j < m; ++j) {
+      rows[4 * j] = q0[j], rows[4 * j + 1] = 0.1 * static_cast<double>(j % 3);  // q1
+      rows[4 * j + 2] = v0[j], rows[4 * j + 3] = 0.5;                           // p1 = v1
+      t[j] = 0.01 * static_cast<double>(j);
+    }
+    const KernelInput one[] = {{0, 0, 1.0}}, two[] = {{0, 0, 1.0}, {0, 1, -1.0}}, clock[] = {{2, 0, -1.0}};
+    const block_sums::Rows at{rows.data(), rows.data() + 2, t.data()};
+    int compared = 0;
+    for (const double slack : {0.0, 1e-15, 0.1})  // (0.1: end 17's two terms, 0.53 - 0.2, inside by S only)
+      for (const bool falling : {false, true})
+        for (int shape = 0; shape < 3; ++shape) {
+          std::vector<block_sums::Group<KernelInput>> groups = {
+              {one, one + 1, lo, hi, slack * lo, slack * hi, slack, falling}};
+          if (shape == 1) groups[0].first = two, groups[0].last = two + 2;
+          if (shape == 2) groups.push_back({clock, clock + 1, -1.0, 0.1, slack, slack * 0.1, slack, true});
+          for (long j = 0; j < m; ++j) {
+            const long want = first_loud_by_hand(groups, rows.data(), t.data(), j, m);
+            long got = m;
+            for (const auto& g : groups) got = block_sums::first_loud2<4, 4>(g, at, j, got);
+            CHECK(got == want);
+            const long dispatched = block_sums::first_loud<4, 4>(groups.data(), groups.size(), at, j, m);
+            CHECK(dispatched == want);
+#if defined(__x86_64__) || defined(__i386__)
+            if (has_avx2()) {
+              long wide = m;
+              for (const auto& g : groups) wide = block_sums::first_loud4<4, 4, false>(g, at, j, wide);
+              CHECK(wide == want);
+            }
+#endif
+            ++compared;
+          }
+        }
+    std::printf("batched screen's kernel: %d starts judged as by hand\n", compared);
   }
 
   // Refusals, each naming the argument.

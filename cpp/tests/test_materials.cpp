@@ -161,7 +161,7 @@ void bouc_wen_lanes_match_the_return_map() {
       const bool narrow_slow = bouc_wen_lanes::common_forces2(all, c.data(), d.data(), narrow.data(),
                                                               out_narrow.data(), n);
 #if defined(__x86_64__) || defined(__i386__)
-      const bool four = bouc_wen_lanes::has_avx2();
+      const bool four = has_avx2();
       const bool wide_slow = four && bouc_wen_lanes::common_forces4(all, c.data(), d.data(), wide.data(),
                                                                     out_wide.data(), n);
 #else

@@ -505,6 +505,7 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
   Recorder<Model, Dim, trapezoid> rec(model, spec, ws, result.trajectory);
   const ModelView view = model_view(model);  // what the observers below see of the model
   EventWatcher watch(view, spec, result, view_of(z), 0.0);  // events
+  watch.batch_screens(Dim != Eigen::Dynamic && !has_materials_v<Model>, kBlock);
   auto time_at = [&](long k) { return step_time(k, spec.h, N, spec.h_last); };
   auto stop = [&](Status status, long failed_step, std::string message) {
     result.status = status, result.failed_step = failed_step, result.message = std::move(message);
@@ -562,9 +563,11 @@ RunResult run_steps(const Model& model, const Tab& tab, const Composition& compo
     const long end = std::min({N, next_save, progress.next(), k + kBlock});
     checkpoint.take(z, ws, rec);  // a replay draws the same noise
     save_materials(model);        // and starts from the same material states
+    watch.begin_block(z, k, rec);
     ws.time = time_at(k);  // the merged loop's clock; advance() sets it per step
     const double block_drift =
         run_block_on<mergeable>(model, tab, stepper, unhooked, z, y, k, end, merge, track_momenta, advance, step_drift);
+    watch.end_block<Dim>(model);  // batched screens: the block's steps observed now
     if (watch.stopped() || envelope.stopped()) {  // a terminal event (its step shortened to it), or a collapse
       k = watch.stopped() ? finish_at_event<Method>(watch, model, tab, composition, spec, ws, rec, z, result)
                           : envelope.stop(result);

@@ -54,6 +54,10 @@ struct RunSpec {
   bool dense = false;
   // Peaks to take at every step's end (record/envelope.hpp), or none; steps then run whole.
   const EnvelopeSpec* envelope = nullptr;
+  // Screened events (affine, of q and t) on a model of fixed size without springs, envelope or noise are
+  // screened a block at a time, from the steps' ends stored as the block runs (events/watcher.hpp); false
+  // screens each step inside the loop instead (tests compare the two: the same events, bit for bit).
+  bool batch_screens = true;
 };
 
 struct Control {

@@ -15,10 +15,12 @@
 // dg/dt, and which of their g are positive is which of their levels -constant L passes. A step whose
 // every form stays inside the same gap between its levels, clear of both by a rounding bound, with its
 // rate's sign kept, has no crossing; any other step gets every g at both ends and the scan above.
-// Affine events of q and t alone (no force needed at a step end) are screened so inline in the loop
-// (screen), and nothing of a quiet step is stored or called (after_step). Where several groups read the
-// q of a model of run-time size, the step is screened by a bound on how far its q moved instead
-// (within_budget): no sum per group until some group's L may have come near one of its levels.
+// Affine events of q and t alone (no force needed at a step end) are screened without observing the
+// quiet steps. On a model of fixed size (the damped pendulum), the loop only stores each step's end, and
+// the block's ends are screened when it is done, four to a vector (batch_screens, events/block_sums.hpp);
+// elsewhere each step is screened inline in the loop (screen), from the start the loop kept. Where several
+// groups read the q of a model of run-time size, the step is screened by a bound on how far its q moved
+// instead (within_budget): no sum per group until some group's L may have come near one of its levels.
 #pragma once
 
 #include <algorithm>
@@ -32,9 +34,11 @@
 #include <utility>
 #include <vector>
 
+#include "raydamp/events/block_sums.hpp"
 #include "raydamp/events/henon.hpp"
 #include "raydamp/events/hermite.hpp"
 #include "raydamp/events/types.hpp"
+#include "raydamp/mass/unit_mass.hpp"
 #include "raydamp/record/marks.hpp"
 #include "raydamp/record/model_view.hpp"
 #include "raydamp/record/save_grid.hpp"
@@ -102,6 +106,8 @@ class EventWatcher {
         }
       forces_ = forces_ || set_->reads_momenta();
       gated_ = screens(spec);
+      keeps_ = gated_;
+      batchable_ = gated_ && spec.batch_screens && !spec.envelope && spec.temperature == 0.0;
       budgeted_ = gated_ && groups_.size() > 1;
       for (const Input& in : inputs_) {
         budgeted_ = budgeted_ && in.which == 0;
@@ -115,7 +121,9 @@ class EventWatcher {
       g0_.assign(events.size(), 0.0);
       g1_ = dg0_ = dg1_ = g0_;
       found_.reserve(3 * events.size());
-      log_.t.reserve(256);
+      log_.t.reserve(256);  // (a log that grows reallocates rarely: 256 crossings, then doubling)
+      log_.event.reserve(256), log_.direction.reserve(256);
+      log_.q.reserve(256 * static_cast<std::size_t>(n_)), log_.p.reserve(256 * static_cast<std::size_t>(n_));
     }
     if (dense_) {
       const std::size_t rows = static_cast<std::size_t>(spec.n_steps) + 1;  // reserved now: no allocation per step
@@ -137,7 +145,7 @@ class EventWatcher {
   // whole step 1.65x, screened 1.3x (benchmarks/bench_event_watcher.cpp).
   template <int Dim, class Rec>
   void keep(const State<Dim>& x, const Rec& rec) {
-    if (!gated_) return;
+    if (!keeps_) return;
     put<Dim>(kept_q_, x.q);  // no allocation: the sizes are the model's
     put<Dim>(kept_p_, x.p);
     if (terminal_) marks_ = rec.marks();  // what a terminal event's restep starts from
@@ -146,6 +154,11 @@ class EventWatcher {
   // After whole step i of model, ending at t, of a state that rec (the recorder) observed.
   template <class Model, int Dim, class Rec>
   void after_step(const Model& model, const State<Dim>& x, long i, double t, const Rec& rec) {
+    const Rows rows = rows_mode_;  // (one load and compare a step where rows are kept, not three)
+    if constexpr (Dim != Eigen::Dynamic) {
+      if (rows == Rows::ends) return write_row<false>(x, rec);
+      if (rows == Rows::ends_and_marks) return write_row<true>(x, rec);
+    }
     if (!on_) return;
     if (gated_) {
       if (!screen(model, x, t)) observe_from(model, x, i, t);
@@ -153,6 +166,53 @@ class EventWatcher {
     }
     if (terminal_ && i > step_) marks_ = rec.marks();  // what a terminal event's restep starts from
     observe(model, x, i, t);
+  }
+
+  // Batched screens. A screened run on a model of fixed size (fixed_size: without springs, whose states
+  // the block's steps move on) screens its steps a block at a time: each step's end (and, with a terminal
+  // event, the recorder's marks there) is stored as the block runs (write_row: a few stores a step, no
+  // keep), and end_block() screens the stored ends in order with screen()'s test, observing the steps that
+  // are not quiet from their two rows as the loop would have; a step whose only news is a rate that turned
+  // well inside its gap is ruled out there too (turns_inside). The events are the same, bit for bit, as
+  // screening each step in the loop (RunSpec::batch_screens = false; test_events.cpp). Inline, that screen
+  // cost the damped pendulum's 11.6 ns step 3-4 ns; batched, 1.2 (benchmarks/bench_event_watcher.cpp).
+  // Call once, before the first block; block: its most steps. (No envelope, no noise: both would have to
+  // be taken back past a terminal event found after the block ran on.)
+  void batch_screens(bool fixed_size, long block) {
+    batched_ = batchable_ && fixed_size;
+    keeps_ = gated_ && !batched_;
+    if (!batched_) return;
+    rows_mode_ = terminal_ ? Rows::ends_and_marks : Rows::ends;
+    // + 4: the last four ends first_loud4() reads (past the block's: found after its own, never returned)
+    const std::size_t rows = static_cast<std::size_t>(block + 1 + 4), n = static_cast<std::size_t>(n_);
+    rows_.assign(2 * rows * n, 0.0);
+    rows_v_.assign(rows * n, 0.0);
+    rows_t_.assign(rows, 0.0);
+    count_.resize(rows);
+    for (std::size_t j = 0; j < rows; ++j) count_[j] = static_cast<double>(j);
+    if (terminal_) row_marks_.assign(rows, RecorderMarks{});
+    spans_.reserve(groups_.size());
+    for (const Input& in : inputs_) reads_time_ = reads_time_ || in.which == 2;
+  }
+
+  // Before a block that starts at step k from z (the recorder rec at that point).
+  template <int Dim, class Rec>
+  void begin_block(const State<Dim>& z, long k, const Rec& rec) {
+    if constexpr (Dim != Eigen::Dynamic) {
+      if (!batched_) return;
+      first_ = k;
+      cursor_ = rows_.data();
+      if (terminal_) write_row<true>(z, rec);
+      else write_row<false>(z, rec);
+    }
+  }
+
+  // After the block: its stored ends screened and observed (out of line), up to a terminal event.
+  template <int Dim, class Model>
+  void end_block(const Model& model) {
+    if constexpr (Dim != Eigen::Dynamic) {
+      if (batched_) screen_rows<Dim>(model);
+    }
   }
 
   // After a terminal event: z becomes the state at the crossing time, stepped by restep(z, i, dt) from
@@ -163,6 +223,7 @@ class EventWatcher {
     if (t_stop_ == t1_) {  // on the step's end: the stepped state itself
       z.q = q1();
       z.p = p1();
+      if (batched_) rec.restore(marks1_);  // the block went on past it
       return step_ + 1;
     }
     z.q = q0();
@@ -272,6 +333,119 @@ class EventWatcher {
     }
   }
 
+  // The block's next row: x's q and p (and the recorder's marks where a terminal event may restep).
+  template <bool Marks, int Dim, class Rec>
+  void write_row(const State<Dim>& x, const Rec& rec) {
+    using Row = Eigen::Map<Eigen::Matrix<double, Dim, 1>>;
+    double* row = cursor_;  // (a pointer kept, not an index: the damped pendulum's step 0.6 ns less)
+    Row{row} = x.q;
+    Row{row + Dim} = x.p;
+    cursor_ = row + 2 * Dim;
+    if constexpr (Marks) row_marks_[static_cast<std::size_t>((row - rows_.data()) / (2 * Dim))] = rec.marks();
+  }
+
+  // Rows 1 .. m - 1 of the block's m (row 0: its start), each the end of step first_ + row - 1, screened in
+  // order, four at a time (block_sums::first_loud: screen_groups()'s sums and inside()'s test on the same bits);
+  // an end that is not quiet is observed from the row before it (its start) and its own, as observe_from()
+  // would have from keep() and after_step(), and the ends after it screened against the gaps it left.
+  template <int Dim, class Model>
+  RAYDAMP_NOINLINE_FLAT void screen_rows(const Model& model) {
+    using Row = Eigen::Map<const Eigen::Matrix<double, Dim, 1>>;
+    using MVec = typename Model::Vec;
+    const long m = (cursor_ - rows_.data()) / (2 * Dim);  // rows written
+    constexpr bool unit = std::is_same_v<std::decay_t<decltype(model.mass)>, UnitMass>;  // v = p, in the rows
+    if constexpr (!unit) {
+      // v = M^-1 p by the model's own (inlined) mass, as screen() takes it; from row 0, the block's start,
+      // which turns_inside() reads as the first step's start
+      for (long j = 0; j < m; ++j) {
+        MVec vj = MVec::Zero(Dim);
+        model.mass.velocity(Row(rows_.data() + 2 * Dim * j + Dim), vj);
+        Eigen::Map<Eigen::Matrix<double, Dim, 1>>{rows_v_.data() + Dim * j} = vj;
+      }
+    }
+    if (reads_time_) {  // the loop's clock, step_time(first_ + j): (first_ + j) h, exact in either form
+      const double first = static_cast<double>(first_);
+      for (long j = 0; j < m; ++j) rows_t_[j] = (first + count_[j]) * h_;
+      if (first_ + m - 1 == steps_) rows_t_[m - 1] = step_time(steps_, h_, steps_, h_last_);
+    }
+    const block_sums::Rows rows{rows_.data(), unit ? rows_.data() + Dim : rows_v_.data(), rows_t_.data()};
+    constexpr int v_stride = unit ? 2 * Dim : Dim;
+    for (long j = 1; j < m;) {
+      spans_.clear();  // (reserved: no allocation) the groups' gaps as the last end observed left them
+      for (const Group& g : groups_)
+        spans_.push_back({inputs_.data() + g.first, inputs_.data() + g.last, g.lo, g.hi, g.lo_slack, g.hi_slack,
+                          g.slack, std::signbit(g.R)});
+      const long r = block_sums::first_loud<2 * Dim, v_stride>(spans_.data(), spans_.size(), rows, j, m);
+      if (r == m) return;
+      if (turns_inside<Dim, v_stride>(rows, r)) {
+        j = r + 1;
+        continue;
+      }
+      const double* q = rows_.data() + 2 * Dim * r;
+      const State<Dim> x{Row(q), Row(q + Dim)};
+      kept_q_ = Row(q - 2 * Dim);
+      kept_p_ = Row(q - Dim);
+      if (terminal_) marks_ = row_marks_[static_cast<std::size_t>(r - 1)];
+      observe_from(model, x, first_ + r - 1, step_time(first_ + r, h_, steps_, h_last_));
+      if (stopped_) {
+        if (terminal_) marks1_ = row_marks_[static_cast<std::size_t>(r)];
+        return;
+      }
+      j = r + 1;
+    }
+  }
+
+  // Whether end r's only news is a rate that turned: every group's L inside its gap at both of step r's
+  // ends, and where its rate R changed sign, its interpolant (the cubic Hermite of L and h R, within
+  // max(|a|, |b|) / 4 of the chord: keeps_sign()) clear inside the gap too, by the rounding bound and a
+  // margin for the Hermite's own roundings. Observing the step would then find no crossing and no touch;
+  // the groups take the sums of its end as quiet() would (their gaps stay, as settle() would find), and
+  // the step is not observed. A damped pendulum turns twice a swing: each turn observed cost as much as a
+  // crossing (locate()'s scan of every event, settle()'s of every level).
+  template <int Dim, int VS>
+  bool turns_inside(block_sums::Rows rows, long r) {
+    const double t0 = step_time(first_ + r - 1, h_, steps_, h_last_), t1 = step_time(first_ + r, h_, steps_, h_last_);
+    const double h = t1 - t0;
+    struct At {
+      Sums sums;
+      double rates;  // sum of |c dx/dt|
+    };
+    auto at = [&](const Group& g, long j) {  // the sums as screen_groups() takes them
+      double L = 0.0, S = 0.0, R = 0.0, A = 0.0;
+      for (std::size_t k = g.first; k < g.last; ++k) {
+        const Input& in = inputs_[k];
+        const double c = in.coefficient;
+        const double term = in.which == 0 ? c * rows.q[j * 2 * Dim + in.index] : c * (j == r ? t1 : t0);
+        const double rate = in.which == 0 ? c * rows.v[j * VS + in.index] : c;
+        R += rate;
+        A += std::abs(rate);
+        L += term;
+        S += std::abs(term);
+      }
+      return At{{L, S, R}, A};
+    };
+    for (const Group& g : groups_) {
+      const At end = at(g, r);
+      if (!inside(g, end.sums.L, end.sums.S)) return false;
+      if (!((bits(g.R) ^ bits(end.sums.R)) >> 63)) continue;
+      const At start = at(g, r - 1);
+      const double L0 = start.sums.L, L1 = end.sums.L, chord = L1 - L0;
+      const double a = std::abs(h * start.sums.R - chord), b = std::abs(h * end.sums.R - chord);
+      const double S = std::max(start.sums.S, end.sums.S);
+      // the interpolant's roundings, term by term (its values and h times its rates at both ends)
+      // (8 slack: 64 (terms + 2) roundings, as many as the interpolant's sum has terms)
+      const double guard = 8.0 * g.slack * (start.sums.S + end.sums.S + std::abs(h) * (start.rates + end.rates));
+      const double reach = 0.25 * std::max(a, b) * (1.0 + 64.0 * DBL_EPSILON) + guard;
+      if (!(reach < DBL_MAX) || !inside(g, std::min(L0, L1) - reach, S) || !inside(g, std::max(L0, L1) + reach, S))
+        return false;
+    }
+    for (Group& g : groups_) {
+      const Sums end = at(g, r).sums;
+      g.L = end.L, g.S = end.S, g.R_was = g.R, g.R = end.R;
+    }
+    return true;
+  }
+
   // Several groups (storey drifts, say) cost a sum each a step. Instead, the movement of every q they read
   // is bounded: on a step, q_j's cubic Hermite interpolant (which events are located on) differs from
   // q_j at the start by at most |dq| + max(|a|, |b|) / 4 <= 1.25 |dq| + 0.25 h max(|v0|, |v1|) (dq over the
@@ -326,8 +500,13 @@ class EventWatcher {
   void rearm() { rearm({q1().data(), p1().data(), v1().data(), f1().data()}); }
 
  public:
-  // Before steps replayed from a checkpoint: the budget's movement counts from a later state.
-  void restart_screen() { budget_ = -1.0; }
+  // Before steps replayed from a checkpoint: the budget's movement counts from a later state; a batched
+  // run's replay writes its rows again from the block's start, and they are not screened again: the block
+  // screened them when it ended, and with events steps run whole, so the replay steps the same states.
+  void restart_screen() {
+    budget_ = -1.0;
+    if (batched_) cursor_ = rows_.data() + 2 * n_;
+  }
 
  private:
 
@@ -881,6 +1060,18 @@ class EventWatcher {
   const long steps_;
   bool forces_ = false, terminal_ = false, stopped_ = false, affine_ = false, gated_ = false, budgeted_ = false;
   bool read_all_ = false;                             // the groups read every q
+  bool keeps_ = false;      // keep() copies the step's start (screened in the loop)
+  bool batchable_ = false;  // screened, and the spec allows batch_screens
+  bool batched_ = false;    // batch_screens(): rows_ hold the block's step ends
+  enum class Rows : unsigned char { none, ends, ends_and_marks };
+  Rows rows_mode_ = Rows::none;  // what after_step() writes to rows_
+  bool reads_time_ = false;  // some group reads t
+  // q then p of each step end in the block, row 0 its start; M^-1 p and t there, once screened; count_[j] = j
+  std::vector<double> rows_, rows_v_, rows_t_, count_;
+  double* cursor_ = nullptr;  // the next row of rows_ to write
+  std::vector<RecorderMarks> row_marks_;  // the recorder's marks there (terminal events)
+  long first_ = 0;                        // the block's first step
+  std::vector<block_sums::Group<Input>> spans_;  // the groups as screen_rows() passes them
   double h_max_ = 0.0, moved_ = 0.0, budget_ = -1.0;  // within_budget()
   std::vector<int> read_q_;                           // the q the groups read
   int n_ = 0;

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "raydamp/materials/materials.hpp"
+#include "raydamp/math/cpu.hpp"
 
 namespace raydamp::materials::bouc_wen_lanes {
 
@@ -117,13 +118,6 @@ __attribute__((noinline, target("avx2"))) inline bool common_forces4(const Param
                                                                     const double* d, BoucWen::State* t, double* out,
                                                                     std::size_t n) {
   return common_forces<D4, I4, 4>(P, c, d, t, out, n);
-}
-inline bool has_avx2() {
-  static const bool avx2 = [] {
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx2") != 0;
-  }();
-  return avx2;
 }
 #endif
 
