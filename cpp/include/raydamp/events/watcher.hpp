@@ -364,8 +364,8 @@ class EventWatcher {
       }
     }
     if (reads_time_) {  // the loop's clock, step_time(first_ + j): (first_ + j) h, exact in either form
-      const double first = static_cast<double>(first_);
-      for (long j = 0; j < m; ++j) rows_t_[j] = (first + count_[j]) * h_;
+      const double first = static_cast<double>(first_);  // (vectorised over count_; step_time() a row, with its
+      for (long j = 0; j < m; ++j) rows_t_[j] = (first + count_[j]) * h_;  // branch, cost the floor 0.4 ns a step)
       if (first_ + m - 1 == steps_) rows_t_[m - 1] = step_time(steps_, h_, steps_, h_last_);
     }
     const block_sums::Rows rows{rows_.data(), unit ? rows_.data() + Dim : rows_v_.data(), rows_t_.data()};
@@ -406,41 +406,32 @@ class EventWatcher {
   bool turns_inside(block_sums::Rows rows, long r) {
     const double t0 = step_time(first_ + r - 1, h_, steps_, h_last_), t1 = step_time(first_ + r, h_, steps_, h_last_);
     const double h = t1 - t0;
-    struct At {
-      Sums sums;
-      double rates;  // sum of |c dx/dt|
-    };
-    auto at = [&](const Group& g, long j) {  // the sums as screen_groups() takes them
-      double L = 0.0, S = 0.0, R = 0.0, A = 0.0;
+    // row j as an end: its q and v (the groups read no p, no force)
+    auto row = [&](long j) { return End{rows.q + j * 2 * Dim, nullptr, rows.v + j * VS, nullptr}; };
+    for (const Group& g : groups_) {
+      const Sums end = sums(g, row(r), t1);  // the bits screen_groups() takes
+      if (!inside(g, end.L, end.S)) return false;
+      if (!((bits(g.R) ^ bits(end.R)) >> 63)) continue;
+      const Sums start = sums(g, row(r - 1), t0);
+      const double *v0 = row(r - 1).v, *v1 = row(r).v;
+      double rates = 0.0;  // sum of |c dx/dt| at both ends
       for (std::size_t k = g.first; k < g.last; ++k) {
         const Input& in = inputs_[k];
-        const double c = in.coefficient;
-        const double term = in.which == 0 ? c * rows.q[j * 2 * Dim + in.index] : c * (j == r ? t1 : t0);
-        const double rate = in.which == 0 ? c * rows.v[j * VS + in.index] : c;
-        R += rate;
-        A += std::abs(rate);
-        L += term;
-        S += std::abs(term);
+        rates += std::abs(in.coefficient) * (in.which == 0 ? std::abs(v0[in.index]) + std::abs(v1[in.index]) : 2.0);
       }
-      return At{{L, S, R}, A};
-    };
-    for (const Group& g : groups_) {
-      const At end = at(g, r);
-      if (!inside(g, end.sums.L, end.sums.S)) return false;
-      if (!((bits(g.R) ^ bits(end.sums.R)) >> 63)) continue;
-      const At start = at(g, r - 1);
-      const double L0 = start.sums.L, L1 = end.sums.L, chord = L1 - L0;
-      const double a = std::abs(h * start.sums.R - chord), b = std::abs(h * end.sums.R - chord);
-      const double S = std::max(start.sums.S, end.sums.S);
+      const double chord = end.L - start.L;
+      const double a = std::abs(h * start.R - chord), b = std::abs(h * end.R - chord);
+      const double S = std::max(start.S, end.S);
       // the interpolant's roundings, term by term (its values and h times its rates at both ends)
       // (8 slack: 64 (terms + 2) roundings, as many as the interpolant's sum has terms)
-      const double guard = 8.0 * g.slack * (start.sums.S + end.sums.S + std::abs(h) * (start.rates + end.rates));
+      const double guard = 8.0 * g.slack * (start.S + end.S + std::abs(h) * rates);
       const double reach = 0.25 * std::max(a, b) * (1.0 + 64.0 * DBL_EPSILON) + guard;
-      if (!(reach < DBL_MAX) || !inside(g, std::min(L0, L1) - reach, S) || !inside(g, std::max(L0, L1) + reach, S))
+      if (!(reach < DBL_MAX) || !inside(g, std::min(start.L, end.L) - reach, S) ||
+          !inside(g, std::max(start.L, end.L) + reach, S))
         return false;
     }
     for (Group& g : groups_) {
-      const Sums end = at(g, r).sums;
+      const Sums end = sums(g, row(r), t1);
       g.L = end.L, g.S = end.S, g.R_was = g.R, g.R = end.R;
     }
     return true;
